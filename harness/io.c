@@ -1,0 +1,237 @@
+#define _POSIX_C_SOURCE 200809L
+#include "io.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+FILE* sere_atomic_open( sere_atomic_file* file, const char* path )
+{
+	file->f = NULL;
+	size_t length = strlen( path );
+	if ( length + 5 > sizeof( file->tmp_path ) )
+	{
+		errno = ENAMETOOLONG;
+		return NULL;
+	}
+	memcpy( file->path, path, length + 1 );
+	memcpy( file->tmp_path, path, length );
+	memcpy( file->tmp_path + length, ".tmp", 5 );
+	file->f = fopen( file->tmp_path, "wb" );
+	return file->f;
+}
+
+int sere_atomic_commit( sere_atomic_file* file )
+{
+	if ( file->f == NULL )
+	{
+		return -1;
+	}
+	int failed = ferror( file->f ) != 0;
+	failed |= fflush( file->f ) != 0;
+	failed |= fsync( fileno( file->f ) ) != 0;
+	failed |= fclose( file->f ) != 0;
+	file->f = NULL;
+	if ( failed || rename( file->tmp_path, file->path ) != 0 )
+	{
+		remove( file->tmp_path );
+		return -1;
+	}
+	return 0;
+}
+
+void sere_atomic_abort( sere_atomic_file* file )
+{
+	if ( file->f != NULL )
+	{
+		fclose( file->f );
+		file->f = NULL;
+	}
+	remove( file->tmp_path );
+}
+
+int sere_mkdirs( const char* dir )
+{
+	char path[4096];
+	size_t length = strlen( dir );
+	if ( length == 0 || length >= sizeof( path ) )
+	{
+		return -1;
+	}
+	memcpy( path, dir, length + 1 );
+	for ( size_t i = 1; i <= length; ++i )
+	{
+		if ( path[i] == '/' || path[i] == '\0' )
+		{
+			char saved = path[i];
+			path[i] = '\0';
+			if ( mkdir( path, 0755 ) != 0 && errno != EEXIST )
+			{
+				return -1;
+			}
+			path[i] = saved;
+		}
+	}
+	struct stat info;
+	return ( stat( dir, &info ) == 0 && S_ISDIR( info.st_mode ) ) ? 0 : -1;
+}
+
+int sere_write_ply( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
+					const int32_t* tri, int32_t triangle_count, const uint8_t* rgb,
+					const sere_vertex_property* properties, int32_t property_count )
+{
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	fprintf( f, "ply\nformat binary_little_endian 1.0\ncomment sere\nelement vertex %d\n", vertex_count );
+	fprintf( f, "property float x\nproperty float y\nproperty float z\n" );
+	if ( rgb != NULL )
+	{
+		fprintf( f, "property uchar red\nproperty uchar green\nproperty uchar blue\n" );
+	}
+	for ( int32_t k = 0; k < property_count; ++k )
+	{
+		fprintf( f, "property float %s\n", properties[k].name );
+	}
+	fprintf( f, "element face %d\nproperty list uchar int vertex_indices\nend_header\n", triangle_count );
+	/* PLY binary is little endian, as is every machine sere targets (x86-64, aarch64). */
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		float p[3] = { x[i], y[i], z[i] };
+		fwrite( p, sizeof( float ), 3, f );
+		if ( rgb != NULL )
+		{
+			fwrite( rgb + 3 * i, 1, 3, f );
+		}
+		for ( int32_t k = 0; k < property_count; ++k )
+		{
+			fwrite( properties[k].values + i, sizeof( float ), 1, f );
+		}
+	}
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		uint8_t three = 3;
+		fwrite( &three, 1, 1, f );
+		fwrite( tri + 3 * t, sizeof( int32_t ), 3, f );
+	}
+	return sere_atomic_commit( &file );
+}
+
+int sere_write_vtp( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
+					const int32_t* tri, int32_t triangle_count, const sere_vertex_property* properties,
+					int32_t property_count )
+{
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	fprintf( f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n" );
+	fprintf( f, "<PolyData>\n<Piece NumberOfPoints=\"%d\" NumberOfPolys=\"%d\">\n", vertex_count, triangle_count );
+	fprintf( f, "<PointData>\n" );
+	for ( int32_t k = 0; k < property_count; ++k )
+	{
+		fprintf( f, "<DataArray type=\"Float32\" Name=\"%s\" format=\"ascii\">\n", properties[k].name );
+		for ( int32_t i = 0; i < vertex_count; ++i )
+		{
+			fprintf( f, "%.9g\n", (double) properties[k].values[i] );
+		}
+		fprintf( f, "</DataArray>\n" );
+	}
+	fprintf( f, "</PointData>\n<Points>\n<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n" );
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		fprintf( f, "%.9g %.9g %.9g\n", (double) x[i], (double) y[i], (double) z[i] );
+	}
+	fprintf( f, "</DataArray>\n</Points>\n<Polys>\n<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n" );
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		fprintf( f, "%d %d %d\n", tri[3 * t], tri[3 * t + 1], tri[3 * t + 2] );
+	}
+	fprintf( f, "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n" );
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		fprintf( f, "%d\n", 3 * ( t + 1 ) );
+	}
+	fprintf( f, "</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n" );
+	return sere_atomic_commit( &file );
+}
+
+int sere_write_pvd( const char* path, const char* const* files, const double* times, int32_t count )
+{
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	fprintf( f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n" );
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		fprintf( f, "<DataSet timestep=\"%.9g\" part=\"0\" file=\"%s\"/>\n", times[i], files[i] );
+	}
+	fprintf( f, "</Collection>\n</VTKFile>\n" );
+	return sere_atomic_commit( &file );
+}
+
+double sere_now( void )
+{
+	struct timespec ts;
+	clock_gettime( CLOCK_MONOTONIC, &ts );
+	return (double) ts.tv_sec + 1e-9 * (double) ts.tv_nsec;
+}
+
+static void progress_draw( sere_progress* progress, int64_t done )
+{
+	const int width = 30;
+	int filled = progress->total > 0 ? (int) ( width * done / progress->total ) : width;
+	double elapsed = sere_now() - progress->start;
+	double eta = done > 0 ? elapsed * (double) ( progress->total - done ) / (double) done : 0.0;
+	char bar[64];
+	for ( int i = 0; i < width; ++i )
+	{
+		bar[i] = i < filled ? '#' : '.';
+	}
+	bar[width] = '\0';
+	fprintf( stderr, "\r%s [%s] %lld/%lld  %.1fs elapsed, %.1fs left ", progress->label, bar, (long long) done,
+			 (long long) progress->total, elapsed, eta );
+	fflush( stderr );
+}
+
+void sere_progress_begin( sere_progress* progress, const char* label, int64_t total )
+{
+	progress->label = label;
+	progress->total = total;
+	progress->shown = -1;
+	progress->start = sere_now();
+	progress->active = isatty( fileno( stderr ) );
+	if ( progress->active )
+	{
+		progress_draw( progress, 0 );
+	}
+}
+
+void sere_progress_update( sere_progress* progress, int64_t done )
+{
+	if ( progress->active && done != progress->shown )
+	{
+		progress->shown = done;
+		progress_draw( progress, done );
+	}
+}
+
+void sere_progress_end( sere_progress* progress )
+{
+	if ( progress->active )
+	{
+		progress_draw( progress, progress->total );
+		fputc( '\n', stderr );
+	}
+}

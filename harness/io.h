@@ -1,0 +1,62 @@
+/* sere harness — files that are never half-written, mesh writers, and a progress bar. */
+#pragma once
+
+#include <stdint.h>
+#include <stdio.h>
+
+/* A file written to "<path>.tmp" and renamed over path on commit, so an interrupted run never
+ * leaves a truncated output behind. */
+typedef struct sere_atomic_file
+{
+	FILE* f;
+	char tmp_path[4096];
+	char path[4096];
+} sere_atomic_file;
+
+/* Opens the temporary file; NULL (with errno set) on failure. */
+FILE* sere_atomic_open( sere_atomic_file* file, const char* path );
+/* Flushes, closes and renames; 0 on success, -1 on any error (the temporary is removed). */
+int sere_atomic_commit( sere_atomic_file* file );
+/* Closes and removes the temporary without touching path. */
+void sere_atomic_abort( sere_atomic_file* file );
+
+/* mkdir -p; 0 on success. */
+int sere_mkdirs( const char* dir );
+
+/* A named per-vertex float property for the mesh writers. */
+typedef struct sere_vertex_property
+{
+	const char* name;
+	const float* values;
+} sere_vertex_property;
+
+/* Binary little-endian PLY of a triangle mesh with optional per-vertex colors (rgb: 3 bytes per
+ * vertex, may be NULL) and float properties; written atomically. 0 on success. */
+int sere_write_ply( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
+					const int32_t* tri, int32_t triangle_count, const uint8_t* rgb,
+					const sere_vertex_property* properties, int32_t property_count );
+
+/* VTK XML PolyData (.vtp, ASCII) with float point data; written atomically. 0 on success. */
+int sere_write_vtp( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
+					const int32_t* tri, int32_t triangle_count, const sere_vertex_property* properties,
+					int32_t property_count );
+
+/* ParaView collection of files (relative names) at the given times; written atomically. */
+int sere_write_pvd( const char* path, const char* const* files, const double* times, int32_t count );
+
+/* A progress bar on stderr, drawn only when stderr is a terminal. */
+typedef struct sere_progress
+{
+	const char* label;
+	int64_t total;
+	int64_t shown;
+	double start;
+	int active;
+} sere_progress;
+
+void sere_progress_begin( sere_progress* progress, const char* label, int64_t total );
+void sere_progress_update( sere_progress* progress, int64_t done );
+void sere_progress_end( sere_progress* progress );
+
+/* Wall-clock seconds from a monotonic clock. */
+double sere_now( void );

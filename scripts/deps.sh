@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Installs the Debian packages sere needs, only those missing. Needs root (or sudo).
+set -euo pipefail
+need=(gcc g++ make pkg-config libgomp1 libhwloc-dev libbenchmark-dev libcriterion-dev
+      libeigen3-dev libembree-dev libpng-dev libcairo2-dev)
+missing=()
+for p in "${need[@]}"; do
+	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+echo "sere: installing missing Debian packages: ${missing[*]}" >&2
+sudo=""
+[ "$(id -u)" -ne 0 ] && sudo="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
