@@ -1,0 +1,105 @@
+#include "fixture.h"
+
+#include <stdlib.h>
+
+static double next_unit( uint64_t* state )
+{
+	/* splitmix64: a fixed-seed generator so fixtures are identical run to run */
+	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
+	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
+	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
+	z ^= z >> 31;
+	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
+}
+
+void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, double width, double height, double jitter,
+						   int vein_row, uint64_t seed )
+{
+	int32_t n = ( nx + 1 ) * ( ny + 1 );
+	int32_t* index = malloc( sizeof( int32_t ) * (size_t) n );
+	plane->x = malloc( sizeof( double ) * (size_t) n );
+	plane->y = malloc( sizeof( double ) * (size_t) n );
+	plane->tri = malloc( sizeof( int32_t ) * 6 * (size_t) nx * (size_t) ny );
+	plane->veins = malloc( sizeof( int32_t ) * 2 * (size_t) ( nx + 1 ) );
+	int32_t next = 0;
+	/* boundary first, counter-clockwise */
+	for ( int32_t i = 0; i < nx; ++i )
+	{
+		index[0 * ( nx + 1 ) + i] = next++;
+	}
+	for ( int32_t j = 0; j < ny; ++j )
+	{
+		index[j * ( nx + 1 ) + nx] = next++;
+	}
+	for ( int32_t i = nx; i > 0; --i )
+	{
+		index[ny * ( nx + 1 ) + i] = next++;
+	}
+	for ( int32_t j = ny; j > 0; --j )
+	{
+		index[j * ( nx + 1 ) + 0] = next++;
+	}
+	int32_t boundary = next;
+	for ( int32_t j = 1; j < ny; ++j )
+	{
+		for ( int32_t i = 1; i < nx; ++i )
+		{
+			index[j * ( nx + 1 ) + i] = next++;
+		}
+	}
+	uint64_t state = seed;
+	double dx = width / nx, dy = height / ny;
+	for ( int32_t j = 0; j <= ny; ++j )
+	{
+		for ( int32_t i = 0; i <= nx; ++i )
+		{
+			int32_t k = index[j * ( nx + 1 ) + i];
+			int interior = i > 0 && i < nx && j > 0 && j < ny && !( vein_row && j == ny / 2 );
+			double jx = interior ? jitter * ( next_unit( &state ) - 0.5 ) * dx : 0.0;
+			double jy = interior ? jitter * ( next_unit( &state ) - 0.5 ) * dy : 0.0;
+			plane->x[k] = i * dx + jx;
+			plane->y[k] = j * dy + jy;
+		}
+	}
+	int32_t t = 0;
+	for ( int32_t j = 0; j < ny; ++j )
+	{
+		for ( int32_t i = 0; i < nx; ++i )
+		{
+			int32_t a = index[j * ( nx + 1 ) + i], b = index[j * ( nx + 1 ) + i + 1];
+			int32_t c = index[( j + 1 ) * ( nx + 1 ) + i + 1], d = index[( j + 1 ) * ( nx + 1 ) + i];
+			int32_t* q = plane->tri + 6 * t++;
+			q[0] = a, q[1] = b, q[2] = c, q[3] = a, q[4] = c, q[5] = d;
+		}
+	}
+	int32_t vein_count = 0;
+	if ( vein_row )
+	{
+		for ( int32_t i = 0; i < nx; ++i )
+		{
+			plane->veins[2 * vein_count] = index[( ny / 2 ) * ( nx + 1 ) + i];
+			plane->veins[2 * vein_count + 1] = index[( ny / 2 ) * ( nx + 1 ) + i + 1];
+			vein_count += 1;
+		}
+	}
+	plane->mesh = ( sere_plane_mesh ){
+		.x = plane->x,
+		.y = plane->y,
+		.point_count = n,
+		.boundary_count = boundary,
+		.tri = plane->tri,
+		.triangle_count = 2 * nx * ny,
+		.vein_segments = plane->veins,
+		.vein_segment_count = vein_count,
+		.base = index[( ny / 2 ) * ( nx + 1 )],
+	};
+	free( index );
+}
+
+void sere_test_plane_free( sere_test_plane* plane )
+{
+	free( plane->x );
+	free( plane->y );
+	free( plane->tri );
+	free( plane->veins );
+}

@@ -1,0 +1,22 @@
+/* Test fixtures shared by several test files: small plane meshes built without the leaf
+ * pipeline, so each kernel can be tested alone. */
+#pragma once
+
+#include "layers.h"
+
+/* A rectangle [0, width] x [0, height] as a grid of nx x ny cells, each cut into two
+ * triangles, with jitter (fraction of a cell) on interior points from a fixed seed. The
+ * boundary points come first, counter-clockwise from (0, 0); the horizontal middle row, if
+ * vein_row is nonzero, is flagged as a vein. The caller frees with sere_test_plane_free. */
+typedef struct sere_test_plane
+{
+	double* x;
+	double* y;
+	int32_t* tri;
+	int32_t* veins;
+	sere_plane_mesh mesh;
+} sere_test_plane;
+
+void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, double width, double height, double jitter,
+						   int vein_row, uint64_t seed );
+void sere_test_plane_free( sere_test_plane* plane );
