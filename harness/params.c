@@ -1,0 +1,278 @@
+#include "params.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#ifndef SERE_DATA_DIR
+#define SERE_DATA_DIR "/usr/local/share/sere"
+#endif
+
+sere_sim_params sere_sim_params_default( void )
+{
+	sere_sim_params p = {
+		.layer = sere_layer_params_default(),
+		.dt = 0.002,
+		.gravity = { 0.0, 0.0, 0.0 },
+		.ground = -INFINITY,
+		.lambda_min = 0.1,
+		.lambda_max = 0.1,
+		.water_rate_t = -0.1,
+		.water_rate_v = -0.1,
+		.sigma_vein = 0.5,
+		.sigma_surf = 0.5,
+		.alpha = 1.3,
+		.min_length_ratio = 0.2,
+		.stiffness = 1.0,
+		.strain_tolerance = 1e-3,
+		.max_iterations = 200,
+		.collision_thickness = 0.004,
+		.restore_measured = 1,
+		.conservative = 0,
+		.soften = 0,
+		.seed = 1,
+	};
+	return p;
+}
+
+typedef struct key_info
+{
+	const char* name;
+	size_t offset;
+	double lo, hi;
+	int integer;
+	const char* help;
+} key_info;
+
+#define KEY( field, lo, hi, integer, help )                                                                            \
+	{                                                                                                                  \
+#field, offsetof( sere_sim_params, field ), lo, hi, integer, help                                              \
+	}
+#define LKEY( name, field, lo, hi, help )                                                                              \
+	{                                                                                                                  \
+		name, offsetof( sere_sim_params, layer ) + offsetof( sere_layer_params, field ), lo, hi, 0, help               \
+	}
+
+static const key_info keys[] = {
+	LKEY( "h_vein", h_vein, -1.0, 1.0, "Voronoi offset of vein triangles (Fig. 5e, Table 2)" ),
+	LKEY( "h_surf", h_surf, -1.0, 1.0, "Voronoi offset of the other triangles" ),
+	LKEY( "omega_vein", omega_vein, 1e-6, 1e6, "shortest-path weight of vein springs (Sec. 3.3)" ),
+	LKEY( "omega_surf", omega_surf, 1e-6, 1e6, "shortest-path weight of surface springs" ),
+	LKEY( "D", D, 1e-3, 100.0, "exponent of Eq. 1" ),
+	LKEY( "m_min", m_min, 1e-6, 1e6, "lower mass of Eq. 2" ),
+	LKEY( "m_max", m_max, 1e-6, 1e6, "upper mass of Eq. 2" ),
+	LKEY( "mu0", mu0, 0.0, 0.999, "initial water ratio w = mu0 m" ),
+	KEY( dt, 1e-6, 1.0, 0, "time step" ),
+	{ "gravity_x", offsetof( sere_sim_params, gravity ), -1e3, 1e3, 0, "gravity, x" },
+	{ "gravity_y", offsetof( sere_sim_params, gravity ) + sizeof( double ), -1e3, 1e3, 0, "gravity, y" },
+	{ "gravity_z", offsetof( sere_sim_params, gravity ) + 2 * sizeof( double ), -1e3, 1e3, 0,
+	  "gravity, z (the leaf's normal at rest is +z)" },
+	KEY( ground, -INFINITY, 1e3, 0, "height of the supporting plane (z); -inf for none" ),
+	KEY( lambda_min, 0.0, 1e6, 0, "diffusion coefficient at tau = 0 (Eq. 8)" ),
+	KEY( lambda_max, 0.0, 1e6, 0, "diffusion coefficient at tau = 1" ),
+	KEY( water_rate_t, -1e3, 1e3, 0, "signed water rate of the T layer (Table 2 w_loss^T; negative = losing)" ),
+	KEY( water_rate_v, -1e3, 1e3, 0, "signed water rate of the V layer (Table 2 w_loss^V)" ),
+	KEY( sigma_vein, -100.0, 100.0, 0, "shrinkage rate of vein springs (Eq. 12)" ),
+	KEY( sigma_surf, -100.0, 100.0, 0, "shrinkage rate of surface springs (Eq. 12)" ),
+	KEY( alpha, 0.1, 10.0, 0, "exponent of Eq. 12" ),
+	KEY( min_length_ratio, 0.0, 1.0, 0, "springs stop shrinking below this fraction of their rest length" ),
+	KEY( stiffness, 0.0, 1.0, 0, "PBD stiffness k (Sec. 5.2)" ),
+	KEY( strain_tolerance, 1e-9, 1.0, 0, "lambda_C: projection stops when max |C/l| is below it" ),
+	KEY( max_iterations, 1.0, 1e5, 1, "PBD iteration cap" ),
+	KEY( collision_thickness, 0.0, 1.0, 0, "self-collision proximity distance" ),
+	KEY( restore_measured, 0.0, 1.0, 1, "Eq. 14 with the measured thickness (1) or the rest h (0)" ),
+	KEY( conservative, 0.0, 1.0, 1, "osmosis weights: 0 = paper (Eq. 8), 1 = conservative" ),
+	KEY( soften, 0.0, 1.0, 1, "scale PBD stiffness by relative water content (Sec. 7)" ),
+	KEY( seed, 0.0, 4294967295.0, 1, "sampling seed" ),
+};
+
+static const key_info* find_key( const char* name, size_t length )
+{
+	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )
+	{
+		if ( strlen( keys[i].name ) == length && strncmp( keys[i].name, name, length ) == 0 )
+		{
+			return keys + i;
+		}
+	}
+	return NULL;
+}
+
+static int parse_value( const key_info* key, const char* text, double* value, char* err, size_t err_size )
+{
+	char* end = NULL;
+	errno = 0;
+	double v = strtod( text, &end );
+	while ( end != NULL && ( *end == ' ' || *end == '\t' || *end == '\r' || *end == '\n' ) )
+	{
+		++end;
+	}
+	if ( end == text || end == NULL || *end != '\0' || errno == ERANGE || isnan( v ) )
+	{
+		snprintf( err, err_size, "%s: '%s' is not a number", key->name, text );
+		return -1;
+	}
+	if ( v < key->lo || v > key->hi )
+	{
+		snprintf( err, err_size, "%s = %g is out of range [%g, %g]", key->name, v, key->lo, key->hi );
+		return -1;
+	}
+	if ( key->integer && v != floor( v ) )
+	{
+		snprintf( err, err_size, "%s must be a whole number, not %g", key->name, v );
+		return -1;
+	}
+	*value = v;
+	return 0;
+}
+
+int sere_params_set( sere_sim_params* params, const char* assignment, char* err, size_t err_size )
+{
+	const char* eq = strchr( assignment, '=' );
+	if ( eq == NULL )
+	{
+		snprintf( err, err_size, "expected key=value, got '%s'", assignment );
+		return -1;
+	}
+	const char* name = assignment;
+	size_t length = (size_t) ( eq - assignment );
+	while ( length > 0 && ( name[length - 1] == ' ' || name[length - 1] == '\t' ) )
+	{
+		--length;
+	}
+	const key_info* key = find_key( name, length );
+	if ( key == NULL )
+	{
+		snprintf( err, err_size, "unknown parameter '%.*s' (sere run --help lists them)", (int) length, name );
+		return -1;
+	}
+	const char* text = eq + 1;
+	while ( *text == ' ' || *text == '\t' )
+	{
+		++text;
+	}
+	double value;
+	if ( parse_value( key, text, &value, err, err_size ) != 0 )
+	{
+		return -1;
+	}
+	memcpy( (char*) params + key->offset, &value, sizeof( double ) );
+	if ( params->layer.m_max < params->layer.m_min )
+	{
+		snprintf( err, err_size, "m_max (%g) must not be below m_min (%g)", params->layer.m_max, params->layer.m_min );
+		return -1;
+	}
+	return 0;
+}
+
+static int file_exists( const char* path )
+{
+	struct stat info;
+	return stat( path, &info ) == 0 && S_ISREG( info.st_mode );
+}
+
+int sere_data_path( const char* relative, char* path, size_t path_size )
+{
+	const char* roots[] = { getenv( "SERE_DATA" ), "data", SERE_DATA_DIR };
+	for ( size_t i = 0; i < sizeof( roots ) / sizeof( roots[0] ); ++i )
+	{
+		if ( roots[i] == NULL )
+		{
+			continue;
+		}
+		snprintf( path, path_size, "%s/%s", roots[i], relative );
+		if ( file_exists( path ) )
+		{
+			return 0;
+		}
+	}
+	return -1;
+}
+
+int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size )
+{
+	char path[4096];
+	if ( file_exists( name_or_path ) )
+	{
+		snprintf( path, sizeof( path ), "%s", name_or_path );
+	}
+	else
+	{
+		char relative[512];
+		snprintf( relative, sizeof( relative ), "presets/%s.preset", name_or_path );
+		if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )
+		{
+			snprintf(
+				err, err_size,
+				"unknown preset '%s' (known: maple-green, maple-red, plane-tree, wisteria, grass, or a file path)",
+				name_or_path );
+			return -1;
+		}
+	}
+	FILE* f = fopen( path, "r" );
+	if ( f == NULL )
+	{
+		snprintf( err, err_size, "%s: %s", path, strerror( errno ) );
+		return -1;
+	}
+	char line[1024];
+	int number = 0;
+	while ( fgets( line, sizeof( line ), f ) != NULL )
+	{
+		++number;
+		char* hash = strchr( line, '#' );
+		if ( hash != NULL )
+		{
+			*hash = '\0';
+		}
+		char* start = line;
+		while ( *start == ' ' || *start == '\t' )
+		{
+			++start;
+		}
+		size_t length = strlen( start );
+		while ( length > 0 && ( start[length - 1] == '\n' || start[length - 1] == '\r' || start[length - 1] == ' ' ||
+								start[length - 1] == '\t' ) )
+		{
+			start[--length] = '\0';
+		}
+		if ( length == 0 )
+		{
+			continue;
+		}
+		char message[512];
+		if ( sere_params_set( params, start, message, sizeof( message ) ) != 0 )
+		{
+			snprintf( err, err_size, "%s:%d: %s", path, number, message );
+			fclose( f );
+			return -1;
+		}
+	}
+	fclose( f );
+	return 0;
+}
+
+void sere_params_print( const sere_sim_params* params, FILE* f, const char* prefix )
+{
+	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )
+	{
+		double value;
+		memcpy( &value, (const char*) params + keys[i].offset, sizeof( double ) );
+		fprintf( f, "%s%s = %.17g\n", prefix, keys[i].name, value );
+	}
+}
+
+void sere_params_describe( FILE* f )
+{
+	sere_sim_params defaults = sere_sim_params_default();
+	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )
+	{
+		double value;
+		memcpy( &value, (const char*) &defaults + keys[i].offset, sizeof( double ) );
+		fprintf( f, "  %-20s %s (default %g, range [%g, %g])\n", keys[i].name, keys[i].help, value, keys[i].lo,
+				 keys[i].hi );
+	}
+}

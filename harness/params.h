@@ -1,0 +1,47 @@
+/* sere harness — every simulation parameter by name: defaults, Table 2 presets, --set overrides. */
+#pragma once
+
+#include "layers.h"
+
+#include <stddef.h>
+#include <stdio.h>
+
+typedef struct sere_sim_params
+{
+	sere_layer_params layer; /* h_vein, h_surf, omega_*, D, m_min, m_max, mu0 */
+	double dt;
+	double gravity[3];
+	double ground; /* height of the supporting plane below the leaf (z), or -inf for none */
+	double lambda_min, lambda_max;
+	double water_rate_t; /* signed water rate of the T layer: Table 2's w_loss^T, −0.1 = losing 0.1 per unit time */
+	double water_rate_v; /* the same for the V layer */
+	double sigma_vein, sigma_surf;
+	double alpha;				/* exponent of Eq. 12 (Sec. 5.1: ≈ 1.3) */
+	double min_length_ratio;	/* springs stop shrinking below this fraction of l⁰ */
+	double stiffness;			/* PBD k ∈ [0, 1] */
+	double strain_tolerance;	/* λ_C: projection stops when max |C/l| < λ_C */
+	double max_iterations;		/* PBD iteration cap */
+	double collision_thickness; /* vertex–triangle proximity distance, leaf units */
+	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
+	double conservative;		/* osmosis: 0 = the paper's Eq. 8, 1 = conservative weights */
+	double soften;				/* Sec. 7: stiffness scaled by relative water content (1) or constant (0) */
+	double seed;
+} sere_sim_params;
+
+sere_sim_params sere_sim_params_default( void );
+
+/* Sets one "key=value"; 0 on success, else -1 with a one-line message in err naming the key. */
+int sere_params_set( sere_sim_params* params, const char* assignment, char* err, size_t err_size );
+
+/* Loads a preset by name (data/presets/NAME.preset, searched in SERE_DATA, ./data and the
+ * install prefix) or by path; 0 on success, else -1 with a one-line message. */
+int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size );
+
+/* Writes every key = value, one per line, for summaries and --help. */
+void sere_params_print( const sere_sim_params* params, FILE* f, const char* prefix );
+/* Every key with its description, default and range, for --help. */
+void sere_params_describe( FILE* f );
+
+/* Finds a data file (relative to SERE_DATA, ./data, or SERE_DATA_DIR compiled in); writes the
+ * full path and returns 0, or -1 when it does not exist. */
+int sere_data_path( const char* relative, char* path, size_t path_size );

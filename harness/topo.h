@@ -1,0 +1,15 @@
+/* sere harness — machine topology and thread binding with hwloc (kernels never see hwloc). */
+#pragma once
+
+#include <stdio.h>
+
+/* Sets the OpenMP thread count (0 = one per core) and binds thread i to core i (round-robin
+ * over cores, one PU each) so timings do not wander between cores. Returns the thread count
+ * used; writes one line per thread to log when log is not NULL. */
+int sere_topo_bind( int threads, FILE* log );
+
+/* Prints packages, cores, PUs and caches as hwloc sees them. */
+void sere_topo_print( FILE* f );
+
+/* Number of physical cores (at least 1). */
+int sere_topo_cores( void );
