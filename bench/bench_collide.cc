@@ -1,0 +1,474 @@
+// Self-collision (Sec. 5.3, Eq. 14): BVH refit and build, the per-vertex proximity query, the
+// push-out response and the Voronoi restore, on a maple-sized sheet (78 × 60 vertices, 9086
+// triangles, thickness 0.005 on a sheet of width 1: Table 1's maple has 4680 vertices and 8517
+// triangles), flat, crumpled and U-folded; beside the brute-force twin and Embree 3 doing the
+// same vertex–triangle proximity search with rtcPointQuery.
+
+#include "bvh.h"
+#include "collide.h"
+#include "ref/collide_ref.h"
+
+#include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
+#include <omp.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+constexpr int kColumns = 78, kRows = 60;
+constexpr float kThickness = 0.005f;
+constexpr double kPi = 3.14159265358979323846;
+
+enum Shape
+{
+	kFlat,
+	kCrumpled,
+	kFolded,
+};
+
+double unit( uint64_t* state )
+{
+	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
+	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
+	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
+	z ^= z >> 31;
+	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
+}
+
+template <typename T> struct Aligned
+{
+	T* data = nullptr;
+	explicit Aligned( size_t n ) : data( static_cast<T*>( sere_alloc( sizeof( T ) * ( n > 0 ? n : 1 ) ) ) )
+	{
+	}
+	~Aligned()
+	{
+		sere_free( data );
+	}
+	Aligned( const Aligned& ) = delete;
+	Aligned& operator=( const Aligned& ) = delete;
+};
+
+// The sheet with its triangle layer first and one Voronoi particle per triangle after it, as
+// sere_model lays them out, plus the BVH and collision workspace made once.
+struct Scene
+{
+	int32_t n = kColumns * kRows;
+	int32_t f = 2 * ( kColumns - 1 ) * ( kRows - 1 );
+	std::vector<int32_t> tri;
+	Aligned<float> x, y, z, vx, vy, vz, inv_m, h;
+	std::vector<float> x0, y0, z0;
+	sere_bvh* bvh = nullptr;
+	sere_collide* collide = nullptr;
+
+	explicit Scene( Shape shape )
+		: tri( 3 * (size_t) f ), x( n + f ), y( n + f ), z( n + f ), vx( n + f ), vy( n + f ), vz( n + f ), inv_m( n ),
+		  h( f )
+	{
+		uint64_t state = 17;
+		const double cell = 1.0 / ( kColumns - 1 );
+		std::vector<double> u( n ), v( n );
+		for ( int j = 0; j < kRows; ++j )
+		{
+			for ( int i = 0; i < kColumns; ++i )
+			{
+				bool interior = i > 0 && j > 0 && i < kColumns - 1 && j < kRows - 1;
+				double jx = interior ? 0.2 * cell * ( unit( &state ) - 0.5 ) : 0.0;
+				double jy = interior ? 0.2 * cell * ( unit( &state ) - 0.5 ) : 0.0;
+				u[j * kColumns + i] = i * cell + jx;
+				v[j * kColumns + i] = j * cell + jy;
+			}
+		}
+		int32_t t = 0;
+		for ( int j = 0; j < kRows - 1; ++j )
+		{
+			for ( int i = 0; i < kColumns - 1; ++i )
+			{
+				int32_t a = j * kColumns + i, b = a + 1, c = a + kColumns + 1, d = a + kColumns;
+				int32_t quad[6] = { a, b, c, a, c, d };
+				std::memcpy( &tri[3 * (size_t) t], quad, sizeof( quad ) );
+				t += 2;
+			}
+		}
+		for ( int32_t k = 0; k < n; ++k )
+		{
+			x.data[k] = (float) u[k];
+			y.data[k] = (float) v[k];
+			inv_m.data[k] = 1.0f;
+		}
+		if ( shape == kCrumpled )
+		{
+			// a smooth random displacement field (eight plane waves of wavelength 0.2 to 0.5, in all
+			// three axes) strong enough to fold the sheet onto itself here and there, plus noise
+			double wave[8][6];
+			for ( auto& w : wave )
+			{
+				double angle = 2.0 * kPi * unit( &state ), k = 2.0 * kPi * ( 2.0 + 3.0 * unit( &state ) );
+				w[0] = k * std::cos( angle ), w[1] = k * std::sin( angle ), w[2] = 2.0 * kPi * unit( &state );
+				w[3] = 0.0125 * ( 2.0 * unit( &state ) - 1.0 );
+				w[4] = 0.0125 * ( 2.0 * unit( &state ) - 1.0 );
+				w[5] = 0.025 * ( 2.0 * unit( &state ) - 1.0 );
+			}
+			for ( int32_t k = 0; k < n; ++k )
+			{
+				double d[3] = { 0.0, 0.0, 0.0 };
+				for ( auto& w : wave )
+				{
+					double s = std::sin( w[0] * u[k] + w[1] * v[k] + w[2] );
+					d[0] += w[3] * s, d[1] += w[4] * s, d[2] += w[5] * s;
+				}
+				x.data[k] = (float) ( u[k] + d[0] );
+				y.data[k] = (float) ( v[k] + d[1] );
+				z.data[k] = (float) ( d[2] + 0.3 * kThickness * ( unit( &state ) - 0.5 ) );
+			}
+		}
+		else if ( shape == kFolded )
+		{
+			// U-fold: two halves facing each other at 0.8 × thickness, joined by a half circle
+			double gap = 0.8 * kThickness, r = 0.5 * gap, a = 0.5 * ( 1.0 - kPi * r );
+			for ( int32_t k = 0; k < n; ++k )
+			{
+				double s = u[k];
+				if ( s <= a )
+				{
+					x.data[k] = (float) s, z.data[k] = 0.0f;
+				}
+				else if ( s <= a + kPi * r )
+				{
+					x.data[k] = (float) ( a + r * std::sin( ( s - a ) / r ) );
+					z.data[k] = (float) ( r - r * std::cos( ( s - a ) / r ) );
+				}
+				else
+				{
+					x.data[k] = (float) ( a - ( s - a - kPi * r ) ), z.data[k] = (float) gap;
+				}
+			}
+		}
+		for ( int32_t k = 0; k < f; ++k )
+		{
+			h.data[k] = 0.01f;
+		}
+		sere_collide_restore_voronoi( x.data, y.data, z.data, vx.data, vy.data, vz.data, tri.data(), f, n, h.data );
+		x0.assign( x.data, x.data + n + f );
+		y0.assign( y.data, y.data + n + f );
+		z0.assign( z.data, z.data + n + f );
+		sere_bvh_create( tri.data(), f, n, x.data, y.data, z.data, &bvh );
+		sere_collide_create( bvh, 0, &collide );
+	}
+
+	~Scene()
+	{
+		sere_collide_destroy( collide );
+		sere_bvh_destroy( bvh );
+	}
+
+	void reset()
+	{
+		std::memcpy( x.data, x0.data(), sizeof( float ) * x0.size() );
+		std::memcpy( y.data, y0.data(), sizeof( float ) * y0.size() );
+		std::memcpy( z.data, z0.data(), sizeof( float ) * z0.size() );
+		std::memset( vx.data, 0, sizeof( float ) * x0.size() );
+		std::memset( vy.data, 0, sizeof( float ) * x0.size() );
+		std::memset( vz.data, 0, sizeof( float ) * x0.size() );
+	}
+
+	sere_collide_state state()
+	{
+		return sere_collide_state{ x.data, y.data, z.data, vx.data, vy.data, vz.data, inv_m.data };
+	}
+};
+
+Scene& scene( Shape shape )
+{
+	static std::map<Shape, std::unique_ptr<Scene>> scenes;
+	auto& s = scenes[shape];
+	if ( !s )
+	{
+		s = std::make_unique<Scene>( shape );
+	}
+	s->reset();
+	sere_bvh_build( s->bvh, s->x.data, s->y.data, s->z.data );
+	return *s;
+}
+
+sere_collide_params params()
+{
+	sere_collide_params p = sere_collide_params_default();
+	p.thickness = kThickness;
+	return p;
+}
+
+void rate( benchmark::State& state, const char* name, double per_iteration )
+{
+	state.counters[name] =
+		benchmark::Counter( per_iteration * (double) state.iterations(), benchmark::Counter::kIsRate );
+}
+
+void BM_bvh_refit( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	for ( auto _ : state )
+	{
+		sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "triangles/s", s.f );
+}
+
+void BM_bvh_build( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	for ( auto _ : state )
+	{
+		sere_bvh_build( s.bvh, s.x.data, s.y.data, s.z.data );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "triangles/s", s.f );
+}
+
+void BM_collide_detect( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	int32_t contacts = 0;
+	for ( auto _ : state )
+	{
+		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, kThickness, &contacts );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "queries/s", s.n );
+	state.counters["contacts"] = contacts;
+}
+
+// Response alone on the contacts of one detection; the positions are reset between iterations
+// outside the timed region.
+void BM_collide_respond( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	int32_t contacts = 0;
+	sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, kThickness, &contacts );
+	sere_collide_state st = s.state();
+	sere_collide_params p = params();
+	for ( auto _ : state )
+	{
+		state.PauseTiming();
+		s.reset();
+		state.ResumeTiming();
+		sere_collide_respond( s.collide, s.bvh, &st, &p, nullptr );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "contacts/s", contacts );
+	state.counters["contacts"] = contacts;
+}
+
+// The paper's Collisions column: refit (rebuild when degraded), detect and respond for
+// params().rounds rounds, then the Voronoi restore of Eq. 14. rounds = range(1).
+void BM_collide_frame( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	sere_collide_state st = s.state();
+	sere_collide_params p = params();
+	p.rounds = (int32_t) state.range( 1 );
+	sere_collide_stats stats = {};
+	for ( auto _ : state )
+	{
+		state.PauseTiming();
+		s.reset();
+		state.ResumeTiming();
+		sere_collide_resolve( s.collide, s.bvh, &st, &p, &stats );
+		sere_collide_restore_voronoi( s.x.data, s.y.data, s.z.data, s.vx.data, s.vy.data, s.vz.data, s.tri.data(), s.f,
+									  s.n, s.h.data );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "vertices/s", s.n );
+	state.counters["contacts"] = stats.contacts;
+	state.counters["unresolved"] = stats.unresolved;
+	state.counters["iterations"] = stats.iterations;
+}
+
+void BM_collide_restore_voronoi( benchmark::State& state )
+{
+	Scene& s = scene( kCrumpled );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	for ( auto _ : state )
+	{
+		sere_collide_restore_voronoi( s.x.data, s.y.data, s.z.data, s.vx.data, s.vy.data, s.vz.data, s.tri.data(), s.f,
+									  s.n, s.h.data );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "triangles/s", s.f );
+}
+
+// The search alone, for the comparison with Embree: refit + per-vertex query + exact test.
+void BM_collide_search( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	int32_t contacts = 0;
+	for ( auto _ : state )
+	{
+		sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
+		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, kThickness, &contacts );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "queries/s", s.n );
+	state.counters["contacts"] = contacts;
+}
+
+void BM_collide_ref_pairs( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	std::vector<int32_t> a( 1 << 20 ), b( 1 << 20 );
+	int64_t pairs = 0;
+	for ( auto _ : state )
+	{
+		pairs = sere_collide_ref_pairs( s.x.data, s.y.data, s.z.data, s.n, s.tri.data(), s.f, kThickness, a.data(),
+										b.data(), (int64_t) a.size() );
+		benchmark::DoNotOptimize( pairs );
+	}
+	rate( state, "pairs tested/s", (double) s.n * s.f );
+	state.counters["contacts"] = (double) pairs;
+}
+
+// Embree 3 doing the same search: a triangle geometry refit on commit, then rtcPointQuery per
+// vertex with radius = thickness, whose callback applies the same exact test.
+struct EmbreeQuery
+{
+	const Scene* scene;
+	int32_t vertex;
+	float p[3];
+	float h2;
+	std::vector<int64_t>* found;
+};
+
+bool embree_visit( RTCPointQueryFunctionArguments* args )
+{
+	auto* q = static_cast<EmbreeQuery*>( args->userPtr );
+	const int32_t* v = &q->scene->tri[3 * (size_t) args->primID];
+	if ( v[0] == q->vertex || v[1] == q->vertex || v[2] == q->vertex )
+	{
+		return false;
+	}
+	const Scene& s = *q->scene;
+	float a[3] = { s.x.data[v[0]], s.y.data[v[0]], s.z.data[v[0]] };
+	float b[3] = { s.x.data[v[1]], s.y.data[v[1]], s.z.data[v[1]] };
+	float c[3] = { s.x.data[v[2]], s.y.data[v[2]], s.z.data[v[2]] };
+	float w[3];
+	if ( sere_closest_point_triangle( q->p, a, b, c, w ) < q->h2 )
+	{
+		q->found->push_back( (int64_t) q->vertex << 32 | args->primID );
+	}
+	return false;
+}
+
+void BM_embree_search( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	int threads = (int) state.range( 0 );
+	omp_set_num_threads( threads );
+	std::string config = "threads=" + std::to_string( threads );
+	RTCDevice device = rtcNewDevice( config.c_str() );
+	RTCScene rtc = rtcNewScene( device );
+	rtcSetSceneFlags( rtc, RTC_SCENE_FLAG_DYNAMIC );
+	RTCGeometry geometry = rtcNewGeometry( device, RTC_GEOMETRY_TYPE_TRIANGLE );
+	rtcSetGeometryBuildQuality( geometry, RTC_BUILD_QUALITY_REFIT );
+	// stride 16 keeps every vertex load inside the buffer, as Embree requires
+	auto* vertices = static_cast<float*>(
+		rtcSetNewGeometryBuffer( geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof( float ), s.n ) );
+	auto* indices = static_cast<uint32_t*>(
+		rtcSetNewGeometryBuffer( geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof( uint32_t ), s.f ) );
+	for ( size_t k = 0; k < s.tri.size(); ++k )
+	{
+		indices[k] = (uint32_t) s.tri[k];
+	}
+	auto upload = [&]()
+	{
+#pragma omp parallel for schedule( static )
+		for ( int32_t k = 0; k < s.n; ++k )
+		{
+			vertices[4 * k + 0] = s.x.data[k];
+			vertices[4 * k + 1] = s.y.data[k];
+			vertices[4 * k + 2] = s.z.data[k];
+			vertices[4 * k + 3] = 0.0f;
+		}
+		rtcUpdateGeometryBuffer( geometry, RTC_BUFFER_TYPE_VERTEX, 0 );
+		rtcCommitGeometry( geometry );
+	};
+	upload();
+	rtcAttachGeometry( rtc, geometry );
+	rtcCommitScene( rtc );
+	std::vector<std::vector<int64_t>> found( (size_t) threads );
+	size_t contacts = 0;
+	for ( auto _ : state )
+	{
+		upload();
+		rtcCommitScene( rtc );
+#pragma omp parallel
+		{
+			std::vector<int64_t>& mine = found[(size_t) omp_get_thread_num()];
+			mine.clear();
+			RTCPointQueryContext context;
+			rtcInitPointQueryContext( &context );
+			EmbreeQuery q = { &s, 0, { 0, 0, 0 }, kThickness * kThickness, &mine };
+#pragma omp for schedule( dynamic, 64 )
+			for ( int32_t k = 0; k < s.n; ++k )
+			{
+				q.vertex = k;
+				q.p[0] = s.x.data[k], q.p[1] = s.y.data[k], q.p[2] = s.z.data[k];
+				RTCPointQuery query = { q.p[0], q.p[1], q.p[2], 0.0f, kThickness };
+				rtcPointQuery( rtc, &query, &context, embree_visit, &q );
+			}
+		}
+		contacts = 0;
+		for ( auto& f : found )
+		{
+			contacts += f.size();
+		}
+		benchmark::DoNotOptimize( contacts );
+	}
+	rate( state, "queries/s", s.n );
+	state.counters["contacts"] = (double) contacts;
+	rtcReleaseGeometry( geometry );
+	rtcReleaseScene( rtc );
+	rtcReleaseDevice( device );
+}
+
+} // namespace
+
+BENCHMARK_CAPTURE( BM_bvh_refit, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_bvh_refit, crumpled, kCrumpled )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_bvh_build, crumpled, kCrumpled )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_detect, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_detect, crumpled, kCrumpled )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_detect, folded, kFolded )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_respond, crumpled, kCrumpled )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_respond, folded, kFolded )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_frame, flat, kFlat )->Args( { 1, 1 } )->Args( { 2, 1 } )->Args( { 2, 2 } )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_frame, crumpled, kCrumpled )
+	->Args( { 1, 1 } )
+	->Args( { 2, 1 } )
+	->Args( { 2, 2 } )
+	->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_frame, folded, kFolded )
+	->Args( { 1, 1 } )
+	->Args( { 2, 1 } )
+	->Args( { 2, 2 } )
+	->UseRealTime();
+BENCHMARK( BM_collide_restore_voronoi )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_search, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_search, crumpled, kCrumpled )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_embree_search, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_embree_search, crumpled, kCrumpled )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_ref_pairs, crumpled, kCrumpled )->Unit( benchmark::kMillisecond );

@@ -1,0 +1,853 @@
+#include "collide.h"
+
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+/* Vertices are queried in fixed blocks handed out dynamically (crumpled regions cost more than
+ * flat ones); a block's contacts land in the list by block index, whichever thread ran it. */
+#define DETECT_BLOCK 64
+
+/* Below this many contacts the response runs on the calling thread alone. */
+#define RESPOND_PARALLEL 512
+
+/* Contact roles in the per-vertex gather lists: corner a, b, c of the triangle, or the vertex. */
+#define ROLE_VERTEX 3
+
+struct sere_collide
+{
+	int32_t vertex_count;
+	int32_t triangle_count;
+	int32_t capacity;
+	int32_t slots; /* threads with their own detection buffer */
+	int32_t block_count;
+	int32_t contact_count;
+	sere_contact* contacts;		   /* capacity, in vertex order */
+	sere_contact* thread_contacts; /* slots × capacity */
+	int32_t* block_thread;
+	int32_t* block_start;
+	int64_t* block_found;
+
+	/* Gather lists: for each vertex, the contacts it takes part in (as vertex or corner),
+	 * entries[entry_offset[i] ..] = contact << 2 | role, in contact order. */
+	int32_t* entry_offset; /* vertex_count + 1 */
+	int32_t* entry_cursor; /* vertex_count */
+	int32_t* entries;	   /* 4 × capacity */
+	int32_t* touched;	   /* vertices with at least one entry, ascending */
+	int32_t touched_count;
+
+	/* Per contact, the current iteration's correction λ n̂, barycentric weights and activity. */
+	float *corr_x, *corr_y, *corr_z;
+	float *weight_a, *weight_b, *weight_c;
+	uint8_t* active;
+
+	/* Per touched vertex: displacement summed over the iterations, for the velocity update. */
+	float *acc_x, *acc_y, *acc_z;
+};
+
+sere_collide_params sere_collide_params_default( void )
+{
+	sere_collide_params params = {
+		/* a tenth to a third of an edge on Table 1's leaves, as cloth solvers choose */
+		.thickness = 0.005f,
+		/* Table 2: Δt = 0.002 for every preset */
+		.dt = 0.002f,
+		.iterations = 8,
+		.rounds = 2,
+		.rebuild_ratio = SERE_BVH_REBUILD_RATIO,
+	};
+	return params;
+}
+
+/* Closest point q on the segment ab to p; t is its parameter (q = a + t (b − a)). */
+static inline float closest_on_segment( const float p[3], const float a[3], const float b[3], float* t )
+{
+	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	float ap[3] = { p[0] - a[0], p[1] - a[1], p[2] - a[2] };
+	float len2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+	float s = len2 > 0.0f ? ( ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2] ) / len2 : 0.0f;
+	s = s < 0.0f ? 0.0f : ( s > 1.0f ? 1.0f : s );
+	float d[3] = { ap[0] - s * ab[0], ap[1] - s * ab[1], ap[2] - s * ab[2] };
+	*t = s;
+	return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+/* Ericson, Real-Time Collision Detection 5.1.5: test the vertex regions, then the edge regions
+ * by the signs of the barycentric areas, else the point projects inside the face. q gets the
+ * closest point, w its weights; returns |p − q|². */
+static inline float closest_point( const float p[3], const float a[3], const float b[3], const float c[3], float w[3],
+								   float q[3] )
+{
+	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	float ac[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+	float ap[3] = { p[0] - a[0], p[1] - a[1], p[2] - a[2] };
+	float d1 = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2];
+	float d2 = ac[0] * ap[0] + ac[1] * ap[1] + ac[2] * ap[2];
+	float bp[3] = { p[0] - b[0], p[1] - b[1], p[2] - b[2] };
+	float d3 = ab[0] * bp[0] + ab[1] * bp[1] + ab[2] * bp[2];
+	float d4 = ac[0] * bp[0] + ac[1] * bp[1] + ac[2] * bp[2];
+	float cp[3] = { p[0] - c[0], p[1] - c[1], p[2] - c[2] };
+	float d5 = ab[0] * cp[0] + ab[1] * cp[1] + ab[2] * cp[2];
+	float d6 = ac[0] * cp[0] + ac[1] * cp[1] + ac[2] * cp[2];
+	float vc = d1 * d4 - d3 * d2;
+	float vb = d5 * d2 - d1 * d6;
+	float va = d3 * d6 - d5 * d4;
+	float sum = va + vb + vc;
+	float u, v, t;
+
+	if ( d1 <= 0.0f && d2 <= 0.0f )
+	{
+		u = 1.0f, v = 0.0f, t = 0.0f;
+		q[0] = a[0], q[1] = a[1], q[2] = a[2];
+	}
+	else if ( d3 >= 0.0f && d4 <= d3 )
+	{
+		u = 0.0f, v = 1.0f, t = 0.0f;
+		q[0] = b[0], q[1] = b[1], q[2] = b[2];
+	}
+	else if ( d6 >= 0.0f && d5 <= d6 )
+	{
+		u = 0.0f, v = 0.0f, t = 1.0f;
+		q[0] = c[0], q[1] = c[1], q[2] = c[2];
+	}
+	else if ( vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f && d1 - d3 > 0.0f )
+	{
+		float s = d1 / ( d1 - d3 );
+		u = 1.0f - s, v = s, t = 0.0f;
+		q[0] = a[0] + s * ab[0], q[1] = a[1] + s * ab[1], q[2] = a[2] + s * ab[2];
+	}
+	else if ( vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f && d2 - d6 > 0.0f )
+	{
+		float s = d2 / ( d2 - d6 );
+		u = 1.0f - s, v = 0.0f, t = s;
+		q[0] = a[0] + s * ac[0], q[1] = a[1] + s * ac[1], q[2] = a[2] + s * ac[2];
+	}
+	else if ( va <= 0.0f && d4 - d3 >= 0.0f && d5 - d6 >= 0.0f && ( d4 - d3 ) + ( d5 - d6 ) > 0.0f )
+	{
+		float s = ( d4 - d3 ) / ( ( d4 - d3 ) + ( d5 - d6 ) );
+		u = 0.0f, v = 1.0f - s, t = s;
+		q[0] = b[0] + s * ( c[0] - b[0] ), q[1] = b[1] + s * ( c[1] - b[1] ), q[2] = b[2] + s * ( c[2] - b[2] );
+	}
+	else if ( vb >= 0.0f && vc >= 0.0f && vb + vc <= sum &&
+			  sum > 0x1p-20f * ( ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2] ) *
+						( ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2] ) )
+	{
+		/* sum = |ab|² |ac|² sin² of the angle at a, formed from products of dot products: below
+		 * a millionth of |ab|² |ac|² rounding swamps it and the weights are noise */
+		v = vb / sum, t = vc / sum;
+		u = 1.0f - v - t;
+		q[0] = a[0] + v * ab[0] + t * ac[0];
+		q[1] = a[1] + v * ab[1] + t * ac[1];
+		q[2] = a[2] + v * ab[2] + t * ac[2];
+	}
+	else
+	{
+		/* A degenerate triangle or a sliver thinner than a thousandth of its edges: its nearest
+		 * edge, off by at most that width. (The edge tests above skip zero-length edges, which
+		 * have no region.) */
+		float sab, sbc, sca;
+		float dab = closest_on_segment( p, a, b, &sab );
+		float dbc = closest_on_segment( p, b, c, &sbc );
+		float dca = closest_on_segment( p, c, a, &sca );
+		if ( dab <= dbc && dab <= dca )
+		{
+			u = 1.0f - sab, v = sab, t = 0.0f;
+			q[0] = a[0] + sab * ab[0], q[1] = a[1] + sab * ab[1], q[2] = a[2] + sab * ab[2];
+		}
+		else if ( dbc <= dca )
+		{
+			u = 0.0f, v = 1.0f - sbc, t = sbc;
+			q[0] = b[0] + sbc * ( c[0] - b[0] ), q[1] = b[1] + sbc * ( c[1] - b[1] ),
+			q[2] = b[2] + sbc * ( c[2] - b[2] );
+		}
+		else
+		{
+			u = sca, v = 0.0f, t = 1.0f - sca;
+			q[0] = c[0] - sca * ac[0], q[1] = c[1] - sca * ac[1], q[2] = c[2] - sca * ac[2];
+		}
+	}
+	w[0] = u, w[1] = v, w[2] = t;
+	float d[3] = { p[0] - q[0], p[1] - q[1], p[2] - q[2] };
+	return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+float sere_closest_point_triangle( const float p[3], const float a[3], const float b[3], const float c[3],
+								   float weights[3] )
+{
+	float q[3];
+	return closest_point( p, a, b, c, weights, q );
+}
+
+static inline void load3( const float* x, const float* y, const float* z, int32_t i, float out[3] )
+{
+	out[0] = x[i], out[1] = y[i], out[2] = z[i];
+}
+
+static void collide_free( sere_collide* c )
+{
+	void* arrays[] = { c->contacts,		c->thread_contacts, c->block_thread, c->block_start, c->block_found,
+					   c->entry_offset, c->entry_cursor,	c->entries,		 c->touched,	 c->corr_x,
+					   c->corr_y,		c->corr_z,			c->weight_a,	 c->weight_b,	 c->weight_c,
+					   c->active,		c->acc_x,			c->acc_y,		 c->acc_z };
+	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
+	{
+		sere_free( arrays[i] );
+	}
+}
+
+/* The arrays sized by the contact capacity; the old ones are kept on failure. */
+static sere_status alloc_contacts( sere_collide* c, int32_t capacity )
+{
+	size_t cap = (size_t) sere_pad( capacity );
+	sere_contact* contacts = sere_alloc( sizeof( sere_contact ) * cap );
+	sere_contact* thread_contacts = sere_alloc( sizeof( sere_contact ) * cap * (size_t) c->slots );
+	int32_t* entries = sere_alloc( sizeof( int32_t ) * 4 * cap );
+	float* floats[6];
+	bool ok = contacts && thread_contacts && entries;
+	for ( int i = 0; i < 6; ++i )
+	{
+		floats[i] = sere_alloc( sizeof( float ) * cap );
+		ok = ok && floats[i] != NULL;
+	}
+	uint8_t* active = sere_alloc( cap );
+	ok = ok && active != NULL;
+	if ( !ok )
+	{
+		sere_free( contacts );
+		sere_free( thread_contacts );
+		sere_free( entries );
+		for ( int i = 0; i < 6; ++i )
+		{
+			sere_free( floats[i] );
+		}
+		sere_free( active );
+		return SERE_ERR_MEMORY;
+	}
+	float** slots[6] = { &c->corr_x, &c->corr_y, &c->corr_z, &c->weight_a, &c->weight_b, &c->weight_c };
+	for ( int i = 0; i < 6; ++i )
+	{
+		sere_free( *slots[i] );
+		*slots[i] = floats[i];
+	}
+	sere_free( c->contacts );
+	sere_free( c->thread_contacts );
+	sere_free( c->entries );
+	sere_free( c->active );
+	c->contacts = contacts;
+	c->thread_contacts = thread_contacts;
+	c->entries = entries;
+	c->active = active;
+	c->capacity = capacity;
+	c->contact_count = 0;
+	c->touched_count = 0;
+	return SERE_OK;
+}
+
+sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out )
+{
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*out = NULL;
+	if ( bvh == NULL || contact_capacity < 0 || contact_capacity >= ( 1 << 29 ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t n = sere_bvh_vertex_count( bvh );
+	int32_t triangles;
+	sere_bvh_triangles( bvh, &triangles );
+	int64_t capacity = contact_capacity > 0 ? contact_capacity : 8 * (int64_t) n;
+	capacity = capacity < ( 1 << 29 ) - 1 ? capacity : ( 1 << 29 ) - 1;
+	sere_collide* c = sere_alloc( sizeof( sere_collide ) );
+	if ( c == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	c->vertex_count = n;
+	c->triangle_count = triangles;
+	c->slots = omp_get_max_threads();
+	c->block_count = ( n + DETECT_BLOCK - 1 ) / DETECT_BLOCK;
+	size_t vn = (size_t) sere_pad( n );
+	c->block_thread = sere_alloc( sizeof( int32_t ) * (size_t) c->block_count );
+	c->block_start = sere_alloc( sizeof( int32_t ) * (size_t) c->block_count );
+	c->block_found = sere_alloc( sizeof( int64_t ) * (size_t) c->block_count );
+	c->entry_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
+	c->entry_cursor = sere_alloc( sizeof( int32_t ) * vn );
+	c->touched = sere_alloc( sizeof( int32_t ) * vn );
+	c->acc_x = sere_alloc( sizeof( float ) * vn );
+	c->acc_y = sere_alloc( sizeof( float ) * vn );
+	c->acc_z = sere_alloc( sizeof( float ) * vn );
+	bool ok = c->block_thread && c->block_start && c->block_found && c->entry_offset && c->entry_cursor && c->touched &&
+			  c->acc_x && c->acc_y && c->acc_z;
+	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
+	{
+		collide_free( c );
+		sere_free( c );
+		return SERE_ERR_MEMORY;
+	}
+	*out = c;
+	return SERE_OK;
+}
+
+void sere_collide_destroy( sere_collide* collide )
+{
+	if ( collide == NULL )
+	{
+		return;
+	}
+	collide_free( collide );
+	sere_free( collide );
+}
+
+sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity )
+{
+	if ( collide == NULL || contact_capacity < 1 || contact_capacity >= ( 1 << 29 ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( contact_capacity <= collide->capacity )
+	{
+		return SERE_OK;
+	}
+	return alloc_contacts( collide, contact_capacity );
+}
+
+const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count )
+{
+	*count = collide->contact_count;
+	return collide->contacts;
+}
+
+typedef struct detect_context
+{
+	const float *x, *y, *z;
+	const int32_t* tri;
+	float p[3];
+	float h2;
+	int32_t vertex;
+	sere_contact* buffer;
+	int32_t used;
+	int32_t capacity;
+	int64_t found;
+} detect_context;
+
+static void detect_visit( void* context, int32_t t )
+{
+	detect_context* c = context;
+	const int32_t* v = c->tri + 3 * (size_t) t;
+	if ( v[0] == c->vertex || v[1] == c->vertex || v[2] == c->vertex )
+	{
+		return;
+	}
+	float a[3], b[3], cc[3], w[3], q[3];
+	load3( c->x, c->y, c->z, v[0], a );
+	load3( c->x, c->y, c->z, v[1], b );
+	load3( c->x, c->y, c->z, v[2], cc );
+	float d2 = closest_point( c->p, a, b, cc, w, q );
+	if ( !( d2 < c->h2 ) )
+	{
+		return;
+	}
+	c->found += 1;
+	if ( c->used < c->capacity )
+	{
+		float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+		float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
+		float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+		float s = ( c->p[0] - q[0] ) * n[0] + ( c->p[1] - q[1] ) * n[1] + ( c->p[2] - q[2] ) * n[2];
+		c->buffer[c->used++] = ( sere_contact ){ c->vertex, t, w[0], w[1], w[2], sqrtf( d2 ), s < 0.0f ? -1.0f : 1.0f };
+	}
+}
+
+/* Half-width of the query cube around a vertex: the thickness plus what rounding can add. The
+ * float distance test may accept a pair up to a few ulps of the thickness too far, and the
+ * closest point (and p ± r) carry a few ulps of the coordinates; both margins are far below
+ * any geometric scale, and the exact test decides anyway. */
+static inline float cull_radius( float h, const float p[3] )
+{
+	return h + h * 0x1p-10f + ( fabsf( p[0] ) + fabsf( p[1] ) + fabsf( p[2] ) ) * 0x1p-18f;
+}
+
+/* Per-vertex gather lists by a counting sort over the contacts in order (sequential: a few
+ * passes over the vertices and four entries per contact). */
+static void build_gather( sere_collide* c, const int32_t* tri )
+{
+	int32_t n = c->vertex_count;
+	int32_t* offset = c->entry_offset;
+	memset( offset, 0, sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	for ( int32_t k = 0; k < c->contact_count; ++k )
+	{
+		const int32_t* v = tri + 3 * (size_t) c->contacts[k].triangle;
+		offset[v[0] + 1] += 1;
+		offset[v[1] + 1] += 1;
+		offset[v[2] + 1] += 1;
+		offset[c->contacts[k].vertex + 1] += 1;
+	}
+	int32_t touched = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( offset[i + 1] > 0 )
+		{
+			c->touched[touched++] = i;
+		}
+		offset[i + 1] += offset[i];
+		c->entry_cursor[i] = offset[i];
+	}
+	c->touched_count = touched;
+	for ( int32_t k = 0; k < c->contact_count; ++k )
+	{
+		const int32_t* v = tri + 3 * (size_t) c->contacts[k].triangle;
+		for ( int32_t r = 0; r < 3; ++r )
+		{
+			c->entries[c->entry_cursor[v[r]]++] = k << 2 | r;
+		}
+		c->entries[c->entry_cursor[c->contacts[k].vertex]++] = k << 2 | ROLE_VERTEX;
+	}
+}
+
+sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+								 const float* z, float thickness, int32_t* contact_count )
+{
+	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
+		 !( thickness > 0.0f ) || !isfinite( thickness ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t triangles;
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
+	if ( sere_bvh_vertex_count( bvh ) != collide->vertex_count || triangles != collide->triangle_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*contact_count = 0;
+	collide->contact_count = 0;
+	collide->touched_count = 0;
+	int32_t n = collide->vertex_count;
+	int32_t threads = omp_get_max_threads();
+	threads = threads < collide->slots ? threads : collide->slots;
+	float h2 = thickness * thickness;
+	int bad = 0;
+#pragma omp parallel num_threads( threads ) reduction( | : bad )
+	{
+		int tid = omp_get_thread_num();
+		detect_context c = {
+			.x = x,
+			.y = y,
+			.z = z,
+			.tri = tri,
+			.h2 = h2,
+			.buffer = collide->thread_contacts + (size_t) tid * (size_t) collide->capacity,
+			.capacity = collide->capacity,
+		};
+#pragma omp for schedule( dynamic, 1 )
+		for ( int32_t block = 0; block < collide->block_count; ++block )
+		{
+			int32_t start = c.used;
+			int64_t found = c.found;
+			int32_t end = ( block + 1 ) * DETECT_BLOCK < n ? ( block + 1 ) * DETECT_BLOCK : n;
+			for ( int32_t v = block * DETECT_BLOCK; v < end; ++v )
+			{
+				load3( x, y, z, v, c.p );
+				if ( !( isfinite( c.p[0] ) && isfinite( c.p[1] ) && isfinite( c.p[2] ) ) )
+				{
+					bad = 1;
+					continue;
+				}
+				c.vertex = v;
+				float r = cull_radius( thickness, c.p );
+				float lo[3] = { c.p[0] - r, c.p[1] - r, c.p[2] - r };
+				float hi[3] = { c.p[0] + r, c.p[1] + r, c.p[2] + r };
+				sere_bvh_query_box( bvh, lo, hi, detect_visit, &c );
+			}
+			collide->block_thread[block] = tid;
+			collide->block_start[block] = start;
+			collide->block_found[block] = c.found - found;
+		}
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	int64_t total = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		total += collide->block_found[block];
+	}
+	*contact_count = total < INT32_MAX ? (int32_t) total : INT32_MAX;
+	if ( total > collide->capacity )
+	{
+		return SERE_ERR_CAPACITY;
+	}
+	/* block_found becomes each block's offset in the list */
+	int64_t offset = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		int64_t found = collide->block_found[block];
+		collide->block_found[block] = offset;
+		offset += found;
+	}
+#pragma omp parallel for num_threads( threads ) schedule( static )
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		int64_t next = block + 1 < collide->block_count ? collide->block_found[block + 1] : total;
+		size_t count = (size_t) ( next - collide->block_found[block] );
+		const sere_contact* from = collide->thread_contacts +
+								   (size_t) collide->block_thread[block] * (size_t) collide->capacity +
+								   (size_t) collide->block_start[block];
+		if ( count > 0 )
+		{
+			memcpy( collide->contacts + collide->block_found[block], from, sizeof( sere_contact ) * count );
+		}
+	}
+	collide->contact_count = (int32_t) total;
+	build_gather( collide, tri );
+	return SERE_OK;
+}
+
+/* Evaluates contact k at the current positions (see sere_collide_respond); returns 1 and stores
+ * its correction λ n̂ and weights when it still pushes, 0 otherwise. */
+static int evaluate_contact( sere_collide* c, int32_t k, const int32_t* tri, const sere_collide_state* s, float h2 )
+{
+	const sere_contact* contact = c->contacts + k;
+	const int32_t* v = tri + 3 * (size_t) contact->triangle;
+	int32_t i = contact->vertex;
+	float p[3], a[3], b[3], cc[3], w[3], q[3];
+	load3( s->x, s->y, s->z, i, p );
+	load3( s->x, s->y, s->z, v[0], a );
+	load3( s->x, s->y, s->z, v[1], b );
+	load3( s->x, s->y, s->z, v[2], cc );
+	closest_point( p, a, b, cc, w, q );
+	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
+	float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+	float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+	float weight =
+		s->inv_m[i] + s->inv_m[v[0]] * w[0] * w[0] + s->inv_m[v[1]] * w[1] * w[1] + s->inv_m[v[2]] * w[2] * w[2];
+	c->active[k] = 0;
+	if ( !( length2 > 0.0f ) || !( weight > 0.0f ) )
+	{
+		return 0;
+	}
+	float scale = contact->side / sqrtf( length2 );
+	n[0] *= scale, n[1] *= scale, n[2] *= scale;
+	float d[3] = { p[0] - q[0], p[1] - q[1], p[2] - q[2] };
+	float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+	float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
+	float lateral2 = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+	if ( !( lateral2 < h2 ) )
+	{
+		return 0;
+	}
+	float target = sqrtf( h2 - lateral2 );
+	if ( !( height < target ) )
+	{
+		return 0;
+	}
+	float lambda = ( target - height ) / weight;
+	c->corr_x[k] = lambda * n[0];
+	c->corr_y[k] = lambda * n[1];
+	c->corr_z[k] = lambda * n[2];
+	c->weight_a[k] = w[0];
+	c->weight_b[k] = w[1];
+	c->weight_c[k] = w[2];
+	c->active[k] = 1;
+	return 1;
+}
+
+/* Moves touched vertex slot j by the mean of its active contacts' corrections, summed in
+ * contact order. */
+static void gather_apply( sere_collide* c, int32_t j, const sere_collide_state* s )
+{
+	int32_t i = c->touched[j];
+	float dx = 0.0f, dy = 0.0f, dz = 0.0f;
+	int32_t count = 0;
+	for ( int32_t e = c->entry_offset[i]; e < c->entry_offset[i + 1]; ++e )
+	{
+		int32_t k = c->entries[e] >> 2, role = c->entries[e] & 3;
+		if ( !c->active[k] )
+		{
+			continue;
+		}
+		float coefficient;
+		switch ( role )
+		{
+			case 0:
+				coefficient = -c->weight_a[k];
+				break;
+			case 1:
+				coefficient = -c->weight_b[k];
+				break;
+			case 2:
+				coefficient = -c->weight_c[k];
+				break;
+			default:
+				coefficient = 1.0f;
+				break;
+		}
+		dx += coefficient * c->corr_x[k];
+		dy += coefficient * c->corr_y[k];
+		dz += coefficient * c->corr_z[k];
+		count += 1;
+	}
+	if ( count == 0 )
+	{
+		return;
+	}
+	float scale = s->inv_m[i] / (float) count;
+	dx *= scale, dy *= scale, dz *= scale;
+	s->x[i] += dx;
+	s->y[i] += dy;
+	s->z[i] += dz;
+	c->acc_x[j] += dx;
+	c->acc_y[j] += dy;
+	c->acc_z[j] += dz;
+}
+
+static bool state_valid( const sere_collide_state* s )
+{
+	return s != NULL && s->x && s->y && s->z && s->vx && s->vy && s->vz && s->inv_m;
+}
+
+static bool params_valid( const sere_collide_params* p )
+{
+	return p != NULL && p->thickness > 0.0f && isfinite( p->thickness ) && p->dt > 0.0f && isfinite( p->dt ) &&
+		   p->iterations >= 0 && p->rounds >= 1 && p->rebuild_ratio > 0.0;
+}
+
+static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+							const sere_collide_params* params, int32_t* unresolved, int32_t* iterations )
+{
+	if ( collide == NULL || bvh == NULL || !state_valid( state ) || !params_valid( params ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t triangles;
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
+	if ( triangles != collide->triangle_count || sere_bvh_vertex_count( bvh ) != collide->vertex_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t contacts = collide->contact_count, touched = collide->touched_count;
+	/* A few hundred contacts take less time than the barriers of a parallel response; the result
+	 * is the same either way. */
+	bool parallel = contacts >= RESPOND_PARALLEL;
+	int bad = 0;
+#pragma omp parallel for reduction( | : bad ) schedule( static ) if ( parallel )
+	for ( int32_t j = 0; j < touched; ++j )
+	{
+		int32_t i = collide->touched[j];
+		bad |= !( isfinite( state->vx[i] ) && isfinite( state->vy[i] ) && isfinite( state->vz[i] ) &&
+				  isfinite( state->inv_m[i] ) && state->inv_m[i] >= 0.0f );
+		collide->acc_x[j] = collide->acc_y[j] = collide->acc_z[j] = 0.0f;
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	float h = params->thickness, h2 = h * h;
+	float loose = h * ( 1.0f - SERE_COLLIDE_TOLERANCE );
+	float inv_dt = 1.0f / params->dt;
+	int active = 0, remaining = 0;
+	int32_t applied = 0;
+#pragma omp parallel if ( parallel )
+	{
+		for ( int32_t it = 0; it < params->iterations; ++it )
+		{
+#pragma omp single
+			active = 0;
+#pragma omp for reduction( + : active ) schedule( static )
+			for ( int32_t k = 0; k < contacts; ++k )
+			{
+				active += evaluate_contact( collide, k, tri, state, h2 );
+			}
+			if ( active == 0 )
+			{
+				break;
+			}
+#pragma omp for schedule( static )
+			for ( int32_t j = 0; j < touched; ++j )
+			{
+				gather_apply( collide, j, state );
+			}
+#pragma omp single nowait
+			applied += 1;
+		}
+#pragma omp for reduction( + : remaining ) schedule( static )
+		for ( int32_t k = 0; k < contacts; ++k )
+		{
+			const sere_contact* contact = collide->contacts + k;
+			const int32_t* v = tri + 3 * (size_t) contact->triangle;
+			float p[3], a[3], b[3], cc[3], w[3], q[3];
+			load3( state->x, state->y, state->z, contact->vertex, p );
+			load3( state->x, state->y, state->z, v[0], a );
+			load3( state->x, state->y, state->z, v[1], b );
+			load3( state->x, state->y, state->z, v[2], cc );
+			remaining += closest_point( p, a, b, cc, w, q ) < loose * loose;
+		}
+#pragma omp for schedule( static )
+		for ( int32_t j = 0; j < touched; ++j )
+		{
+			int32_t i = collide->touched[j];
+			state->vx[i] += collide->acc_x[j] * inv_dt;
+			state->vy[i] += collide->acc_y[j] * inv_dt;
+			state->vz[i] += collide->acc_z[j] * inv_dt;
+		}
+	}
+	*unresolved = remaining;
+	*iterations = applied;
+	return SERE_OK;
+}
+
+sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+								  const sere_collide_params* params, int32_t* unresolved )
+{
+	int32_t remaining, iterations;
+	sere_status status = respond( collide, bvh, state, params, &remaining, &iterations );
+	if ( status == SERE_OK && unresolved != NULL )
+	{
+		*unresolved = remaining;
+	}
+	return status;
+}
+
+sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const sere_collide_state* state,
+								  const sere_collide_params* params, sere_collide_stats* stats )
+{
+	if ( collide == NULL || bvh == NULL || !state_valid( state ) || !params_valid( params ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sere_collide_stats local = { 0 };
+	sere_status status = sere_bvh_update( bvh, state->x, state->y, state->z, params->rebuild_ratio, &local.rebuilt );
+	for ( int32_t round = 0; status == SERE_OK && round < params->rounds; ++round )
+	{
+		if ( round > 0 )
+		{
+			status = sere_bvh_refit( bvh, state->x, state->y, state->z );
+			if ( status != SERE_OK )
+			{
+				break;
+			}
+		}
+		int32_t found = 0;
+		status = sere_collide_detect( collide, bvh, state->x, state->y, state->z, params->thickness, &found );
+		if ( round == 0 )
+		{
+			local.contacts = found;
+		}
+		if ( status != SERE_OK )
+		{
+			break;
+		}
+		local.rounds += 1;
+		local.unresolved = 0;
+		if ( found == 0 )
+		{
+			break;
+		}
+		int32_t iterations = 0;
+		status = respond( collide, bvh, state, params, &local.unresolved, &iterations );
+		local.iterations += iterations;
+	}
+	if ( stats != NULL )
+	{
+		*stats = local;
+	}
+	return status;
+}
+
+/* The unit normal of triangle t and its three corners; zero normal when degenerate. */
+static inline void triangle_frame( const float* x, const float* y, const float* z, const int32_t* v, float a[3],
+								   float b[3], float c[3], float n[3] )
+{
+	load3( x, y, z, v[0], a );
+	load3( x, y, z, v[1], b );
+	load3( x, y, z, v[2], c );
+	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	float ac[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+	n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+	n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+	n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+	float length = sqrtf( n[0] * n[0] + n[1] * n[1] + n[2] * n[2] );
+	float inv = length > 0.0f ? 1.0f / length : 0.0f;
+	n[0] *= inv, n[1] *= inv, n[2] *= inv;
+}
+
+sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
+									int32_t triangle_count, int32_t voronoi_first, float* h_hat )
+{
+	if ( x == NULL || y == NULL || z == NULL || tri == NULL || h_hat == NULL || triangle_count < 0 ||
+		 voronoi_first < 0 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int bad = 0;
+#pragma omp parallel for reduction( | : bad ) schedule( static )
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		float a[3], b[3], c[3], n[3], p[3];
+		triangle_frame( x, y, z, tri + 3 * (size_t) t, a, b, c, n );
+		load3( x, y, z, voronoi_first + t, p );
+		/* Algorithm 1 line 14 */
+		float h = ( p[0] - a[0] ) * n[0] + ( p[1] - a[1] ) * n[1] + ( p[2] - a[2] ) * n[2];
+		/* a NaN or infinity in any of the four points reaches h through n or the difference */
+		bad |= !isfinite( h );
+		h_hat[t] = isfinite( h ) ? h : 0.0f;
+	}
+	return bad ? SERE_ERR_NONFINITE : SERE_OK;
+}
+
+sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,
+										  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
+										  const float* h )
+{
+	if ( x == NULL || y == NULL || z == NULL || vx == NULL || vy == NULL || vz == NULL || tri == NULL || h == NULL ||
+		 triangle_count < 0 || voronoi_first < 0 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	/* Check everything read before writing anything: the corners (all below voronoi_first, so
+	 * contiguous scans, and never a Voronoi particle being written) and the thicknesses. */
+	int bad = 0, outside = 0;
+#pragma omp parallel
+	{
+#pragma omp for reduction( | : bad ) schedule( static ) nowait
+		for ( int32_t i = 0; i < voronoi_first; ++i )
+		{
+			bad |= !( isfinite( x[i] ) && isfinite( y[i] ) && isfinite( z[i] ) && isfinite( vx[i] ) &&
+					  isfinite( vy[i] ) && isfinite( vz[i] ) );
+		}
+#pragma omp for reduction( | : bad, outside ) schedule( static )
+		for ( int32_t t = 0; t < triangle_count; ++t )
+		{
+			bad |= !isfinite( h[t] );
+			outside |= tri[3 * t] < 0 || tri[3 * t] >= voronoi_first || tri[3 * t + 1] < 0 ||
+					   tri[3 * t + 1] >= voronoi_first || tri[3 * t + 2] < 0 || tri[3 * t + 2] >= voronoi_first;
+		}
+	}
+	if ( outside )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+#pragma omp parallel for schedule( static )
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* v = tri + 3 * (size_t) t;
+		float a[3], b[3], c[3], n[3];
+		triangle_frame( x, y, z, v, a, b, c, n );
+		int32_t i = voronoi_first + t;
+		/* Eq. 14 */
+		x[i] = ( a[0] + b[0] + c[0] ) / 3.0f + h[t] * n[0];
+		y[i] = ( a[1] + b[1] + c[1] ) / 3.0f + h[t] * n[1];
+		z[i] = ( a[2] + b[2] + c[2] ) / 3.0f + h[t] * n[2];
+		vx[i] = ( vx[v[0]] + vx[v[1]] + vx[v[2]] ) / 3.0f;
+		vy[i] = ( vy[v[0]] + vy[v[1]] + vy[v[2]] ) / 3.0f;
+		vz[i] = ( vz[v[0]] + vz[v[1]] + vz[v[2]] ) / 3.0f;
+	}
+	return SERE_OK;
+}

@@ -1,0 +1,138 @@
+#include "collide_ref.h"
+
+#include "collide.h"
+
+#include <math.h>
+
+int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, int32_t vertex_count,
+								const int32_t* tri, int32_t triangle_count, float thickness, int32_t* vertex,
+								int32_t* triangle, int64_t capacity )
+{
+	float h2 = thickness * thickness;
+	int64_t count = 0;
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		float p[3] = { x[i], y[i], z[i] };
+		for ( int32_t t = 0; t < triangle_count; ++t )
+		{
+			const int32_t* v = tri + 3 * (size_t) t;
+			if ( v[0] == i || v[1] == i || v[2] == i )
+			{
+				continue;
+			}
+			float a[3] = { x[v[0]], y[v[0]], z[v[0]] };
+			float b[3] = { x[v[1]], y[v[1]], z[v[1]] };
+			float c[3] = { x[v[2]], y[v[2]], z[v[2]] };
+			float w[3];
+			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 )
+			{
+				if ( count < capacity )
+				{
+					vertex[count] = i;
+					triangle[count] = t;
+				}
+				count += 1;
+			}
+		}
+	}
+	return count;
+}
+
+static double dot3( const double u[3], const double v[3] )
+{
+	return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+static double segment_distance2( const double p[3], const double a[3], const double b[3] )
+{
+	double ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	double ap[3] = { p[0] - a[0], p[1] - a[1], p[2] - a[2] };
+	double len2 = dot3( ab, ab );
+	double t = len2 > 0.0 ? dot3( ap, ab ) / len2 : 0.0;
+	t = t < 0.0 ? 0.0 : ( t > 1.0 ? 1.0 : t );
+	double d[3] = { ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2] };
+	return dot3( d, d );
+}
+
+double sere_collide_ref_distance2( const double p[3], const double a[3], const double b[3], const double c[3] )
+{
+	double ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	double ac[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+	double ap[3] = { p[0] - a[0], p[1] - a[1], p[2] - a[2] };
+	double n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+	double n2 = dot3( n, n );
+	if ( n2 > 0.0 )
+	{
+		/* barycentric coordinates of the projection from the sub-triangle areas */
+		double s = dot3( ap, n ) / n2;
+		double q[3] = { ap[0] - s * n[0], ap[1] - s * n[1], ap[2] - s * n[2] };
+		double qb[3] = { q[0] - ab[0], q[1] - ab[1], q[2] - ab[2] };
+		double qc[3] = { q[0] - ac[0], q[1] - ac[1], q[2] - ac[2] };
+		double cross_bc[3] = { qb[1] * qc[2] - qb[2] * qc[1], qb[2] * qc[0] - qb[0] * qc[2],
+							   qb[0] * qc[1] - qb[1] * qc[0] };
+		double cross_ca[3] = { qc[1] * q[2] - qc[2] * q[1], qc[2] * q[0] - qc[0] * q[2], qc[0] * q[1] - qc[1] * q[0] };
+		double cross_ab[3] = { q[1] * qb[2] - q[2] * qb[1], q[2] * qb[0] - q[0] * qb[2], q[0] * qb[1] - q[1] * qb[0] };
+		if ( dot3( cross_bc, n ) >= 0.0 && dot3( cross_ca, n ) >= 0.0 && dot3( cross_ab, n ) >= 0.0 )
+		{
+			return s * s * n2;
+		}
+	}
+	double dab = segment_distance2( p, a, b );
+	double dbc = segment_distance2( p, b, c );
+	double dca = segment_distance2( p, c, a );
+	double d = dab < dbc ? dab : dbc;
+	return d < dca ? d : dca;
+}
+
+static void ref_normal( const float* x, const float* y, const float* z, const int32_t* v, double n[3] )
+{
+	double ab[3] = { (double) x[v[1]] - x[v[0]], (double) y[v[1]] - y[v[0]], (double) z[v[1]] - z[v[0]] };
+	double ac[3] = { (double) x[v[2]] - x[v[0]], (double) y[v[2]] - y[v[0]], (double) z[v[2]] - z[v[0]] };
+	n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+	n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+	n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+	double length = sqrt( dot3( n, n ) );
+	for ( int k = 0; k < 3; ++k )
+	{
+		n[k] = length > 0.0 ? n[k] / length : 0.0;
+	}
+}
+
+void sere_collide_ref_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
+								 int32_t triangle_count, int32_t voronoi_first, double* h_hat )
+{
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* v = tri + 3 * (size_t) t;
+		int32_t i = voronoi_first + t;
+		double n[3];
+		ref_normal( x, y, z, v, n );
+		h_hat[t] = ( (double) x[i] - x[v[0]] ) * n[0] + ( (double) y[i] - y[v[0]] ) * n[1] +
+				   ( (double) z[i] - z[v[0]] ) * n[2];
+	}
+}
+
+void sere_collide_ref_restore_voronoi( double* x, double* y, double* z, double* vx, double* vy, double* vz,
+									   const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
+									   const double* h )
+{
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* v = tri + 3 * (size_t) t;
+		int32_t i = voronoi_first + t;
+		double ab[3] = { x[v[1]] - x[v[0]], y[v[1]] - y[v[0]], z[v[1]] - z[v[0]] };
+		double ac[3] = { x[v[2]] - x[v[0]], y[v[2]] - y[v[0]], z[v[2]] - z[v[0]] };
+		double n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+		double length = sqrt( dot3( n, n ) );
+		for ( int k = 0; k < 3; ++k )
+		{
+			n[k] = length > 0.0 ? n[k] / length : 0.0;
+		}
+		x[i] = ( x[v[0]] + x[v[1]] + x[v[2]] ) / 3.0 + h[t] * n[0];
+		y[i] = ( y[v[0]] + y[v[1]] + y[v[2]] ) / 3.0 + h[t] * n[1];
+		z[i] = ( z[v[0]] + z[v[1]] + z[v[2]] ) / 3.0 + h[t] * n[2];
+		vx[i] = ( vx[v[0]] + vx[v[1]] + vx[v[2]] ) / 3.0;
+		vy[i] = ( vy[v[0]] + vy[v[1]] + vy[v[2]] ) / 3.0;
+		vz[i] = ( vz[v[0]] + vz[v[1]] + vz[v[2]] ) / 3.0;
+	}
+}

@@ -1,0 +1,752 @@
+#include "bvh.h"
+#include "collide.h"
+#include "fixture.h"
+#include "ref/collide_ref.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define COLLIDE_PI 3.14159265358979323846
+
+/* A jittered grid sheet of width 1 (the shared plane fixture; jitter ±0.1 cell keeps every
+ * triangle taller than the 0.3-cell thickness the tests use, so the flat sheet has no contact)
+ * with velocities and unit inverse masses, plus one Voronoi particle per triangle after the triangle layer (the
+ * sere_model layout); u, v keep the plane coordinates so every shape is made from rest. */
+typedef struct collide_sheet
+{
+	int32_t n, triangles;
+	float *x, *y, *z, *vx, *vy, *vz, *inv_m;
+	double *u, *v;
+	int32_t* tri;
+	float cell;
+} collide_sheet;
+
+static void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed )
+{
+	sere_test_plane plane;
+	sere_test_plane_grid( &plane, nx, ny, 1.0, (double) ny / nx, 0.2, 0, seed );
+	s->n = plane.mesh.point_count;
+	s->triangles = plane.mesh.triangle_count;
+	s->cell = 1.0f / (float) nx;
+	size_t bytes = sizeof( float ) * (size_t) sere_pad( s->n + s->triangles );
+	float** arrays[] = { &s->x, &s->y, &s->z, &s->vx, &s->vy, &s->vz, &s->inv_m };
+	for ( int k = 0; k < 7; ++k )
+	{
+		*arrays[k] = sere_alloc( bytes );
+	}
+	s->u = plane.x;
+	s->v = plane.y;
+	s->tri = plane.tri;
+	free( plane.veins );
+	for ( int32_t i = 0; i < s->n; ++i )
+	{
+		s->x[i] = (float) s->u[i];
+		s->y[i] = (float) s->v[i];
+		s->inv_m[i] = 1.0f;
+	}
+}
+
+static void collide_sheet_free( collide_sheet* s )
+{
+	float* arrays[] = { s->x, s->y, s->z, s->vx, s->vy, s->vz, s->inv_m };
+	for ( int k = 0; k < 7; ++k )
+	{
+		sere_free( arrays[k] );
+	}
+	free( s->u );
+	free( s->v );
+	free( s->tri );
+}
+
+static double collide_unit( uint64_t* state )
+{
+	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
+	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
+	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
+	z ^= z >> 31;
+	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
+}
+
+static void collide_sheet_flat( collide_sheet* s )
+{
+	for ( int32_t i = 0; i < s->n; ++i )
+	{
+		s->x[i] = (float) s->u[i], s->y[i] = (float) s->v[i], s->z[i] = 0.0f;
+	}
+}
+
+/* U-fold across x: the half u < a stays at z = 0, a half circle of radius gap / 2 follows, and
+ * the rest comes back above at z = gap, so the two halves face each other at distance gap. */
+static void collide_sheet_fold( collide_sheet* s, double gap )
+{
+	double r = 0.5 * gap, a = 0.5 * ( 1.0 - COLLIDE_PI * r );
+	for ( int32_t i = 0; i < s->n; ++i )
+	{
+		double u = s->u[i];
+		if ( u <= a )
+		{
+			s->x[i] = (float) u, s->z[i] = 0.0f;
+		}
+		else if ( u <= a + COLLIDE_PI * r )
+		{
+			s->x[i] = (float) ( a + r * sin( ( u - a ) / r ) );
+			s->z[i] = (float) ( r - r * cos( ( u - a ) / r ) );
+		}
+		else
+		{
+			s->x[i] = (float) ( a - ( u - a - COLLIDE_PI * r ) ), s->z[i] = (float) gap;
+		}
+		s->y[i] = (float) s->v[i];
+	}
+}
+
+/* Crumpled: a smooth random displacement field (eight plane waves of wavelength 0.2 to 0.5 in
+ * all three axes) of the given amplitude, plus per-vertex noise, from a fixed seed. Large
+ * amplitudes fold the sheet through itself. */
+static void collide_sheet_crumple( collide_sheet* s, double amplitude, double noise, uint64_t seed )
+{
+	uint64_t state = seed;
+	double wave[8][6];
+	for ( int m = 0; m < 8; ++m )
+	{
+		double angle = 2.0 * COLLIDE_PI * collide_unit( &state );
+		double k = 2.0 * COLLIDE_PI * ( 2.0 + 3.0 * collide_unit( &state ) );
+		wave[m][0] = k * cos( angle ), wave[m][1] = k * sin( angle );
+		wave[m][2] = 2.0 * COLLIDE_PI * collide_unit( &state );
+		for ( int a = 0; a < 3; ++a )
+		{
+			wave[m][3 + a] = ( a == 2 ? 0.25 : 0.125 ) * amplitude * ( 2.0 * collide_unit( &state ) - 1.0 );
+		}
+	}
+	for ( int32_t i = 0; i < s->n; ++i )
+	{
+		double d[3] = { 0.0, 0.0, 0.0 };
+		for ( int m = 0; m < 8; ++m )
+		{
+			double phase = sin( wave[m][0] * s->u[i] + wave[m][1] * s->v[i] + wave[m][2] );
+			for ( int a = 0; a < 3; ++a )
+			{
+				d[a] += wave[m][3 + a] * phase;
+			}
+		}
+		s->x[i] = (float) ( s->u[i] + d[0] + noise * ( collide_unit( &state ) - 0.5 ) );
+		s->y[i] = (float) ( s->v[i] + d[1] + noise * ( collide_unit( &state ) - 0.5 ) );
+		s->z[i] = (float) ( d[2] + noise * ( collide_unit( &state ) - 0.5 ) );
+	}
+}
+
+static int collide_cmp_pair( const void* a, const void* b )
+{
+	const int32_t *p = a, *q = b;
+	if ( p[0] != q[0] )
+	{
+		return p[0] < q[0] ? -1 : 1;
+	}
+	return ( p[1] > q[1] ) - ( p[1] < q[1] );
+}
+
+/* Detects with the BVH (already built or refit for the current positions) and asserts the
+ * contact set equals the brute-force pair set exactly; returns the pair count. */
+static int32_t collide_check_pairs( collide_sheet* s, sere_bvh* bvh, sere_collide* c, float h, const char* what )
+{
+	int32_t count = -1;
+	cr_assert_eq( sere_collide_detect( c, bvh, s->x, s->y, s->z, h, &count ), SERE_OK, "%s", what );
+	int64_t capacity = 1 << 20;
+	int32_t* rv = malloc( sizeof( int32_t ) * (size_t) capacity );
+	int32_t* rt = malloc( sizeof( int32_t ) * (size_t) capacity );
+	int64_t expected = sere_collide_ref_pairs( s->x, s->y, s->z, s->n, s->tri, s->triangles, h, rv, rt, capacity );
+	cr_assert_eq( count, expected, "%s: BVH finds %d pairs, brute force %lld", what, count, (long long) expected );
+	int32_t listed;
+	const sere_contact* contacts = sere_collide_contacts( c, &listed );
+	cr_assert_eq( listed, count );
+	int32_t* pairs = malloc( sizeof( int32_t ) * 2 * (size_t) ( count + 1 ) );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		pairs[2 * k] = contacts[k].vertex;
+		pairs[2 * k + 1] = contacts[k].triangle;
+		cr_assert( contacts[k].distance < h, "%s: contact %d at %g", what, k, contacts[k].distance );
+	}
+	qsort( pairs, (size_t) count, 2 * sizeof( int32_t ), collide_cmp_pair );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		cr_assert( pairs[2 * k] == rv[k] && pairs[2 * k + 1] == rt[k], "%s: pair %d differs", what, k );
+	}
+	free( pairs );
+	free( rv );
+	free( rt );
+	return count;
+}
+
+/* Pairs closer than (1 − tolerance) × h by brute force. */
+static int64_t collide_violations( const collide_sheet* s, float h, float tolerance )
+{
+	int32_t dummy;
+	return sere_collide_ref_pairs( s->x, s->y, s->z, s->n, s->tri, s->triangles, h * ( 1.0f - tolerance ), &dummy,
+								   &dummy, 0 );
+}
+
+Test( collide, closest_point_matches_double_reference )
+{
+	uint64_t state = 4;
+	for ( int k = 0; k < 20000; ++k )
+	{
+		float a[3], b[3], c[3], p[3];
+		for ( int i = 0; i < 3; ++i )
+		{
+			a[i] = (float) ( 2.0 * collide_unit( &state ) - 1.0 );
+			b[i] = (float) ( 2.0 * collide_unit( &state ) - 1.0 );
+			c[i] = (float) ( 2.0 * collide_unit( &state ) - 1.0 );
+			p[i] = (float) ( 3.0 * collide_unit( &state ) - 1.5 );
+		}
+		if ( k % 10 == 1 )
+		{
+			/* slivers and fully degenerate triangles: c on the line ab, or all three equal */
+			double t = collide_unit( &state );
+			for ( int i = 0; i < 3; ++i )
+			{
+				c[i] = (float) ( a[i] + t * ( b[i] - a[i] ) );
+				b[i] = k % 20 == 1 ? a[i] : b[i];
+			}
+		}
+		float w[3];
+		float d2 = sere_closest_point_triangle( p, a, b, c, w );
+		double pd[3] = { p[0], p[1], p[2] }, ad[3] = { a[0], a[1], a[2] }, bd[3] = { b[0], b[1], b[2] },
+			   cd[3] = { c[0], c[1], c[2] };
+		double ref = sere_collide_ref_distance2( pd, ad, bd, cd );
+		/* coordinates within 1.5: a few dozen float operations keep the distance within 1e-5 */
+		cr_assert( fabs( sqrt( d2 ) - sqrt( ref ) ) < 1e-5, "case %d: %g vs %g", k, sqrt( d2 ), sqrt( ref ) );
+		cr_assert( w[0] >= 0.0f && w[1] >= 0.0f && w[2] >= 0.0f, "case %d: negative weight", k );
+		cr_assert( fabsf( w[0] + w[1] + w[2] - 1.0f ) < 1e-6f, "case %d: weights sum %g", k, w[0] + w[1] + w[2] );
+		double q[3], e = 0.0;
+		for ( int i = 0; i < 3; ++i )
+		{
+			q[i] = w[0] * ad[i] + w[1] * bd[i] + w[2] * cd[i];
+			e += ( pd[i] - q[i] ) * ( pd[i] - q[i] );
+		}
+		cr_assert( fabs( sqrt( e ) - sqrt( ref ) ) < 1e-5, "case %d: weights point %g away", k, sqrt( e ) );
+	}
+}
+
+Test( collide, pairs_match_brute_force_on_random_deformations )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 5 );
+	float h = 0.3f * s.cell;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "flat" ), 0 );
+	/* noise of 1.5 cells in every axis: neighbourhoods interpenetrate, many contacts */
+	for ( uint64_t seed = 1; seed <= 3; ++seed )
+	{
+		uint64_t state = seed;
+		for ( int32_t i = 0; i < s.n; ++i )
+		{
+			s.x[i] = (float) ( s.u[i] + 1.5 * s.cell * ( collide_unit( &state ) - 0.5 ) );
+			s.y[i] = (float) ( s.v[i] + 1.5 * s.cell * ( collide_unit( &state ) - 0.5 ) );
+			s.z[i] = (float) ( 1.5 * s.cell * ( collide_unit( &state ) - 0.5 ) );
+		}
+		/* refit only: the tree was built on the flat sheet */
+		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+		int32_t refit = collide_check_pairs( &s, bvh, c, h, "noise, refit" );
+		cr_assert_gt( refit, 100 );
+		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "noise, rebuilt" ), refit );
+		collide_sheet_flat( &s );
+		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+	}
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+Test( collide, pairs_match_brute_force_on_u_fold )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 6 );
+	float h = 0.3f * s.cell;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	/* below the thickness the halves touch everywhere: about every vertex is in contact */
+	collide_sheet_fold( &s, 0.8 * h );
+	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t near = collide_check_pairs( &s, bvh, c, h, "fold 0.8h, refit" );
+	cr_assert_gt( near, s.n );
+	cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+	collide_check_pairs( &s, bvh, c, h, "fold 0.8h, rebuilt" );
+	/* above it only the tight bend itself (radius 0.6h) is closer than h */
+	collide_sheet_fold( &s, 1.2 * h );
+	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t far = collide_check_pairs( &s, bvh, c, h, "fold 1.2h" );
+	cr_assert_lt( far, near / 20 );
+	int32_t count;
+	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		const int32_t* v = s.tri + 3 * contacts[k].triangle;
+		cr_assert( fabs( s.u[contacts[k].vertex] - 0.5 ) < 2.0 * s.cell && fabs( s.u[v[0]] - 0.5 ) < 2.0 * s.cell,
+				   "contact away from the bend" );
+	}
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+Test( collide, pairs_match_brute_force_on_crumpled_sheet )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h = 0.3f * s.cell;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	const double amplitudes[] = { 0.05, 0.2, 0.4 };
+	int32_t most = 0;
+	for ( int k = 0; k < 3; ++k )
+	{
+		collide_sheet_crumple( &s, amplitudes[k], 0.3 * h, 11 + (uint64_t) k );
+		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+		int32_t refit = collide_check_pairs( &s, bvh, c, h, "crumpled, refit" );
+		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "crumpled, rebuilt" ), refit );
+		most = refit > most ? refit : most;
+		collide_sheet_flat( &s );
+		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+	}
+	cr_assert_gt( most, 50, "the strongest crumple must fold the sheet onto itself" );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+/* One vertex over the middle of a triangle, everything else far away: a single contact whose
+ * solution is known in closed form. */
+Test( collide, single_contact_shared_by_inverse_mass )
+{
+	/* triangle 0 = (0, 1, 2) in z = 0; triangle 1 = (3, 4, 5) holds the vertex 3 above it */
+	float x[6] = { 0.0f, 1.0f, 0.0f, 1.0f / 3.0f, 5.0f, 5.0f };
+	float y[6] = { 0.0f, 0.0f, 1.0f, 1.0f / 3.0f, 5.0f, 6.0f };
+	float z[6] = { 0.0f, 0.0f, 0.0f, 0.02f, 5.0f, 5.0f };
+	float vx[6] = { 0 }, vy[6] = { 0 }, vz[6] = { 0 };
+	float inv_m[6] = { 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f };
+	int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = 0.05f;
+	params.dt = 0.01f;
+	params.rounds = 1;
+	sere_collide_state state = { x, y, z, vx, vy, vz, inv_m };
+	sere_collide_stats stats;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	cr_assert_eq( stats.contacts, 1 );
+	cr_assert_eq( stats.unresolved, 0 );
+	/* W = w_p + Σ w_k b_k² = 1 + 3 (1/3)² = 4/3, λ = (0.05 − 0.02) / W = 0.0225: the vertex rises
+	 * by λ, each corner sinks by λ / 3, and the gap becomes exactly the thickness. One contact
+	 * converges in one iteration; float rounding of the weights and sqrt stays below 1e-7. */
+	cr_assert_float_eq( z[3], 0.02f + 0.0225f, 1e-7f );
+	for ( int k = 0; k < 3; ++k )
+	{
+		cr_assert_float_eq( z[k], -0.0075f, 1e-7f );
+		cr_assert_float_eq( vz[k], -0.0075f / 0.01f, 1e-5f );
+		cr_assert( x[k] == ( k == 1 ? 1.0f : 0.0f ) && y[k] == ( k == 2 ? 1.0f : 0.0f ), "moved off the normal" );
+	}
+	cr_assert_float_eq( vz[3], 0.0225f / 0.01f, 1e-5f );
+	cr_assert_float_eq( z[3] - z[0], 0.05f, 1e-7f );
+	cr_assert( vz[4] == 0.0f && vz[5] == 0.0f && z[4] == 5.0f, "bystanders moved" );
+
+	/* pinned triangle: the vertex alone takes the whole push */
+	z[0] = z[1] = z[2] = 0.0f, z[3] = 0.02f;
+	inv_m[0] = inv_m[1] = inv_m[2] = 0.0f;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	cr_assert_float_eq( z[3], 0.05f, 1e-7f );
+	cr_assert( z[0] == 0.0f && z[1] == 0.0f && z[2] == 0.0f, "a pinned corner moved" );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+}
+
+/* The U-fold closer than the thickness: after the response no vertex is closer than the
+ * thickness to a non-incident triangle, up to SERE_COLLIDE_TOLERANCE (0.1%: Jacobi averaging
+ * approaches the target from below). */
+Test( collide, response_separates_u_fold )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 8 );
+	float h = 0.3f * s.cell;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.iterations = 16;
+	params.rounds = 3;
+	const double gaps[] = { 0.8, 0.5 };
+	for ( int g = 0; g < 2; ++g )
+	{
+		collide_sheet_fold( &s, gaps[g] * h );
+		memset( s.vx, 0, sizeof( float ) * (size_t) s.n );
+		memset( s.vy, 0, sizeof( float ) * (size_t) s.n );
+		memset( s.vz, 0, sizeof( float ) * (size_t) s.n );
+		float* before = malloc( sizeof( float ) * (size_t) s.n );
+		memcpy( before, s.z, sizeof( float ) * (size_t) s.n );
+		cr_assert_gt( collide_violations( &s, h, SERE_COLLIDE_TOLERANCE ), s.n );
+		sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+		sere_collide_stats stats;
+		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		cr_assert_gt( stats.contacts, s.n );
+		cr_assert_eq( stats.unresolved, 0 );
+		int64_t left = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
+		cr_assert_eq( left, 0, "gap %gh: %lld pairs still closer than the thickness", gaps[g], (long long) left );
+		/* velocities carry the displacement: Δv = Δx / dt, to float rounding of the division */
+		for ( int32_t i = 0; i < s.n; ++i )
+		{
+			float expected = ( s.z[i] - before[i] ) / params.dt;
+			cr_assert( fabsf( s.vz[i] - expected ) <= 1e-3f * ( 1.0f + fabsf( expected ) ), "velocity %d", i );
+		}
+		free( before );
+	}
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+/* A sheet crumpled through itself cannot be separated by proximity pushes where it truly
+ * intersects; the response must still clear almost every contact and report what is left. */
+Test( collide, response_on_crumpled_sheet_is_bounded )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 9 );
+	float h = 0.3f * s.cell;
+	collide_sheet_crumple( &s, 0.4, 0.3 * h, 13 );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.iterations = 16;
+	params.rounds = 3;
+	int64_t initial = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_stats stats;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	int64_t left = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
+	cr_log_info( "crumpled: %lld violations before, %lld after, %d unresolved reported", (long long) initial,
+				 (long long) left, stats.unresolved );
+	cr_assert_gt( initial, 50 );
+	cr_assert_leq( left * 10, initial, "more than a tenth of the contacts remain" );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		cr_assert( isfinite( s.x[i] ) && isfinite( s.y[i] ) && isfinite( s.z[i] ) && isfinite( s.vz[i] ) );
+	}
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+/* Eq. 14 in both modes: ĥ measured before the collision pass (Algorithm 1 line 14), or the rest
+ * thickness h. */
+Test( collide, voronoi_restore_eq14 )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 20, 16, 10 );
+	collide_sheet_crumple( &s, 0.1, 0.0, 3 );
+	int32_t n = s.n, f = s.triangles;
+	uint64_t state = 2;
+	/* Voronoi particles scattered around their triangles, velocities random */
+	for ( int32_t i = 0; i < n + f; ++i )
+	{
+		s.vx[i] = (float) ( collide_unit( &state ) - 0.5 );
+		s.vy[i] = (float) ( collide_unit( &state ) - 0.5 );
+		s.vz[i] = (float) ( collide_unit( &state ) - 0.5 );
+	}
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		const int32_t* v = s.tri + 3 * t;
+		s.x[n + t] = ( s.x[v[0]] + s.x[v[1]] + s.x[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
+		s.y[n + t] = ( s.y[v[0]] + s.y[v[1]] + s.y[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
+		s.z[n + t] = ( s.z[v[0]] + s.z[v[1]] + s.z[v[2]] ) / 3.0f + (float) ( 0.02 * ( collide_unit( &state ) - 0.5 ) );
+	}
+	float* h_hat = malloc( sizeof( float ) * (size_t) f );
+	double* h_ref = malloc( sizeof( double ) * (size_t) f );
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h_hat ), SERE_OK );
+	sere_collide_ref_measure_h( s.x, s.y, s.z, s.tri, f, n, h_ref );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		/* offsets of 0.01 with unit-size coordinates: float error ~1e-7 × |x| */
+		cr_assert( fabs( h_hat[t] - h_ref[t] ) < 1e-6, "ĥ %d: %g vs %g", t, h_hat[t], h_ref[t] );
+	}
+
+	/* the layer moves (a collision pass would), then both modes restore */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		s.z[i] += (float) ( 0.002 * sin( 9.0 * s.u[i] ) );
+	}
+	float* rest = malloc( sizeof( float ) * (size_t) f );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		rest[t] = t % 3 == 0 ? -0.06f : 0.01f; /* signed, as h_vein and h_surf of Table 2 */
+	}
+	const float* modes[2] = { h_hat, rest };
+	size_t all = (size_t) ( n + f );
+	double *dx = malloc( sizeof( double ) * all ), *dy = malloc( sizeof( double ) * all ),
+		   *dz = malloc( sizeof( double ) * all ), *dvx = malloc( sizeof( double ) * all ),
+		   *dvy = malloc( sizeof( double ) * all ), *dvz = malloc( sizeof( double ) * all ),
+		   *dh = malloc( sizeof( double ) * (size_t) f );
+	for ( int m = 0; m < 2; ++m )
+	{
+		for ( size_t i = 0; i < all; ++i )
+		{
+			dx[i] = s.x[i], dy[i] = s.y[i], dz[i] = s.z[i], dvx[i] = s.vx[i], dvy[i] = s.vy[i], dvz[i] = s.vz[i];
+		}
+		for ( int32_t t = 0; t < f; ++t )
+		{
+			dh[t] = modes[m][t];
+		}
+		cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, modes[m] ), SERE_OK );
+		sere_collide_ref_restore_voronoi( dx, dy, dz, dvx, dvy, dvz, s.tri, f, n, dh );
+		for ( int32_t t = 0; t < f; ++t )
+		{
+			int32_t i = n + t;
+			/* position: centroid + h n in float against double, coordinates ≤ 1.5 and |h| ≤ 0.06:
+			 * a few ulps of the coordinates (2e-7) */
+			cr_assert( fabs( s.x[i] - dx[i] ) < 1e-6 && fabs( s.y[i] - dy[i] ) < 1e-6 && fabs( s.z[i] - dz[i] ) < 1e-6,
+					   "mode %d: particle %d off Eq. 14", m, t );
+			/* velocity: the corner mean, three additions and a division in float */
+			cr_assert( fabs( s.vx[i] - dvx[i] ) < 1e-6 && fabs( s.vy[i] - dvy[i] ) < 1e-6 &&
+						   fabs( s.vz[i] - dvz[i] ) < 1e-6,
+					   "mode %d: velocity %d is not the corner mean", m, t );
+		}
+		/* measuring again gives back the thickness used (the particle sits on the normal line) */
+		float* again = malloc( sizeof( float ) * (size_t) f );
+		cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again ), SERE_OK );
+		for ( int32_t t = 0; t < f; ++t )
+		{
+			cr_assert( fabsf( again[t] - modes[m][t] ) < 1e-6f, "mode %d: %d measures %g, restored %g", m, t, again[t],
+					   modes[m][t] );
+		}
+		free( again );
+	}
+	free( dx ), free( dy ), free( dz ), free( dvx ), free( dvy ), free( dvz ), free( dh );
+	free( rest );
+	free( h_hat );
+	free( h_ref );
+	collide_sheet_free( &s );
+}
+
+/* Runs one collision pass (three rounds) plus the Voronoi restore with the given thread count
+ * and returns the state as one buffer. */
+static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), int32_t* contacts_out )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 12 );
+	shape( &s );
+	int32_t n = s.n, f = s.triangles;
+	float* h = malloc( sizeof( float ) * (size_t) f );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		h[t] = 0.01f;
+	}
+	omp_set_num_threads( threads );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = 0.3f * s.cell;
+	params.rounds = 3;
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_stats stats;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_OK );
+	*contacts_out = stats.contacts;
+	size_t all = (size_t) ( n + f );
+	float* out = malloc( sizeof( float ) * 6 * all );
+	const float* arrays[6] = { s.x, s.y, s.z, s.vx, s.vy, s.vz };
+	for ( int k = 0; k < 6; ++k )
+	{
+		memcpy( out + (size_t) k * all, arrays[k], sizeof( float ) * all );
+	}
+	free( h );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+	return out;
+}
+
+static void collide_shape_fold( collide_sheet* s )
+{
+	collide_sheet_fold( s, 0.8 * 0.3 * s->cell );
+}
+
+static void collide_shape_crumple( collide_sheet* s )
+{
+	collide_sheet_crumple( s, 0.3, 0.1 * s->cell, 21 );
+}
+
+Test( collide, identical_with_one_and_two_threads )
+{
+	void ( *shapes[2] )( collide_sheet* ) = { collide_shape_fold, collide_shape_crumple };
+	int saved = omp_get_max_threads();
+	for ( int k = 0; k < 2; ++k )
+	{
+		int32_t c1, c2;
+		float* one = collide_run_pass( 1, shapes[k], &c1 );
+		float* two = collide_run_pass( 2, shapes[k], &c2 );
+		collide_sheet probe;
+		collide_sheet_make( &probe, 36, 24, 12 );
+		size_t bytes = sizeof( float ) * 6 * (size_t) ( probe.n + probe.triangles );
+		collide_sheet_free( &probe );
+		/* the fold's contacts exceed the sequential-response threshold (512), exercising the
+		 * parallel response; the crumple's stay below it */
+		cr_assert_gt( c1, k == 0 ? 512 : 20, "shape %d: %d contacts", k, c1 );
+		cr_assert_eq( c1, c2 );
+		cr_assert_eq( memcmp( one, two, bytes ), 0, "shape %d: 1 and 2 threads differ", k );
+		free( one );
+		free( two );
+	}
+	omp_set_num_threads( saved );
+}
+
+Test( collide, nonfinite_inputs_are_refused )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 12, 10, 1 );
+	collide_shape_fold( &s );
+	int32_t n = s.n, f = s.triangles;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	size_t bytes = sizeof( float ) * (size_t) ( n + f );
+	float* saved = malloc( 3 * bytes );
+	memcpy( saved, s.x, bytes ), memcpy( saved + n + f, s.y, bytes ), memcpy( saved + 2 * ( n + f ), s.z, bytes );
+
+	s.x[7] = NAN;
+	int32_t count = 0;
+	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_NONFINITE );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = 0.3f * s.cell;
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
+	s.x[7] = saved[7];
+	cr_assert( memcmp( saved, s.x, bytes ) == 0 && memcmp( saved + n + f, s.y, bytes ) == 0 &&
+				   memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0,
+			   "positions changed on error" );
+
+	/* a NaN velocity on a vertex in contact */
+	s.vz[0] = INFINITY;
+	bool touched = false;
+	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, params.thickness, &count ), SERE_OK );
+	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		touched = touched || contacts[k].vertex == 0 || s.tri[3 * contacts[k].triangle] == 0 ||
+				  s.tri[3 * contacts[k].triangle + 1] == 0 || s.tri[3 * contacts[k].triangle + 2] == 0;
+	}
+	cr_assert( touched, "vertex 0 should be in contact in the fold" );
+	cr_assert_eq( sere_collide_respond( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
+
+	/* Eq. 14 with a NaN thickness or velocity writes nothing */
+	float* h = malloc( sizeof( float ) * (size_t) f );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		h[t] = 0.01f;
+	}
+	h[3] = NAN;
+	s.vz[0] = 0.0f;
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_ERR_NONFINITE );
+	h[3] = 0.01f;
+	s.vy[5] = NAN;
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_ERR_NONFINITE );
+	cr_assert( memcmp( saved + n, s.x + n, sizeof( float ) * (size_t) f ) == 0, "Voronoi particles written on error" );
+	s.vy[5] = 0.0f;
+	/* a corner at or past voronoi_first would be overwritten while read */
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n - 1, h ),
+				  SERE_ERR_ARGUMENT );
+	s.z[2] = NAN;
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h ), SERE_ERR_NONFINITE );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		cr_assert( isfinite( h[t] ), "measure_h wrote a non-finite ĥ" );
+	}
+	free( h );
+	free( saved );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 20, 16, 2 );
+	collide_shape_fold( &s );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 16, &c ), SERE_OK );
+	float* saved = malloc( sizeof( float ) * (size_t) s.n );
+	memcpy( saved, s.z, sizeof( float ) * (size_t) s.n );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = 0.3f * s.cell;
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_stats stats;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_ERR_CAPACITY );
+	int32_t needed = stats.contacts;
+	cr_assert_gt( needed, 16 );
+	cr_assert_eq( memcmp( saved, s.z, sizeof( float ) * (size_t) s.n ), 0, "positions changed on overflow" );
+	int32_t listed;
+	sere_collide_contacts( c, &listed );
+	cr_assert_eq( listed, 0 );
+	cr_assert_eq( sere_collide_reserve( c, needed ), SERE_OK );
+	int32_t found;
+	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, params.thickness, &found ), SERE_OK );
+	cr_assert_eq( found, needed );
+	free( saved );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
+Test( collide, bad_arguments_are_refused )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 6, 6, 1 );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, -1, &c ), SERE_ERR_ARGUMENT );
+	cr_assert_null( c );
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	int32_t count;
+	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.0f, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, NAN, &count ), SERE_ERR_ARGUMENT );
+	sere_collide_params params = sere_collide_params_default();
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	params.dt = 0.0f;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
+	params = sere_collide_params_default();
+	params.rounds = 0;
+	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
+	/* a workspace made for another mesh */
+	sere_bvh* other;
+	int32_t one[3] = { 0, 1, 2 };
+	cr_assert_eq( sere_bvh_create( one, 1, 3, s.x, s.y, s.z, &other ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( c, other, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_ARGUMENT );
+	sere_bvh_destroy( other );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
