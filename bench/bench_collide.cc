@@ -12,6 +12,8 @@
 #include <embree3/rtcore.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -87,16 +89,50 @@ struct Scene
 				v[j * kColumns + i] = j * cell + jy;
 			}
 		}
-		int32_t t = 0;
+		// vertices and triangles in Morton order of their grid cell, as sere_model orders them
+		// for locality (neighbouring vertices query the BVH together)
+		std::vector<int32_t> rank( n ), order( n );
+		for ( int32_t k = 0; k < n; ++k )
+		{
+			order[k] = k;
+		}
+		auto morton = []( uint32_t i, uint32_t j )
+		{
+			uint64_t code = 0;
+			for ( int b = 0; b < 16; ++b )
+			{
+				code |= (uint64_t) ( ( i >> b ) & 1u ) << ( 2 * b ) | (uint64_t) ( ( j >> b ) & 1u ) << ( 2 * b + 1 );
+			}
+			return code;
+		};
+		std::sort( order.begin(), order.end(),
+				   [&]( int32_t a, int32_t b )
+				   { return morton( a % kColumns, a / kColumns ) < morton( b % kColumns, b / kColumns ); } );
+		for ( int32_t k = 0; k < n; ++k )
+		{
+			rank[order[k]] = k;
+		}
+		std::vector<std::pair<uint64_t, std::array<int32_t, 3>>> cells;
 		for ( int j = 0; j < kRows - 1; ++j )
 		{
 			for ( int i = 0; i < kColumns - 1; ++i )
 			{
 				int32_t a = j * kColumns + i, b = a + 1, c = a + kColumns + 1, d = a + kColumns;
-				int32_t quad[6] = { a, b, c, a, c, d };
-				std::memcpy( &tri[3 * (size_t) t], quad, sizeof( quad ) );
-				t += 2;
+				uint64_t code = morton( i, j ) << 1;
+				cells.push_back( { code, { rank[a], rank[b], rank[c] } } );
+				cells.push_back( { code | 1u, { rank[a], rank[c], rank[d] } } );
 			}
+		}
+		std::sort( cells.begin(), cells.end() );
+		for ( size_t t = 0; t < cells.size(); ++t )
+		{
+			std::memcpy( &tri[3 * t], cells[t].second.data(), 3 * sizeof( int32_t ) );
+		}
+		std::vector<double> gu( u ), gv( v );
+		for ( int32_t k = 0; k < n; ++k )
+		{
+			u[rank[k]] = gu[k];
+			v[rank[k]] = gv[k];
 		}
 		for ( int32_t k = 0; k < n; ++k )
 		{

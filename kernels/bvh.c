@@ -45,6 +45,14 @@ struct sere_bvh
 	 * subtree, then the second's, ... */
 	int32_t* subtree_begin;
 	int32_t* subtree_end;
+	/* The roots of the subtrees refit in parallel (two levels down), in the order of the mean
+	 * index of their triangles' vertices: a static share of them then gives each thread the
+	 * part of the mesh a static share of vertex-ordered work (the collision queries) gives it,
+	 * so the nodes a thread refits are the ones it reads next, from its own cache. */
+	int32_t cut_level;
+	int32_t cut_count;
+	int32_t* cut_roots;
+	double* cut_key;
 	float* node_area;	  /* per node: surface area of the node's own box */
 	double quality;		  /* SAH cost of the internal nodes after the last refit */
 	double quality_built; /* the same right after the last build */
@@ -502,7 +510,7 @@ static void refit_node( sere_bvh* bvh, int32_t n, const float* x, const float* y
  * the rebuild decision are the same for every thread count. */
 static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const float* z )
 {
-	int32_t cut = bvh->level_count - 1 < 2 ? bvh->level_count - 1 : 2;
+	int32_t cut = bvh->cut_level;
 	int32_t n = bvh->vertex_count;
 	int bad = 0;
 #pragma omp parallel
@@ -515,9 +523,9 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 		if ( !bad )
 		{
 #pragma omp for schedule( static )
-			for ( int32_t i = bvh->level_start[cut]; i < bvh->level_start[cut + 1]; ++i )
+			for ( int32_t i = 0; i < bvh->cut_count; ++i )
 			{
-				int32_t root = bvh->level_nodes[i];
+				int32_t root = bvh->cut_roots[i];
 				for ( int32_t node = bvh->subtree_end[root] - 1; node >= bvh->subtree_begin[root]; --node )
 				{
 					refit_node( bvh, node, x, y, z );
@@ -625,6 +633,38 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->subtree_end[i] = end;
 	}
 
+	bvh->cut_level = levels - 1 < 2 ? levels - 1 : 2;
+	bvh->cut_count = bvh->level_start[bvh->cut_level + 1] - bvh->level_start[bvh->cut_level];
+	for ( int32_t i = 0; i < bvh->cut_count; ++i )
+	{
+		int32_t root = bvh->level_nodes[bvh->level_start[bvh->cut_level] + i];
+		double sum = 0.0, count = 0.0;
+		for ( int32_t node = root; node < bvh->subtree_end[root];
+			  node = node == root ? bvh->subtree_begin[root] : node + 1 )
+		{
+			for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+			{
+				int32_t c = bvh->nodes[node].child[k];
+				if ( c < 0 && c != SERE_BVH_EMPTY )
+				{
+					sum += bvh->tri[3 * (size_t) ~c];
+					count += 1.0;
+				}
+			}
+		}
+		double key = sum / count;
+		/* insertion sort by key (ties keep level order): at most 64 roots */
+		int32_t j = i;
+		while ( j > 0 && bvh->cut_key[j - 1] > key )
+		{
+			bvh->cut_key[j] = bvh->cut_key[j - 1];
+			bvh->cut_roots[j] = bvh->cut_roots[j - 1];
+			--j;
+		}
+		bvh->cut_key[j] = key;
+		bvh->cut_roots[j] = root;
+	}
+
 	refit_tree( bvh, x, y, z );
 	bvh->quality_built = bvh->quality;
 	return SERE_OK;
@@ -669,11 +709,13 @@ sere_status sere_bvh_create( const int32_t* tri, int32_t triangle_count, int32_t
 	bvh->level_start = sere_alloc( sizeof( int32_t ) * ( (size_t) capacity + 1 ) );
 	bvh->subtree_begin = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
 	bvh->subtree_end = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
+	bvh->cut_roots = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
+	bvh->cut_key = sere_alloc( sizeof( double ) * (size_t) capacity );
 	bvh->node_area = sere_alloc( sizeof( float ) * (size_t) capacity );
 	float** scratch[] = { &bvh->lo_x, &bvh->lo_y, &bvh->lo_z, &bvh->hi_x, &bvh->hi_y,
 						  &bvh->hi_z, &bvh->c_x,  &bvh->c_y,  &bvh->c_z };
 	bool ok = bvh->tri && bvh->nodes && bvh->node_level && bvh->level_nodes && bvh->level_start && bvh->subtree_begin &&
-			  bvh->subtree_end && bvh->node_area;
+			  bvh->subtree_end && bvh->cut_roots && bvh->cut_key && bvh->node_area;
 	for ( size_t i = 0; i < sizeof( scratch ) / sizeof( scratch[0] ); ++i )
 	{
 		*scratch[i] = sere_alloc( fn );
@@ -705,9 +747,10 @@ void sere_bvh_destroy( sere_bvh* bvh )
 		return;
 	}
 	void* arrays[] = { bvh->tri,		   bvh->nodes,		 bvh->node_level, bvh->level_nodes, bvh->level_start,
-					   bvh->subtree_begin, bvh->subtree_end, bvh->node_area,  bvh->lo_x,		bvh->lo_y,
-					   bvh->lo_z,		   bvh->hi_x,		 bvh->hi_y,		  bvh->hi_z,		bvh->c_x,
-					   bvh->c_y,		   bvh->c_z,		 bvh->order,	  bvh->stack };
+					   bvh->subtree_begin, bvh->subtree_end, bvh->cut_roots,  bvh->cut_key,		bvh->node_area,
+					   bvh->lo_x,		   bvh->lo_y,		 bvh->lo_z,		  bvh->hi_x,		bvh->hi_y,
+					   bvh->hi_z,		   bvh->c_x,		 bvh->c_y,		  bvh->c_z,			bvh->order,
+					   bvh->stack };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -780,6 +823,115 @@ void sere_bvh_query_box( const sere_bvh* bvh, const float lo[3], const float hi[
 			else
 			{
 				visit( context, ~c );
+			}
+		}
+	}
+}
+
+#if defined( __AVX__ )
+
+/* The group's lane boxes, one register per face. */
+typedef query_box group_box;
+
+/* Bit k set when the box [lo, hi] overlaps group lane k (ignored lanes hold empty boxes). */
+static inline uint32_t group_mask( const group_box* lanes, float lx, float ly, float lz, float hx, float hy, float hz )
+{
+	__m256 x = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( lx ), lanes->hx, _CMP_LE_OQ ),
+							  _mm256_cmp_ps( _mm256_set1_ps( hx ), lanes->lx, _CMP_GE_OQ ) );
+	__m256 y = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( ly ), lanes->hy, _CMP_LE_OQ ),
+							  _mm256_cmp_ps( _mm256_set1_ps( hy ), lanes->ly, _CMP_GE_OQ ) );
+	__m256 z = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( lz ), lanes->hz, _CMP_LE_OQ ),
+							  _mm256_cmp_ps( _mm256_set1_ps( hz ), lanes->lz, _CMP_GE_OQ ) );
+	return (uint32_t) _mm256_movemask_ps( _mm256_and_ps( x, _mm256_and_ps( y, z ) ) );
+}
+
+static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SERE_BVH_WIDTH] )
+{
+	group_box q = { _mm256_loadu_ps( lo[0] ), _mm256_loadu_ps( lo[1] ), _mm256_loadu_ps( lo[2] ),
+					_mm256_loadu_ps( hi[0] ), _mm256_loadu_ps( hi[1] ), _mm256_loadu_ps( hi[2] ) };
+	return q;
+}
+
+#else
+
+typedef struct group_box
+{
+	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
+} group_box;
+
+static inline uint32_t group_mask( const group_box* lanes, float lx, float ly, float lz, float hx, float hy, float hz )
+{
+	uint32_t mask = 0;
+	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+	{
+		bool hit = lx <= lanes->hi[0][k] && hx >= lanes->lo[0][k] && ly <= lanes->hi[1][k] && hy >= lanes->lo[1][k] &&
+				   lz <= lanes->hi[2][k] && hz >= lanes->lo[2][k];
+		mask |= (uint32_t) hit << k;
+	}
+	return mask;
+}
+
+static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SERE_BVH_WIDTH] )
+{
+	group_box q;
+	memcpy( q.lo, lo, sizeof( q.lo ) );
+	memcpy( q.hi, hi, sizeof( q.hi ) );
+	return q;
+}
+
+#endif
+
+void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
+						   void* context )
+{
+	/* the lanes as given, ignored ones emptied, and their union for the walk down */
+	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
+	float ulo[3] = { INFINITY, INFINITY, INFINITY }, uhi[3] = { -INFINITY, -INFINITY, -INFINITY };
+	const float* glo[3] = { group->lo_x, group->lo_y, group->lo_z };
+	const float* ghi[3] = { group->hi_x, group->hi_y, group->hi_z };
+	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+	{
+		bool used = k < group->count;
+		for ( int a = 0; a < 3; ++a )
+		{
+			used = used && isfinite( glo[a][k] ) && isfinite( ghi[a][k] );
+		}
+		for ( int a = 0; a < 3; ++a )
+		{
+			lo[a][k] = used ? glo[a][k] : INFINITY;
+			hi[a][k] = used ? ghi[a][k] : -INFINITY;
+			ulo[a] = min2( ulo[a], lo[a][k] );
+			uhi[a] = max2( uhi[a], hi[a][k] );
+		}
+	}
+	if ( !( ulo[0] <= uhi[0] && ulo[1] <= uhi[1] && ulo[2] <= uhi[2] ) )
+	{
+		return;
+	}
+	query_box q = query_make( ulo, uhi );
+	group_box lanes = group_lanes( lo, hi );
+	int32_t stack[STACK_SIZE];
+	int32_t size = 0;
+	stack[size++] = 0;
+	while ( size > 0 )
+	{
+		const sere_bvh_node* node = bvh->nodes + stack[--size];
+		uint32_t mask = overlap_mask( node, &q );
+		while ( mask != 0 )
+		{
+			int k = __builtin_ctz( mask );
+			mask &= mask - 1;
+			int32_t c = node->child[k];
+			if ( c >= 0 )
+			{
+				stack[size++] = c;
+				continue;
+			}
+			uint32_t hits = group_mask( &lanes, node->min_x[k], node->min_y[k], node->min_z[k], node->max_x[k],
+										node->max_y[k], node->max_z[k] );
+			if ( hits != 0 )
+			{
+				visit( context, ~c, hits );
 			}
 		}
 	}

@@ -78,6 +78,25 @@ extern "C"
 	void sere_bvh_query_box( const sere_bvh* bvh, const float lo[3], const float hi[3], sere_bvh_visit_fn* visit,
 							 void* context );
 
+	/* Up to SERE_BVH_WIDTH query boxes answered in one traversal (SoA; lanes from count on, and
+	 * lanes with a non-finite bound, are ignored). Nearby boxes, e.g. the cubes around eight
+	 * consecutive vertices of a spatially ordered mesh, then share the walk down the tree. */
+	typedef struct sere_bvh_group
+	{
+		float lo_x[SERE_BVH_WIDTH], lo_y[SERE_BVH_WIDTH], lo_z[SERE_BVH_WIDTH];
+		float hi_x[SERE_BVH_WIDTH], hi_y[SERE_BVH_WIDTH], hi_z[SERE_BVH_WIDTH];
+		int32_t count;
+	} sere_bvh_group;
+
+	/* Called once per triangle whose box overlaps at least one box of the group; bit k of lanes is
+	 * set when it overlaps box k. */
+	typedef void sere_bvh_visit_group_fn( void* context, int32_t triangle, uint32_t lanes );
+
+	/* Visits every triangle overlapping a box of the group, in a fixed order that depends only on
+	 * the tree and the group. */
+	void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
+							   void* context );
+
 	/* Triangles whose box overlaps the cube of half-width r around (x, y, z), i.e. whose box padded
 	 * by r contains the point. Writes the first min(count, capacity) into out and returns count. */
 	int32_t sere_bvh_query( const sere_bvh* bvh, float x, float y, float z, float r, int32_t* out, int32_t capacity );

@@ -40,16 +40,18 @@ extern "C"
 		float dt;			  /* time step: velocities change by Δx / dt */
 		int32_t iterations;	  /* Jacobi response iterations per round (stops early once all are resolved) */
 		int32_t rounds;		  /* detect + respond rounds; later rounds catch contacts made by the push-out */
+		float relaxation;	  /* ω of the averaged update, in (0, 2]: see sere_collide_respond */
 		double rebuild_ratio; /* BVH quality ratio that triggers a rebuild (SERE_BVH_REBUILD_RATIO) */
 	} sere_collide_params;
 
-/* A contact counts as unresolved when its distance is still below (1 − this) × thickness. */
+/* A contact counts as resolved once the push it still needs is below this fraction of the
+ * thickness; the response stops when every contact is. */
 #define SERE_COLLIDE_TOLERANCE 1e-3f
 
 	typedef struct sere_collide_stats
 	{
 		int32_t contacts;	/* found by the first detection */
-		int32_t unresolved; /* contacts of the last round still closer than (1 − tolerance) × thickness */
+		int32_t unresolved; /* contacts of the last round still short of the thickness by over the tolerance */
 		int32_t iterations; /* response iterations run, summed over rounds */
 		int32_t rounds;		/* rounds run (a round finding no contact ends the loop) */
 		bool rebuilt;		/* the BVH was rebuilt rather than only refit */
@@ -69,26 +71,33 @@ extern "C"
 	sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity );
 
 	/* Every (vertex, triangle) pair with the vertex not a corner of the triangle and their distance
-	 * (sere_closest_point_triangle) below thickness. Each vertex queries the BVH, which must be refit
-	 * to these positions; vertices are processed in parallel and the contacts kept in vertex order,
-	 * so the list is the same for every thread count. *contact_count gets the number found;
-	 * SERE_ERR_CAPACITY when it exceeds the capacity (the contacts are then dropped),
-	 * SERE_ERR_NONFINITE for NaN or infinite positions. */
+	 * (sere_closest_point_triangle) below thickness. The BVH must be refit to these positions.
+	 * Eight consecutive vertices query it together (sere_bvh_query_group), so number the vertices
+	 * in a spatially coherent order (sere_model uses Morton order); blocks of vertices run in
+	 * parallel and the list keeps block order, then the tree's order within a group: it is the
+	 * same for every thread count. *contact_count gets the number found; SERE_ERR_CAPACITY when
+	 * it exceeds the capacity (the contacts are then dropped), SERE_ERR_NONFINITE for NaN or
+	 * infinite positions. */
 	sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 									 const float* z, float thickness, int32_t* contact_count );
 
 	const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
 
 	/* Pushes the detected contacts apart. Each iteration evaluates every contact at the current
-	 * positions: closest point (weights wa, wb, wc), unit normal n̂ = side · n, height s = (p − q) · n̂
-	 * and in-plane offset l; the target height is s* = sqrt(thickness² − l²), so moving along n̂ makes
-	 * the distance exactly the thickness. The constraint C = s − s* is solved as in position-based
-	 * cloth: λ = −C / (w_p + Σ w_k b_k²), the vertex moves by w_p λ n̂ and corner k by −w_k b_k λ n̂.
-	 * Every vertex then gathers the corrections of its contacts (as vertex or corner) in contact
-	 * order and moves by their mean (Jacobi averaging: never scattered in thread order, so the result
-	 * is bitwise the same for every thread count). Velocities change by the total Δx / dt, as the
-	 * paper's PBD does (Sec. 5.2). Degenerate triangles give no push. *unresolved (may be NULL) gets
-	 * the contacts still closer than (1 − SERE_COLLIDE_TOLERANCE) × thickness. */
+	 * positions at its point of detection q = u a + v b + w c (barycentric weights fixed, as cloth
+	 * solvers keep them through a response): unit normal n̂ = side · n, height s = (p − q) · n̂
+	 * and in-plane offset l; the target height is s* = sqrt(thickness² − l²), so moving along n̂
+	 * makes the distance exactly the thickness. The constraint C = s − s* < 0 is solved as in
+	 * position-based cloth: λ = −C / W with W = w_p + Σ w_k b_k², the vertex moves by w_p λ n̂
+	 * and corner k by −w_k b_k λ n̂. Every vertex then gathers the corrections of its pushing
+	 * contacts (as vertex or corner) in contact order and moves by ω times their mean (Jacobi
+	 * averaging, Macklin et al. 2014: never scattered in thread order, so the result is bitwise
+	 * the same for every thread count). ω = 1 solves an isolated contact exactly; up to 2
+	 * converges faster where contacts crowd (a U-fold: 4 iterations instead of 16) but overshoots
+	 * isolated ones by ω − 1. Iterations stop once every contact is within
+	 * SERE_COLLIDE_TOLERANCE. Velocities change by the total Δx / dt, as the paper's PBD does
+	 * (Sec. 5.2). Degenerate triangles give no push. *unresolved (may be NULL) gets the contacts
+	 * still short by more than the tolerance. */
 	sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
 									  const sere_collide_params* params, int32_t* unresolved );
 

@@ -158,6 +158,79 @@ Test( bvh, query_matches_brute_force_after_build_and_refit )
 	bvh_sheet_free( &s );
 }
 
+typedef struct bvh_group_hits
+{
+	uint32_t* lanes; /* per triangle: the lanes reported */
+	int32_t calls;
+	int32_t repeats;
+} bvh_group_hits;
+
+static void bvh_group_visit( void* context, int32_t triangle, uint32_t lanes )
+{
+	bvh_group_hits* hits = context;
+	hits->repeats += hits->lanes[triangle] != 0;
+	hits->lanes[triangle] = lanes;
+	hits->calls += 1;
+}
+
+/* A group query reports each triangle once, with exactly the lanes whose box overlaps the
+ * triangle's box; unused lanes and lanes with a NaN bound report nothing. */
+Test( bvh, group_query_matches_brute_force )
+{
+	bvh_sheet s;
+	bvh_sheet_make( &s, 40, 30, 12 );
+	bvh_sheet_bump( &s, 0.05, 0.5 * s.cell, 2 );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	uint32_t* lanes = calloc( (size_t) s.triangles, sizeof( uint32_t ) );
+	uint64_t state = 9;
+	for ( int g = 0; g < 200; ++g )
+	{
+		sere_bvh_group group;
+		group.count = 1 + g % SERE_BVH_WIDTH;
+		/* boxes around nearby vertices (a group's usual shape), one of them NaN now and then */
+		int32_t base = (int32_t) ( bvh_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
+		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+		{
+			int32_t i = base + k;
+			float r = (float) ( 2.0 * s.cell * bvh_unit( &state ) );
+			group.lo_x[k] = s.x[i] - r, group.lo_y[k] = s.y[i] - r, group.lo_z[k] = s.z[i] - r;
+			group.hi_x[k] = s.x[i] + r, group.hi_y[k] = s.y[i] + r, group.hi_z[k] = s.z[i] + r;
+		}
+		if ( g % 5 == 0 )
+		{
+			group.hi_y[g % group.count] = NAN;
+		}
+		memset( lanes, 0, sizeof( uint32_t ) * (size_t) s.triangles );
+		bvh_group_hits hits = { lanes, 0, 0 };
+		sere_bvh_query_group( bvh, &group, bvh_group_visit, &hits );
+		cr_assert_eq( hits.repeats, 0, "group %d: a triangle reported twice", g );
+		for ( int32_t t = 0; t < s.triangles; ++t )
+		{
+			const int32_t* v = s.tri + 3 * t;
+			float lo[3], hi[3];
+			const float* c[3] = { s.x, s.y, s.z };
+			for ( int a = 0; a < 3; ++a )
+			{
+				lo[a] = fminf( c[a][v[0]], fminf( c[a][v[1]], c[a][v[2]] ) );
+				hi[a] = fmaxf( c[a][v[0]], fmaxf( c[a][v[1]], c[a][v[2]] ) );
+			}
+			uint32_t expected = 0;
+			for ( int k = 0; k < group.count; ++k )
+			{
+				bool overlap = lo[0] <= group.hi_x[k] && hi[0] >= group.lo_x[k] && lo[1] <= group.hi_y[k] &&
+							   hi[1] >= group.lo_y[k] && lo[2] <= group.hi_z[k] && hi[2] >= group.lo_z[k];
+				expected |= (uint32_t) overlap << k;
+			}
+			cr_assert_eq( lanes[t], expected, "group %d triangle %d: lanes %x, brute force %x", g, t, lanes[t],
+						  expected );
+		}
+	}
+	free( lanes );
+	sere_bvh_destroy( bvh );
+	bvh_sheet_free( &s );
+}
+
 /* Refit boxes are exact: a triangle lane is the min/max of its corners, a node lane the union of
  * the child's lanes; so they contain everything below them whatever the deformation. Also the
  * structure: each triangle in exactly one lane, children after their parent. */
