@@ -103,7 +103,8 @@ extern "C"
 
 	/* One self-collision pass of Algorithm 1 (line 23): refit the BVH (rebuilding it past
 	 * params->rebuild_ratio), then params->rounds times detect and respond, refitting between rounds.
-	 * stats may be NULL. */
+	 * stats may be NULL. An error in the first round leaves the state untouched; one in a later
+	 * round (SERE_ERR_CAPACITY) keeps the pushes of the rounds before it. */
 	sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const sere_collide_state* state,
 									  const sere_collide_params* params, sere_collide_stats* stats );
 
