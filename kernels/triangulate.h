@@ -25,9 +25,9 @@ typedef struct sere_cdt_input
 typedef struct sere_triangulation
 {
 	int32_t triangle_count;
-	int32_t* tri;		   /* 3 * triangle_count vertex indices, counter-clockwise */
-	int32_t* vertex_map;   /* point_count entries: the vertex each input point became (duplicates merge) */
-	int32_t merged_count;  /* input points that merged into an earlier duplicate */
+	int32_t* tri;		  /* 3 * triangle_count vertex indices, counter-clockwise */
+	int32_t* vertex_map;  /* point_count entries: the vertex each input point became (duplicates merge) */
+	int32_t merged_count; /* input points that merged into an earlier duplicate */
 } sere_triangulation;
 
 /* Builds the CDT with exact predicates. Collinear, cocircular and duplicate points are handled;
@@ -39,11 +39,11 @@ void sere_triangulation_destroy( sere_triangulation* triangulation );
 
 typedef struct sere_mesh_quality
 {
-	double min_angle_deg;		  /* over all triangles */
-	double min_angle_free_deg;	  /* over triangles with no vertex on a constrained segment or the boundary */
-	double max_aspect;			  /* longest edge / (2 * sqrt(3) * inradius): 1 for equilateral */
-	int32_t inverted;			  /* triangles with non-positive signed area */
-	int32_t free_triangle_count;  /* triangles counted in min_angle_free_deg */
+	double min_angle_deg;		 /* over all triangles */
+	double min_angle_free_deg;	 /* over triangles with no vertex on a constrained segment or the boundary */
+	double max_aspect;			 /* longest edge / (2 * sqrt(3) * inradius): 1 for equilateral */
+	int32_t inverted;			 /* triangles with non-positive signed area */
+	int32_t free_triangle_count; /* triangles counted in min_angle_free_deg */
 } sere_mesh_quality;
 
 /* constrained_vertex: point_count flags, nonzero for points on the boundary or a segment (may
