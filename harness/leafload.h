@@ -1,0 +1,13 @@
+/* sere harness — one entry point for leaves: a .leaf file or an auxiliary PNG (Fig. 3a-b). */
+#pragma once
+
+#include "leaffile.h"
+
+typedef struct sere_leaf
+{
+	sere_leaf_file file;
+} sere_leaf;
+
+/* Reads PATH by its extension; 0 on success, else -1 with one line in err. */
+int sere_leaf_load( const char* path, sere_leaf* leaf, char* err, size_t err_size );
+void sere_leaf_free( sere_leaf* leaf );
