@@ -1,0 +1,17 @@
+// The Table 1 leaves, built once per process and shared by every benchmark, so kernels are
+// timed on the same models the paper times (maple 13197/51102, plane tree 15069/59550,
+// wisteria 12750/50436).
+#pragma once
+
+#include "model.h"
+
+enum sere_bench_leaf
+{
+	SERE_BENCH_MAPLE = 0,
+	SERE_BENCH_PLANE = 1,
+	SERE_BENCH_WISTERIA = 2,
+};
+
+// A model at rest (never modified by callers: copy what you deform). Aborts the benchmark
+// binary with a message if the leaf files cannot be read.
+const sere_model* sere_bench_model( sere_bench_leaf leaf );

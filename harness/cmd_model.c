@@ -1,0 +1,215 @@
+#include "commands.h"
+#include "leafload.h"
+#include "model.h"
+#include "params.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void model_help( void )
+{
+	printf( "usage: sere model LEAF [options]\n\n"
+			"Builds the triangle-Voronoi double layer of Sec. 3 from LEAF (a .leaf file or an auxiliary PNG)\n"
+			"and prints its counts and mesh quality.\n\n"
+			"options:\n"
+			"  --particles P --springs S  build exactly P particles and S springs (N = P + 2 - (S + 12)/6\n"
+			"                             triangle-layer points, B = 3N - P - 2 of them on the outline)\n"
+			"  --points N                 N triangle-layer points, B chosen so outline and interior spacing match\n"
+			"                             (default 3000)\n"
+			"  --seed K                   interior sampling seed (default 1)\n"
+			"  --relax K                  centroidal relaxation passes (default 4)\n"
+			"  --preset P                 take h_vein, h_surf, D, masses from a preset (data/presets)\n"
+			"  --set key=value            override one parameter (sere run --help lists them)\n"
+			"  --json                     print one JSON object instead of text\n" );
+}
+
+static int parse_count( const char* option, const char* text, long long lo, long long hi, long long* value )
+{
+	char* end;
+	long long v = strtoll( text, &end, 10 );
+	if ( *text == '\0' || *end != '\0' || v < lo || v > hi )
+	{
+		fprintf( stderr, "sere model: %s takes a whole number from %lld to %lld, not '%s'\n", option, lo, hi, text );
+		return -1;
+	}
+	*value = v;
+	return 0;
+}
+
+int sere_cmd_model( int argc, char** argv )
+{
+	const char* path = NULL;
+	long long particles = -1, springs = -1, points = 3000, seed = 1, relax = 4;
+	int json = 0;
+	char err[1024];
+	sere_sim_params params = sere_sim_params_default();
+	for ( int i = 1; i < argc; ++i )
+	{
+		const char* a = argv[i];
+		const char* next = i + 1 < argc ? argv[i + 1] : NULL;
+		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
+		{
+			model_help();
+			return 0;
+		}
+		else if ( strcmp( a, "--json" ) == 0 )
+		{
+			json = 1;
+		}
+		else if ( next == NULL && a[0] == '-' )
+		{
+			fprintf( stderr, "sere model: %s needs a value\n", a );
+			return 2;
+		}
+		else if ( strcmp( a, "--particles" ) == 0 )
+		{
+			if ( parse_count( a, argv[++i], 4, 100000000, &particles ) != 0 )
+			{
+				return 2;
+			}
+		}
+		else if ( strcmp( a, "--springs" ) == 0 )
+		{
+			if ( parse_count( a, argv[++i], 1, 400000000, &springs ) != 0 )
+			{
+				return 2;
+			}
+		}
+		else if ( strcmp( a, "--points" ) == 0 )
+		{
+			if ( parse_count( a, argv[++i], 3, 30000000, &points ) != 0 )
+			{
+				return 2;
+			}
+		}
+		else if ( strcmp( a, "--seed" ) == 0 )
+		{
+			if ( parse_count( a, argv[++i], 0, 4294967295LL, &seed ) != 0 )
+			{
+				return 2;
+			}
+		}
+		else if ( strcmp( a, "--relax" ) == 0 )
+		{
+			if ( parse_count( a, argv[++i], 0, 100, &relax ) != 0 )
+			{
+				return 2;
+			}
+		}
+		else if ( strcmp( a, "--preset" ) == 0 )
+		{
+			if ( sere_params_load_preset( &params, argv[++i], err, sizeof( err ) ) != 0 )
+			{
+				fprintf( stderr, "sere model: %s\n", err );
+				return 2;
+			}
+		}
+		else if ( strcmp( a, "--set" ) == 0 )
+		{
+			if ( sere_params_set( &params, argv[++i], err, sizeof( err ) ) != 0 )
+			{
+				fprintf( stderr, "sere model: %s\n", err );
+				return 2;
+			}
+		}
+		else if ( a[0] == '-' )
+		{
+			fprintf( stderr, "sere model: unknown option '%s' (see sere model --help)\n", a );
+			return 2;
+		}
+		else if ( path == NULL )
+		{
+			path = a;
+		}
+		else
+		{
+			fprintf( stderr, "sere model: one LEAF only, got '%s' and '%s'\n", path, a );
+			return 2;
+		}
+	}
+	if ( path == NULL )
+	{
+		fprintf( stderr, "sere model: missing LEAF (a .leaf file or an auxiliary PNG; see sere model --help)\n" );
+		return 2;
+	}
+	if ( ( particles < 0 ) != ( springs < 0 ) )
+	{
+		fprintf( stderr, "sere model: --particles and --springs go together\n" );
+		return 2;
+	}
+
+	sere_leaf leaf;
+	if ( sere_leaf_load( path, &leaf, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere model: %s\n", err );
+		return 1;
+	}
+	const sere_leaf_shape* shape = &leaf.file.shape;
+	sere_build_params build = sere_build_params_default();
+	build.layer = params.layer;
+	build.seed = (uint64_t) seed;
+	build.relax_iterations = (int32_t) relax;
+	if ( particles >= 0 )
+	{
+		int32_t n, b;
+		if ( sere_counts_solve( particles, springs, &n, &b ) != SERE_OK )
+		{
+			fprintf( stderr,
+					 "sere model: no triangulation has %lld particles and %lld springs (need particles = 3N - B - 2, "
+					 "springs = 12N - 6B - 12 with 3 <= B <= N)\n",
+					 particles, springs );
+			sere_leaf_free( &leaf );
+			return 1;
+		}
+		build.point_count = n;
+		build.boundary_count = b;
+	}
+	else
+	{
+		build.point_count = (int32_t) points;
+		build.boundary_count =
+			sere_boundary_for_points( sere_shape_area( shape ), sere_shape_perimeter( shape ), build.point_count );
+	}
+
+	sere_model model;
+	sere_build_report report;
+	sere_status status = sere_model_build( shape, &build, &model, &report );
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "sere model: %s: cannot build N=%d B=%d: %s\n", path, build.point_count, build.boundary_count,
+				 sere_status_text( status ) );
+		sere_leaf_free( &leaf );
+		return 1;
+	}
+	if ( json )
+	{
+		printf(
+			"{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"triangles\": %d, \"triangle_particles\": %d, "
+			"\"voronoi_particles\": %d, \"t_springs\": %d, \"v_springs\": %d, \"l_springs\": %d, \"vein_springs\": %d, "
+			"\"boundary_vertices\": %d, \"vein_points\": %d, \"interior_points\": %d, \"min_angle_deg\": %.4f, "
+			"\"min_angle_free_deg\": %.4f, \"max_aspect\": %.4f, \"spacing\": %.6g, \"area\": %.6g, \"perimeter\": "
+			"%.6g}\n",
+			leaf.file.name, model.p.count, model.s.count, model.triangle_count, model.triangle_particles,
+			model.triangle_count, model.t_springs, model.v_springs, model.l_springs, model.vein_springs,
+			model.boundary_count, report.vein_points, report.interior_points, report.quality.min_angle_deg,
+			report.quality.min_angle_free_deg, report.quality.max_aspect, report.spacing, report.area,
+			report.perimeter );
+	}
+	else
+	{
+		printf( "%s (%s)\n", leaf.file.name, path );
+		printf( "  particles      %8d  (%d triangle + %d Voronoi)\n", model.p.count, model.triangle_particles,
+				model.triangle_count );
+		printf( "  springs        %8d  (T %d, V %d, L %d; %d on veins)\n", model.s.count, model.t_springs,
+				model.v_springs, model.l_springs, model.vein_springs );
+		printf( "  triangles      %8d\n", model.triangle_count );
+		printf( "  outline points %8d, vein points %d, interior points %d, spacing %.4g\n", model.boundary_count,
+				report.vein_points, report.interior_points, report.spacing );
+		printf( "  min angle      %8.2f deg (%.2f deg away from the outline and veins), worst aspect %.2f\n",
+				report.quality.min_angle_deg, report.quality.min_angle_free_deg, report.quality.max_aspect );
+	}
+	sere_model_destroy( &model );
+	sere_leaf_free( &leaf );
+	return 0;
+}

@@ -1,0 +1,46 @@
+/* sere — the command-line driver. Every subcommand lives in its own cmd_*.c. */
+#include "commands.h"
+
+#include <stdio.h>
+#include <string.h>
+
+typedef struct command
+{
+	const char* name;
+	int ( *run )( int argc, char** argv );
+	const char* summary;
+} command;
+
+static const command commands[] = {
+	{ "model", sere_cmd_model, "build a leaf's triangle-Voronoi double layer; print counts and mesh quality" },
+	{ "topo", sere_cmd_topo, "show the hwloc topology and how threads are bound" },
+};
+
+static void usage( FILE* f )
+{
+	fprintf( f, "sere — drying, wilting and seasonal leaves, fast\n\nusage: sere COMMAND [options]\n\ncommands:\n" );
+	for ( size_t i = 0; i < sizeof( commands ) / sizeof( commands[0] ); ++i )
+	{
+		fprintf( f, "  %-9s %s\n", commands[i].name, commands[i].summary );
+	}
+	fprintf( f, "\n'sere COMMAND --help' describes a command's options.\n" );
+}
+
+int main( int argc, char** argv )
+{
+	if ( argc < 2 || strcmp( argv[1], "--help" ) == 0 || strcmp( argv[1], "-h" ) == 0 ||
+		 strcmp( argv[1], "help" ) == 0 )
+	{
+		usage( argc < 2 ? stderr : stdout );
+		return argc < 2 ? 2 : 0;
+	}
+	for ( size_t i = 0; i < sizeof( commands ) / sizeof( commands[0] ); ++i )
+	{
+		if ( strcmp( argv[1], commands[i].name ) == 0 )
+		{
+			return commands[i].run( argc - 1, argv + 1 );
+		}
+	}
+	fprintf( stderr, "sere: unknown command '%s' (sere --help lists them)\n", argv[1] );
+	return 2;
+}
