@@ -1,0 +1,424 @@
+#include "cg.h"
+#include "fixture.h"
+#include "osmosis.h"
+#include "ref/osmosis_ref.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A jittered grid double layer; the T layer is particles [0, N) with springs [0, t_springs). */
+static void grid_model( sere_model* model, int32_t nx, int32_t ny, double width, double height )
+{
+	sere_test_plane plane;
+	sere_test_plane_grid( &plane, nx, ny, width, height, 0.3, 1, 5 );
+	sere_layer_params params = sere_layer_params_default();
+	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &params, model ), SERE_OK );
+	sere_test_plane_free( &plane );
+}
+
+static sere_osmosis* t_layer( const sere_model* model )
+{
+	sere_osmosis* o = NULL;
+	cr_assert_eq( sere_osmosis_create( 0, model->triangle_particles, model->s.a, model->s.b, model->t_springs, &o ),
+				  SERE_OK );
+	return o;
+}
+
+static double total( const double* w, int32_t first, int32_t count )
+{
+	double sum = 0.0;
+	for ( int32_t i = first; i < first + count; ++i )
+	{
+		sum += w[i];
+	}
+	return sum;
+}
+
+Test( osmosis, matrix_is_symmetric )
+{
+	sere_model model;
+	grid_model( &model, 14, 9, 1.4, 0.9 );
+	sere_osmosis* o = t_layer( &model );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.lambda_min = 0.5;
+	params.lambda_max = 20.0;
+	sere_osmosis_report report;
+	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
+									 &params, &report ),
+				  SERE_OK );
+	const sere_csr* a = sere_osmosis_matrix( o );
+	int32_t n = a->rows;
+	double *x = malloc( sizeof( double ) * n ), *y = malloc( sizeof( double ) * n );
+	double *ax = malloc( sizeof( double ) * n ), *ay = malloc( sizeof( double ) * n );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		x[i] = sin( 1.7 * i + 0.3 );
+		y[i] = cos( 0.9 * i );
+	}
+	sere_csr_spmv( a, x, ax );
+	sere_csr_spmv( a, y, ay );
+	double xay = 0.0, yax = 0.0, norm = 0.0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		xay += x[i] * ay[i];
+		yax += y[i] * ax[i];
+		norm += fabs( x[i] * ay[i] ) + fabs( y[i] * ax[i] );
+	}
+	/* HPCG's symmetry test: |xᵀAy − yᵀAx| at rounding level of the sums (1e-14 of their size). */
+	cr_expect_leq( fabs( xay - yax ), 1e-14 * norm );
+	free( x ), free( y ), free( ax ), free( ay );
+	sere_osmosis_destroy( o );
+	sere_model_destroy( &model );
+}
+
+Test( osmosis, matches_literal_eq9 )
+{
+	sere_model model;
+	grid_model( &model, 10, 7, 1.0, 0.7 );
+	int32_t n = model.triangle_particles;
+	double* w_ref = malloc( sizeof( double ) * model.p.capacity );
+	sere_osmosis* o = t_layer( &model );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.lambda_min = 0.3;
+	params.lambda_max = 40.0;
+	params.dt = 0.05;
+	params.water_rate = -0.05;
+	params.tolerance = 1e-14;
+	/* Unequal water so the flow is not trivial. */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		model.p.w[i] *= 1.0 + 0.5 * sin( 0.7 * i );
+	}
+	cr_assert_eq( sere_osmosis_ref_step( 0, n, model.s.a, model.s.b, model.t_springs, model.p.x, model.p.y, model.p.z,
+										 model.p.tau, model.p.M, model.p.w, params.dt, params.lambda_min,
+										 params.lambda_max, params.water_rate, w_ref ),
+				  SERE_OK );
+	sere_osmosis_report report;
+	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
+									 &params, &report ),
+				  SERE_OK );
+	/* w = M c turns the paper's nonsymmetric Eq. 9 into the SPD form with the same solution;
+	 * CG to 1e-14 and a pivoted dense solve agree to 1e-10 relative (the issue's bar). */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		cr_assert( w_ref[i] > 0.0 );
+		cr_assert_leq( fabs( model.p.w[i] - w_ref[i] ), 1e-10 * fabs( w_ref[i] ), "particle %d: %.17g vs %.17g", i,
+					   model.p.w[i], w_ref[i] );
+		cr_assert_eq( model.p.m[i], model.p.M[i] + model.p.w[i] ); /* Eq. 10 */
+	}
+	free( w_ref );
+	sere_osmosis_destroy( o );
+	sere_model_destroy( &model );
+}
+
+Test( osmosis, conservative_mode_conserves_water )
+{
+	sere_model model;
+	grid_model( &model, 16, 10, 1.6, 1.0 );
+	int32_t n = model.triangle_particles;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		model.p.w[i] *= 1.0 + 0.8 * cos( 1.3 * i );
+	}
+	double before = total( model.p.w, 0, n );
+	sere_osmosis* o = t_layer( &model );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.mode = SERE_OSMOSIS_CONSERVATIVE;
+	params.water_rate = 0.0;
+	params.lambda_min = 1.0;
+	params.lambda_max = 50.0;
+	params.dt = 0.01;
+	params.tolerance = 1e-14;
+	sere_osmosis_report report;
+	for ( int step = 0; step < 20; ++step )
+	{
+		cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
+										 model.p.m, &params, &report ),
+					  SERE_OK );
+	}
+	/* Flow only moves water: the row sums telescope, so the total changes only by rounding and
+	 * the CG residual (1e-14), well inside the issue's 1e-12. */
+	cr_expect_leq( fabs( total( model.p.w, 0, n ) - before ), 1e-12 * before );
+	sere_osmosis_destroy( o );
+	sere_model_destroy( &model );
+}
+
+Test( osmosis, fig8_large_lambda_equalizes_concentration )
+{
+	sere_model model;
+	grid_model( &model, 12, 8, 1.2, 0.8 );
+	int32_t n = model.triangle_particles;
+	/* Fig. 8b: some particles lose water, so concentrations M/m differ. */
+	for ( int32_t i = 0; i < n; i += 3 )
+	{
+		model.p.w[i] -= 0.2 * model.p.w[i];
+	}
+	sere_osmosis* o = t_layer( &model );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.mode = SERE_OSMOSIS_CONSERVATIVE;
+	params.lambda_min = params.lambda_max = 1e7; /* λ → ∞ (Fig. 8c) */
+	params.water_rate = 0.0;
+	params.tolerance = 1e-13;
+	sere_osmosis_report report;
+	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
+									 &params, &report ),
+				  SERE_OK );
+	double lo = INFINITY, hi = 0.0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double c = model.p.M[i] / model.p.m[i];
+		lo = fmin( lo, c ), hi = fmax( hi, c );
+	}
+	/* With λΔt ~ 1e4 per unit length the residual spread is O(1/(λΔt)) of the initial one. */
+	cr_expect_leq( hi - lo, 1e-4 * hi, "concentration spread %g", hi - lo );
+	sere_osmosis_destroy( o );
+	sere_model_destroy( &model );
+}
+
+/* Fig. 9: a rectangle with solute stripes, water supplied at one point, run to equilibrium. */
+static void fig9( int osmotic, double* stripe_water )
+{
+	sere_model model;
+	grid_model( &model, 24, 12, 2.0, 1.0 );
+	int32_t n = model.triangle_particles;
+	int32_t supply = -1;
+	double best = INFINITY;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double y = model.p.y[i];
+		/* primary stripe (white, 1.0) along the middle, secondary (grey, 0.55) above, rest (black, 0.1) */
+		double solute = fabs( y - 0.5 ) < 0.1 ? 1.0 : ( fabs( y - 0.8 ) < 0.1 ? 0.55 : 0.1 );
+		model.p.M[i] = osmotic ? solute : 0.5;
+		model.p.w[i] = 0.0; /* completely desiccated at the start */
+		model.p.tau[i] = 0.0f;
+		double d = hypot( model.p.x[i] - 0.0, model.p.y[i] - 0.5 );
+		if ( d < best )
+		{
+			best = d, supply = i;
+		}
+	}
+	sere_osmosis* o = t_layer( &model );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.mode = SERE_OSMOSIS_CONSERVATIVE;
+	params.lambda_min = params.lambda_max = 5.0;
+	params.water_rate = 0.0;
+	params.dt = 0.5;
+	params.supply = &supply;
+	params.supply_count = 1;
+	params.supply_rate = 1.0;
+	sere_osmosis_report report;
+	for ( int step = 0; step < 60; ++step )
+	{
+		cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
+										 model.p.m, &params, &report ),
+					  SERE_OK );
+	}
+	double sum[3] = { 0 }, count[3] = { 0 };
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double y = model.p.y[i];
+		int stripe = fabs( y - 0.5 ) < 0.1 ? 0 : ( fabs( y - 0.8 ) < 0.1 ? 1 : 2 );
+		sum[stripe] += model.p.w[i];
+		count[stripe] += 1;
+	}
+	for ( int k = 0; k < 3; ++k )
+	{
+		stripe_water[k] = sum[k] / count[k];
+	}
+	sere_osmosis_destroy( o );
+	sere_model_destroy( &model );
+}
+
+Test( osmosis, fig9_osmosis_keeps_low_solute_dry_diffusion_equalizes )
+{
+	double osmotic[3], diffusion[3];
+	fig9( 1, osmotic );
+	fig9( 0, diffusion );
+	/* Osmotic equilibrium is uniform concentration w/M: water follows solute 1.0 : 0.55 : 0.1. */
+	cr_expect_gt( osmotic[0], 5.0 * osmotic[2], "white %g black %g", osmotic[0], osmotic[2] );
+	cr_expect_gt( osmotic[1], 3.0 * osmotic[2], "grey %g black %g", osmotic[1], osmotic[2] );
+	cr_expect_gt( osmotic[0], osmotic[1] );
+	/* Plain diffusion (uniform M) spreads water evenly: stripes within 10% of each other. */
+	cr_expect_lt( fabs( diffusion[0] - diffusion[2] ), 0.1 * diffusion[0], "%g %g", diffusion[0], diffusion[2] );
+}
+
+static double rim_relative_water( double lambda )
+{
+	sere_model model;
+	grid_model( &model, 20, 12, 1.6, 1.0 );
+	int32_t n = model.triangle_particles;
+	double* w0 = malloc( sizeof( double ) * n );
+	memcpy( w0, model.p.w, sizeof( double ) * n );
+	sere_osmosis* o = t_layer( &model );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.lambda_min = params.lambda_max = lambda;
+	params.water_rate = -0.1;
+	params.dt = 0.05;
+	sere_osmosis_report report;
+	/* Half dehydrated, as in Fig. 16. */
+	while ( total( model.p.w, 0, n ) > 0.5 * total( w0, 0, n ) )
+	{
+		cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
+										 model.p.m, &params, &report ),
+					  SERE_OK );
+	}
+	double rim = 0.0;
+	int32_t count = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( model.boundary[i] )
+		{
+			rim += model.p.w[i] / w0[i];
+			count += 1;
+		}
+	}
+	free( w0 );
+	sere_osmosis_destroy( o );
+	sere_model_destroy( &model );
+	return rim / count;
+}
+
+Test( osmosis, fig16_rim_drier_without_flow )
+{
+	/* τ is high along the vein row through the base and low at the rim, so rim particles are
+	 * light and, without flow (λ = 0), lose their water first. λ = 100 refills them. */
+	double dry = rim_relative_water( 0.0 );
+	double wet = rim_relative_water( 100.0 );
+	cr_expect_lt( dry + 0.05, wet, "rim relative water: lambda 0 -> %g, lambda 100 -> %g", dry, wet );
+}
+
+Test( osmosis, deterministic_across_threads )
+{
+	double* result[2];
+	for ( int t = 0; t < 2; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		sere_model model;
+		grid_model( &model, 60, 40, 3.0, 2.0 );
+		sere_osmosis* o = t_layer( &model );
+		sere_osmosis_params params = sere_osmosis_params_default();
+		params.lambda_min = 0.1;
+		params.lambda_max = 10.0;
+		sere_osmosis_report report;
+		for ( int step = 0; step < 5; ++step )
+		{
+			cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
+											 model.p.m, &params, &report ),
+						  SERE_OK );
+		}
+		result[t] = malloc( sizeof( double ) * model.triangle_particles );
+		memcpy( result[t], model.p.w, sizeof( double ) * model.triangle_particles );
+		cr_assert_gt( model.triangle_particles, 2 * SERE_CG_BLOCK ); /* several blocks, so both threads work */
+		sere_osmosis_destroy( o );
+		sere_model_destroy( &model );
+	}
+	cr_expect_eq( memcmp( result[0], result[1], sizeof( double ) * 61 * 41 ), 0 );
+	free( result[0] ), free( result[1] );
+	omp_set_num_threads( 2 );
+}
+
+/* A small CSR from a dense symmetric matrix. */
+static sere_csr dense_csr( const double* dense, int32_t n )
+{
+	sere_csr a = { n, 0, malloc( sizeof( int32_t ) * ( n + 1 ) ), malloc( sizeof( int32_t ) * n * n ),
+				   malloc( sizeof( double ) * n * n ) };
+	a.row_ptr[0] = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		for ( int32_t j = 0; j < n; ++j )
+		{
+			if ( dense[i * n + j] != 0.0 )
+			{
+				a.col[a.nnz] = j;
+				a.val[a.nnz++] = dense[i * n + j];
+			}
+		}
+		a.row_ptr[i + 1] = a.nnz;
+	}
+	return a;
+}
+
+static void free_csr( sere_csr* a )
+{
+	free( a->row_ptr ), free( a->col ), free( a->val );
+}
+
+Test( cg, solves_spd_and_rejects_bad_matrices )
+{
+	/* 1D Laplacian + identity: SPD; exact solution known by construction. */
+	enum
+	{
+		n = 40
+	};
+	double dense[n * n] = { 0 }, b[n], x[n], expected[n];
+	for ( int i = 0; i < n; ++i )
+	{
+		dense[i * n + i] = 3.0;
+		if ( i > 0 )
+			dense[i * n + i - 1] = -1.0;
+		if ( i + 1 < n )
+			dense[i * n + i + 1] = -1.0;
+		expected[i] = sin( 0.3 * i );
+	}
+	for ( int i = 0; i < n; ++i )
+	{
+		b[i] = 0.0;
+		for ( int j = 0; j < n; ++j )
+			b[i] += dense[i * n + j] * expected[j];
+		x[i] = 0.0;
+	}
+	sere_csr a = dense_csr( dense, n );
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( n, &w ), SERE_OK );
+	sere_cg_result result;
+	cr_assert_eq( sere_cg_solve( w, &a, b, x, 1e-12, 200, &result ), SERE_OK );
+	for ( int i = 0; i < n; ++i )
+	{
+		/* condition number ≤ 5: residual 1e-12 bounds the error by ~5e-12 */
+		cr_expect_leq( fabs( x[i] - expected[i] ), 1e-10 );
+	}
+	cr_expect_leq( result.residual, 1e-12 );
+
+	/* Indefinite: a negative diagonal entry. */
+	dense[5 * n + 5] = -3.0;
+	sere_csr indefinite = dense_csr( dense, n );
+	memset( x, 0, sizeof( x ) );
+	cr_expect_eq( sere_cg_solve( w, &indefinite, b, x, 1e-12, 200, &result ), SERE_ERR_NOT_SPD );
+	dense[5 * n + 5] = 3.0;
+
+	/* Singular: a graph Laplacian (constant null space) with b outside its range. */
+	double lap[n * n] = { 0 };
+	for ( int i = 0; i + 1 < n; ++i )
+	{
+		lap[i * n + i] += 1.0, lap[( i + 1 ) * n + i + 1] += 1.0;
+		lap[i * n + i + 1] -= 1.0, lap[( i + 1 ) * n + i] -= 1.0;
+	}
+	sere_csr singular = dense_csr( lap, n );
+	for ( int i = 0; i < n; ++i )
+	{
+		b[i] = 1.0; /* Σ b ≠ 0: no solution */
+		x[i] = 0.0;
+	}
+	sere_status status = sere_cg_solve( w, &singular, b, x, 1e-12, 500, &result );
+	cr_expect( status == SERE_ERR_NOT_SPD || status == SERE_ERR_NO_CONVERGE, "status %d", status );
+	for ( int i = 0; i < n; ++i )
+	{
+		cr_expect( isfinite( x[i] ) );
+	}
+
+	/* NaN right-hand side. */
+	b[3] = NAN;
+	cr_expect_eq( sere_cg_solve( w, &a, b, x, 1e-12, 200, &result ), SERE_ERR_NONFINITE );
+
+	/* b = 0 gives x = 0 with no iteration. */
+	memset( b, 0, sizeof( b ) );
+	x[0] = 5.0;
+	cr_expect_eq( sere_cg_solve( w, &a, b, x, 1e-12, 200, &result ), SERE_OK );
+	cr_expect_eq( x[0], 0.0 );
+	cr_expect_eq( result.iterations, 0 );
+	sere_cg_destroy( w );
+	free_csr( &a ), free_csr( &indefinite ), free_csr( &singular );
+}
