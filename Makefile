@@ -69,11 +69,11 @@ test: deps
 	@$(MAKE) --no-print-directory test-asan
 
 test-fast: $(TESTS) $(SERE)
-	SERE_BIN=$(SERE) $(TESTS) --jobs 2
+	SERE_BIN=$(SERE) $(TESTS) --jobs 1
 
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 build/asan/sere-tests build/asan/sere
-	ASAN_OPTIONS=detect_leaks=1 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 2
+	ASAN_OPTIONS=detect_leaks=1 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
 
 bench: deps
 	@$(MAKE) --no-print-directory $(BENCHX)
