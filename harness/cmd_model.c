@@ -1,5 +1,5 @@
+#include "build.h"
 #include "commands.h"
-#include "leafload.h"
 #include "model.h"
 #include "params.h"
 
@@ -18,7 +18,6 @@ static void model_help( void )
 			"  --points N                 N triangle-layer points, B chosen so outline and interior spacing match\n"
 			"                             (default 3000)\n"
 			"  --seed K                   interior sampling seed (default 1)\n"
-			"  --relax K                  centroidal relaxation passes (default 4)\n"
 			"  --preset P                 take h_vein, h_surf, D, masses from a preset (data/presets)\n"
 			"  --set key=value            override one parameter (sere run --help lists them)\n"
 			"  --json                     print one JSON object instead of text\n" );
@@ -40,7 +39,7 @@ static int parse_count( const char* option, const char* text, long long lo, long
 int sere_cmd_model( int argc, char** argv )
 {
 	const char* path = NULL;
-	long long particles = -1, springs = -1, points = 3000, seed = 1, relax = 4;
+	long long particles = -1, springs = -1, points = 3000, seed = 1;
 	int json = 0;
 	char err[1024];
 	sere_sim_params params = sere_sim_params_default();
@@ -90,13 +89,6 @@ int sere_cmd_model( int argc, char** argv )
 				return 2;
 			}
 		}
-		else if ( strcmp( a, "--relax" ) == 0 )
-		{
-			if ( parse_count( a, argv[++i], 0, 100, &relax ) != 0 )
-			{
-				return 2;
-			}
-		}
 		else if ( strcmp( a, "--preset" ) == 0 )
 		{
 			if ( sere_params_load_preset( &params, argv[++i], err, sizeof( err ) ) != 0 )
@@ -139,47 +131,14 @@ int sere_cmd_model( int argc, char** argv )
 		return 2;
 	}
 
-	sere_leaf leaf;
-	if ( sere_leaf_load( path, &leaf, err, sizeof( err ) ) != 0 )
-	{
-		fprintf( stderr, "sere model: %s\n", err );
-		return 1;
-	}
-	const sere_leaf_shape* shape = &leaf.file.shape;
-	sere_build_params build = sere_build_params_default();
-	build.layer = params.layer;
-	build.seed = (uint64_t) seed;
-	build.relax_iterations = (int32_t) relax;
-	if ( particles >= 0 )
-	{
-		int32_t n, b;
-		if ( sere_counts_solve( particles, springs, &n, &b ) != SERE_OK )
-		{
-			fprintf( stderr,
-					 "sere model: no triangulation has %lld particles and %lld springs (need particles = 3N - B - 2, "
-					 "springs = 12N - 6B - 12 with 3 <= B <= N)\n",
-					 particles, springs );
-			sere_leaf_free( &leaf );
-			return 1;
-		}
-		build.point_count = n;
-		build.boundary_count = b;
-	}
-	else
-	{
-		build.point_count = (int32_t) points;
-		build.boundary_count =
-			sere_boundary_for_points( sere_shape_area( shape ), sere_shape_perimeter( shape ), build.point_count );
-	}
-
+	params.seed = (double) seed;
 	sere_model model;
 	sere_build_report report;
-	sere_status status = sere_model_build( shape, &build, &model, &report );
-	if ( status != SERE_OK )
+	char name[128];
+	if ( sere_harness_build( path, particles, springs, points, &params, &model, &report, name, sizeof( name ), err,
+							 sizeof( err ) ) != 0 )
 	{
-		fprintf( stderr, "sere model: %s: cannot build N=%d B=%d: %s\n", path, build.point_count, build.boundary_count,
-				 sere_status_text( status ) );
-		sere_leaf_free( &leaf );
+		fprintf( stderr, "sere model: %s\n", err );
 		return 1;
 	}
 	if ( json )
@@ -190,15 +149,14 @@ int sere_cmd_model( int argc, char** argv )
 			"\"boundary_vertices\": %d, \"vein_points\": %d, \"interior_points\": %d, \"min_angle_deg\": %.4f, "
 			"\"min_angle_free_deg\": %.4f, \"max_aspect\": %.4f, \"spacing\": %.6g, \"area\": %.6g, \"perimeter\": "
 			"%.6g}\n",
-			leaf.file.name, model.p.count, model.s.count, model.triangle_count, model.triangle_particles,
-			model.triangle_count, model.t_springs, model.v_springs, model.l_springs, model.vein_springs,
-			model.boundary_count, report.vein_points, report.interior_points, report.quality.min_angle_deg,
-			report.quality.min_angle_free_deg, report.quality.max_aspect, report.spacing, report.area,
-			report.perimeter );
+			name, model.p.count, model.s.count, model.triangle_count, model.triangle_particles, model.triangle_count,
+			model.t_springs, model.v_springs, model.l_springs, model.vein_springs, model.boundary_count,
+			report.vein_points, report.interior_points, report.quality.min_angle_deg, report.quality.min_angle_free_deg,
+			report.quality.max_aspect, report.spacing, report.area, report.perimeter );
 	}
 	else
 	{
-		printf( "%s (%s)\n", leaf.file.name, path );
+		printf( "%s (%s)\n", name, path );
 		printf( "  particles      %8d  (%d triangle + %d Voronoi)\n", model.p.count, model.triangle_particles,
 				model.triangle_count );
 		printf( "  springs        %8d  (T %d, V %d, L %d; %d on veins)\n", model.s.count, model.t_springs,
@@ -210,6 +168,5 @@ int sere_cmd_model( int argc, char** argv )
 				report.quality.min_angle_deg, report.quality.min_angle_free_deg, report.quality.max_aspect );
 	}
 	sere_model_destroy( &model );
-	sere_leaf_free( &leaf );
 	return 0;
 }

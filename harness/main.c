@@ -13,6 +13,7 @@ typedef struct command
 
 static const command commands[] = {
 	{ "model", sere_cmd_model, "build a leaf's triangle-Voronoi double layer; print counts and mesh quality" },
+	{ "run", sere_cmd_run, "dry a leaf (Algorithm 1): frames, statistics, summary and pictures" },
 	{ "topo", sere_cmd_topo, "show the hwloc topology and how threads are bound" },
 };
 

@@ -1,0 +1,454 @@
+#define _POSIX_C_SOURCE 200809L
+#include "build.h"
+#include "commands.h"
+#include "io.h"
+#include "leaf.h"
+#include "picture.h"
+#include "topo.h"
+
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static volatile sig_atomic_t interrupted = 0;
+
+static void on_signal( int signal_number )
+{
+	(void) signal_number;
+	interrupted = 1;
+}
+
+static void run_help( void )
+{
+	printf(
+		"usage: sere run LEAF --preset P --frames N --out DIR [options]\n\n"
+		"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
+		"  frames/frame_NNNNN.ply  triangle layer with water, tau and relative water per vertex (Blender, MeshLab)\n"
+		"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
+		"  stats.csv               one row per frame: water per layer, area, strain, iterations, contacts, ms\n"
+		"  summary.json            counts, parameters and the Table 1 breakdown (mean ms per frame)\n"
+		"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
+		"  curves.png              relative water content and leaf area over time\n\n"
+		"options:\n"
+		"  --preset P        maple-green, maple-red, plane-tree, wisteria, grass, or a preset file\n"
+		"  --frames N        frames to simulate (default 400)\n"
+		"  --out DIR         output directory (default out/run)\n"
+		"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
+		"  --points N        triangle-layer points (default 1500); or --particles P --springs S exactly\n"
+		"  --threads T       OpenMP threads, bound to cores with hwloc (default: one per core)\n"
+		"  --set key=value   override a parameter; keys:\n" );
+	sere_params_describe( stdout );
+	printf( "Interrupting (Ctrl-C) stops after the current frame and still writes the summary and pictures.\n" );
+}
+
+static int parse_long( const char* option, const char* text, long long lo, long long hi, long long* value )
+{
+	char* end;
+	long long v = strtoll( text, &end, 10 );
+	if ( *text == '\0' || *end != '\0' || v < lo || v > hi )
+	{
+		fprintf( stderr, "sere run: %s takes a whole number from %lld to %lld, not '%s'\n", option, lo, hi, text );
+		return -1;
+	}
+	*value = v;
+	return 0;
+}
+
+static sere_leaf_params leaf_params( const sere_sim_params* s )
+{
+	sere_leaf_params p = sere_leaf_params_default();
+	p.dt = (float) s->dt;
+	p.gravity[0] = (float) s->gravity[0];
+	p.gravity[1] = (float) s->gravity[1];
+	p.gravity[2] = (float) s->gravity[2];
+	p.ground = (float) s->ground;
+	p.water_rate_t = s->water_rate_t;
+	p.water_rate_v = s->water_rate_v;
+	p.osmosis.lambda_min = s->lambda_min;
+	p.osmosis.lambda_max = s->lambda_max;
+	p.osmosis.mode = s->conservative != 0.0 ? SERE_OSMOSIS_CONSERVATIVE : SERE_OSMOSIS_PAPER;
+	p.shrink.sigma_vein = s->sigma_vein;
+	p.shrink.sigma_surf = s->sigma_surf;
+	p.shrink.alpha = s->alpha;
+	p.shrink.m_min = s->layer.m_min;
+	p.shrink.min_length_ratio = s->min_length_ratio;
+	p.pbd.stiffness = (float) s->stiffness;
+	p.pbd.tolerance = (float) s->strain_tolerance;
+	p.pbd.max_iterations = (int32_t) s->max_iterations;
+	p.collide.thickness = (float) s->collision_thickness;
+	p.collisions = s->collision_thickness > 0.0;
+	p.restore_measured = s->restore_measured != 0.0;
+	p.soften = s->soften != 0.0;
+	return p;
+}
+
+static double leaf_area( const sere_model* model )
+{
+	const sere_particles* p = &model->p;
+	double area = 0.0;
+	for ( int32_t t = 0; t < model->triangle_count; ++t )
+	{
+		const int32_t* v = model->tri + 3 * t;
+		double ax = p->x[v[1]] - p->x[v[0]], ay = p->y[v[1]] - p->y[v[0]], az = p->z[v[1]] - p->z[v[0]];
+		double bx = p->x[v[2]] - p->x[v[0]], by = p->y[v[2]] - p->y[v[0]], bz = p->z[v[2]] - p->z[v[0]];
+		double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+		area += 0.5 * sqrt( nx * nx + ny * ny + nz * nz );
+	}
+	return area;
+}
+
+/* A kept snapshot for the contact sheet. */
+typedef struct snapshot
+{
+	float *x, *y, *z, *rwc;
+	char caption[96];
+} snapshot;
+
+static int write_frame( const char* out, int frame, double time, const sere_model* model, const float* rwc,
+						char names[][64], double* times, int* written )
+{
+	const sere_particles* p = &model->p;
+	int32_t n = model->triangle_particles;
+	float* water = malloc( sizeof( float ) * (size_t) n );
+	if ( water == NULL )
+	{
+		return -1;
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		water[i] = (float) p->w[i];
+	}
+	sere_vertex_property properties[3] = { { "water", water }, { "tau", p->tau }, { "relative_water", rwc } };
+	char path[4096];
+	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
+	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 3 );
+	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.vtp", out, frame );
+	failed |= sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 3 );
+	free( water );
+	if ( failed )
+	{
+		return -1;
+	}
+	snprintf( names[*written], 64, "frames/frame_%05d.vtp", frame );
+	times[*written] = time;
+	*written += 1;
+	const char* files[1024];
+	for ( int k = 0; k < *written; ++k )
+	{
+		files[k] = names[k];
+	}
+	snprintf( path, sizeof( path ), "%s/leaf.pvd", out );
+	return sere_write_pvd( path, files, times, *written );
+}
+
+int sere_cmd_run( int argc, char** argv )
+{
+	const char* path = NULL;
+	const char* preset = NULL;
+	const char* out = "out/run";
+	long long frames = 400, every = 0, points = 1500, particles = -1, springs = -1, threads = 0;
+	char err[1024];
+	sere_sim_params params = sere_sim_params_default();
+	const char* sets[64];
+	int set_count = 0;
+	for ( int i = 1; i < argc; ++i )
+	{
+		const char* a = argv[i];
+		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
+		{
+			run_help();
+			return 0;
+		}
+		if ( a[0] == '-' && i + 1 >= argc )
+		{
+			fprintf( stderr, "sere run: %s needs a value (see sere run --help)\n", a );
+			return 2;
+		}
+		if ( strcmp( a, "--preset" ) == 0 )
+		{
+			preset = argv[++i];
+		}
+		else if ( strcmp( a, "--out" ) == 0 )
+		{
+			out = argv[++i];
+		}
+		else if ( strcmp( a, "--set" ) == 0 )
+		{
+			if ( set_count == 64 )
+			{
+				fprintf( stderr, "sere run: at most 64 --set options\n" );
+				return 2;
+			}
+			sets[set_count++] = argv[++i];
+		}
+		else if ( strcmp( a, "--frames" ) == 0 )
+		{
+			if ( parse_long( a, argv[++i], 1, 100000000, &frames ) != 0 )
+				return 2;
+		}
+		else if ( strcmp( a, "--every" ) == 0 )
+		{
+			if ( parse_long( a, argv[++i], 1, 100000000, &every ) != 0 )
+				return 2;
+		}
+		else if ( strcmp( a, "--points" ) == 0 )
+		{
+			if ( parse_long( a, argv[++i], 10, 10000000, &points ) != 0 )
+				return 2;
+		}
+		else if ( strcmp( a, "--particles" ) == 0 )
+		{
+			if ( parse_long( a, argv[++i], 4, 100000000, &particles ) != 0 )
+				return 2;
+		}
+		else if ( strcmp( a, "--springs" ) == 0 )
+		{
+			if ( parse_long( a, argv[++i], 1, 400000000, &springs ) != 0 )
+				return 2;
+		}
+		else if ( strcmp( a, "--threads" ) == 0 )
+		{
+			if ( parse_long( a, argv[++i], 0, 256, &threads ) != 0 )
+				return 2;
+		}
+		else if ( a[0] == '-' )
+		{
+			fprintf( stderr, "sere run: unknown option '%s' (see sere run --help)\n", a );
+			return 2;
+		}
+		else if ( path == NULL )
+		{
+			path = a;
+		}
+		else
+		{
+			fprintf( stderr, "sere run: one LEAF only, got '%s' and '%s'\n", path, a );
+			return 2;
+		}
+	}
+	if ( path == NULL )
+	{
+		fprintf( stderr, "sere run: missing LEAF (a .leaf file; see sere run --help)\n" );
+		return 2;
+	}
+	if ( ( particles < 0 ) != ( springs < 0 ) )
+	{
+		fprintf( stderr, "sere run: --particles and --springs go together\n" );
+		return 2;
+	}
+	if ( preset != NULL && sere_params_load_preset( &params, preset, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere run: %s\n", err );
+		return 2;
+	}
+	for ( int k = 0; k < set_count; ++k )
+	{
+		if ( sere_params_set( &params, sets[k], err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere run: %s\n", err );
+			return 2;
+		}
+	}
+	if ( every == 0 )
+	{
+		every = frames / 24 > 0 ? frames / 24 : 1;
+	}
+	int bound = sere_topo_bind( (int) threads, NULL );
+
+	sere_model model;
+	sere_build_report report;
+	char name[128];
+	if ( sere_harness_build( path, particles, springs, points, &params, &model, &report, name, sizeof( name ), err,
+							 sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere run: %s\n", err );
+		return 1;
+	}
+	char frames_dir[4096];
+	snprintf( frames_dir, sizeof( frames_dir ), "%s/frames", out );
+	if ( sere_mkdirs( frames_dir ) != 0 )
+	{
+		fprintf( stderr, "sere run: cannot create %s\n", frames_dir );
+		sere_model_destroy( &model );
+		return 1;
+	}
+	sere_leaf_sim* sim = NULL;
+	sere_status status = sere_leaf_create( &model, &sim );
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "sere run: %s\n", sere_status_text( status ) );
+		sere_model_destroy( &model );
+		return 1;
+	}
+	sere_leaf_params leaf = leaf_params( &params );
+
+	int32_t n = model.triangle_particles;
+	float* rwc = malloc( sizeof( float ) * (size_t) model.p.capacity );
+	enum
+	{
+		sheet_panels = 12
+	};
+	snapshot shots[sheet_panels] = { 0 };
+	int shot_count = 0;
+	long long shot_every = frames / ( sheet_panels - 1 ) > 0 ? frames / ( sheet_panels - 1 ) : 1;
+	double* curve_t = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
+	double* curve_rwc = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
+	double* curve_area = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
+	char( *names )[64] = malloc( 64 * 1024 );
+	double* pvd_times = malloc( sizeof( double ) * 1024 );
+	if ( !rwc || !curve_t || !curve_rwc || !curve_area || !names || !pvd_times )
+	{
+		fprintf( stderr, "sere run: out of memory\n" );
+		return 1;
+	}
+	sere_atomic_file csv_file;
+	char csv_path[4096];
+	snprintf( csv_path, sizeof( csv_path ), "%s/stats.csv", out );
+	FILE* csv = sere_atomic_open( &csv_file, csv_path );
+	if ( csv == NULL )
+	{
+		fprintf( stderr, "sere run: cannot write %s\n", csv_path );
+		return 1;
+	}
+	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,cg_iterations_t,"
+				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,contacts,desiccated,osmosis_ms,dynamics_ms,collisions_ms,"
+				  "total_ms\n" );
+
+	signal( SIGINT, on_signal );
+	signal( SIGTERM, on_signal );
+	double area0 = leaf_area( &model );
+	sere_leaf_relative_water( sim, rwc );
+	int written = 0;
+	write_frame( out, 0, 0.0, &model, rwc, names, pvd_times, &written );
+	curve_t[0] = 0.0, curve_rwc[0] = 1.0, curve_area[0] = 1.0;
+	double sum_osmosis = 0, sum_dynamics = 0, sum_collisions = 0, sum_total = 0;
+	long long done = 0, cap_hits = 0;
+	int32_t max_pbd_iterations = 0;
+	sere_leaf_stats stats = { 0 };
+	sere_progress progress;
+	sere_progress_begin( &progress, "drying", frames );
+	/* the first contact-sheet panel: the fresh leaf */
+	for ( long long frame = 0; frame <= frames && !interrupted; ++frame )
+	{
+		if ( frame > 0 )
+		{
+			status = sere_leaf_step( sim, &leaf, &stats );
+			if ( status != SERE_OK )
+			{
+				fprintf( stderr, "\nsere run: frame %lld: %s\n", frame, sere_status_text( status ) );
+				break;
+			}
+			done = frame;
+			sum_osmosis += stats.osmosis_ms, sum_dynamics += stats.dynamics_ms;
+			sum_collisions += stats.collisions_ms, sum_total += stats.total_ms;
+			cap_hits += stats.pbd_hit_cap;
+			max_pbd_iterations = stats.pbd_iterations > max_pbd_iterations ? stats.pbd_iterations : max_pbd_iterations;
+			double area = leaf_area( &model );
+			curve_t[frame] = frame * params.dt;
+			curve_rwc[frame] = stats.relative_water;
+			curve_area[frame] = area / area0;
+			fprintf( csv, "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f\n", frame,
+					 frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
+					 stats.max_strain, stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations,
+					 stats.pbd_hit_cap, stats.contacts, stats.desiccated, stats.osmosis_ms, stats.dynamics_ms,
+					 stats.collisions_ms, stats.total_ms );
+			sere_leaf_relative_water( sim, rwc );
+			if ( frame % every == 0 || frame == frames )
+			{
+				if ( written < 1024 &&
+					 write_frame( out, (int) frame, frame * params.dt, &model, rwc, names, pvd_times, &written ) != 0 )
+				{
+					fprintf( stderr, "\nsere run: cannot write frame %lld in %s\n", frame, out );
+					break;
+				}
+			}
+		}
+		if ( ( frame % shot_every == 0 || frame == frames ) && shot_count < sheet_panels )
+		{
+			snapshot* s = shots + shot_count++;
+			size_t bytes = sizeof( float ) * (size_t) n;
+			s->x = malloc( bytes ), s->y = malloc( bytes ), s->z = malloc( bytes ), s->rwc = malloc( bytes );
+			memcpy( s->x, model.p.x, bytes ), memcpy( s->y, model.p.y, bytes ), memcpy( s->z, model.p.z, bytes );
+			memcpy( s->rwc, rwc, bytes );
+			snprintf( s->caption, sizeof( s->caption ), "frame %lld, water %.0f%%", frame,
+					  100.0 * ( frame > 0 ? stats.relative_water : 1.0 ) );
+		}
+		sere_progress_update( &progress, frame );
+	}
+	sere_progress_end( &progress );
+	if ( sere_atomic_commit( &csv_file ) != 0 )
+	{
+		fprintf( stderr, "sere run: cannot write %s\n", csv_path );
+	}
+
+	/* Pictures. */
+	char picture[4096];
+	sere_panel panels[sheet_panels];
+	for ( int k = 0; k < shot_count; ++k )
+	{
+		panels[k] = ( sere_panel ){ shots[k].x, shots[k].y,			  shots[k].z,	   shots[k].rwc,
+									model.tri,	model.triangle_count, shots[k].caption };
+	}
+	char title[256];
+	snprintf( title, sizeof( title ), "%s, preset %s: drying colored by relative water content", name,
+			  preset ? preset : "default" );
+	snprintf( picture, sizeof( picture ), "%s/drying.png", out );
+	int picture_failed = sere_picture_sheet( picture, title, panels, shot_count, 4, err, sizeof( err ) ) != 0;
+	sere_series curves[2] = { { "relative water content", curve_t, curve_rwc, (int32_t) done + 1, 0.15, 0.45, 0.8 },
+							  { "relative leaf area", curve_t, curve_area, (int32_t) done + 1, 0.55, 0.36, 0.17 } };
+	snprintf( picture, sizeof( picture ), "%s/curves.png", out );
+	picture_failed |=
+		sere_picture_plot( picture, title, "time", "fraction of initial", curves, 2, err, sizeof( err ) ) != 0;
+	if ( picture_failed )
+	{
+		fprintf( stderr, "sere run: %s\n", err );
+	}
+
+	/* Summary, Table 1 breakdown in mean ms per frame. */
+	char summary_path[4096];
+	snprintf( summary_path, sizeof( summary_path ), "%s/summary.json", out );
+	sere_atomic_file summary_file;
+	FILE* summary = sere_atomic_open( &summary_file, summary_path );
+	double frames_done = done > 0 ? (double) done : 1.0;
+	if ( summary != NULL )
+	{
+		fprintf(
+			summary,
+			"{\n  \"leaf\": \"%s\",\n  \"preset\": \"%s\",\n  \"frames\": %lld,\n  \"frames_requested\": %lld,\n"
+			"  \"interrupted\": %s,\n  \"threads\": %d,\n  \"particles\": %d,\n  \"springs\": %d,\n"
+			"  \"triangles\": %d,\n  \"relative_water\": %.6g,\n  \"relative_area\": %.6g,\n"
+			"  \"osmosis_ms\": %.4f,\n  \"dynamics_ms\": %.4f,\n  \"collisions_ms\": %.4f,\n  \"total_ms\": %.4f,\n"
+			"  \"pbd_tolerance\": %g,\n  \"pbd_cap\": %d,\n  \"pbd_cap_hits\": %lld,\n  \"pbd_max_iterations\": %d,\n"
+			"  \"parameters\": {\n",
+			name, preset ? preset : "default", done, frames, interrupted ? "true" : "false", bound, model.p.count,
+			model.s.count, model.triangle_count, done > 0 ? stats.relative_water : 1.0, curve_area[done > 0 ? done : 0],
+			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
+			sum_total / frames_done, params.strain_tolerance, (int) params.max_iterations, cap_hits,
+			max_pbd_iterations );
+		sere_params_print( &params, summary, "    \"" );
+		fprintf( summary, "    \"end\": 0\n  }\n}\n" );
+		sere_atomic_commit( &summary_file );
+	}
+	printf( "%s: %lld frames, %d particles, %d springs, %d threads\n", name, done, model.p.count, model.s.count,
+			bound );
+	printf( "  relative water %.1f%%, leaf area %.1f%% of fresh\n", 100.0 * ( done > 0 ? stats.relative_water : 1.0 ),
+			100.0 * curve_area[done > 0 ? done : 0] );
+	printf( "  ms per frame: osmotic flow %.3f, dynamics %.3f, collisions %.3f, total %.3f\n",
+			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
+			sum_total / frames_done );
+	printf( "  PBD: lambda_C %g, cap %d, cap reached in %lld of %lld frames\n", params.strain_tolerance,
+			(int) params.max_iterations, cap_hits, done );
+	printf( "  pictures: %s/drying.png and %s/curves.png\n  frames:   %s/frames (PLY, VTP; open %s/leaf.pvd in "
+			"ParaView)\n  stats:    %s/stats.csv, %s/summary.json\n",
+			out, out, out, out, out, out );
+	for ( int k = 0; k < shot_count; ++k )
+	{
+		free( shots[k].x ), free( shots[k].y ), free( shots[k].z ), free( shots[k].rwc );
+	}
+	free( rwc ), free( curve_t ), free( curve_rwc ), free( curve_area ), free( names ), free( pvd_times );
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+	return status == SERE_OK ? ( interrupted ? 130 : 0 ) : 1;
+}

@@ -1,0 +1,69 @@
+/* sere — one frame of Algorithm 1 on a whole leaf, composed from the kernels: osmotic flow on
+ * both layers (Eq. 9) → masses (Eq. 10) → rest lengths (Eq. 12) → gravity and integration →
+ * ĥ → projection of the T, V and L constraints (Eq. 13) → self-collision of the triangle layer
+ * → Voronoi restore (Eq. 14). Another program can drive a leaf through this API alone. */
+#pragma once
+
+#include "collide.h"
+#include "layers.h"
+#include "osmosis.h"
+#include "pbd.h"
+#include "shrink.h"
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
+typedef struct sere_leaf_params
+{
+	float dt;
+	float gravity[3];
+	float ground;				 /* z of a supporting plane below the leaf; -INFINITY for none */
+	double water_rate_t;		 /* signed (Table 2 w_loss^T): negative loses water */
+	double water_rate_v;		 /* signed (Table 2 w_loss^V) */
+	sere_osmosis_params osmosis; /* λ, mode and CG settings; its water_rate and dt are set per layer */
+	sere_shrink_params shrink;
+	sere_pbd_params pbd;
+	sere_collide_params collide;
+	int collisions;		  /* run the self-collision pass */
+	int restore_measured; /* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
+	int soften;			  /* Sec. 7: stiffness scaled by relative water content */
+} sere_leaf_params;
+
+sere_leaf_params sere_leaf_params_default( void );
+
+typedef struct sere_leaf_stats
+{
+	double water_t, water_v; /* total water per layer after the frame */
+	double relative_water;	 /* total water / initial total water */
+	int32_t cg_iterations_t, cg_iterations_v;
+	int32_t pbd_iterations;
+	float max_strain; /* max |C/l| after projection */
+	int pbd_hit_cap;
+	int32_t contacts;
+	int desiccated; /* a layer ran dry: flow and shrinkage have stopped (Sec. 6) */
+	/* Table 1's breakdown, milliseconds of wall time */
+	double osmosis_ms, dynamics_ms, collisions_ms, total_ms;
+} sere_leaf_stats;
+
+typedef struct sere_leaf_sim sere_leaf_sim;
+
+/* The simulation keeps a pointer to model and changes it in place every frame. */
+sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out );
+void sere_leaf_destroy( sere_leaf_sim* sim );
+
+/* One frame of Algorithm 1. */
+sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats );
+
+/* Initial shaping (Sec. 3.1, Fig. 3g): vein springs of the Voronoi layer shortened by crease
+ * and the other Voronoi springs lengthened by curl (fractions of l⁰), projected to rest, and the
+ * result taken as the new rest state (l⁰ and positions). */
+sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float curl, const sere_pbd_params* pbd );
+
+/* Per-particle relative water content w / w⁰ (0 where w⁰ = 0), for colors and outputs. */
+void sere_leaf_relative_water( const sere_leaf_sim* sim, float* out );
+
+#ifdef __cplusplus
+}
+#endif
