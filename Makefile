@@ -13,7 +13,8 @@ CXX    := g++
 
 LEAF   ?= data/leaves/maple.leaf
 PRESET ?= maple-green
-FRAMES ?= 200
+FRAMES ?= 3000
+POINTS ?= 1000
 OUT    ?= out/run
 
 WARN      := -Wall -Wextra -Wpedantic -Werror
@@ -61,7 +62,7 @@ deps:
 
 run: deps
 	@$(MAKE) --no-print-directory all
-	$(SERE) run $(LEAF) --preset $(PRESET) --frames $(FRAMES) --out $(OUT)
+	$(SERE) run $(LEAF) --preset $(PRESET) --frames $(FRAMES) --points $(POINTS) --until-dry --out $(OUT)
 
 # The suite, then the same suite under AddressSanitizer + UBSan; Criterion's summary closes.
 test: deps

@@ -56,7 +56,7 @@ static int parse_long( const char* option, const char* text, long long lo, long 
 	return 0;
 }
 
-static sere_leaf_params leaf_params( const sere_sim_params* s )
+sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 {
 	sere_leaf_params p = sere_leaf_params_default();
 	p.dt = (float) s->dt;
@@ -64,6 +64,7 @@ static sere_leaf_params leaf_params( const sere_sim_params* s )
 	p.gravity[1] = (float) s->gravity[1];
 	p.gravity[2] = (float) s->gravity[2];
 	p.ground = (float) s->ground;
+	p.damping = (float) s->damping;
 	p.water_rate_t = s->water_rate_t;
 	p.water_rate_v = s->water_rate_v;
 	p.osmosis.lambda_min = s->lambda_min;
@@ -150,6 +151,7 @@ int sere_cmd_run( int argc, char** argv )
 	const char* out = "out/run";
 	long long frames = 400, every = 0, points = 1500, particles = -1, springs = -1, threads = 0;
 	char err[1024];
+	int until_dry = 0;
 	sere_sim_params params = sere_sim_params_default();
 	const char* sets[64];
 	int set_count = 0;
@@ -160,6 +162,11 @@ int sere_cmd_run( int argc, char** argv )
 		{
 			run_help();
 			return 0;
+		}
+		if ( strcmp( a, "--until-dry" ) == 0 )
+		{
+			until_dry = 1;
+			continue;
 		}
 		if ( a[0] == '-' && i + 1 >= argc )
 		{
@@ -282,7 +289,7 @@ int sere_cmd_run( int argc, char** argv )
 		sere_model_destroy( &model );
 		return 1;
 	}
-	sere_leaf_params leaf = leaf_params( &params );
+	sere_leaf_params leaf = sere_run_leaf_params( &params );
 
 	int32_t n = model.triangle_particles;
 	float* rwc = malloc( sizeof( float ) * (size_t) model.p.capacity );
@@ -292,7 +299,7 @@ int sere_cmd_run( int argc, char** argv )
 	};
 	snapshot shots[sheet_panels] = { 0 };
 	int shot_count = 0;
-	long long shot_every = frames / ( sheet_panels - 1 ) > 0 ? frames / ( sheet_panels - 1 ) : 1;
+	long long shot_every = 1;
 	double* curve_t = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
 	double* curve_rwc = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
 	double* curve_area = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
@@ -334,8 +341,13 @@ int sere_cmd_run( int argc, char** argv )
 	{
 		if ( frame > 0 )
 		{
-			status = sere_leaf_step( sim, &leaf, &stats );
-			if ( status != SERE_OK )
+			sere_leaf_stats next;
+			status = sere_leaf_step( sim, &leaf, &next );
+			if ( status == SERE_OK )
+			{
+				stats = next;
+			}
+			else
 			{
 				fprintf( stderr, "\nsere run: frame %lld: %s\n", frame, sere_status_text( status ) );
 				break;
@@ -365,17 +377,44 @@ int sere_cmd_run( int argc, char** argv )
 				}
 			}
 		}
-		if ( ( frame % shot_every == 0 || frame == frames ) && shot_count < sheet_panels )
+		int last = frame == frames || ( until_dry && stats.desiccated );
+		if ( frame % shot_every == 0 || last )
 		{
-			snapshot* s = shots + shot_count++;
-			size_t bytes = sizeof( float ) * (size_t) n;
-			s->x = malloc( bytes ), s->y = malloc( bytes ), s->z = malloc( bytes ), s->rwc = malloc( bytes );
-			memcpy( s->x, model.p.x, bytes ), memcpy( s->y, model.p.y, bytes ), memcpy( s->z, model.p.z, bytes );
-			memcpy( s->rwc, rwc, bytes );
-			snprintf( s->caption, sizeof( s->caption ), "frame %lld, water %.0f%%", frame,
-					  100.0 * ( frame > 0 ? stats.relative_water : 1.0 ) );
+			/* Keep at most sheet_panels evenly spaced panels whatever the run's length: when full,
+			 * drop every other one and take them half as often. */
+			if ( shot_count == sheet_panels )
+			{
+				for ( int k = 1; k < sheet_panels; k += 2 )
+				{
+					free( shots[k].x ), free( shots[k].y ), free( shots[k].z ), free( shots[k].rwc );
+				}
+				for ( int k = 0; k < sheet_panels / 2; ++k )
+				{
+					shots[k] = shots[2 * k];
+				}
+				shot_count = sheet_panels / 2;
+				shot_every *= 2;
+			}
+			if ( frame % shot_every == 0 || last )
+			{
+				snapshot* s = shots + shot_count++;
+				size_t bytes = sizeof( float ) * (size_t) n;
+				s->x = malloc( bytes ), s->y = malloc( bytes ), s->z = malloc( bytes ), s->rwc = malloc( bytes );
+				memcpy( s->x, model.p.x, bytes ), memcpy( s->y, model.p.y, bytes ), memcpy( s->z, model.p.z, bytes );
+				memcpy( s->rwc, rwc, bytes );
+				snprintf( s->caption, sizeof( s->caption ), "frame %lld, water %.0f%%", frame,
+						  100.0 * ( frame > 0 ? stats.relative_water : 1.0 ) );
+			}
 		}
 		sere_progress_update( &progress, frame );
+		if ( until_dry && stats.desiccated )
+		{
+			if ( frame % every != 0 && written < 1024 )
+			{
+				write_frame( out, (int) frame, frame * params.dt, &model, rwc, names, pvd_times, &written );
+			}
+			break;
+		}
 	}
 	sere_progress_end( &progress );
 	if ( sere_atomic_commit( &csv_file ) != 0 )

@@ -150,7 +150,8 @@ int sere_write_vtp( const char* path, const float* x, const float* y, const floa
 	{
 		fprintf( f, "%.9g %.9g %.9g\n", (double) x[i], (double) y[i], (double) z[i] );
 	}
-	fprintf( f, "</DataArray>\n</Points>\n<Polys>\n<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n" );
+	fprintf( f,
+			 "</DataArray>\n</Points>\n<Polys>\n<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n" );
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		fprintf( f, "%d %d %d\n", tri[3 * t], tri[3 * t + 1], tri[3 * t + 2] );

@@ -14,6 +14,7 @@ typedef struct command
 static const command commands[] = {
 	{ "model", sere_cmd_model, "build a leaf's triangle-Voronoi double layer; print counts and mesh quality" },
 	{ "run", sere_cmd_run, "dry a leaf (Algorithm 1): frames, statistics, summary and pictures" },
+	{ "table1", sere_cmd_table1, "the three Table 1 leaves: our ms per frame beside the paper's" },
 	{ "topo", sere_cmd_topo, "show the hwloc topology and how threads are bound" },
 };
 

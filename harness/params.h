@@ -11,7 +11,8 @@ typedef struct sere_sim_params
 	sere_layer_params layer; /* h_vein, h_surf, omega_*, D, m_min, m_max, mu0 */
 	double dt;
 	double gravity[3];
-	double ground; /* height of the supporting plane below the leaf (z), or -inf for none */
+	double damping; /* fraction of every velocity removed per frame */
+	double ground;	/* height of the supporting plane below the leaf (z), or -inf for none */
 	double lambda_min, lambda_max;
 	double water_rate_t; /* signed water rate of the T layer: Table 2's w_loss^T, −0.1 = losing 0.1 per unit time */
 	double water_rate_v; /* the same for the V layer */

@@ -164,7 +164,18 @@ int sere_picture_sheet( const char* path, const char* title, const sere_panel* p
 	{
 		double ox = ( k % columns ) * cell + 0.5 * cell;
 		double oy = header + ( k / columns ) * ( cell + caption ) + 0.5 * cell;
-		draw_mesh( cr, &v, panels + k, ox, oy, order );
+		/* Every panel at the first panel's scale but centred on its own leaf, so a leaf that
+		 * drifts stays in its cell while its shrinking shows. */
+		view centred = v;
+		double c[3] = { 0.0, 0.0, 0.0 };
+		for ( int32_t t = 0; t < 3 * panels[k].triangle_count; ++t )
+		{
+			int32_t i = panels[k].tri[t];
+			c[0] += panels[k].x[i], c[1] += panels[k].y[i], c[2] += panels[k].z[i];
+		}
+		double inv = 1.0 / fmax( 1.0, 3.0 * panels[k].triangle_count );
+		centred.cx = c[0] * inv, centred.cy = c[1] * inv, centred.cz = c[2] * inv;
+		draw_mesh( cr, &centred, panels + k, ox, oy, order );
 		cairo_text_extents_t extents;
 		cairo_text_extents( cr, panels[k].caption, &extents );
 		cairo_set_source_rgb( cr, 0.15, 0.15, 0.15 );

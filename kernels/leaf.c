@@ -15,6 +15,7 @@ struct sere_leaf_sim
 	float* h_hat;
 	double* w0;
 	double water0;
+	int32_t contact_capacity;
 	int desiccated;
 };
 
@@ -24,6 +25,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.dt = 0.002f,
 		.gravity = { 0.0f, 0.0f, 0.0f },
 		.ground = -INFINITY,
+		.damping = 0.1f,
 		.water_rate_t = -0.1,
 		.water_rate_v = -0.1,
 		.osmosis = sere_osmosis_params_default(),
@@ -88,9 +90,10 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	{
 		status = sere_bvh_create( model->tri, f, n, model->p.x, model->p.y, model->p.z, &sim->bvh );
 	}
+	sim->contact_capacity = 8 * n;
 	if ( status == SERE_OK )
 	{
-		status = sere_collide_create( sim->bvh, 0, &sim->collide );
+		status = sere_collide_create( sim->bvh, sim->contact_capacity, &sim->collide );
 	}
 	sim->h_hat = sere_alloc( sizeof( float ) * (size_t) sere_pad( f ) );
 	sim->w0 = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
@@ -228,6 +231,16 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		}
 	}
 	sere_pbd_finish( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, params->dt );
+	/* Shrinkage turns into velocity through Δv = Δx/Δt; without damping that momentum
+	 * accumulates and a drying leaf drifts away. */
+	const float keep = 1.0f - params->damping;
+#pragma omp parallel for simd schedule( static )
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		p->vx[i] *= keep;
+		p->vy[i] *= keep;
+		p->vz[i] *= keep;
+	}
 	double t4 = omp_get_wtime();
 
 	/* Line 23: self-collision of the triangle layer; lines 24–27: Voronoi restore (Eq. 14). */
@@ -238,6 +251,17 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		collide.dt = params->dt;
 		sere_collide_stats collide_stats;
 		status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
+		/* A crumpled leaf can have more contacts than the workspace holds: grow it (rare, so
+		 * the allocation stays out of the steady state) and run the pass again. */
+		for ( int grow = 0; status == SERE_ERR_CAPACITY && grow < 8; ++grow )
+		{
+			sim->contact_capacity *= 2;
+			status = sere_collide_reserve( sim->collide, sim->contact_capacity );
+			if ( status == SERE_OK )
+			{
+				status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
+			}
+		}
 		if ( status != SERE_OK )
 		{
 			return status;

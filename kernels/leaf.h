@@ -19,9 +19,10 @@ typedef struct sere_leaf_params
 {
 	float dt;
 	float gravity[3];
-	float ground;				 /* z of a supporting plane below the leaf; -INFINITY for none */
-	double water_rate_t;		 /* signed (Table 2 w_loss^T): negative loses water */
-	double water_rate_v;		 /* signed (Table 2 w_loss^V) */
+	float ground;		 /* z of a supporting plane below the leaf; -INFINITY for none */
+	float damping;		 /* fraction of every velocity removed per frame (the damping step of Müller et al. 2007) */
+	double water_rate_t; /* signed (Table 2 w_loss^T): negative loses water */
+	double water_rate_v; /* signed (Table 2 w_loss^V) */
 	sere_osmosis_params osmosis; /* λ, mode and CG settings; its water_rate and dt are set per layer */
 	sere_shrink_params shrink;
 	sere_pbd_params pbd;
