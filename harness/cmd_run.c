@@ -168,7 +168,14 @@ int sere_cmd_run( int argc, char** argv )
 			until_dry = 1;
 			continue;
 		}
-		if ( a[0] == '-' && i + 1 >= argc )
+		static const char* const valued[] = { "--preset", "--out",		 "--set",	  "--frames", "--every",
+											  "--points", "--particles", "--springs", "--threads" };
+		int takes_value = 0;
+		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
+		{
+			takes_value |= strcmp( a, valued[k] ) == 0;
+		}
+		if ( takes_value && i + 1 >= argc )
 		{
 			fprintf( stderr, "sere run: %s needs a value (see sere run --help)\n", a );
 			return 2;

@@ -1,0 +1,147 @@
+/* The sere command as a user meets it: bad input gives one clear line and a non-zero exit;
+ * an interrupted run leaves complete outputs. SERE_BIN names the binary under test. */
+#define _DEFAULT_SOURCE
+#include <criterion/criterion.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char* sere_bin( void )
+{
+	const char* bin = getenv( "SERE_BIN" );
+	return bin != NULL ? bin : "build/sere";
+}
+
+/* Runs sere with args; captures stderr; returns the exit status. */
+static int run( const char* args, char* err, size_t err_size )
+{
+	char command[2048];
+	snprintf( command, sizeof( command ), "%s %s 2>&1 >/dev/null", sere_bin(), args );
+	FILE* pipe = popen( command, "r" );
+	cr_assert_not_null( pipe );
+	size_t used = fread( err, 1, err_size - 1, pipe );
+	err[used] = '\0';
+	int status = pclose( pipe );
+	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+}
+
+static void expect_error( const char* args, const char* phrase )
+{
+	char err[4096];
+	int code = run( args, err, sizeof( err ) );
+	cr_expect_neq( code, 0, "'%s' should fail", args );
+	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
+	/* one line, ending in a newline */
+	char* newline = strchr( err, '\n' );
+	cr_expect( newline != NULL && newline[1] == '\0', "'%s': not one line: %s", args, err );
+}
+
+Test( cli, bad_input_one_clear_line )
+{
+	expect_error( "run data/leaves/maple.leaf --preset autumn --frames 2 --out /tmp/sere-cli",
+				  "unknown preset 'autumn'" );
+	expect_error( "run data/leaves/nope.leaf --frames 2 --out /tmp/sere-cli", "data/leaves/nope.leaf: cannot open" );
+	expect_error( "run data/leaves/maple.leaf --frames -3 --out /tmp/sere-cli", "--frames takes a whole number" );
+	expect_error( "run data/leaves/maple.leaf --frames 2 --set wetness=3 --out /tmp/sere-cli",
+				  "unknown parameter 'wetness'" );
+	expect_error( "run data/leaves/maple.leaf --frames 2 --set stiffness=2 --out /tmp/sere-cli",
+				  "stiffness = 2 is out of range" );
+	expect_error( "run data/leaves/maple.leaf --frames 2 --set dt=abc --out /tmp/sere-cli",
+				  "dt: 'abc' is not a number" );
+	expect_error( "run data/leaves/maple.leaf --bogus", "unknown option '--bogus'" );
+	expect_error( "model data/leaves/maple.leaf --particles 100 --springs 7", "no triangulation has 100 particles" );
+	expect_error( "frobnicate", "unknown command 'frobnicate'" );
+}
+
+Test( cli, help_describes_every_command )
+{
+	const char* commands[] = { "model", "run", "table1", "topo" };
+	for ( size_t k = 0; k < sizeof( commands ) / sizeof( commands[0] ); ++k )
+	{
+		char command[512], out[8192];
+		snprintf( command, sizeof( command ), "%s %s --help", sere_bin(), commands[k] );
+		FILE* pipe = popen( command, "r" );
+		size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
+		out[used] = '\0';
+		cr_expect_eq( pclose( pipe ), 0 );
+		cr_expect_not_null( strstr( out, "usage: sere" ), "%s --help", commands[k] );
+	}
+}
+
+Test( cli, model_json_table1_counts )
+{
+	char command[512], out[8192];
+	snprintf( command, sizeof( command ), "%s model data/leaves/wisteria.leaf --particles 12750 --springs 50436 --json",
+			  sere_bin() );
+	FILE* pipe = popen( command, "r" );
+	size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
+	out[used] = '\0';
+	cr_assert_eq( pclose( pipe ), 0 );
+	cr_expect_not_null( strstr( out, "\"particles\": 12750" ), "%s", out );
+	cr_expect_not_null( strstr( out, "\"springs\": 50436" ), "%s", out );
+	cr_expect_not_null( strstr( out, "\"min_angle_deg\"" ) );
+}
+
+static long file_size( const char* path )
+{
+	struct stat info;
+	return stat( path, &info ) == 0 ? (long) info.st_size : -1;
+}
+
+Test( cli, interrupted_run_leaves_complete_outputs )
+{
+	char dir[] = "/tmp/sere-interrupt-XXXXXX";
+	cr_assert_not_null( mkdtemp( dir ) );
+	pid_t pid = fork();
+	cr_assert_geq( pid, 0 );
+	if ( pid == 0 )
+	{
+		freopen( "/dev/null", "w", stdout );
+		freopen( "/dev/null", "w", stderr );
+		execl( sere_bin(), sere_bin(), "run", "data/leaves/hickory.leaf", "--points", "600", "--frames", "100000",
+			   "--every", "5", "--out", dir, (char*) NULL );
+		_exit( 127 );
+	}
+	/* Wait until a few frames are on disk, then interrupt. */
+	char probe[512];
+	snprintf( probe, sizeof( probe ), "%s/frames/frame_00010.ply", dir );
+	for ( int k = 0; k < 600 && file_size( probe ) <= 0; ++k )
+	{
+		nanosleep( &( struct timespec ){ 0, 50000000 }, NULL );
+	}
+	cr_assert_gt( file_size( probe ), 0, "no frame written in 30 s" );
+	kill( pid, SIGINT );
+	int status;
+	waitpid( pid, &status, 0 );
+	cr_expect( WIFEXITED( status ) && WEXITSTATUS( status ) == 130, "exit %d", WEXITSTATUS( status ) );
+	char path[512], text[65536];
+	snprintf( path, sizeof( path ), "%s/summary.json", dir );
+	FILE* f = fopen( path, "r" );
+	cr_assert_not_null( f, "no summary.json" );
+	size_t used = fread( text, 1, sizeof( text ) - 1, f );
+	text[used] = '\0';
+	fclose( f );
+	cr_expect_not_null( strstr( text, "\"interrupted\": true" ) );
+	cr_expect( used > 2 && text[used - 2] == '}', "summary is not closed: ...%s",
+			   text + ( used > 40 ? used - 40 : 0 ) );
+	const char* expected[] = { "stats.csv", "drying.png", "curves.png", "leaf.pvd" };
+	for ( size_t k = 0; k < sizeof( expected ) / sizeof( expected[0] ); ++k )
+	{
+		snprintf( path, sizeof( path ), "%s/%s", dir, expected[k] );
+		cr_expect_gt( file_size( path ), 0, "%s missing", expected[k] );
+	}
+	/* No temporary file survives: every output was renamed into place whole. */
+	snprintf( path, sizeof( path ), "ls %s %s/frames | grep -c '\\.tmp$'", dir, dir );
+	FILE* pipe = popen( path, "r" );
+	int tmp_count = -1;
+	cr_assert_eq( fscanf( pipe, "%d", &tmp_count ), 1 );
+	pclose( pipe );
+	cr_expect_eq( tmp_count, 0 );
+	snprintf( path, sizeof( path ), "rm -rf %s", dir );
+	cr_expect_eq( system( path ), 0 );
+}

@@ -1,0 +1,150 @@
+#include "leaf.h"
+#include "leafload.h"
+#include "model.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void small_leaf( sere_model* model, const char* name, int32_t points )
+{
+	char path[256], err[1024];
+	snprintf( path, sizeof( path ), "data/leaves/%s.leaf", name );
+	sere_leaf leaf;
+	cr_assert_eq( sere_leaf_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
+	sere_build_params params = sere_build_params_default();
+	params.point_count = points;
+	params.boundary_count = sere_boundary_for_points( sere_shape_area( &leaf.file.shape ),
+													  sere_shape_perimeter( &leaf.file.shape ), points );
+	params.layer.h_vein = -0.02;
+	params.layer.h_surf = 0.005;
+	params.layer.mu0 = 0.5;
+	cr_assert_eq( sere_model_build( &leaf.file.shape, &params, model, NULL ), SERE_OK );
+	sere_leaf_free( &leaf );
+}
+
+static double t_area( const sere_model* model )
+{
+	double area = 0.0;
+	for ( int32_t t = 0; t < model->triangle_count; ++t )
+	{
+		const int32_t* v = model->tri + 3 * t;
+		const float* x = model->p.x;
+		const float* y = model->p.y;
+		const float* z = model->p.z;
+		double ax = x[v[1]] - x[v[0]], ay = y[v[1]] - y[v[0]], az = z[v[1]] - z[v[0]];
+		double bx = x[v[2]] - x[v[0]], by = y[v[2]] - y[v[0]], bz = z[v[2]] - z[v[0]];
+		area +=
+			0.5 * sqrt( ( ay * bz - az * by ) * ( ay * bz - az * by ) + ( az * bx - ax * bz ) * ( az * bx - ax * bz ) +
+						( ax * by - ay * bx ) * ( ax * by - ay * bx ) );
+	}
+	return area;
+}
+
+Test( leaf, end_to_end_dry )
+{
+	sere_model model;
+	small_leaf( &model, "wisteria", 400 );
+	sere_leaf_sim* sim;
+	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+	sere_leaf_params params = sere_leaf_params_default();
+	params.water_rate_t = -0.2;
+	params.water_rate_v = -0.2;
+	params.shrink.sigma_surf = 0.5;
+	params.shrink.sigma_vein = 0.2;
+	params.pbd.max_iterations = 60;
+	double area0 = t_area( &model );
+	double water = INFINITY;
+	sere_leaf_stats stats;
+	for ( int frame = 0; frame < 300; ++frame )
+	{
+		cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK, "frame %d", frame );
+		double total = stats.water_t + stats.water_v;
+		/* w_loss < 0 removes water every frame and flow only moves it: the total never rises */
+		cr_assert_leq( total, water, "frame %d: water rose from %.17g to %.17g", frame, water, total );
+		water = total;
+	}
+	for ( int32_t i = 0; i < model.p.count; ++i )
+	{
+		cr_assert( isfinite( model.p.x[i] ) && isfinite( model.p.y[i] ) && isfinite( model.p.z[i] ), "particle %d", i );
+		cr_assert( isfinite( model.p.w[i] ) && model.p.w[i] >= 0.0 );
+	}
+	cr_expect_lt( stats.relative_water, 0.9 );
+	/* Shrinking springs pull the blade in: the triangle layer's area falls. */
+	cr_expect_lt( t_area( &model ), 0.97 * area0, "area %g of %g", t_area( &model ), area0 );
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+}
+
+Test( leaf, desiccated_layer_stops )
+{
+	sere_model model;
+	small_leaf( &model, "hickory", 300 );
+	sere_leaf_sim* sim;
+	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+	sere_leaf_params params = sere_leaf_params_default();
+	params.water_rate_v = -50.0; /* the Voronoi layer dries in a few frames */
+	params.water_rate_t = -0.1;
+	params.pbd.max_iterations = 20;
+	sere_leaf_stats stats = { 0 };
+	int frame = 0;
+	for ( ; frame < 200 && !stats.desiccated; ++frame )
+	{
+		cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK );
+	}
+	cr_assert( stats.desiccated, "the V layer never ran dry" );
+	cr_expect_eq( stats.water_v, 0.0 );
+	/* Sec. 6: from then on neither flow nor shrinkage change anything. */
+	double water_t = stats.water_t;
+	float* rest = malloc( sizeof( float ) * model.s.count );
+	memcpy( rest, model.s.rest, sizeof( float ) * model.s.count );
+	for ( int k = 0; k < 5; ++k )
+	{
+		cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK );
+	}
+	cr_expect_eq( stats.water_t, water_t );
+	cr_expect_eq( memcmp( rest, model.s.rest, sizeof( float ) * model.s.count ), 0 );
+	free( rest );
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+}
+
+Test( leaf, deterministic_across_threads )
+{
+	float* final[2];
+	int32_t count = 0;
+	for ( int t = 0; t < 2; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		sere_model model;
+		small_leaf( &model, "maple", 1200 );
+		sere_leaf_sim* sim;
+		cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+		sere_leaf_params params = sere_leaf_params_default();
+		params.water_rate_t = -0.5;
+		params.water_rate_v = -1.0;
+		params.shrink.sigma_surf = 1.5;
+		params.pbd.max_iterations = 40;
+		sere_leaf_stats stats;
+		for ( int frame = 0; frame < 40; ++frame )
+		{
+			cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK );
+		}
+		count = model.p.count;
+		final[t] = malloc( sizeof( float ) * 6 * count );
+		memcpy( final[t], model.p.x, sizeof( float ) * count );
+		memcpy( final[t] + count, model.p.y, sizeof( float ) * count );
+		memcpy( final[t] + 2 * count, model.p.z, sizeof( float ) * count );
+		memcpy( final[t] + 3 * count, model.p.vx, sizeof( float ) * count );
+		memcpy( final[t] + 4 * count, model.p.vy, sizeof( float ) * count );
+		memcpy( final[t] + 5 * count, model.p.vz, sizeof( float ) * count );
+		sere_leaf_destroy( sim );
+		sere_model_destroy( &model );
+	}
+	cr_expect_eq( memcmp( final[0], final[1], sizeof( float ) * 6 * count ), 0 );
+	free( final[0] ), free( final[1] );
+	omp_set_num_threads( 2 );
+}
