@@ -1825,67 +1825,95 @@ static void corner( const float* x, const float* y, const float* z, int32_t i, d
 	out[2] = z[i];
 }
 
-typedef struct pierce_query
+/* Eight consecutive vertices share one walk down the tree (sere_bvh_query_group); vertices of a
+ * plant are ordered by joint, so the eight boxes are close together. */
+typedef struct pierce_group
 {
 	const int32_t* tri;
-	const float *x, *y, *z;
-	int32_t vertex;
-	double p0[3], p1[3];
-	double first; /* smallest crossing fraction so far */
-} pierce_query;
+	const float *x, *y, *z; /* previous positions: the mesh a move must not pass through */
+	int32_t first;			/* the vertex of lane 0 */
+	double p0[SERE_BVH_WIDTH][3], p1[SERE_BVH_WIDTH][3];
+	double hit[SERE_BVH_WIDTH]; /* smallest crossing fraction per lane */
+} pierce_group;
 
-static void pierce_visit( void* context, int32_t t )
+static void pierce_visit( void* context, int32_t t, uint32_t lanes )
 {
-	pierce_query* q = context;
-	const int32_t* c = q->tri + 3 * t;
-	if ( c[0] == q->vertex || c[1] == q->vertex || c[2] == q->vertex )
-	{
-		return;
-	}
+	pierce_group* g = context;
+	const int32_t* c = g->tri + 3 * t;
 	double a[3], b[3], d[3];
-	corner( q->x, q->y, q->z, c[0], a );
-	corner( q->x, q->y, q->z, c[1], b );
-	corner( q->x, q->y, q->z, c[2], d );
-	double s = segment_triangle( q->p0, q->p1, a, b, d );
-	if ( s >= 0.0 && s < q->first )
+	corner( g->x, g->y, g->z, c[0], a );
+	corner( g->x, g->y, g->z, c[1], b );
+	corner( g->x, g->y, g->z, c[2], d );
+	while ( lanes != 0 )
 	{
-		q->first = s;
+		int k = __builtin_ctz( lanes );
+		lanes &= lanes - 1;
+		int32_t v = g->first + k;
+		if ( c[0] == v || c[1] == v || c[2] == v )
+		{
+			continue;
+		}
+		double s = segment_triangle( g->p0[k], g->p1[k], a, b, d );
+		if ( s >= 0.0 && s < g->hit[k] )
+		{
+			g->hit[k] = s;
+		}
 	}
 }
 
 static int32_t pierce_limit( const sere_bvh* bvh, const int32_t* tri, const float* px, const float* py, const float* pz,
-							 float* x, float* y, float* z, int32_t vertex_count, float margin )
+							 float* x, float* y, float* z, int32_t vertex_count, float margin, uint8_t* modified )
 {
 	int32_t shortened = 0;
-#pragma omp parallel for schedule( dynamic, 256 ) reduction( + : shortened )
-	for ( int32_t i = 0; i < vertex_count; ++i )
+	int32_t groups = ( vertex_count + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
+#pragma omp parallel for schedule( dynamic, 32 ) reduction( + : shortened )
+	for ( int32_t b = 0; b < groups; ++b )
 	{
-		if ( x[i] == px[i] && y[i] == py[i] && z[i] == pz[i] )
+		pierce_group g;
+		sere_bvh_group boxes;
+		g.tri = tri;
+		g.x = px;
+		g.y = py;
+		g.z = pz;
+		g.first = b * SERE_BVH_WIDTH;
+		boxes.count = vertex_count - g.first < SERE_BVH_WIDTH ? vertex_count - g.first : SERE_BVH_WIDTH;
+		int moving = 0;
+		for ( int k = 0; k < boxes.count; ++k )
+		{
+			int32_t i = g.first + k;
+			g.hit[k] = INFINITY;
+			corner( px, py, pz, i, g.p0[k] );
+			corner( x, y, z, i, g.p1[k] );
+			int still = x[i] == px[i] && y[i] == py[i] && z[i] == pz[i];
+			moving |= !still;
+			/* A vertex that does not move cannot pierce anything: a NaN box leaves its lane out. */
+			boxes.lo_x[k] = still ? NAN : fminf( px[i], x[i] );
+			boxes.lo_y[k] = fminf( py[i], y[i] );
+			boxes.lo_z[k] = fminf( pz[i], z[i] );
+			boxes.hi_x[k] = fmaxf( px[i], x[i] );
+			boxes.hi_y[k] = fmaxf( py[i], y[i] );
+			boxes.hi_z[k] = fmaxf( pz[i], z[i] );
+		}
+		if ( !moving )
 		{
 			continue;
 		}
-		pierce_query q;
-		q.tri = tri;
-		q.x = px;
-		q.y = py;
-		q.z = pz;
-		q.vertex = i;
-		q.first = INFINITY;
-		corner( px, py, pz, i, q.p0 );
-		corner( x, y, z, i, q.p1 );
-		float lo[3] = { fminf( px[i], x[i] ), fminf( py[i], y[i] ), fminf( pz[i], z[i] ) };
-		float hi[3] = { fmaxf( px[i], x[i] ), fmaxf( py[i], y[i] ), fmaxf( pz[i], z[i] ) };
-		sere_bvh_query_box( bvh, lo, hi, pierce_visit, &q );
-		if ( q.first <= 1.0 )
+		sere_bvh_query_group( bvh, &boxes, pierce_visit, &g );
+		for ( int k = 0; k < boxes.count; ++k )
 		{
-			double d[3] = { q.p1[0] - q.p0[0], q.p1[1] - q.p0[1], q.p1[2] - q.p0[2] };
-			double length = sqrt( d[0] * d[0] + d[1] * d[1] + d[2] * d[2] );
-			double s = q.first - margin / length;
-			s = s > 0.0 ? s : 0.0;
-			x[i] = (float) ( q.p0[0] + s * d[0] );
-			y[i] = (float) ( q.p0[1] + s * d[1] );
-			z[i] = (float) ( q.p0[2] + s * d[2] );
-			++shortened;
+			if ( g.hit[k] <= 1.0 )
+			{
+				int32_t i = g.first + k;
+				double d[3] = { g.p1[k][0] - g.p0[k][0], g.p1[k][1] - g.p0[k][1], g.p1[k][2] - g.p0[k][2] };
+				double length = sqrt( d[0] * d[0] + d[1] * d[1] + d[2] * d[2] );
+				double s = g.hit[k] - margin / length;
+				s = s > 0.0 ? s : 0.0;
+				x[i] = (float) ( g.p0[k][0] + s * d[0] );
+				y[i] = (float) ( g.p0[k][1] + s * d[1] );
+				z[i] = (float) ( g.p0[k][2] + s * d[2] );
+				modified[i] = 1;
+				++shortened;
+			}
 		}
 	}
 	return shortened;
@@ -1903,9 +1931,35 @@ static int edge_hits( const float* x, const float* y, const float* z, const int3
 	return segment_triangle( p0, p1, a, b, c ) >= 0.0;
 }
 
+/* The corners of `from` against the plane of `onto`, with exactly the arithmetic of
+ * segment_triangle, so an edge whose ends do not change sides here fails its plane test there. */
+static void plane_sides( const float* x, const float* y, const float* z, const int32_t* onto, const int32_t* from,
+						 double d[3] )
+{
+	double a[3], b[3], c[3];
+	corner( x, y, z, onto[0], a );
+	corner( x, y, z, onto[1], b );
+	corner( x, y, z, onto[2], c );
+	double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	double e2[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+	double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
+	for ( int k = 0; k < 3; ++k )
+	{
+		double p[3];
+		corner( x, y, z, from[k], p );
+		d[k] = n[0] * ( p[0] - a[0] ) + n[1] * ( p[1] - a[1] ) + n[2] * ( p[2] - a[2] );
+	}
+}
+
+static int may_cross( const double d[3], int i, int j )
+{
+	return ( d[i] >= 0.0 ) != ( d[j] >= 0.0 ) && d[i] != d[j];
+}
+
 /* Triangles s and o intersect: sharing an edge they never count (only a coplanar fold could
  * make them); sharing one corner, only the edges opposite it can cross the other triangle
- * anywhere but at that corner; otherwise any of the six edges. */
+ * anywhere but at that corner; otherwise any of the six edges. An edge is tested only when its
+ * ends lie on both sides of the other triangle's plane, which rejects most pairs cheaply. */
 static int triangles_intersect( const float* x, const float* y, const float* z, const int32_t* s, const int32_t* o )
 {
 	int shared = 0, s_at = -1, o_at = -1;
@@ -1921,19 +1975,26 @@ static int triangles_intersect( const float* x, const float* y, const float* z, 
 			}
 		}
 	}
+	if ( shared > 1 )
+	{
+		return 0;
+	}
+	double ds[3], dn[3];
+	plane_sides( x, y, z, o, s, ds );
+	plane_sides( x, y, z, s, o, dn );
 	if ( shared == 1 )
 	{
-		return edge_hits( x, y, z, s, ( s_at + 1 ) % 3, ( s_at + 2 ) % 3, o ) ||
-			   edge_hits( x, y, z, o, ( o_at + 1 ) % 3, ( o_at + 2 ) % 3, s );
+		int s1 = ( s_at + 1 ) % 3, s2 = ( s_at + 2 ) % 3, o1 = ( o_at + 1 ) % 3, o2 = ( o_at + 2 ) % 3;
+		return ( may_cross( ds, s1, s2 ) && edge_hits( x, y, z, s, s1, s2, o ) ) ||
+			   ( may_cross( dn, o1, o2 ) && edge_hits( x, y, z, o, o1, o2, s ) );
 	}
-	if ( shared == 0 )
+	for ( int k = 0; k < 3; ++k )
 	{
-		for ( int k = 0; k < 3; ++k )
+		int l = ( k + 1 ) % 3;
+		if ( ( may_cross( ds, k, l ) && edge_hits( x, y, z, s, k, l, o ) ) ||
+			 ( may_cross( dn, k, l ) && edge_hits( x, y, z, o, k, l, s ) ) )
 		{
-			if ( edge_hits( x, y, z, s, k, ( k + 1 ) % 3, o ) || edge_hits( x, y, z, o, k, ( k + 1 ) % 3, s ) )
-			{
-				return 1;
-			}
+			return 1;
 		}
 	}
 	return 0;
@@ -1949,69 +2010,133 @@ static void triangle_box( const float* x, const float* y, const float* z, const 
 	}
 }
 
-typedef struct pair_query
+struct sere_pierce
+{
+	int32_t vertex_count;
+	int32_t triangle_count;
+	int32_t* tri;
+	int32_t* group;		/* rigid group of each vertex, or NULL */
+	uint8_t* off_pose;	/* vertex left short of its target by the previous step */
+	uint8_t* modified;	/* vertex moved short of its target in this step */
+	uint8_t* flag;		/* vertex is a corner of an intersecting pair this round */
+	uint8_t* halvings;	/* how often a vertex has been pulled back this step */
+	uint8_t* candidate; /* triangle to search this round */
+	sere_bvh* bvh;
+};
+
+/* Eight consecutive triangles share one walk down the tree. */
+typedef struct pair_group
 {
 	const int32_t* tri;
 	const float *x, *y, *z;
-	int32_t self;
-	int only_later; /* count each pair once (o > self) rather than every partner */
-	uint8_t* flag;	/* when not NULL, the corners of both triangles of every pair are flagged */
+	int32_t first; /* the triangle of lane 0 */
+	/* Triangles that search (all when NULL); a pair of two searching triangles is taken from the
+	 * lower one only, so every pair is tested once. */
+	const uint8_t* candidate;
+	uint8_t* flag; /* when not NULL, the corners of both triangles of every pair are flagged */
+	/* When not NULL: pairs whose six corners share a group and all moved with it skip the test. */
+	const int32_t* group;
+	const uint8_t *off_pose, *modified;
 	int64_t count;
-} pair_query;
+} pair_group;
 
-static void pair_visit( void* context, int32_t other )
+/* All six corners in one rigid group, each at the caller's target both before and after this
+ * step: the pair moved as one rigid body, so it cannot have come to intersect. */
+static int moved_rigidly( const pair_group* g, const int32_t* s, const int32_t* o )
 {
-	pair_query* q = context;
-	if ( other == q->self || ( q->only_later && other < q->self ) )
+	int32_t k = g->group[s[0]];
+	for ( int c = 0; c < 3; ++c )
 	{
-		return;
-	}
-	const int32_t* s = q->tri + 3 * q->self;
-	const int32_t* o = q->tri + 3 * other;
-	if ( !triangles_intersect( q->x, q->y, q->z, s, o ) )
-	{
-		return;
-	}
-	++q->count;
-	if ( q->flag != NULL )
-	{
-		for ( int k = 0; k < 3; ++k )
+		if ( g->group[s[c]] != k || g->group[o[c]] != k || g->off_pose[s[c]] | g->modified[s[c]] ||
+			 g->off_pose[o[c]] | g->modified[o[c]] )
 		{
-			/* Every writer stores the same value, so the result does not depend on the order. */
-#pragma omp atomic write
-			q->flag[s[k]] = 1;
-#pragma omp atomic write
-			q->flag[o[k]] = 1;
+			return 0;
 		}
 	}
+	return 1;
+}
+
+static void pair_visit( void* context, int32_t other, uint32_t lanes )
+{
+	pair_group* g = context;
+	const int32_t* o = g->tri + 3 * other;
+	while ( lanes != 0 )
+	{
+		int k = __builtin_ctz( lanes );
+		lanes &= lanes - 1;
+		int32_t self = g->first + k;
+		if ( other == self || ( other < self && ( g->candidate == NULL || g->candidate[other] ) ) )
+		{
+			continue;
+		}
+		const int32_t* s = g->tri + 3 * self;
+		if ( ( g->group != NULL && moved_rigidly( g, s, o ) ) || !triangles_intersect( g->x, g->y, g->z, s, o ) )
+		{
+			continue;
+		}
+		++g->count;
+		if ( g->flag != NULL )
+		{
+			for ( int c = 0; c < 3; ++c )
+			{
+				/* Every writer stores the same value, so the result does not depend on the order. */
+#pragma omp atomic write
+				g->flag[s[c]] = 1;
+#pragma omp atomic write
+				g->flag[o[c]] = 1;
+			}
+		}
+	}
+}
+
+/* Intersecting pairs among the triangles [first, first + 8) whose `candidate` flag is set (all
+ * when candidate is NULL). */
+static int64_t pair_search( const sere_bvh* bvh, const int32_t* tri, int32_t triangle_count, const float* x,
+							const float* y, const float* z, int32_t first, const uint8_t* candidate, uint8_t* flag,
+							const struct sere_pierce* rigid )
+{
+	pair_group g = { tri, x, y, z, first, candidate, flag, NULL, NULL, NULL, 0 };
+	if ( rigid != NULL )
+	{
+		g.group = rigid->group;
+		g.off_pose = rigid->off_pose;
+		g.modified = rigid->modified;
+	}
+	sere_bvh_group boxes;
+	boxes.count = triangle_count - first < SERE_BVH_WIDTH ? triangle_count - first : SERE_BVH_WIDTH;
+	int any = 0;
+	for ( int k = 0; k < boxes.count; ++k )
+	{
+		float lo[3], hi[3];
+		triangle_box( x, y, z, tri + 3 * ( first + k ), lo, hi );
+		int use = candidate == NULL || candidate[first + k];
+		any |= use;
+		boxes.lo_x[k] = use ? lo[0] : NAN;
+		boxes.lo_y[k] = lo[1];
+		boxes.lo_z[k] = lo[2];
+		boxes.hi_x[k] = hi[0];
+		boxes.hi_y[k] = hi[1];
+		boxes.hi_z[k] = hi[2];
+	}
+	if ( any )
+	{
+		sere_bvh_query_group( bvh, &boxes, pair_visit, &g );
+	}
+	return g.count;
 }
 
 int64_t sere_mesh_intersections( const sere_bvh* bvh, const int32_t* tri, int32_t triangle_count, const float* x,
 								 const float* y, const float* z )
 {
 	int64_t total = 0;
-#pragma omp parallel for schedule( dynamic, 256 ) reduction( + : total )
-	for ( int32_t t = 0; t < triangle_count; ++t )
+	int32_t groups = ( triangle_count + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
+#pragma omp parallel for schedule( dynamic, 32 ) reduction( + : total )
+	for ( int32_t b = 0; b < groups; ++b )
 	{
-		pair_query q = { tri, x, y, z, t, 1, NULL, 0 };
-		float lo[3], hi[3];
-		triangle_box( x, y, z, tri + 3 * t, lo, hi );
-		sere_bvh_query_box( bvh, lo, hi, pair_visit, &q );
-		total += q.count;
+		total += pair_search( bvh, tri, triangle_count, x, y, z, b * SERE_BVH_WIDTH, NULL, NULL, NULL );
 	}
 	return total;
 }
-
-struct sere_pierce
-{
-	int32_t vertex_count;
-	int32_t triangle_count;
-	int32_t* tri;
-	uint8_t* flag;		/* vertex is a corner of an intersecting pair this round */
-	uint8_t* halvings;	/* how often a vertex has been pulled back this step */
-	uint8_t* candidate; /* triangle to search this round */
-	sere_bvh* bvh;
-};
 
 /* Pull-backs halve the remaining move this many times before undoing it. */
 #define PIERCE_HALVINGS 4
@@ -2024,6 +2149,9 @@ void sere_pierce_destroy( sere_pierce* pierce )
 		return;
 	}
 	sere_free( pierce->tri );
+	sere_free( pierce->group );
+	sere_free( pierce->off_pose );
+	sere_free( pierce->modified );
 	sere_free( pierce->flag );
 	sere_free( pierce->halvings );
 	sere_free( pierce->candidate );
@@ -2032,7 +2160,7 @@ void sere_pierce_destroy( sere_pierce* pierce )
 }
 
 sere_status sere_pierce_create( const int32_t* tri, int32_t triangle_count, int32_t vertex_count, const float* x,
-								const float* y, const float* z, sere_pierce** out )
+								const float* y, const float* z, const int32_t* rigid_group, sere_pierce** out )
 {
 	*out = NULL;
 	if ( tri == NULL || triangle_count < 1 || vertex_count < 3 || triangle_count > INT32_MAX / 3 - SERE_PAD )
@@ -2049,13 +2177,24 @@ sere_status sere_pierce_create( const int32_t* tri, int32_t triangle_count, int3
 	p->tri = sere_alloc( (size_t) sere_pad( 3 * triangle_count ) * sizeof( int32_t ) );
 	p->flag = sere_alloc( (size_t) sere_pad( vertex_count ) );
 	p->halvings = sere_alloc( (size_t) sere_pad( vertex_count ) );
+	p->off_pose = sere_alloc( (size_t) sere_pad( vertex_count ) );
+	p->modified = sere_alloc( (size_t) sere_pad( vertex_count ) );
 	p->candidate = sere_alloc( (size_t) sere_pad( triangle_count ) );
-	if ( p->tri == NULL || p->flag == NULL || p->halvings == NULL || p->candidate == NULL )
+	if ( rigid_group != NULL )
+	{
+		p->group = sere_alloc( (size_t) sere_pad( vertex_count ) * sizeof( int32_t ) );
+	}
+	if ( p->tri == NULL || p->flag == NULL || p->halvings == NULL || p->off_pose == NULL || p->modified == NULL ||
+		 p->candidate == NULL || ( rigid_group != NULL && p->group == NULL ) )
 	{
 		sere_pierce_destroy( p );
 		return SERE_ERR_MEMORY;
 	}
 	memcpy( p->tri, tri, 3 * (size_t) triangle_count * sizeof( int32_t ) );
+	if ( rigid_group != NULL )
+	{
+		memcpy( p->group, rigid_group, (size_t) vertex_count * sizeof( int32_t ) );
+	}
 	sere_status status = sere_bvh_create( tri, triangle_count, vertex_count, x, y, z, &p->bvh );
 	if ( status != SERE_OK )
 	{
@@ -2105,7 +2244,8 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 		return SERE_ERR_NONFINITE;
 	}
 	/* The seed's check: no vertex passes through the mesh as it was. */
-	st.shortened = pierce_limit( p->bvh, p->tri, px, py, pz, x, y, z, n, margin );
+	memset( p->modified, 0, (size_t) n );
+	st.shortened = pierce_limit( p->bvh, p->tri, px, py, pz, x, y, z, n, margin, p->modified );
 
 	/* Then no triangle may end up through another. Only triangles with a moving corner can
 	 * meet a new partner; later rounds search around the vertices just pulled back. */
@@ -2130,24 +2270,19 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 			memcpy( x, px, (size_t) n * sizeof( float ) );
 			memcpy( y, py, (size_t) n * sizeof( float ) );
 			memcpy( z, pz, (size_t) n * sizeof( float ) );
+			memset( p->modified, 1, (size_t) n );
 			st.reverted = 1;
 			status = sere_bvh_refit( p->bvh, x, y, z );
 			break;
 		}
 		memset( p->flag, 0, (size_t) n );
 		int64_t found = 0;
-#pragma omp parallel for schedule( dynamic, 256 ) reduction( + : found )
-		for ( int32_t t = 0; t < f; ++t )
+		int32_t groups = ( f + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
+#pragma omp parallel for schedule( dynamic, 32 ) reduction( + : found )
+		for ( int32_t b = 0; b < groups; ++b )
 		{
-			if ( !p->candidate[t] )
-			{
-				continue;
-			}
-			pair_query q = { p->tri, x, y, z, t, 0, p->flag, 0 };
-			float lo[3], hi[3];
-			triangle_box( x, y, z, p->tri + 3 * t, lo, hi );
-			sere_bvh_query_box( p->bvh, lo, hi, pair_visit, &q );
-			found += q.count;
+			found += pair_search( p->bvh, p->tri, f, x, y, z, b * SERE_BVH_WIDTH, p->candidate, p->flag,
+								  p->group != NULL ? p : NULL );
 		}
 		if ( found == 0 )
 		{
@@ -2175,6 +2310,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 				y[i] = py[i];
 				z[i] = pz[i];
 			}
+			p->modified[i] = 1;
 			++pulled;
 		}
 		st.pulled_back += pulled;
@@ -2185,6 +2321,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 			p->candidate[t] = p->flag[c[0]] | p->flag[c[1]] | p->flag[c[2]];
 		}
 	}
+	memcpy( p->off_pose, p->modified, (size_t) n );
 	if ( stats != NULL )
 	{
 		*stats = st;
@@ -2332,8 +2469,11 @@ sere_status sere_plant_create( const sere_leaf_template* templates, int32_t temp
 		goto fail;
 	}
 	int32_t** rank = calloc( (size_t) template_count, sizeof( int32_t* ) );
-	if ( rank == NULL )
+	int32_t** order = calloc( (size_t) template_count, sizeof( int32_t* ) );
+	if ( rank == NULL || order == NULL )
 	{
+		free( rank );
+		free( order );
 		free( banding );
 		status = SERE_ERR_MEMORY;
 		goto fail;
@@ -2370,6 +2510,36 @@ sere_status sere_plant_create( const sere_leaf_template* templates, int32_t temp
 			{
 				rank[k][i] = first[banding[k][i]]++;
 			}
+			/* Triangles follow their lowest vertex (stably), so consecutive triangles are
+			 * neighbours too and share BVH walks in the piercing check. */
+			order[k] = malloc( (size_t) m->triangle_count * sizeof( int32_t ) );
+			int32_t* count = calloc( (size_t) m->vertex_count + 1, sizeof( int32_t ) );
+			if ( order[k] == NULL || count == NULL )
+			{
+				status = SERE_ERR_MEMORY;
+			}
+			else
+			{
+				for ( int32_t t = 0; t < m->triangle_count; ++t )
+				{
+					const int32_t* c = m->tri + 3 * t;
+					int32_t low = rank[k][c[0]] < rank[k][c[1]] ? rank[k][c[0]] : rank[k][c[1]];
+					low = rank[k][c[2]] < low ? rank[k][c[2]] : low;
+					++count[low + 1];
+				}
+				for ( int32_t i = 0; i < m->vertex_count; ++i )
+				{
+					count[i + 1] += count[i];
+				}
+				for ( int32_t t = 0; t < m->triangle_count; ++t )
+				{
+					const int32_t* c = m->tri + 3 * t;
+					int32_t low = rank[k][c[0]] < rank[k][c[1]] ? rank[k][c[0]] : rank[k][c[1]];
+					low = rank[k][c[2]] < low ? rank[k][c[2]] : low;
+					order[k][count[low]++] = t;
+				}
+			}
+			free( count );
 		}
 		free( first );
 		sere_joint_grid_destroy( grid );
@@ -2423,9 +2593,13 @@ sere_status sere_plant_create( const sere_leaf_template* templates, int32_t temp
 			p->u[v] = m->u[i];
 			p->v[v] = m->v[i];
 		}
-		for ( int32_t i = 0; i < 3 * m->triangle_count; ++i )
+		for ( int32_t q = 0; q < m->triangle_count; ++q )
 		{
-			p->tri[3 * tf + i] = vf + rank[l->template_index][m->tri[i]];
+			const int32_t* c = m->tri + 3 * order[l->template_index][q];
+			for ( int a = 0; a < 3; ++a )
+			{
+				p->tri[3 * ( tf + q ) + a] = vf + rank[l->template_index][c[a]];
+			}
 		}
 		p->joints.vein_count += s->vein_count;
 		jf += s->joint_count;
@@ -2439,12 +2613,15 @@ sere_status sere_plant_create( const sere_leaf_template* templates, int32_t temp
 	{
 		free( banding[k] );
 		free( rank[k] );
+		free( order[k] );
 	}
 	free( banding );
 	free( rank );
+	free( order );
 	if ( status == SERE_OK )
 	{
-		status = sere_pierce_create( p->tri, p->triangle_count, p->vertex_count, p->x, p->y, p->z, &p->pierce );
+		status =
+			sere_pierce_create( p->tri, p->triangle_count, p->vertex_count, p->x, p->y, p->z, p->joint, &p->pierce );
 	}
 	if ( status != SERE_OK )
 	{
@@ -2463,6 +2640,7 @@ void sere_plant_reset( sere_plant* plant )
 	memcpy( plant->x, plant->rx, bytes );
 	memcpy( plant->y, plant->ry, bytes );
 	memcpy( plant->z, plant->rz, bytes );
+	memset( plant->pierce->off_pose, 0, (size_t) plant->vertex_count );
 	for ( int32_t k = 0; k < plant->leaf_count; ++k )
 	{
 		plant->leaf_t[k] = 0.0f;

@@ -205,12 +205,15 @@ sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, in
 void sere_skin( const sere_joint_frames* frames, const int32_t* joint, const float* ox, const float* oy,
 				const float* oz, int32_t vertex_count, float* x, float* y, float* z );
 
-/* Sec. 6, piercing. A workspace over one triangle mesh: its BVH, the triangles around each
- * vertex and per-vertex flags, made once. */
+/* Sec. 6, piercing. A workspace over one triangle mesh: its BVH and per-vertex flags, made once.
+ * rigid_group (copied; may be NULL) names, per vertex, a group the caller moves rigidly, such as
+ * the joint a skinned vertex is banded to: a pair of triangles whose six corners share a group
+ * and reached their targets in this step and the one before moved as one body and cannot have
+ * come to intersect, so the search skips it. */
 typedef struct sere_pierce sere_pierce;
 
 sere_status sere_pierce_create( const int32_t* tri, int32_t triangle_count, int32_t vertex_count, const float* x,
-								const float* y, const float* z, sere_pierce** pierce );
+								const float* y, const float* z, const int32_t* rigid_group, sere_pierce** pierce );
 void sere_pierce_destroy( sere_pierce* pierce );
 
 typedef struct sere_pierce_stats
@@ -269,7 +272,7 @@ typedef struct sere_leaf_placement
  * [joint_first[k], joint_first[k + 1]), vertices [vertex_first[k], vertex_first[k + 1]) and
  * triangles [triangle_first[k], triangle_first[k + 1]). Triangle indices are global. A leaf's
  * vertices are its template's reordered by joint (stably), so skinning streams one joint's
- * vertices at a time; triangles keep the template's order. */
+ * vertices at a time; its triangles are ordered by their lowest vertex (stably). */
 typedef struct sere_plant
 {
 	int32_t leaf_count;

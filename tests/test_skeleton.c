@@ -1016,7 +1016,7 @@ Test( skeleton, piercing_shortens_moves_through_the_mesh )
 	tz[a] = tz[a + 1] = -0.5f;
 	cr_assert_gt( count_intersections( tri, f, n, tx, ty, tz ), 0, "the unchecked move goes through" );
 	sere_pierce* pierce;
-	cr_assert_eq( sere_pierce_create( tri, f, n, x, y, z, &pierce ), SERE_OK );
+	cr_assert_eq( sere_pierce_create( tri, f, n, x, y, z, NULL, &pierce ), SERE_OK );
 	sere_pierce_stats stats;
 	cr_assert_eq( sere_pierce_step( pierce, x, y, z, tx, ty, tz, 0.01f, &stats ), SERE_OK );
 	cr_expect_eq( stats.shortened, 2 );
@@ -1044,7 +1044,7 @@ Test( skeleton, piercing_shortens_moves_through_the_mesh )
 	int32_t two[6] = { 0, 1, 2, 3, 4, 5 };
 	cr_assert_eq( count_intersections( two, 2, 6, cx, cy, cz ), 1 );
 	sere_pierce* small;
-	cr_assert_eq( sere_pierce_create( two, 2, 6, bx, by, bz, &small ), SERE_OK );
+	cr_assert_eq( sere_pierce_create( two, 2, 6, bx, by, bz, NULL, &small ), SERE_OK );
 	cr_assert_eq( sere_pierce_step( small, bx, by, bz, cx, cy, cz, 0.01f, &stats ), SERE_OK );
 	cr_expect_eq( stats.shortened, 0 );
 	cr_expect_gt( stats.pulled_back, 0 );
