@@ -74,7 +74,7 @@ test-fast: $(TESTS) $(SERE)
 
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 build/asan/sere-tests build/asan/sere
-	ASAN_OPTIONS=detect_leaks=1 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
+	ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
 
 bench: deps
 	@$(MAKE) --no-print-directory $(BENCHX)
@@ -92,9 +92,11 @@ $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(HARNESS_CFLAGS) -Itests -c $< -o $@
 
+# gcc 12 reports a false maybe-uninitialized inside Eigen's AVX-512 reductions (system header
+# code inlined into the Eigen peer); everything else stays -Werror.
 $(BUILD)/obj/bench/%.o: bench/%.cc
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS_ALL) -isystem /usr/include/embree3 -Ibench -c $< -o $@
+	$(CXX) $(CXXFLAGS_ALL) -Wno-maybe-uninitialized -isystem /usr/include/embree3 -Ibench -c $< -o $@
 
 $(LIB_A): $(KERNEL_OBJ)
 	@rm -f $@

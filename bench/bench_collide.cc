@@ -96,8 +96,7 @@ struct Scene
 		{
 			order[k] = k;
 		}
-		auto morton = []( uint32_t i, uint32_t j )
-		{
+		auto morton = []( uint32_t i, uint32_t j ) {
 			uint64_t code = 0;
 			for ( int b = 0; b < 16; ++b )
 			{
@@ -105,9 +104,9 @@ struct Scene
 			}
 			return code;
 		};
-		std::sort( order.begin(), order.end(),
-				   [&]( int32_t a, int32_t b )
-				   { return morton( a % kColumns, a / kColumns ) < morton( b % kColumns, b / kColumns ); } );
+		std::sort( order.begin(), order.end(), [&]( int32_t a, int32_t b ) {
+			return morton( a % kColumns, a / kColumns ) < morton( b % kColumns, b / kColumns );
+		} );
 		for ( int32_t k = 0; k < n; ++k )
 		{
 			rank[order[k]] = k;
@@ -429,8 +428,7 @@ void BM_embree_search( benchmark::State& state, Shape shape )
 	{
 		indices[k] = (uint32_t) s.tri[k];
 	}
-	auto upload = [&]()
-	{
+	auto upload = [&]() {
 #pragma omp parallel for schedule( static )
 		for ( int32_t k = 0; k < s.n; ++k )
 		{

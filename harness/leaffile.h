@@ -5,6 +5,11 @@
 
 #include <stddef.h>
 
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
 /* A leaf read from a file: owns its arrays; shape views them. */
 typedef struct sere_leaf_file
 {
@@ -24,3 +29,7 @@ void sere_leaf_file_free( sere_leaf_file* leaf );
 
 /* Writes a shape as a .leaf file (to a temporary name, then renamed); 0 on success. */
 int sere_leaf_write( const char* path, const sere_leaf_shape* shape, const char* name );
+
+#ifdef __cplusplus
+}
+#endif

@@ -3,6 +3,11 @@
 
 #include "leaffile.h"
 
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
 typedef struct sere_leaf
 {
 	sere_leaf_file file;
@@ -11,3 +16,7 @@ typedef struct sere_leaf
 /* Reads PATH by its extension; 0 on success, else -1 with one line in err. */
 int sere_leaf_load( const char* path, sere_leaf* leaf, char* err, size_t err_size );
 void sere_leaf_free( sere_leaf* leaf );
+
+#ifdef __cplusplus
+}
+#endif

@@ -15,6 +15,7 @@ static const command commands[] = {
 	{ "model", sere_cmd_model, "build a leaf's triangle-Voronoi double layer; print counts and mesh quality" },
 	{ "run", sere_cmd_run, "dry a leaf (Algorithm 1): frames, statistics, summary and pictures" },
 	{ "table1", sere_cmd_table1, "the three Table 1 leaves: our ms per frame beside the paper's" },
+	{ "wilt", sere_cmd_wilt, "wilt a leaf or a plant on a stem (venation skeleton, seed 003): PLY/VTK/PNG frames" },
 	{ "topo", sere_cmd_topo, "show the hwloc topology and how threads are bound" },
 };
 
