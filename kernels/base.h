@@ -12,19 +12,19 @@ extern "C"
 /* Every array the kernels touch starts on a cache line and its length is padded to a
  * multiple of 16 elements, so 512-bit loops over float or int32 need no scalar tail. */
 #define SERE_ALIGN 64
-#define SERE_PAD 16
+#define SERE_PAD   16
 
 typedef enum sere_status
 {
 	SERE_OK = 0,
-	SERE_ERR_ARGUMENT,	   /* a null pointer, a negative size, a parameter out of its range */
-	SERE_ERR_MEMORY,	   /* an allocation failed */
-	SERE_ERR_NONFINITE,	   /* NaN or infinity in the input */
-	SERE_ERR_GEOMETRY,	   /* degenerate or invalid geometry: zero-length springs, crossing segments */
-	SERE_ERR_COUNTS,	   /* particle/spring counts no triangulation can produce */
-	SERE_ERR_NOT_SPD,	   /* the matrix is not symmetric positive definite (CG met pᵀAp ≤ 0) */
-	SERE_ERR_NO_CONVERGE,  /* an iteration cap was reached before the tolerance */
-	SERE_ERR_CAPACITY,	   /* a workspace is too small for the input */
+	SERE_ERR_ARGUMENT,	  /* a null pointer, a negative size, a parameter out of its range */
+	SERE_ERR_MEMORY,	  /* an allocation failed */
+	SERE_ERR_NONFINITE,	  /* NaN or infinity in the input */
+	SERE_ERR_GEOMETRY,	  /* degenerate or invalid geometry: zero-length springs, crossing segments */
+	SERE_ERR_COUNTS,	  /* particle/spring counts no triangulation can produce */
+	SERE_ERR_NOT_SPD,	  /* the matrix is not symmetric positive definite (CG met pᵀAp ≤ 0) */
+	SERE_ERR_NO_CONVERGE, /* an iteration cap was reached before the tolerance */
+	SERE_ERR_CAPACITY,	  /* a workspace is too small for the input */
 	SERE_STATUS_COUNT
 } sere_status;
 

@@ -10,125 +10,125 @@ extern "C"
 {
 #endif
 
-	/* A contact: vertex closer than the thickness to a triangle it is not a corner of. The closest
-	 * point on the triangle is u a + v b + w c (barycentric, u + v + w = 1). side is +1 when the
-	 * vertex lies on the side the triangle's counter-clockwise normal n = (b − a) × (c − a) points to,
-	 * −1 otherwise, measured at detection as the sign of (p − closest) · n (+1 when zero); the
-	 * response pushes the vertex out on that side. */
-	typedef struct sere_contact
-	{
-		int32_t vertex;
-		int32_t triangle;
-		float u, v, w;
-		float distance;
-		float side;
-	} sere_contact;
+/* A contact: vertex closer than the thickness to a triangle it is not a corner of. The closest
+ * point on the triangle is u a + v b + w c (barycentric, u + v + w = 1). side is +1 when the
+ * vertex lies on the side the triangle's counter-clockwise normal n = (b − a) × (c − a) points to,
+ * −1 otherwise, measured at detection as the sign of (p − closest) · n (+1 when zero); the
+ * response pushes the vertex out on that side. */
+typedef struct sere_contact
+{
+	int32_t vertex;
+	int32_t triangle;
+	float u, v, w;
+	float distance;
+	float side;
+} sere_contact;
 
-	/* The deforming layer the response moves: positions, velocities and inverse masses (0 pins a
-	 * vertex) of the BVH's vertices, caller-owned SoA arrays. Only the first vertex_count entries
-	 * are used, so a sere_particles whose triangle layer comes first can be passed as is. */
-	typedef struct sere_collide_state
-	{
-		float *x, *y, *z;
-		float *vx, *vy, *vz;
-		const float* inv_m;
-	} sere_collide_state;
+/* The deforming layer the response moves: positions, velocities and inverse masses (0 pins a
+ * vertex) of the BVH's vertices, caller-owned SoA arrays. Only the first vertex_count entries
+ * are used, so a sere_particles whose triangle layer comes first can be passed as is. */
+typedef struct sere_collide_state
+{
+	float *x, *y, *z;
+	float *vx, *vy, *vz;
+	const float* inv_m;
+} sere_collide_state;
 
-	typedef struct sere_collide_params
-	{
-		float thickness;	  /* contact when the vertex–triangle distance is below it */
-		float dt;			  /* time step: velocities change by Δx / dt */
-		int32_t iterations;	  /* Jacobi response iterations per round (stops early once all are resolved) */
-		int32_t rounds;		  /* detect + respond rounds; later rounds catch contacts made by the push-out */
-		float relaxation;	  /* ω of the averaged update, in (0, 2]: see sere_collide_respond */
-		double rebuild_ratio; /* BVH quality ratio that triggers a rebuild (SERE_BVH_REBUILD_RATIO) */
-	} sere_collide_params;
+typedef struct sere_collide_params
+{
+	float thickness;	  /* contact when the vertex–triangle distance is below it */
+	float dt;			  /* time step: velocities change by Δx / dt */
+	int32_t iterations;	  /* Jacobi response iterations per round (stops early once all are resolved) */
+	int32_t rounds;		  /* detect + respond rounds; later rounds catch contacts made by the push-out */
+	float relaxation;	  /* ω of the averaged update, in (0, 2]: see sere_collide_respond */
+	double rebuild_ratio; /* BVH quality ratio that triggers a rebuild (SERE_BVH_REBUILD_RATIO) */
+} sere_collide_params;
 
 /* A contact counts as resolved once the push it still needs is below this fraction of the
  * thickness; the response stops when every contact is. */
 #define SERE_COLLIDE_TOLERANCE 1e-3f
 
-	typedef struct sere_collide_stats
-	{
-		int32_t contacts;	/* found by the first detection */
-		int32_t unresolved; /* contacts of the last round still short of the thickness by over the tolerance */
-		int32_t iterations; /* response iterations run, summed over rounds */
-		int32_t rounds;		/* rounds run (a round finding no contact ends the loop) */
-		bool rebuilt;		/* the BVH was rebuilt rather than only refit */
-	} sere_collide_stats;
+typedef struct sere_collide_stats
+{
+	int32_t contacts;	/* found by the first detection */
+	int32_t unresolved; /* contacts of the last round still short of the thickness by over the tolerance */
+	int32_t iterations; /* response iterations run, summed over rounds */
+	int32_t rounds;		/* rounds run (a round finding no contact ends the loop) */
+	bool rebuilt;		/* the BVH was rebuilt rather than only refit */
+} sere_collide_stats;
 
-	sere_collide_params sere_collide_params_default( void );
+sere_collide_params sere_collide_params_default( void );
 
-	typedef struct sere_collide sere_collide;
+typedef struct sere_collide sere_collide;
 
-	/* A workspace for the BVH's mesh holding up to contact_capacity contacts (0 picks 8 per vertex).
-	 * Per-thread buffers are made for omp_get_max_threads() threads at this call; later calls use
-	 * at most that many. On success the caller frees with sere_collide_destroy. */
-	sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out );
-	void sere_collide_destroy( sere_collide* collide );
+/* A workspace for the BVH's mesh holding up to contact_capacity contacts (0 picks 8 per vertex).
+ * Per-thread buffers are made for omp_get_max_threads() threads at this call; later calls use
+ * at most that many. On success the caller frees with sere_collide_destroy. */
+sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out );
+void sere_collide_destroy( sere_collide* collide );
 
-	/* Grows the contact capacity (allocates: call it between frames after SERE_ERR_CAPACITY). */
-	sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity );
+/* Grows the contact capacity (allocates: call it between frames after SERE_ERR_CAPACITY). */
+sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity );
 
-	/* Every (vertex, triangle) pair with the vertex not a corner of the triangle and their distance
-	 * (sere_closest_point_triangle) below thickness. The BVH must be refit to these positions.
-	 * Eight consecutive vertices query it together (sere_bvh_query_group), so number the vertices
-	 * in a spatially coherent order (sere_model uses Morton order); blocks of vertices run in
-	 * parallel and the list keeps block order, then the tree's order within a group: it is the
-	 * same for every thread count. *contact_count gets the number found; SERE_ERR_CAPACITY when
-	 * it exceeds the capacity (the contacts are then dropped), SERE_ERR_NONFINITE for NaN or
-	 * infinite positions. */
-	sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-									 const float* z, float thickness, int32_t* contact_count );
+/* Every (vertex, triangle) pair with the vertex not a corner of the triangle and their distance
+ * (sere_closest_point_triangle) below thickness. The BVH must be refit to these positions.
+ * Eight consecutive vertices query it together (sere_bvh_query_group), so number the vertices
+ * in a spatially coherent order (sere_model uses Morton order); blocks of vertices run in
+ * parallel and the list keeps block order, then the tree's order within a group: it is the
+ * same for every thread count. *contact_count gets the number found; SERE_ERR_CAPACITY when
+ * it exceeds the capacity (the contacts are then dropped), SERE_ERR_NONFINITE for NaN or
+ * infinite positions. */
+sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+								 const float* z, float thickness, int32_t* contact_count );
 
-	const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
+const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
 
-	/* Pushes the detected contacts apart. Each iteration evaluates every contact at the current
-	 * positions at its point of detection q = u a + v b + w c (barycentric weights fixed, as cloth
-	 * solvers keep them through a response): unit normal n̂ = side · n, height s = (p − q) · n̂
-	 * and in-plane offset l; the target height is s* = sqrt(thickness² − l²), so moving along n̂
-	 * makes the distance exactly the thickness. The constraint C = s − s* < 0 is solved as in
-	 * position-based cloth: λ = −C / W with W = w_p + Σ w_k b_k², the vertex moves by w_p λ n̂
-	 * and corner k by −w_k b_k λ n̂. Every vertex then gathers the corrections of its pushing
-	 * contacts (as vertex or corner) in contact order and moves by ω times their mean (Jacobi
-	 * averaging, Macklin et al. 2014: never scattered in thread order, so the result is bitwise
-	 * the same for every thread count). ω = 1 solves an isolated contact exactly; up to 2
-	 * converges faster where contacts crowd (a U-fold: 4 iterations instead of 16) but overshoots
-	 * isolated ones by ω − 1. Iterations stop once every contact is within
-	 * SERE_COLLIDE_TOLERANCE. Velocities change by the total Δx / dt, as the paper's PBD does
-	 * (Sec. 5.2). Degenerate triangles give no push. *unresolved (may be NULL) gets the contacts
-	 * still short by more than the tolerance. */
-	sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
-									  const sere_collide_params* params, int32_t* unresolved );
+/* Pushes the detected contacts apart. Each iteration evaluates every contact at the current
+ * positions at its point of detection q = u a + v b + w c (barycentric weights fixed, as cloth
+ * solvers keep them through a response): unit normal n̂ = side · n, height s = (p − q) · n̂
+ * and in-plane offset l; the target height is s* = sqrt(thickness² − l²), so moving along n̂
+ * makes the distance exactly the thickness. The constraint C = s − s* < 0 is solved as in
+ * position-based cloth: λ = −C / W with W = w_p + Σ w_k b_k², the vertex moves by w_p λ n̂
+ * and corner k by −w_k b_k λ n̂. Every vertex then gathers the corrections of its pushing
+ * contacts (as vertex or corner) in contact order and moves by ω times their mean (Jacobi
+ * averaging, Macklin et al. 2014: never scattered in thread order, so the result is bitwise
+ * the same for every thread count). ω = 1 solves an isolated contact exactly; up to 2
+ * converges faster where contacts crowd (a U-fold: 4 iterations instead of 16) but overshoots
+ * isolated ones by ω − 1. Iterations stop once every contact is within
+ * SERE_COLLIDE_TOLERANCE. Velocities change by the total Δx / dt, as the paper's PBD does
+ * (Sec. 5.2). Degenerate triangles give no push. *unresolved (may be NULL) gets the contacts
+ * still short by more than the tolerance. */
+sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+								  const sere_collide_params* params, int32_t* unresolved );
 
-	/* One self-collision pass of Algorithm 1 (line 23): refit the BVH (rebuilding it past
-	 * params->rebuild_ratio), then params->rounds times detect and respond, refitting between rounds.
-	 * stats may be NULL. An error in the first round leaves the state untouched; one in a later
-	 * round (SERE_ERR_CAPACITY) keeps the pushes of the rounds before it. */
-	sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const sere_collide_state* state,
-									  const sere_collide_params* params, sere_collide_stats* stats );
+/* One self-collision pass of Algorithm 1 (line 23): refit the BVH (rebuilding it past
+ * params->rebuild_ratio), then params->rounds times detect and respond, refitting between rounds.
+ * stats may be NULL. An error in the first round leaves the state untouched; one in a later
+ * round (SERE_ERR_CAPACITY) keeps the pushes of the rounds before it. */
+sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const sere_collide_state* state,
+								  const sere_collide_params* params, sere_collide_stats* stats );
 
-	/* ĥ_t = (x_t^V − x_a) · n_t for each triangle t = (a, b, c), n_t its unit normal and x_t^V the
-	 * Voronoi particle voronoi_first + t (Algorithm 1 line 14: stored before collisions). A
-	 * degenerate triangle gives 0. */
-	sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
-										int32_t triangle_count, int32_t voronoi_first, float* h_hat );
+/* ĥ_t = (x_t^V − x_a) · n_t for each triangle t = (a, b, c), n_t its unit normal and x_t^V the
+ * Voronoi particle voronoi_first + t (Algorithm 1 line 14: stored before collisions). A
+ * degenerate triangle gives 0. */
+sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
+									int32_t triangle_count, int32_t voronoi_first, float* h_hat );
 
-	/* Eq. 14: x_t^V = (x_a + x_b + x_c) / 3 + h_t n_t and v_t^V = (v_a + v_b + v_c) / 3, with h the
-	 * ĥ of sere_collide_measure_h or the rest thickness (the two modes of Sec. 5.3), for Voronoi
-	 * particle voronoi_first + t. Every corner must lie below voronoi_first (the triangle layer comes
-	 * first, DESIGN.md), else SERE_ERR_ARGUMENT. A degenerate triangle puts its particle at the
-	 * centroid. SERE_ERR_NONFINITE (nothing written) for NaN or infinity in the triangle layer's
-	 * positions or velocities or in h. */
-	sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,
-											  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
-											  const float* h );
+/* Eq. 14: x_t^V = (x_a + x_b + x_c) / 3 + h_t n_t and v_t^V = (v_a + v_b + v_c) / 3, with h the
+ * ĥ of sere_collide_measure_h or the rest thickness (the two modes of Sec. 5.3), for Voronoi
+ * particle voronoi_first + t. Every corner must lie below voronoi_first (the triangle layer comes
+ * first, DESIGN.md), else SERE_ERR_ARGUMENT. A degenerate triangle puts its particle at the
+ * centroid. SERE_ERR_NONFINITE (nothing written) for NaN or infinity in the triangle layer's
+ * positions or velocities or in h. */
+sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,
+										  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
+										  const float* h );
 
-	/* Closest point on triangle abc to p by Ericson's walk over the Voronoi regions of the
-	 * vertices, edges and face: returns the squared distance and writes the barycentric weights of
-	 * the closest point. Degenerate triangles fall back to the nearest of the three edges. */
-	float sere_closest_point_triangle( const float p[3], const float a[3], const float b[3], const float c[3],
-									   float weights[3] );
+/* Closest point on triangle abc to p by Ericson's walk over the Voronoi regions of the
+ * vertices, edges and face: returns the squared distance and writes the barycentric weights of
+ * the closest point. Degenerate triangles fall back to the nearest of the three edges. */
+float sere_closest_point_triangle( const float p[3], const float a[3], const float b[3], const float c[3],
+								   float weights[3] );
 
 #ifdef __cplusplus
 }

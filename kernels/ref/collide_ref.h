@@ -9,26 +9,26 @@ extern "C"
 {
 #endif
 
-	/* Brute force over all vertex_count × triangle_count pairs: every (vertex, triangle) with the
-	 * vertex not a corner of the triangle and squared distance (sere_closest_point_triangle, the
-	 * same float test the BVH search applies) below thickness². Pairs come vertex-major, triangles
-	 * ascending; the first min(count, capacity) are written and the count is returned. */
-	int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, int32_t vertex_count,
-									const int32_t* tri, int32_t triangle_count, float thickness, int32_t* vertex,
-									int32_t* triangle, int64_t capacity );
+/* Brute force over all vertex_count × triangle_count pairs: every (vertex, triangle) with the
+ * vertex not a corner of the triangle and squared distance (sere_closest_point_triangle, the
+ * same float test the BVH search applies) below thickness². Pairs come vertex-major, triangles
+ * ascending; the first min(count, capacity) are written and the count is returned. */
+int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, int32_t vertex_count,
+								const int32_t* tri, int32_t triangle_count, float thickness, int32_t* vertex,
+								int32_t* triangle, int64_t capacity );
 
-	/* Squared distance from p to triangle abc in double by a different route than the kernel's:
-	 * the plane projection when it falls inside the triangle, else the nearest of the three edges. */
-	double sere_collide_ref_distance2( const double p[3], const double a[3], const double b[3], const double c[3] );
+/* Squared distance from p to triangle abc in double by a different route than the kernel's:
+ * the plane projection when it falls inside the triangle, else the nearest of the three edges. */
+double sere_collide_ref_distance2( const double p[3], const double a[3], const double b[3], const double c[3] );
 
-	/* Algorithm 1 line 14 and Eq. 14 transcribed in double: ĥ_t = (x_t^V − x_a)·n and
-	 * x_t^V = (x_a + x_b + x_c)/3 + h_t n, v_t^V = (v_a + v_b + v_c)/3, for Voronoi particle
-	 * voronoi_first + t. */
-	void sere_collide_ref_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
-									 int32_t triangle_count, int32_t voronoi_first, double* h_hat );
-	void sere_collide_ref_restore_voronoi( double* x, double* y, double* z, double* vx, double* vy, double* vz,
-										   const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
-										   const double* h );
+/* Algorithm 1 line 14 and Eq. 14 transcribed in double: ĥ_t = (x_t^V − x_a)·n and
+ * x_t^V = (x_a + x_b + x_c)/3 + h_t n, v_t^V = (v_a + v_b + v_c)/3, for Voronoi particle
+ * voronoi_first + t. */
+void sere_collide_ref_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
+								 int32_t triangle_count, int32_t voronoi_first, double* h_hat );
+void sere_collide_ref_restore_voronoi( double* x, double* y, double* z, double* vx, double* vy, double* vz,
+									   const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
+									   const double* h );
 
 #ifdef __cplusplus
 }
