@@ -30,7 +30,7 @@ INCLUDES  := -Ikernels -Iharness
 CAIRO_CFLAGS := $(shell pkg-config --cflags cairo 2>/dev/null)
 CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
 CFLAGS_ALL   := -std=c17 $(COMMON) $(WARN) $(INCLUDES)
-HARNESS_CFLAGS := $(CFLAGS_ALL) $(CAIRO_CFLAGS)
+HARNESS_CFLAGS := $(CFLAGS_ALL) $(CAIRO_CFLAGS) -DSERE_DATA_DIR='"$(PREFIX)/share/sere"'
 CXXFLAGS_ALL := -std=c++17 $(COMMON) $(WARN) $(INCLUDES) -isystem /usr/include/eigen3
 LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) -lm
 
@@ -120,6 +120,8 @@ install: all
 	install -m 644 $(LIB_A) $(LIB_SO) $(DESTDIR)$(PREFIX)/lib/
 	install -m 755 $(SERE) $(DESTDIR)$(PREFIX)/bin/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' scripts/sere.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/sere.pc
+	install -d $(DESTDIR)$(PREFIX)/share/sere
+	cp -r data/presets data/leaves $(wildcard data/skeletons) $(DESTDIR)$(PREFIX)/share/sere/
 
 format:
 	clang-format -i $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC)

@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "model.h"
 #include "params.h"
+#include "pbd.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -141,6 +142,15 @@ int sere_cmd_model( int argc, char** argv )
 		fprintf( stderr, "sere model: %s\n", err );
 		return 1;
 	}
+	/* The constraint coloring the projection uses (Sec. 5.2): colors and batch sizes. */
+	sere_pbd* pbd = NULL;
+	if ( sere_pbd_create( model.s.a, model.s.b, model.s.count, model.p.count, &pbd ) != SERE_OK )
+	{
+		fprintf( stderr, "sere model: %s: coloring failed\n", path );
+		sere_model_destroy( &model );
+		return 1;
+	}
+	const sere_coloring* coloring = sere_pbd_coloring( pbd );
 	if ( json )
 	{
 		printf(
@@ -166,7 +176,10 @@ int sere_cmd_model( int argc, char** argv )
 				report.vein_points, report.interior_points, report.spacing );
 		printf( "  min angle      %8.2f deg (%.2f deg away from the outline and veins), worst aspect %.2f\n",
 				report.quality.min_angle_deg, report.quality.min_angle_free_deg, report.quality.max_aspect );
+		printf( "  colors         %8d  (batches of %d to %d springs)\n", coloring->color_count, coloring->min_batch,
+				coloring->max_batch );
 	}
+	sere_pbd_destroy( pbd );
 	sere_model_destroy( &model );
 	return 0;
 }

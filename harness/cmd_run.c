@@ -297,6 +297,20 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	sere_leaf_params leaf = sere_run_leaf_params( &params );
+	if ( params.crease != 0.0 || params.curl != 0.0 )
+	{
+		/* Sec. 3.1: creases along the veins and a curled blade before drying starts. */
+		sere_pbd_params shaping = leaf.pbd;
+		shaping.max_iterations = 2000;
+		status = sere_leaf_shape_initial( sim, (float) params.crease, (float) params.curl, &shaping );
+		if ( status != SERE_OK )
+		{
+			fprintf( stderr, "sere run: initial shaping: %s\n", sere_status_text( status ) );
+			sere_leaf_destroy( sim );
+			sere_model_destroy( &model );
+			return 1;
+		}
+	}
 
 	int32_t n = model.triangle_particles;
 	float* rwc = malloc( sizeof( float ) * (size_t) model.p.capacity );

@@ -34,6 +34,8 @@ sere_sim_params sere_sim_params_default( void )
 		.restore_measured = 1,
 		.conservative = 0,
 		.soften = 0,
+		.crease = 0.0,
+		.curl = 0.0,
 		.seed = 1,
 	};
 	return p;
@@ -88,6 +90,8 @@ static const key_info keys[] = {
 	KEY( restore_measured, 0.0, 1.0, 1, "Eq. 14 with the measured thickness (1) or the rest h (0)" ),
 	KEY( conservative, 0.0, 1.0, 1, "osmosis weights: 0 = paper (Eq. 8), 1 = conservative" ),
 	KEY( soften, 0.0, 1.0, 1, "scale PBD stiffness by relative water content (Sec. 7)" ),
+	KEY( crease, -0.5, 0.5, 0, "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
+	KEY( curl, -0.5, 0.5, 0, "initial shaping (Sec. 3.1): lengthen the other Voronoi springs by this fraction" ),
 	KEY( seed, 0.0, 4294967295.0, 1, "sampling seed" ),
 };
 

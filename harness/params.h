@@ -26,6 +26,8 @@ typedef struct sere_sim_params
 	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	double conservative;		/* osmosis: 0 = the paper's Eq. 8, 1 = conservative weights */
 	double soften;				/* Sec. 7: stiffness scaled by relative water content (1) or constant (0) */
+	double crease;				/* Sec. 3.1 initial shaping: Voronoi vein springs shortened by this fraction */
+	double curl;				/* ... and the other Voronoi springs lengthened by this fraction */
 	double seed;
 } sere_sim_params;
 

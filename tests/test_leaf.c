@@ -148,3 +148,34 @@ Test( leaf, deterministic_across_threads )
 	free( final[0] ), free( final[1] );
 	omp_set_num_threads( 2 );
 }
+
+Test( leaf, initial_shaping_creases_along_veins )
+{
+	sere_model model;
+	small_leaf( &model, "hickory", 500 );
+	sere_leaf_sim* sim;
+	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+	sere_pbd_params pbd = sere_pbd_params_default();
+	pbd.max_iterations = 500;
+	/* h_vein = -0.02: the vein's Voronoi particles lie below; shortening their springs
+	 * creases the blade along the midvein (Fig. 3g, Fig. 4). */
+	cr_assert_eq( sere_leaf_shape_initial( sim, 0.3f, 0.05f, &pbd ), SERE_OK );
+	float lo = INFINITY, hi = -INFINITY;
+	for ( int32_t i = 0; i < model.triangle_particles; ++i )
+	{
+		lo = fminf( lo, model.p.z[i] ), hi = fmaxf( hi, model.p.z[i] );
+	}
+	/* The triangle layer starts exactly flat (z = 0); a crease lifts it by a fair part of the
+	 * layer thickness |h_vein| = 0.02. */
+	cr_expect_gt( hi - lo, 0.25f * 0.02f, "the flat blade did not bend: z range %g", hi - lo );
+	/* The shaped leaf is the new rest state: l0 equals the current lengths (float rounding). */
+	for ( int32_t s = 0; s < model.s.count; ++s )
+	{
+		int32_t a = model.s.a[s], b = model.s.b[s];
+		float dx = model.p.x[b] - model.p.x[a], dy = model.p.y[b] - model.p.y[a], dz = model.p.z[b] - model.p.z[a];
+		cr_assert_float_eq( model.s.rest0[s], sqrtf( dx * dx + dy * dy + dz * dz ), 1e-6f );
+		cr_assert_eq( model.s.rest[s], model.s.rest0[s] );
+	}
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+}
