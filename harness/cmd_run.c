@@ -458,6 +458,8 @@ int sere_cmd_run( int argc, char** argv )
 	int picture_failed = sere_picture_sheet( picture, title, panels, shot_count, 4, err, sizeof( err ) ) != 0;
 	sere_series curves[2] = { { "relative water content", curve_t, curve_rwc, (int32_t) done + 1, 0.15, 0.45, 0.8 },
 							  { "relative leaf area", curve_t, curve_area, (int32_t) done + 1, 0.55, 0.36, 0.17 } };
+	snprintf( title, sizeof( title ), "%s, preset %s: relative water content and leaf area", name,
+			  preset ? preset : "default" );
 	snprintf( picture, sizeof( picture ), "%s/curves.png", out );
 	picture_failed |=
 		sere_picture_plot( picture, title, "time", "fraction of initial", curves, 2, err, sizeof( err ) ) != 0;
