@@ -13,6 +13,8 @@ typedef struct command
 
 static const command commands[] = {
 	{ "model", sere_cmd_model, "build a leaf's triangle-Voronoi double layer; print counts and mesh quality" },
+	{ "osmosis", sere_cmd_osmosis,
+	  "osmotic water flow alone: CG iterations, residuals, water per layer; --dump the system" },
 	{ "run", sere_cmd_run, "dry a leaf (Algorithm 1): frames, statistics, summary and pictures" },
 	{ "table1", sere_cmd_table1, "the three Table 1 leaves: our ms per frame beside the paper's" },
 	{ "wilt", sere_cmd_wilt, "wilt a leaf or a plant on a stem (venation skeleton, seed 003): PLY/VTK/PNG frames" },
