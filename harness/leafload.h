@@ -13,7 +13,8 @@ typedef struct sere_leaf
 	sere_leaf_file file;
 } sere_leaf;
 
-/* Reads PATH by its extension; 0 on success, else -1 with one line in err. */
+/* Reads PATH by its extension (.png: an auxiliary image, see leafimage.h; anything else: a
+ * .leaf file); 0 on success, else -1 with one line in err. */
 int sere_leaf_load( const char* path, sere_leaf* leaf, char* err, size_t err_size );
 void sere_leaf_free( sere_leaf* leaf );
 
