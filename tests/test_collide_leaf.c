@@ -1,0 +1,110 @@
+/* Self-collision on the shipped leaves (the issue's case): random smooth deformations and a
+ * crumple of real leaf meshes; the BVH must find exactly the brute-force pair set. */
+#include "collide.h"
+#include "leafload.h"
+#include "model.h"
+#include "ref/collide_ref.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+typedef struct pair
+{
+	int32_t v, t;
+} pair;
+
+static int compare_pair( const void* pa, const void* pb )
+{
+	const pair* a = pa;
+	const pair* b = pb;
+	return a->v != b->v ? ( a->v > b->v ) - ( a->v < b->v ) : ( a->t > b->t ) - ( a->t < b->t );
+}
+
+Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
+{
+	const char* names[] = { "maple", "hickory", "ginkgo" };
+	for ( size_t k = 0; k < sizeof( names ) / sizeof( names[0] ); ++k )
+	{
+		char path[128], err[1024];
+		snprintf( path, sizeof( path ), "data/leaves/%s.leaf", names[k] );
+		sere_leaf leaf;
+		cr_assert_eq( sere_leaf_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
+		sere_build_params params = sere_build_params_default();
+		params.point_count = 900;
+		params.boundary_count = sere_boundary_for_points( sere_shape_area( &leaf.file.shape ),
+														  sere_shape_perimeter( &leaf.file.shape ), 900 );
+		sere_model m;
+		cr_assert_eq( sere_model_build( &leaf.file.shape, &params, &m, NULL ), SERE_OK );
+		int32_t n = m.triangle_particles;
+		float* x = m.p.x;
+		float* y = m.p.y;
+		float* z = m.p.z;
+		for ( int shape = 0; shape < 3; ++shape )
+		{
+			/* 0: gentle waves; 1: a roll about the midrib; 2: a crumple with vertex noise */
+			for ( int32_t i = 0; i < n; ++i )
+			{
+				float u = m.u[i], v = m.v[i];
+				if ( shape == 0 )
+					x[i] = u, y[i] = v, z[i] = 0.03f * sinf( 9.0f * u ) * cosf( 7.0f * v );
+				else if ( shape == 1 )
+				{
+					float angle = 5.5f * u; /* rolls the blade around the y axis */
+					x[i] = 0.18f * sinf( angle ), y[i] = v, z[i] = 0.18f * ( 1.0f - cosf( angle ) );
+				}
+				else
+				{
+					float noise = sinf( 12.9898f * i ) * 43758.5453f;
+					noise -= floorf( noise );
+					x[i] = 0.6f * u + 0.05f * sinf( 11.0f * v );
+					y[i] = 0.6f * v + 0.05f * sinf( 13.0f * u );
+					z[i] = 0.08f * sinf( 8.0f * u + 5.0f * v ) + 0.004f * ( noise - 0.5f );
+				}
+			}
+			sere_bvh* bvh;
+			cr_assert_eq( sere_bvh_create( m.tri, m.triangle_count, n, x, y, z, &bvh ), SERE_OK );
+			sere_collide* collide;
+			cr_assert_eq( sere_collide_create( bvh, 64 * n, &collide ), SERE_OK );
+			const float thickness = 0.01f;
+			int32_t count = 0;
+			cr_assert_eq( sere_collide_detect( collide, bvh, x, y, z, thickness, &count ), SERE_OK );
+			int32_t listed = 0;
+			const sere_contact* contacts = sere_collide_contacts( collide, &listed );
+			pair* found = malloc( sizeof( pair ) * ( listed + 1 ) );
+			for ( int32_t c = 0; c < listed; ++c )
+			{
+				found[c] = ( pair ){ contacts[c].vertex, contacts[c].triangle };
+			}
+			int64_t capacity = 64 * (int64_t) n;
+			int32_t* rv = malloc( sizeof( int32_t ) * capacity );
+			int32_t* rt = malloc( sizeof( int32_t ) * capacity );
+			int64_t brute = sere_collide_ref_pairs( x, y, z, n, m.tri, m.triangle_count, thickness, rv, rt, capacity );
+			cr_assert_leq( brute, capacity );
+			pair* expected = malloc( sizeof( pair ) * ( brute + 1 ) );
+			for ( int64_t c = 0; c < brute; ++c )
+			{
+				expected[c] = ( pair ){ rv[c], rt[c] };
+			}
+			qsort( found, (size_t) listed, sizeof( pair ), compare_pair );
+			qsort( expected, (size_t) brute, sizeof( pair ), compare_pair );
+			cr_expect_eq( listed, brute, "%s shape %d: BVH %d pairs, brute force %lld", names[k], shape, listed,
+						  (long long) brute );
+			for ( int32_t c = 0; c < listed && c < brute; ++c )
+			{
+				cr_assert( found[c].v == expected[c].v && found[c].t == expected[c].t, "%s shape %d: pair %d differs",
+						   names[k], shape, c );
+			}
+			if ( shape == 1 )
+			{
+				cr_expect_gt( brute, 0, "%s: the roll should bring layers into contact", names[k] );
+			}
+			free( found ), free( expected ), free( rv ), free( rt );
+			sere_collide_destroy( collide );
+			sere_bvh_destroy( bvh );
+		}
+		sere_model_destroy( &m );
+		sere_leaf_free( &leaf );
+	}
+}
