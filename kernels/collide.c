@@ -843,7 +843,9 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	}
 	/* Check everything read before writing anything: the corners (all below voronoi_first, so
 	 * contiguous scans, and never a Voronoi particle being written) and the thicknesses. */
-	int bad = 0, outside = 0;
+	/* Two reductions in one region need two variables: with a shared one, the first loop's
+	 * combine could race with the second's. */
+	int bad = 0, bad_h = 0, outside = 0;
 #pragma omp parallel
 	{
 #pragma omp for reduction( | : bad ) schedule( static ) nowait
@@ -852,10 +854,10 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 			bad |= !( isfinite( x[i] ) && isfinite( y[i] ) && isfinite( z[i] ) && isfinite( vx[i] ) &&
 					  isfinite( vy[i] ) && isfinite( vz[i] ) );
 		}
-#pragma omp for reduction( | : bad, outside ) schedule( static )
+#pragma omp for reduction( | : bad_h, outside ) schedule( static )
 		for ( int32_t t = 0; t < triangle_count; ++t )
 		{
-			bad |= !isfinite( h[t] );
+			bad_h |= !isfinite( h[t] );
 			outside |= tri[3 * t] < 0 || tri[3 * t] >= voronoi_first || tri[3 * t + 1] < 0 ||
 					   tri[3 * t + 1] >= voronoi_first || tri[3 * t + 2] < 0 || tri[3 * t + 2] >= voronoi_first;
 		}
@@ -864,7 +866,7 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( bad )
+	if ( bad || bad_h )
 	{
 		return SERE_ERR_NONFINITE;
 	}
