@@ -169,18 +169,10 @@ int sere_cmd_osmosis( int argc, char** argv )
 		fprintf( stderr, "sere osmosis: missing LEAF (see sere osmosis --help)\n" );
 		return 2;
 	}
-	if ( preset != NULL && sere_params_load_preset( &params, preset, err, sizeof( err ) ) != 0 )
+	if ( sere_params_apply( &params, preset, sets, set_count, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere osmosis: %s\n", err );
 		return 2;
-	}
-	for ( int k = 0; k < set_count; ++k )
-	{
-		if ( sere_params_set( &params, sets[k], err, sizeof( err ) ) != 0 )
-		{
-			fprintf( stderr, "sere osmosis: %s\n", err );
-			return 2;
-		}
 	}
 	if ( conservative >= 0 )
 	{

@@ -252,18 +252,10 @@ int sere_cmd_run( int argc, char** argv )
 		fprintf( stderr, "sere run: --particles and --springs go together\n" );
 		return 2;
 	}
-	if ( preset != NULL && sere_params_load_preset( &params, preset, err, sizeof( err ) ) != 0 )
+	if ( sere_params_apply( &params, preset, sets, set_count, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
 		return 2;
-	}
-	for ( int k = 0; k < set_count; ++k )
-	{
-		if ( sere_params_set( &params, sets[k], err, sizeof( err ) ) != 0 )
-		{
-			fprintf( stderr, "sere run: %s\n", err );
-			return 2;
-		}
 	}
 	if ( every == 0 )
 	{

@@ -261,6 +261,23 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 	return 0;
 }
 
+int sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count, char* err,
+					   size_t err_size )
+{
+	if ( preset != NULL && sere_params_load_preset( params, preset, err, err_size ) != 0 )
+	{
+		return -1;
+	}
+	for ( int k = 0; k < set_count; ++k )
+	{
+		if ( sere_params_set( params, sets[k], err, err_size ) != 0 )
+		{
+			return -1;
+		}
+	}
+	return 0;
+}
+
 void sere_params_print( const sere_sim_params* params, FILE* f, const char* prefix )
 {
 	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )

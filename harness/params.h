@@ -40,6 +40,11 @@ int sere_params_set( sere_sim_params* params, const char* assignment, char* err,
  * install prefix) or by path; 0 on success, else -1 with a one-line message. */
 int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size );
 
+/* A preset (may be NULL) then each "key=value" in order, the way every command applies its
+ * --preset and --set options; 0 on success, else -1 with a one-line message. */
+int sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count, char* err,
+					   size_t err_size );
+
 /* Writes every key = value, one per line, for summaries and --help. */
 void sere_params_print( const sere_sim_params* params, FILE* f, const char* prefix );
 /* Every key with its description, default and range, for --help. */
