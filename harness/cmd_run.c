@@ -3,7 +3,7 @@
 #include "commands.h"
 #include "io.h"
 #include "leaf.h"
-#include "picture.h"
+#include "render.h"
 #include "topo.h"
 
 #include <math.h>
@@ -142,6 +142,41 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 	}
 	snprintf( path, sizeof( path ), "%s/leaf.pvd", out );
 	return sere_write_pvd( path, files, times, *written );
+}
+
+/* The contact sheet: every panel at frame 0's scale, centred on its own leaf so a drifting
+ * leaf stays in view while its shrinking shows, colored by the paper's fresh-to-dry blend. */
+typedef struct sheet_context
+{
+	const snapshot* shots;
+	const int32_t* tri;
+	int32_t triangle_count;
+	int32_t vertex_count;
+	float* rgb;
+	sere_render_view view;
+} sheet_context;
+
+static int draw_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
+					   size_t caption_size, char* err, size_t err_size )
+{
+	sheet_context* c = user;
+	const snapshot* s = c->shots + index;
+	sere_render_dry_colors( s->rwc, c->vertex_count, c->rgb );
+	sere_render_mesh mesh = { s->x, s->y, s->z, c->vertex_count, c->tri, c->triangle_count, c->rgb, NULL, { 0, 0, 0 } };
+	if ( index > 0 )
+	{
+		double centre[3] = { 0.0, 0.0, 0.0 };
+		for ( int32_t i = 0; i < c->vertex_count; ++i )
+		{
+			centre[0] += s->x[i], centre[1] += s->y[i], centre[2] += s->z[i];
+		}
+		for ( int k = 0; k < 3; ++k )
+		{
+			c->view.center[k] = centre[k] / c->vertex_count;
+		}
+	}
+	snprintf( caption, caption_size, "%s", s->caption );
+	return sere_render_mesh_draw( cr, x, y, w, h, &mesh, &c->view, NULL, err, err_size );
 }
 
 int sere_cmd_run( int argc, char** argv )
@@ -437,24 +472,27 @@ int sere_cmd_run( int argc, char** argv )
 
 	/* Pictures. */
 	char picture[4096];
-	sere_panel panels[sheet_panels];
-	for ( int k = 0; k < shot_count; ++k )
-	{
-		panels[k] = ( sere_panel ){ shots[k].x, shots[k].y,			  shots[k].z,	   shots[k].rwc,
-									model.tri,	model.triangle_count, shots[k].caption };
-	}
+	sheet_context sheet_user = {
+		shots, model.tri, model.triangle_count, n, NULL, { -35.0, 50.0, { 0, 0, 0 }, 0.0, 8.0 }
+	};
+	sheet_user.rgb = malloc( sizeof( float ) * 3 * (size_t) n );
 	char title[256];
 	snprintf( title, sizeof( title ), "%s, preset %s: drying colored by relative water content", name,
 			  preset ? preset : "default" );
 	snprintf( picture, sizeof( picture ), "%s/drying.png", out );
-	int picture_failed = sere_picture_sheet( picture, title, panels, shot_count, 4, err, sizeof( err ) ) != 0;
-	sere_series curves[2] = { { "relative water content", curve_t, curve_rwc, (int32_t) done + 1, 0.15, 0.45, 0.8 },
-							  { "relative leaf area", curve_t, curve_area, (int32_t) done + 1, 0.55, 0.36, 0.17 } };
+	sere_render_sheet sheet = { title, 4, shot_count, 320, 300, draw_panel, &sheet_user };
+	int picture_failed =
+		sheet_user.rgb == NULL || sere_render_contact_sheet( picture, &sheet, err, sizeof( err ) ) != 0;
+	free( sheet_user.rgb );
+	sere_render_series curves[2] = {
+		{ "relative water content", curve_t, curve_rwc, (int32_t) done + 1, { 0.0f, 0.45f, 0.70f }, 0 },
+		{ "relative leaf area", curve_t, curve_area, (int32_t) done + 1, { 0.55f, 0.36f, 0.17f }, 0 }
+	};
 	snprintf( title, sizeof( title ), "%s, preset %s: relative water content and leaf area", name,
 			  preset ? preset : "default" );
+	sere_render_axes axes = { title, "time", "fraction of initial", 1, 0.0, 1.05 };
 	snprintf( picture, sizeof( picture ), "%s/curves.png", out );
-	picture_failed |=
-		sere_picture_plot( picture, title, "time", "fraction of initial", curves, 2, err, sizeof( err ) ) != 0;
+	picture_failed = picture_failed || sere_render_plot( picture, 800, 480, &axes, curves, 2, err, sizeof( err ) ) != 0;
 	if ( picture_failed )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
