@@ -1,0 +1,151 @@
+#include "massspring_ref.h"
+
+#include <math.h>
+
+sere_status sere_massspring_step_ref( const sere_ms_topology* topology, sere_ms_particles* p,
+									  const sere_ms_params* params, float* fx, float* fy, float* fz,
+									  sere_ms_report* report )
+{
+	if ( topology == NULL || p == NULL || params == NULL || fx == NULL || fy == NULL || fz == NULL ||
+		 p->count != topology->vertex_count || !( params->dt > 0.0f ) || params->max_sweeps < 1 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = p->count;
+	const float dt = params->dt;
+
+	/* Forces: gravity, then the springs. */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		float m = p->inv_m[i] > 0.0f ? 1.0f / p->inv_m[i] : 0.0f;
+		fx[i] = m * params->gravity[0];
+		fy[i] = m * params->gravity[1];
+		fz[i] = m * params->gravity[2];
+	}
+	const int32_t springs = topology->structural_count + topology->flexion_count;
+	for ( int32_t s = 0; s < springs; ++s )
+	{
+		const int structural = s < topology->structural_count;
+		const int32_t a = topology->a[s], b = topology->b[s];
+		float dx = p->x[b] - p->x[a], dy = p->y[b] - p->y[a], dz = p->z[b] - p->z[a];
+		float len = sqrtf( dx * dx + dy * dy + dz * dz );
+		float nx = len > 0.0f ? dx / len : 0.0f;
+		float ny = len > 0.0f ? dy / len : 0.0f;
+		float nz = len > 0.0f ? dz / len : 0.0f;
+		float rest = topology->rest0[s] * ( 1.0f - ( structural ? params->shrink : params->curl ) );
+		float k = structural ? params->stiffness : params->bend_stiffness;
+		float along = ( p->vx[b] - p->vx[a] ) * nx + ( p->vy[b] - p->vy[a] ) * ny + ( p->vz[b] - p->vz[a] ) * nz;
+		float f = k * ( len - rest ) / rest + params->damping * along;
+		fx[a] += f * nx;
+		fy[a] += f * ny;
+		fz[a] += f * nz;
+		fx[b] -= f * nx;
+		fy[b] -= f * ny;
+		fz[b] -= f * nz;
+	}
+
+	/* Eq. 1, explicit Euler for the velocities. */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( p->inv_m[i] > 0.0f )
+		{
+			float m = 1.0f / p->inv_m[i];
+			p->vx[i] = ( p->vx[i] + fx[i] / m * dt ) * ( 1.0f - params->drag );
+			p->vy[i] = ( p->vy[i] + fy[i] / m * dt ) * ( 1.0f - params->drag );
+			p->vz[i] = ( p->vz[i] + fz[i] / m * dt ) * ( 1.0f - params->drag );
+		}
+		else
+		{
+			p->vx[i] = 0.0f;
+			p->vy[i] = 0.0f;
+			p->vz[i] = 0.0f;
+		}
+	}
+
+	/* Eq. 2: the relative position after the step must stay within τ_c of the natural length.
+	 * Each violating spring is moved onto the band narrowed by the tolerance δ; sweeps repeat
+	 * until one finds nothing more than δ off it and every spring is inside the true band. */
+	const float tau = params->strain_limit, delta = params->strain_tolerance;
+	int32_t sweeps = 0, limited = 0;
+	int converged = 0;
+	while ( sweeps < params->max_sweeps && !converged )
+	{
+		float worst = 0.0f;
+		for ( int32_t s = 0; s < topology->structural_count; ++s )
+		{
+			const int32_t a = topology->a[s], b = topology->b[s];
+			float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
+			float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
+			float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
+			float len = sqrtf( px * px + py * py + pz * pz );
+			float rest = topology->rest0[s] * ( 1.0f - params->shrink );
+			float target = len;
+			if ( len > rest * ( 1.0f + tau - delta ) )
+			{
+				target = rest * ( 1.0f + tau - delta );
+			}
+			if ( len < rest * ( 1.0f - tau + delta ) )
+			{
+				target = rest * ( 1.0f - tau + delta );
+			}
+			if ( target == len )
+			{
+				continue;
+			}
+			worst = fmaxf( worst, fabsf( len - target ) / rest );
+			limited += sweeps == 0;
+			float w = p->inv_m[a] + p->inv_m[b];
+			if ( w > 0.0f && len > 0.0f )
+			{
+				/* Change the relative velocity along p so that |p| becomes the target. */
+				float dv = ( len - target ) / len / dt;
+				p->vx[a] += p->inv_m[a] / w * dv * px;
+				p->vy[a] += p->inv_m[a] / w * dv * py;
+				p->vz[a] += p->inv_m[a] / w * dv * pz;
+				p->vx[b] -= p->inv_m[b] / w * dv * px;
+				p->vy[b] -= p->inv_m[b] / w * dv * py;
+				p->vz[b] -= p->inv_m[b] / w * dv * pz;
+			}
+		}
+		++sweeps;
+		if ( worst <= delta )
+		{
+			converged = 1;
+			for ( int32_t s = 0; s < topology->structural_count; ++s )
+			{
+				const int32_t a = topology->a[s], b = topology->b[s];
+				float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
+				float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
+				float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
+				float ratio = sqrtf( px * px + py * py + pz * pz ) / ( topology->rest0[s] * ( 1.0f - params->shrink ) );
+				if ( ratio > 1.0f + tau || ratio < 1.0f - tau )
+				{
+					converged = 0;
+				}
+			}
+		}
+	}
+
+	float strain = 0.0f;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		p->x[i] += p->vx[i] * dt;
+		p->y[i] += p->vy[i] * dt;
+		p->z[i] += p->vz[i] * dt;
+	}
+	for ( int32_t s = 0; s < topology->structural_count; ++s )
+	{
+		const int32_t a = topology->a[s], b = topology->b[s];
+		float dx = p->x[b] - p->x[a], dy = p->y[b] - p->y[a], dz = p->z[b] - p->z[a];
+		float rest = topology->rest0[s] * ( 1.0f - params->shrink );
+		strain = fmaxf( strain, fabsf( sqrtf( dx * dx + dy * dy + dz * dz ) / rest - 1.0f ) );
+	}
+	if ( report != NULL )
+	{
+		report->sweeps = sweeps;
+		report->limited = limited;
+		report->max_strain = strain;
+		report->hit_cap = !converged;
+	}
+	return converged ? SERE_OK : SERE_ERR_NO_CONVERGE;
+}
