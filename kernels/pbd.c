@@ -1,26 +1,123 @@
+/* nanosleep, for the barrier's back-off when a thread has lost its core. */
+#define _POSIX_C_SOURCE 200809L
+
 #include "pbd.h"
 
+#include <float.h>
 #include <math.h>
+#include <omp.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+
+#if defined( __AVX512F__ )
+#include <immintrin.h>
+#endif
+
+enum
+{
+	/* Constraints per SIMD step: one 512-bit register of floats. */
+	LANES = 16,
+	/* Bands hold at least this many particles, so the constraints joining two bands stay a
+	 * small share (on the maple, 8 bands: 6% of the constraints). */
+	BAND_PARTICLES = 1600,
+	MAX_BANDS = 8,
+	/* Threads past this many are not started (per-thread slots live in the workspace). */
+	MAX_THREADS = 64,
+	/* A waiting thread naps this long at a time once it has spun SPIN_SECONDS. */
+	NAP_NANOSECONDS = 50000,
+};
+
+#define SPIN_SECONDS 100e-6
+
+/* What one pass over a constraint block does. */
+typedef enum block_mode
+{
+	MODE_GAUSS_SEIDEL, /* project and write both ends */
+	MODE_JACOBI,	   /* measure and store the correction per constraint */
+	MODE_MEASURE,	   /* measure only */
+	MODE_TOUCH,		   /* load and store both ends unchanged (the memory floor) */
+} block_mode;
+
+/* Work lists a sweep claims items from: the bands, the cuts between bands r and r+1 for even
+ * r, for odd r, and every item (the read-only and Jacobi passes). */
+typedef enum phase
+{
+	PHASE_BANDS,
+	PHASE_EVEN_CUTS,
+	PHASE_ODD_CUTS,
+	PHASE_ALL,
+	PHASE_COUNT
+} phase;
+
+enum
+{
+	FLAG_ZERO_LENGTH = 1,
+	FLAG_NONFINITE = 2,
+	FLAG_NEGATIVE_MASS = 4,
+};
+
+/* Per-thread results of a pass, double-buffered by pass parity so a fast thread can publish
+ * the next pass's values while a slow one still reads this one's. One cache line each. */
+typedef struct thread_slot
+{
+	_Alignas( 64 ) float worst[2];
+	int32_t flags[2];
+} thread_slot;
+
+typedef struct claim_counter
+{
+	_Alignas( 64 ) atomic_int next;
+} claim_counter;
+
+/* A sense-free spin barrier. libgomp's barrier makes a futex system call at every release,
+ * about 1 µs on this machine's virtual CPUs even for one thread; a sweep crosses several per
+ * iteration, so the projection synchronizes with this one instead (0.2–0.5 µs for two threads,
+ * nothing for one). */
+typedef struct spin_barrier
+{
+	_Alignas( 64 ) atomic_uint arrived;
+	_Alignas( 64 ) atomic_uint generation;
+} spin_barrier;
 
 struct sere_pbd
 {
-	int32_t count, particle_count;
+	int32_t particle_count, constraint_count;
 	sere_coloring coloring;
-	int32_t *a, *b; /* in color order */
-	float* rest;
-	float* lambda; /* XPBD multipliers */
-	/* Jacobi: particle i's constraints (color-order indices) in [adjacency_offset[i], [i+1]) */
-	int32_t* adjacency_offset;
-	int32_t* adjacency;
-	float *jx, *jy, *jz; /* Jacobi scratch positions */
+	int32_t colors;
+	int32_t bands, items; /* items: bands 0..R−1, then cut r (bands r, r+1) is item R + r */
+	int32_t interface_count;
+	int32_t* segment;		   /* items·colors + 1 lane offsets, multiples of LANES: item w, color c */
+	int32_t lanes;			   /* segment[items·colors] */
+	int32_t *ia, *ib;		   /* per lane: float offset 4·slot of each end */
+	int32_t* source;		   /* per lane: the caller's constraint index, −1 for padding */
+	float* rest;			   /* per lane; padding lanes keep 1 */
+	float* lambda;			   /* per lane, XPBD multipliers */
+	float* factor;			   /* per lane, Jacobi: the f of the block below */
+	int32_t* slot;			   /* particle → slot (its place in breadth-first order) */
+	int32_t slot_count;		   /* particles rounded up to 4, then a dummy pair per item */
+	float* packed[2];		   /* (x, y, z, w) per slot; Jacobi alternates the two, the others use [0] */
+	int32_t* adjacency_offset; /* per slot < particle_count, Jacobi */
+	int32_t* adjacency;		   /* pairs (lane, 4·slot of the other end) */
+	float* inv_degree;		   /* per slot: 1/n_i, 0 for a particle without constraints */
+	float one;				   /* 1.0f, opaque to the compiler so sere_pbd_touch keeps its stores */
+	int rest_valid;
+	thread_slot* threads;	 /* MAX_THREADS */
+	claim_counter* counters; /* PHASE_COUNT × MAX_THREADS */
+	spin_barrier* barrier;
 };
 
 sere_pbd_params sere_pbd_params_default( void )
 {
 	sere_pbd_params params = {
-		.stiffness = 1.0f, .tolerance = 1e-3f, .max_iterations = 200, .compliance = 0.0f, .dt = 0.002f
+		.stiffness = 1.0f,
+		.tolerance = 1e-3f,
+		.max_iterations = 200,
+		.compliance = 0.0f,
+		.dt = 0.002f,
+		.relaxation = 1.5f,
+		.linear_stiffness = 0,
 	};
 	return params;
 }
@@ -32,16 +129,23 @@ void sere_pbd_destroy( sere_pbd* pbd )
 		return;
 	}
 	sere_coloring_destroy( &pbd->coloring );
-	sere_free( pbd->a );
-	sere_free( pbd->b );
+	sere_free( pbd->segment );
+	sere_free( pbd->ia );
+	sere_free( pbd->ib );
+	sere_free( pbd->source );
 	sere_free( pbd->rest );
 	sere_free( pbd->lambda );
+	sere_free( pbd->factor );
+	sere_free( pbd->slot );
+	sere_free( pbd->packed[0] );
+	sere_free( pbd->packed[1] );
 	sere_free( pbd->adjacency_offset );
 	sere_free( pbd->adjacency );
-	sere_free( pbd->jx );
-	sere_free( pbd->jy );
-	sere_free( pbd->jz );
-	free( pbd );
+	sere_free( pbd->inv_degree );
+	sere_free( pbd->threads );
+	sere_free( pbd->counters );
+	sere_free( pbd->barrier );
+	sere_free( pbd );
 }
 
 const sere_coloring* sere_pbd_coloring( const sere_pbd* pbd )
@@ -49,9 +153,284 @@ const sere_coloring* sere_pbd_coloring( const sere_pbd* pbd )
 	return &pbd->coloring;
 }
 
+sere_pbd_info sere_pbd_get_info( const sere_pbd* pbd )
+{
+	sere_pbd_info info = {
+		.colors = pbd->coloring.color_count,
+		.min_batch = pbd->coloring.min_batch,
+		.max_batch = pbd->coloring.max_batch,
+		.bands = pbd->bands,
+		.interface_constraints = pbd->interface_count,
+		.lanes = pbd->lanes,
+	};
+	return info;
+}
+
+/* ---------------------------------------------------------------------------------------
+ * Create: particle order, bands, lane layout. */
+
+/* Breadth-first search from start over the particle graph; appends the visited particles to
+ * order (from *count on) and marks them with tag. */
+static void breadth_first( int32_t start, const int32_t* offset, const int32_t* neighbor, int32_t* mark, int32_t tag,
+						   int32_t* order, int32_t* count )
+{
+	int32_t head = *count;
+	mark[start] = tag;
+	order[( *count )++] = start;
+	while ( head < *count )
+	{
+		int32_t i = order[head++];
+		for ( int32_t e = offset[i]; e < offset[i + 1]; ++e )
+		{
+			int32_t j = neighbor[e];
+			if ( mark[j] != tag )
+			{
+				mark[j] = tag;
+				order[( *count )++] = j;
+			}
+		}
+	}
+}
+
+/* Particles in breadth-first order, each connected component from a pseudo-peripheral
+ * particle (the last one reached from its lowest index): the order then sweeps across the
+ * mesh in levels, each constraint joins equal or adjacent levels, and a range of the order is
+ * a band whose boundary with the next range is short. */
+static sere_status order_particles( const int32_t* a, const int32_t* b, int32_t count, int32_t n, int32_t* order )
+{
+	int32_t* offset = calloc( (size_t) n + 1, sizeof( int32_t ) );
+	int32_t* neighbor = malloc( sizeof( int32_t ) * 2 * (size_t) count );
+	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t* mark = malloc( sizeof( int32_t ) * (size_t) n );
+	if ( offset == NULL || neighbor == NULL || fill == NULL || mark == NULL )
+	{
+		free( offset ), free( neighbor ), free( fill ), free( mark );
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		offset[a[k] + 1] += 1;
+		offset[b[k] + 1] += 1;
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		offset[i + 1] += offset[i];
+		mark[i] = -1;
+	}
+	memcpy( fill, offset, sizeof( int32_t ) * (size_t) n );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		neighbor[fill[a[k]]++] = b[k];
+		neighbor[fill[b[k]]++] = a[k];
+	}
+	int32_t placed = 0, components = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( mark[i] >= 0 )
+		{
+			continue;
+		}
+		/* Probe from i (written past the placed prefix, then overwritten), keep its last. */
+		int32_t probe = placed;
+		breadth_first( i, offset, neighbor, mark, 2 * components, order, &probe );
+		int32_t far = order[probe - 1];
+		breadth_first( far, offset, neighbor, mark, 2 * components + 1, order, &placed );
+		components += 1;
+	}
+	free( offset ), free( neighbor ), free( fill ), free( mark );
+	return SERE_OK;
+}
+
+typedef struct lane_key
+{
+	int64_t key; /* segment, then lower slot of the two ends */
+	int32_t constraint;
+} lane_key;
+
+static int compare_lane_keys( const void* p, const void* q )
+{
+	const lane_key* u = p;
+	const lane_key* v = q;
+	if ( u->key != v->key )
+	{
+		return u->key < v->key ? -1 : 1;
+	}
+	return ( u->constraint > v->constraint ) - ( u->constraint < v->constraint );
+}
+
+/* Band of each slot for R bands with boundaries on multiples of 4 slots (a 64-byte line of
+ * records), so two bands never share a cache line. Returns 0 when some constraint joins two
+ * bands that are not neighbors (bands thinner than a breadth-first level). */
+static int assign_bands( int32_t bands, int32_t n, const int32_t* a, const int32_t* b, int32_t count,
+						 const int32_t* slot, int32_t* band_of_slot )
+{
+	for ( int32_t r = 0; r < bands; ++r )
+	{
+		int32_t lo = r == 0 ? 0 : (int32_t) ( (int64_t) n * r / bands ) & ~3;
+		int32_t hi = r == bands - 1 ? n : (int32_t) ( (int64_t) n * ( r + 1 ) / bands ) & ~3;
+		for ( int32_t s = lo; s < hi; ++s )
+		{
+			band_of_slot[s] = r;
+		}
+	}
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		int32_t ra = band_of_slot[slot[a[k]]], rb = band_of_slot[slot[b[k]]];
+		if ( ra - rb > 1 || rb - ra > 1 )
+		{
+			return 0;
+		}
+	}
+	return 1;
+}
+
+static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t* b )
+{
+	const int32_t n = pbd->particle_count, count = pbd->constraint_count, colors = pbd->colors;
+	int32_t* band_of_slot = malloc( sizeof( int32_t ) * (size_t) n );
+	lane_key* keys = malloc( sizeof( lane_key ) * (size_t) count );
+	if ( band_of_slot == NULL || keys == NULL )
+	{
+		free( band_of_slot ), free( keys );
+		return SERE_ERR_MEMORY;
+	}
+	/* The band count depends on the mesh only (never on threads): determinism. */
+	int32_t bands = n / BAND_PARTICLES;
+	bands = bands < 1 ? 1 : bands > MAX_BANDS ? MAX_BANDS : bands;
+	while ( !assign_bands( bands, n, a, b, count, pbd->slot, band_of_slot ) )
+	{
+		bands -= 1;
+	}
+	pbd->bands = bands;
+	pbd->items = 2 * bands - 1;
+	const int32_t segments = pbd->items * colors;
+	pbd->segment = sere_alloc( sizeof( int32_t ) * ( (size_t) segments + 1 ) );
+	int32_t* fill = calloc( (size_t) segments + 1, sizeof( int32_t ) );
+	if ( pbd->segment == NULL || fill == NULL )
+	{
+		free( band_of_slot ), free( keys ), free( fill );
+		return SERE_ERR_MEMORY;
+	}
+	pbd->interface_count = 0;
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		int32_t sa = pbd->slot[a[k]], sb = pbd->slot[b[k]];
+		int32_t ra = band_of_slot[sa], rb = band_of_slot[sb];
+		int32_t item = ra == rb ? ra : bands + ( ra < rb ? ra : rb );
+		pbd->interface_count += ra != rb;
+		int64_t seg = (int64_t) item * colors + pbd->coloring.color[k];
+		keys[k].key = seg << 32 | (int64_t) ( sa < sb ? sa : sb );
+		keys[k].constraint = k;
+		fill[seg] += 1;
+	}
+	for ( int32_t g = 0; g < segments; ++g )
+	{
+		pbd->segment[g + 1] = pbd->segment[g] + ( ( fill[g] + LANES - 1 ) / LANES ) * LANES;
+	}
+	pbd->lanes = pbd->segment[segments];
+	const size_t lanes = (size_t) pbd->lanes;
+	pbd->ia = sere_alloc( sizeof( int32_t ) * lanes );
+	pbd->ib = sere_alloc( sizeof( int32_t ) * lanes );
+	pbd->source = sere_alloc( sizeof( int32_t ) * lanes );
+	pbd->rest = sere_alloc( sizeof( float ) * lanes );
+	pbd->lambda = sere_alloc( sizeof( float ) * lanes );
+	pbd->factor = sere_alloc( sizeof( float ) * lanes );
+	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
+	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->factor || !pbd->packed[0] ||
+		 !pbd->packed[1] )
+	{
+		free( band_of_slot ), free( keys ), free( fill );
+		return SERE_ERR_MEMORY;
+	}
+	/* Within a segment, constraints by their lower slot: neighbors in space share SIMD steps
+	 * and cache lines. */
+	qsort( keys, (size_t) count, sizeof( lane_key ), compare_lane_keys );
+	for ( int32_t g = 0; g < segments; ++g )
+	{
+		fill[g] = pbd->segment[g];
+	}
+	for ( int32_t j = 0; j < count; ++j )
+	{
+		int32_t k = keys[j].constraint;
+		int32_t q = fill[keys[j].key >> 32]++;
+		pbd->ia[q] = 4 * pbd->slot[a[k]];
+		pbd->ib[q] = 4 * pbd->slot[b[k]];
+		pbd->source[q] = k;
+	}
+	/* Padding lanes join the item's own dummy pair, unit length apart with w = 0: they measure
+	 * C = 0, move nothing, and no two threads ever write the same dummy. */
+	const int32_t dummies = ( n + 3 ) & ~3;
+	for ( int32_t g = 0; g < segments; ++g )
+	{
+		int32_t item = g / colors;
+		for ( int32_t q = fill[g]; q < pbd->segment[g + 1]; ++q )
+		{
+			pbd->ia[q] = 4 * ( dummies + 4 * item );
+			pbd->ib[q] = 4 * ( dummies + 4 * item + 1 );
+			pbd->source[q] = -1;
+			pbd->rest[q] = 1.0f;
+		}
+	}
+	for ( int32_t item = 0; item < pbd->items; ++item )
+	{
+		pbd->packed[0][4 * ( dummies + 4 * item + 1 )] = 1.0f;
+		pbd->packed[1][4 * ( dummies + 4 * item + 1 )] = 1.0f;
+	}
+	free( band_of_slot ), free( keys ), free( fill );
+	return SERE_OK;
+}
+
+/* Particle → constraint lists for the Jacobi gather, in lane order. */
+static sere_status build_adjacency( sere_pbd* pbd )
+{
+	const int32_t n = pbd->particle_count;
+	pbd->adjacency_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	pbd->adjacency = sere_alloc( sizeof( int32_t ) * 4 * (size_t) pbd->constraint_count );
+	pbd->inv_degree = sere_alloc( sizeof( float ) * (size_t) n );
+	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) n );
+	if ( !pbd->adjacency_offset || !pbd->adjacency || !pbd->inv_degree || !fill )
+	{
+		free( fill );
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t q = 0; q < pbd->lanes; ++q )
+	{
+		if ( pbd->source[q] >= 0 )
+		{
+			pbd->adjacency_offset[pbd->ia[q] / 4 + 1] += 1;
+			pbd->adjacency_offset[pbd->ib[q] / 4 + 1] += 1;
+		}
+	}
+	for ( int32_t s = 0; s < n; ++s )
+	{
+		int32_t degree = pbd->adjacency_offset[s + 1];
+		pbd->inv_degree[s] = degree > 0 ? 1.0f / (float) degree : 0.0f;
+		pbd->adjacency_offset[s + 1] += pbd->adjacency_offset[s];
+	}
+	memcpy( fill, pbd->adjacency_offset, sizeof( int32_t ) * (size_t) n );
+	for ( int32_t q = 0; q < pbd->lanes; ++q )
+	{
+		if ( pbd->source[q] >= 0 )
+		{
+			int32_t ea = 2 * fill[pbd->ia[q] / 4]++, eb = 2 * fill[pbd->ib[q] / 4]++;
+			pbd->adjacency[ea] = q, pbd->adjacency[ea + 1] = pbd->ib[q];
+			pbd->adjacency[eb] = q, pbd->adjacency[eb + 1] = pbd->ia[q];
+		}
+	}
+	free( fill );
+	return SERE_OK;
+}
+
 sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, int32_t particle_count, sere_pbd** out )
 {
-	sere_pbd* pbd = calloc( 1, sizeof( *pbd ) );
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*out = NULL;
+	sere_pbd* pbd = sere_alloc( sizeof( *pbd ) );
 	if ( pbd == NULL )
 	{
 		return SERE_ERR_MEMORY;
@@ -59,66 +438,74 @@ sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, 
 	sere_status status = sere_color_springs( a, b, count, particle_count, &pbd->coloring );
 	if ( status != SERE_OK )
 	{
-		free( pbd );
+		sere_free( pbd );
 		return status;
 	}
-	pbd->count = count;
 	pbd->particle_count = particle_count;
-	size_t ints = sizeof( int32_t ) * (size_t) sere_pad( count );
-	size_t floats = sizeof( float ) * (size_t) sere_pad( particle_count );
-	pbd->a = sere_alloc( ints );
-	pbd->b = sere_alloc( ints );
-	pbd->rest = sere_alloc( sizeof( float ) * (size_t) sere_pad( count ) );
-	pbd->lambda = sere_alloc( sizeof( float ) * (size_t) sere_pad( count ) );
-	pbd->adjacency_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) particle_count + 1 ) );
-	pbd->adjacency = sere_alloc( sizeof( int32_t ) * 2 * (size_t) count );
-	pbd->jx = sere_alloc( floats );
-	pbd->jy = sere_alloc( floats );
-	pbd->jz = sere_alloc( floats );
-	if ( !pbd->a || !pbd->b || !pbd->rest || !pbd->lambda || !pbd->adjacency_offset || !pbd->adjacency || !pbd->jx ||
-		 !pbd->jy || !pbd->jz )
+	pbd->constraint_count = count;
+	pbd->colors = pbd->coloring.color_count;
+	pbd->one = 1.0f;
+	pbd->slot = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
+	pbd->threads = sere_alloc( sizeof( thread_slot ) * MAX_THREADS );
+	pbd->counters = sere_alloc( sizeof( claim_counter ) * PHASE_COUNT * MAX_THREADS );
+	pbd->barrier = sere_alloc( sizeof( spin_barrier ) );
+	int32_t* order = malloc( sizeof( int32_t ) * (size_t) particle_count );
+	if ( !pbd->slot || !order || !pbd->threads || !pbd->counters || !pbd->barrier )
 	{
+		free( order );
 		sere_pbd_destroy( pbd );
 		return SERE_ERR_MEMORY;
 	}
-	for ( int32_t k = 0; k < count; ++k )
+	atomic_init( &pbd->barrier->arrived, 0u );
+	atomic_init( &pbd->barrier->generation, 0u );
+	for ( int32_t c = 0; c < PHASE_COUNT * MAX_THREADS; ++c )
 	{
-		int32_t s = pbd->coloring.order[k];
-		pbd->a[k] = a[s];
-		pbd->b[k] = b[s];
-		pbd->adjacency_offset[a[s] + 1] += 1;
-		pbd->adjacency_offset[b[s] + 1] += 1;
+		atomic_init( &pbd->counters[c].next, 0 );
 	}
-	for ( int32_t i = 0; i < particle_count; ++i )
+	status = order_particles( a, b, count, particle_count, order );
+	for ( int32_t s = 0; status == SERE_OK && s < particle_count; ++s )
 	{
-		pbd->adjacency_offset[i + 1] += pbd->adjacency_offset[i];
+		pbd->slot[order[s]] = s;
 	}
-	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) particle_count );
-	if ( fill == NULL )
+	free( order );
+	if ( status == SERE_OK )
+	{
+		status = build_layout( pbd, a, b );
+	}
+	if ( status == SERE_OK )
+	{
+		status = build_adjacency( pbd );
+	}
+	if ( status != SERE_OK )
 	{
 		sere_pbd_destroy( pbd );
-		return SERE_ERR_MEMORY;
+		return status;
 	}
-	memcpy( fill, pbd->adjacency_offset, sizeof( int32_t ) * (size_t) particle_count );
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		pbd->adjacency[fill[pbd->a[k]]++] = k;
-		pbd->adjacency[fill[pbd->b[k]]++] = k;
-	}
-	free( fill );
 	*out = pbd;
 	return SERE_OK;
 }
 
 sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest )
 {
-	int bad = 0;
-	for ( int32_t k = 0; k < pbd->count; ++k )
+	if ( pbd == NULL || rest == NULL )
 	{
-		float l = rest[pbd->coloring.order[k]];
-		bad |= !( l > 0.0f ) || !isfinite( l );
-		pbd->rest[k] = l;
+		return SERE_ERR_ARGUMENT;
 	}
+	int bad = 0;
+	const int32_t lanes = pbd->lanes;
+	const int32_t* source = pbd->source;
+	float* lane_rest = pbd->rest;
+#pragma omp parallel for schedule( static ) reduction( | : bad )
+	for ( int32_t q = 0; q < lanes; ++q )
+	{
+		if ( source[q] >= 0 )
+		{
+			float l = rest[source[q]];
+			bad |= !( l > 0.0f && l <= FLT_MAX );
+			lane_rest[q] = l;
+		}
+	}
+	pbd->rest_valid = !bad;
 	return bad ? SERE_ERR_GEOMETRY : SERE_OK;
 }
 
@@ -155,189 +542,694 @@ void sere_pbd_finish( int32_t count, float* x, float* y, float* z, float* vx, fl
 	}
 }
 
-static sere_status check_params( const sere_pbd* pbd, const float* px, const float* py, const float* pz,
-								 const float* inv_m, const sere_pbd_params* params )
+/* ---------------------------------------------------------------------------------------
+ * The constraint block: 16 constraints of one color, no particle twice.
+ *
+ * Per lane, in this order (the scalar build does the same operations, so both round alike):
+ *   d = p_b − p_a, len = √((dx² + dy²) + dz²), C = len − l                    (Eq. 13)
+ *   residual r = C (PBD) or C + α̃λ (XPBD); strain |r|/l
+ *   PBD:  f = (k C)/((w_a + w_b) len), 0 when w_a + w_b = 0
+ *   XPBD: Δλ = (−C − α̃λ)/(w_a + w_b + α̃), λ += Δλ, f = −Δλ/len
+ *   p_a += (w_a f) d, p_b −= (w_b f) d       (Jacobi: store f instead) */
+
+typedef struct block_context
 {
-	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || params == NULL ||
-		 !( params->stiffness >= 0.0f && params->stiffness <= 1.0f ) || !( params->tolerance > 0.0f ) ||
-		 params->max_iterations < 1 || !( params->compliance >= 0.0f ) ||
-		 ( params->compliance > 0.0f && !( params->dt > 0.0f ) ) )
+	float* packed;
+	const int32_t* ia;
+	const int32_t* ib;
+	const float* rest;
+	float* lambda;
+	float* factor;
+	float k, alpha, one;
+} block_context;
+
+#if defined( __AVX512F__ )
+
+typedef struct lane_accum
+{
+	__m512 worst;
+	__mmask16 zero, nonfinite;
+} lane_accum;
+
+static inline lane_accum lane_accum_start( void )
+{
+	lane_accum acc = { _mm512_setzero_ps(), 0, 0 };
+	return acc;
+}
+
+static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
+{
+	float w = _mm512_reduce_max_ps( acc->worst );
+	*worst = w > *worst ? w : *worst;
+	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
+}
+
+/* Four (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
+ * lane j of register r, then a 4×4 transpose inside each 128-bit lane. This replaces AVX-512
+ * gathers and scatters, which on this machine cost 3× as much for the same sweep. */
+static inline void load_records( const float* packed, const int32_t* at, __m512* x, __m512* y, __m512* z, __m512* w )
+{
+	__m512 r0 = _mm512_castps128_ps512( _mm_load_ps( packed + at[0] ) );
+	__m512 r1 = _mm512_castps128_ps512( _mm_load_ps( packed + at[1] ) );
+	__m512 r2 = _mm512_castps128_ps512( _mm_load_ps( packed + at[2] ) );
+	__m512 r3 = _mm512_castps128_ps512( _mm_load_ps( packed + at[3] ) );
+	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[4] ), 1 );
+	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[5] ), 1 );
+	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[6] ), 1 );
+	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[7] ), 1 );
+	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[8] ), 2 );
+	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[9] ), 2 );
+	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[10] ), 2 );
+	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[11] ), 2 );
+	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[12] ), 3 );
+	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[13] ), 3 );
+	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[14] ), 3 );
+	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[15] ), 3 );
+	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( r0, r1 ) ); /* x0 x1 y0 y1 per lane */
+	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( r0, r1 ) ); /* z0 z1 w0 w1 */
+	__m512d t2 = _mm512_castps_pd( _mm512_unpacklo_ps( r2, r3 ) );
+	__m512d t3 = _mm512_castps_pd( _mm512_unpackhi_ps( r2, r3 ) );
+	*x = _mm512_castpd_ps( _mm512_unpacklo_pd( t0, t2 ) );
+	*y = _mm512_castpd_ps( _mm512_unpackhi_pd( t0, t2 ) );
+	*z = _mm512_castpd_ps( _mm512_unpacklo_pd( t1, t3 ) );
+	*w = _mm512_castpd_ps( _mm512_unpackhi_pd( t1, t3 ) );
+}
+
+/* The inverse of load_records: four components into records, 16 stores of 128 bits. */
+static inline void store_records( float* packed, const int32_t* at, __m512 x, __m512 y, __m512 z, __m512 w )
+{
+	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( x, y ) );
+	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( x, y ) );
+	__m512d t2 = _mm512_castps_pd( _mm512_unpacklo_ps( z, w ) );
+	__m512d t3 = _mm512_castps_pd( _mm512_unpackhi_ps( z, w ) );
+	__m512 r0 = _mm512_castpd_ps( _mm512_unpacklo_pd( t0, t2 ) );
+	__m512 r1 = _mm512_castpd_ps( _mm512_unpackhi_pd( t0, t2 ) );
+	__m512 r2 = _mm512_castpd_ps( _mm512_unpacklo_pd( t1, t3 ) );
+	__m512 r3 = _mm512_castpd_ps( _mm512_unpackhi_pd( t1, t3 ) );
+	_mm_store_ps( packed + at[0], _mm512_castps512_ps128( r0 ) );
+	_mm_store_ps( packed + at[1], _mm512_castps512_ps128( r1 ) );
+	_mm_store_ps( packed + at[2], _mm512_castps512_ps128( r2 ) );
+	_mm_store_ps( packed + at[3], _mm512_castps512_ps128( r3 ) );
+	_mm_store_ps( packed + at[4], _mm512_extractf32x4_ps( r0, 1 ) );
+	_mm_store_ps( packed + at[5], _mm512_extractf32x4_ps( r1, 1 ) );
+	_mm_store_ps( packed + at[6], _mm512_extractf32x4_ps( r2, 1 ) );
+	_mm_store_ps( packed + at[7], _mm512_extractf32x4_ps( r3, 1 ) );
+	_mm_store_ps( packed + at[8], _mm512_extractf32x4_ps( r0, 2 ) );
+	_mm_store_ps( packed + at[9], _mm512_extractf32x4_ps( r1, 2 ) );
+	_mm_store_ps( packed + at[10], _mm512_extractf32x4_ps( r2, 2 ) );
+	_mm_store_ps( packed + at[11], _mm512_extractf32x4_ps( r3, 2 ) );
+	_mm_store_ps( packed + at[12], _mm512_extractf32x4_ps( r0, 3 ) );
+	_mm_store_ps( packed + at[13], _mm512_extractf32x4_ps( r1, 3 ) );
+	_mm_store_ps( packed + at[14], _mm512_extractf32x4_ps( r2, 3 ) );
+	_mm_store_ps( packed + at[15], _mm512_extractf32x4_ps( r3, 3 ) );
+}
+
+static inline void project_block( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+{
+	__m512 ax, ay, az, aw, bx, by, bz, bw;
+	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
+	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
+	if ( mode == MODE_TOUCH )
+	{
+		const __m512 one = _mm512_set1_ps( ctx->one );
+		store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
+					   _mm512_mul_ps( az, one ), aw );
+		store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
+					   _mm512_mul_ps( bz, one ), bw );
+		return;
+	}
+	const __m512 zero = _mm512_setzero_ps();
+	__m512 dx = _mm512_sub_ps( bx, ax ), dy = _mm512_sub_ps( by, ay ), dz = _mm512_sub_ps( bz, az );
+	__m512 len2 =
+		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( dx, dx ), _mm512_mul_ps( dy, dy ) ), _mm512_mul_ps( dz, dz ) );
+	__m512 len = _mm512_sqrt_ps( len2 );
+	__m512 rest = _mm512_load_ps( ctx->rest + q );
+	__m512 c = _mm512_sub_ps( len, rest ); /* Eq. 13 */
+	acc->zero |= _mm512_cmp_ps_mask( len, zero, _CMP_EQ_OQ );
+	acc->nonfinite |= _mm512_cmp_ps_mask( len, _mm512_set1_ps( FLT_MAX ), _CMP_NLE_UQ );
+	__m512 wsum = _mm512_add_ps( aw, bw );
+	__m512 lambda = zero, alpha = zero, residual = c;
+	if ( xpbd )
+	{
+		alpha = _mm512_set1_ps( ctx->alpha );
+		lambda = _mm512_load_ps( ctx->lambda + q );
+		residual = _mm512_add_ps( c, _mm512_mul_ps( alpha, lambda ) );
+	}
+	acc->worst = _mm512_max_ps( acc->worst, _mm512_div_ps( _mm512_abs_ps( residual ), rest ) );
+	if ( mode == MODE_MEASURE )
+	{
+		return;
+	}
+	__m512 f;
+	if ( xpbd )
+	{
+		__m512 denominator = _mm512_add_ps( wsum, alpha );
+		__mmask16 movable = _mm512_cmp_ps_mask( denominator, zero, _CMP_GT_OQ );
+		__m512 numerator = _mm512_sub_ps( _mm512_sub_ps( zero, c ), _mm512_mul_ps( alpha, lambda ) );
+		__m512 dlambda = _mm512_maskz_div_ps( movable, numerator, denominator );
+		_mm512_store_ps( ctx->lambda + q, _mm512_add_ps( lambda, dlambda ) );
+		f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
+	}
+	else
+	{
+		__mmask16 movable = _mm512_cmp_ps_mask( wsum, zero, _CMP_GT_OQ );
+		f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
+	}
+	if ( mode == MODE_JACOBI )
+	{
+		_mm512_store_ps( ctx->factor + q, f );
+		return;
+	}
+	__m512 fa = _mm512_mul_ps( aw, f ), fb = _mm512_mul_ps( bw, f );
+	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( ax, _mm512_mul_ps( fa, dx ) ),
+				   _mm512_add_ps( ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( az, _mm512_mul_ps( fa, dz ) ), aw );
+	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( bx, _mm512_mul_ps( fb, dx ) ),
+				   _mm512_sub_ps( by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( bz, _mm512_mul_ps( fb, dz ) ), bw );
+}
+
+#else
+
+/* Portable build (no AVX-512): the same operations one lane at a time. Lanes of a block share
+ * no particle, so doing them in sequence gives the bits the SIMD build gives. */
+typedef struct lane_accum
+{
+	float worst;
+	int zero, nonfinite;
+} lane_accum;
+
+static inline lane_accum lane_accum_start( void )
+{
+	lane_accum acc = { 0.0f, 0, 0 };
+	return acc;
+}
+
+static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
+{
+	*worst = acc->worst > *worst ? acc->worst : *worst;
+	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
+}
+
+static inline void project_block( const block_context* ctx, int32_t q0, block_mode mode, int xpbd, lane_accum* acc )
+{
+	for ( int32_t q = q0; q < q0 + LANES; ++q )
+	{
+		float* pa = ctx->packed + ctx->ia[q];
+		float* pb = ctx->packed + ctx->ib[q];
+		if ( mode == MODE_TOUCH )
+		{
+			for ( int j = 0; j < 3; ++j )
+			{
+				pa[j] = pa[j] * ctx->one;
+				pb[j] = pb[j] * ctx->one;
+			}
+			continue;
+		}
+		float dx = pb[0] - pa[0], dy = pb[1] - pa[1], dz = pb[2] - pa[2];
+		float len = sqrtf( ( dx * dx + dy * dy ) + dz * dz );
+		float rest = ctx->rest[q];
+		float c = len - rest; /* Eq. 13 */
+		acc->zero |= len == 0.0f;
+		acc->nonfinite |= !( len <= FLT_MAX );
+		float wsum = pa[3] + pb[3];
+		float lambda = xpbd ? ctx->lambda[q] : 0.0f;
+		float residual = xpbd ? c + ctx->alpha * lambda : c;
+		float strain = fabsf( residual ) / rest;
+		acc->worst = strain > acc->worst ? strain : acc->worst;
+		if ( mode == MODE_MEASURE )
+		{
+			continue;
+		}
+		float f;
+		if ( xpbd )
+		{
+			float denominator = wsum + ctx->alpha;
+			float dlambda = denominator > 0.0f ? ( ( 0.0f - c ) - ctx->alpha * lambda ) / denominator : 0.0f;
+			ctx->lambda[q] = lambda + dlambda;
+			f = ( 0.0f - dlambda ) / len;
+		}
+		else
+		{
+			f = wsum > 0.0f ? ( ctx->k * c ) / ( wsum * len ) : 0.0f;
+		}
+		if ( mode == MODE_JACOBI )
+		{
+			ctx->factor[q] = f;
+			continue;
+		}
+		float fa = pa[3] * f, fb = pb[3] * f;
+		pa[0] = pa[0] + fa * dx, pa[1] = pa[1] + fa * dy, pa[2] = pa[2] + fa * dz;
+		pb[0] = pb[0] - fb * dx, pb[1] = pb[1] - fb * dy, pb[2] = pb[2] - fb * dz;
+	}
+}
+
+#endif
+
+/* ---------------------------------------------------------------------------------------
+ * Threads: work claiming and the barrier. */
+
+static void barrier_wait( spin_barrier* barrier, int threads )
+{
+	if ( threads == 1 )
+	{
+		return;
+	}
+	unsigned generation = atomic_load_explicit( &barrier->generation, memory_order_relaxed );
+	if ( atomic_fetch_add_explicit( &barrier->arrived, 1u, memory_order_acq_rel ) == (unsigned) threads - 1 )
+	{
+		atomic_store_explicit( &barrier->arrived, 0u, memory_order_relaxed );
+		atomic_store_explicit( &barrier->generation, generation + 1u, memory_order_release );
+		return;
+	}
+	/* Spin while the wait is short (every phase of a sweep is tens of µs); past SPIN_SECONDS
+	 * another thread has most likely lost its core to some other process, so nap instead:
+	 * an idle core lets the scheduler move that thread over, where spinning (or yielding) would
+	 * keep it queued behind the other process for a whole time slice (milliseconds). */
+	const struct timespec nap = { 0, NAP_NANOSECONDS };
+	double start = -1.0;
+	unsigned spins = 0;
+	while ( atomic_load_explicit( &barrier->generation, memory_order_acquire ) == generation )
+	{
+		if ( ++spins % 1024 == 0 )
+		{
+			double now = omp_get_wtime();
+			start = start < 0.0 ? now : start;
+			if ( now - start > SPIN_SECONDS )
+			{
+				nanosleep( &nap, NULL );
+			}
+		}
+	}
+}
+
+/* Publishes this thread's result of a pass, waits for all, and returns the combined result
+ * (the same on every thread, so all take the same branch next). Max is exact in any order. */
+static void exchange( sere_pbd* pbd, int t, int threads, int* parity, float* worst, int32_t* flags )
+{
+	pbd->threads[t].worst[*parity] = *worst;
+	pbd->threads[t].flags[*parity] = *flags;
+	barrier_wait( pbd->barrier, threads );
+	float all_worst = 0.0f;
+	int32_t all_flags = 0;
+	for ( int u = 0; u < threads; ++u )
+	{
+		float w = pbd->threads[u].worst[*parity];
+		all_worst = w > all_worst ? w : all_worst;
+		all_flags |= pbd->threads[u].flags[*parity];
+	}
+	*parity ^= 1;
+	*worst = all_worst;
+	*flags = all_flags;
+}
+
+static int32_t phase_items( const sere_pbd* pbd, phase p )
+{
+	switch ( p )
+	{
+		case PHASE_BANDS:
+			return pbd->bands;
+		case PHASE_EVEN_CUTS:
+			return pbd->bands / 2;
+		case PHASE_ODD_CUTS:
+			return ( pbd->bands - 1 ) / 2;
+		default:
+			return pbd->items;
+	}
+}
+
+static int32_t phase_item( const sere_pbd* pbd, phase p, int32_t j )
+{
+	switch ( p )
+	{
+		case PHASE_EVEN_CUTS:
+			return pbd->bands + 2 * j;
+		case PHASE_ODD_CUTS:
+			return pbd->bands + 2 * j + 1;
+		default:
+			return j;
+	}
+}
+
+/* Thread t's own items of a phase are the t-th contiguous share (neighboring bands stay on
+ * one thread, and on the same one from sweep to sweep); it takes them in order and then
+ * helps the other threads with theirs, so a thread on a slower core does less. Which thread
+ * projects an item never changes the result: items of a phase share no particle. */
+static void reset_counters( sere_pbd* pbd, int t, int threads, phase current )
+{
+	for ( int p = 0; p < PHASE_COUNT; ++p )
+	{
+		if ( p != (int) current )
+		{
+			int32_t first = (int32_t) ( (int64_t) phase_items( pbd, (phase) p ) * t / threads );
+			atomic_store_explicit( &pbd->counters[p * MAX_THREADS + t].next, first, memory_order_relaxed );
+		}
+	}
+}
+
+static void run_phase( sere_pbd* pbd, const block_context* ctx, phase p, block_mode mode, int xpbd, int t, int threads,
+					   float* worst, int32_t* flags )
+{
+	/* Counters of the other phases are idle until the barrier that ends this one. */
+	reset_counters( pbd, t, threads, p );
+	const int32_t count = phase_items( pbd, p ), colors = pbd->colors;
+	lane_accum acc = lane_accum_start();
+	for ( int v = 0; v < threads; ++v )
+	{
+		int u = ( t + v ) % threads;
+		int32_t end = (int32_t) ( (int64_t) count * ( u + 1 ) / threads );
+		atomic_int* next = &pbd->counters[p * MAX_THREADS + u].next;
+		for ( ;; )
+		{
+			int32_t j = atomic_fetch_add_explicit( next, 1, memory_order_relaxed );
+			if ( j >= end )
+			{
+				break;
+			}
+			const int32_t item = phase_item( pbd, p, j );
+			const int32_t first = pbd->segment[item * colors], last = pbd->segment[( item + 1 ) * colors];
+			/* Color after color; all lanes of one block have one color. */
+			for ( int32_t q = first; q < last; q += LANES )
+			{
+				project_block( ctx, q, mode, xpbd, &acc );
+			}
+		}
+	}
+	lane_accum_finish( &acc, worst, flags );
+}
+
+/* Thread t's share [first, last) of n. */
+static void share( int32_t n, int t, int threads, int32_t* first, int32_t* last )
+{
+	*first = (int32_t) ( (int64_t) n * t / threads );
+	*last = (int32_t) ( (int64_t) n * ( t + 1 ) / threads );
+}
+
+/* Caller's arrays into records: a SIMD pass over thread t's share checks every value once
+ * (streaming the caller's arrays), then each particle's record is written to its slot. */
+static int32_t pack( sere_pbd* pbd, const float* px, const float* py, const float* pz, const float* inv_m, int t,
+					 int threads )
+{
+	int32_t first, last, flags = 0;
+	share( pbd->particle_count, t, threads, &first, &last );
+#pragma omp simd reduction( | : flags )
+	for ( int32_t i = first; i < last; ++i )
+	{
+		int finite = ( fabsf( px[i] ) <= FLT_MAX ) & ( fabsf( py[i] ) <= FLT_MAX ) & ( fabsf( pz[i] ) <= FLT_MAX ) &
+					 ( fabsf( inv_m[i] ) <= FLT_MAX );
+		flags |= ( finite ? 0 : FLAG_NONFINITE ) | ( inv_m[i] < 0.0f ? FLAG_NEGATIVE_MASS : 0 );
+	}
+	float* packed = pbd->packed[0];
+	for ( int32_t i = first; i < last; ++i )
+	{
+		float* record = packed + 4 * pbd->slot[i];
+		record[0] = px[i], record[1] = py[i], record[2] = pz[i], record[3] = inv_m[i];
+	}
+	return flags;
+}
+
+static void unpack( const float* packed, const int32_t* slot, int32_t n, float* px, float* py, float* pz, int t,
+					int threads )
+{
+	int32_t first, last;
+	share( n, t, threads, &first, &last );
+	for ( int32_t i = first; i < last; ++i )
+	{
+		const float* record = packed + 4 * slot[i];
+		px[i] = record[0], py[i] = record[1], pz[i] = record[2];
+	}
+}
+
+/* Jacobi: every particle of thread t's share moves from its old record to a new one by
+ * ω/n_i · w_i Σ f_q (p_other − p_i) over its constraints q, summed in lane order (both ends
+ * of a constraint move along their own d, which is how −w_b f d reads from b's side). */
+static void jacobi_apply( sere_pbd* pbd, const float* old, float* next, float omega, int t, int threads )
+{
+	/* No claimed work list is active in this pass: ready them all for the next one. */
+	reset_counters( pbd, t, threads, PHASE_COUNT );
+	int32_t first, last;
+	share( pbd->particle_count, t, threads, &first, &last );
+	const float* factor = pbd->factor;
+	const int32_t* adjacency = pbd->adjacency;
+	for ( int32_t s = first; s < last; ++s )
+	{
+		const float* p = old + 4 * s;
+		float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+		for ( int32_t e = pbd->adjacency_offset[s]; e < pbd->adjacency_offset[s + 1]; ++e )
+		{
+			float f = factor[adjacency[2 * e]];
+			const float* o = old + adjacency[2 * e + 1];
+			sx += f * ( o[0] - p[0] ), sy += f * ( o[1] - p[1] ), sz += f * ( o[2] - p[2] );
+		}
+		float scale = ( omega * pbd->inv_degree[s] ) * p[3];
+		float* n = next + 4 * s;
+		n[0] = p[0] + scale * sx, n[1] = p[1] + scale * sy, n[2] = p[2] + scale * sz, n[3] = p[3];
+	}
+}
+
+static sere_status status_of( int32_t flags )
+{
+	if ( flags & FLAG_NEGATIVE_MASS )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	int bad = 0;
-#pragma omp parallel for simd schedule( static ) reduction( | : bad )
-	for ( int32_t i = 0; i < pbd->particle_count; ++i )
+	if ( flags & FLAG_ZERO_LENGTH )
 	{
-		bad |= !isfinite( px[i] ) || !isfinite( py[i] ) || !isfinite( pz[i] );
+		return SERE_ERR_GEOMETRY;
 	}
-	return bad ? SERE_ERR_NONFINITE : SERE_OK;
+	return flags & FLAG_NONFINITE ? SERE_ERR_NONFINITE : SERE_OK;
+}
+
+typedef enum solver
+{
+	SOLVER_GAUSS_SEIDEL,
+	SOLVER_JACOBI,
+	SOLVER_TOUCH,
+} solver;
+
+typedef struct solve_setup
+{
+	solver kind;
+	float k, alpha, omega, tolerance;
+	int32_t max_iterations;
+	int xpbd;
+} solve_setup;
+
+typedef struct solve_result
+{
+	int32_t iterations, flags;
+	float strain;
+	int converged;
+} solve_result;
+
+/* One thread's part of a Gauss–Seidel (or touch) sweep: the bands, then the even cuts, then
+ * the odd cuts, a barrier between; returns the combined result of the sweep. */
+static void sweep( sere_pbd* pbd, const block_context* ctx, block_mode mode, int xpbd, int t, int threads, int* parity,
+				   float* worst, int32_t* flags )
+{
+	run_phase( pbd, ctx, PHASE_BANDS, mode, xpbd, t, threads, worst, flags );
+	barrier_wait( pbd->barrier, threads );
+	run_phase( pbd, ctx, PHASE_EVEN_CUTS, mode, xpbd, t, threads, worst, flags );
+	barrier_wait( pbd->barrier, threads );
+	run_phase( pbd, ctx, PHASE_ODD_CUTS, mode, xpbd, t, threads, worst, flags );
+	exchange( pbd, t, threads, parity, worst, flags );
+}
+
+/* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. */
+static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
+								  int* parity )
+{
+	solve_result result = { 0, 0, 0.0f, 0 };
+	const block_mode mode = setup->kind == SOLVER_TOUCH ? MODE_TOUCH : MODE_GAUSS_SEIDEL;
+	while ( result.iterations < setup->max_iterations )
+	{
+		float worst = 0.0f;
+		int32_t flags = 0;
+		sweep( pbd, ctx, mode, setup->xpbd, t, threads, parity, &worst, &flags );
+		result.iterations += 1, result.flags = flags, result.strain = worst;
+		if ( flags != 0 || setup->kind == SOLVER_TOUCH )
+		{
+			result.converged = flags == 0;
+			break;
+		}
+		if ( worst < setup->tolerance )
+		{
+			/* Residuals were taken before each projection; check the positions left. */
+			worst = 0.0f;
+			run_phase( pbd, ctx, PHASE_ALL, MODE_MEASURE, setup->xpbd, t, threads, &worst, &flags );
+			exchange( pbd, t, threads, parity, &worst, &flags );
+			result.flags = flags;
+			if ( flags != 0 || worst < setup->tolerance )
+			{
+				result.strain = worst, result.converged = flags == 0;
+				break;
+			}
+		}
+	}
+	return result;
+}
+
+/* Jacobi sweeps, alternating the two record buffers; *front ends on the one holding the
+ * result. */
+static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup* setup, int t, int threads,
+							int* parity, int* front )
+{
+	solve_result result = { 0, 0, 0.0f, 0 };
+	while ( result.iterations < setup->max_iterations )
+	{
+		float worst = 0.0f;
+		int32_t flags = 0;
+		ctx->packed = pbd->packed[*front];
+		run_phase( pbd, ctx, PHASE_ALL, MODE_JACOBI, setup->xpbd, t, threads, &worst, &flags );
+		exchange( pbd, t, threads, parity, &worst, &flags );
+		result.iterations += 1, result.flags = flags, result.strain = worst;
+		/* Measured on the positions as they are: converged means exactly that. */
+		if ( flags != 0 || worst < setup->tolerance )
+		{
+			result.converged = flags == 0;
+			break;
+		}
+		jacobi_apply( pbd, pbd->packed[*front], pbd->packed[1 - *front], setup->omega, t, threads );
+		*front = 1 - *front;
+		barrier_wait( pbd->barrier, threads );
+	}
+	return result;
+}
+
+static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, const solve_setup* setup,
+						  sere_pbd_report* report )
+{
+	int requested = omp_get_max_threads();
+	requested = requested < 1 ? 1 : requested > MAX_THREADS ? MAX_THREADS : requested;
+	solve_result outcome = { 0, 0, 0.0f, 0 };
+	/* One parallel region per call; inside it every thread follows the same control flow,
+	 * driven by values combined in exchange(). */
+#pragma omp parallel num_threads( requested )
+	{
+		const int t = omp_get_thread_num(), threads = omp_get_num_threads();
+		block_context ctx = {
+			.packed = pbd->packed[0],
+			.ia = pbd->ia,
+			.ib = pbd->ib,
+			.rest = pbd->rest,
+			.lambda = pbd->lambda,
+			.factor = pbd->factor,
+			.k = setup->k,
+			.alpha = setup->alpha,
+			.one = pbd->one,
+		};
+		int parity = 0, front = 0;
+		float worst = 0.0f;
+		int32_t flags = pack( pbd, px, py, pz, inv_m, t, threads );
+		if ( setup->xpbd )
+		{
+			int32_t first, last;
+			share( pbd->lanes, t, threads, &first, &last );
+			memset( pbd->lambda + first, 0, sizeof( float ) * (size_t) ( last - first ) );
+		}
+		reset_counters( pbd, t, threads, PHASE_COUNT );
+		exchange( pbd, t, threads, &parity, &worst, &flags );
+		solve_result result = { 0, flags, 0.0f, 0 };
+		if ( flags == 0 )
+		{
+			result = setup->kind == SOLVER_JACOBI ? jacobi( pbd, &ctx, setup, t, threads, &parity, &front )
+												  : gauss_seidel( pbd, &ctx, setup, t, threads, &parity );
+		}
+		if ( result.flags == 0 )
+		{
+			unpack( pbd->packed[front], pbd->slot, pbd->particle_count, px, py, pz, t, threads );
+		}
+		if ( t == 0 )
+		{
+			outcome = result;
+		}
+	}
+	report->iterations = outcome.iterations;
+	report->max_strain = outcome.strain;
+	report->hit_cap = !outcome.converged;
+	return status_of( outcome.flags );
+}
+
+static sere_status check_call( const sere_pbd* pbd, const float* px, const float* py, const float* pz,
+							   const float* inv_m, const sere_pbd_params* params, sere_pbd_report* report )
+{
+	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || params == NULL || report == NULL ||
+		 !( params->stiffness >= 0.0f && params->stiffness <= 1.0f ) || !( params->tolerance > 0.0f ) ||
+		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( params->compliance > 0.0f )
+	{
+		float alpha = params->compliance / ( params->dt * params->dt );
+		if ( !( params->dt > 0.0f ) || !( alpha <= FLT_MAX ) )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
+	return pbd->rest_valid ? SERE_OK : SERE_ERR_GEOMETRY;
+}
+
+static solve_setup setup_of( const sere_pbd_params* params, solver kind )
+{
+	solve_setup setup = {
+		.kind = kind,
+		.k = params->stiffness,
+		.alpha = params->compliance > 0.0f ? params->compliance / ( params->dt * params->dt ) : 0.0f,
+		.omega = params->relaxation,
+		.tolerance = params->tolerance,
+		.max_iterations = params->max_iterations,
+		.xpbd = params->compliance > 0.0f,
+	};
+	return setup;
 }
 
 sere_status sere_pbd_project( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 							  const sere_pbd_params* params, sere_pbd_report* report )
 {
-	memset( report, 0, sizeof( *report ) );
-	sere_status status = check_params( pbd, px, py, pz, inv_m, params );
+	if ( report != NULL )
+	{
+		memset( report, 0, sizeof( *report ) );
+	}
+	sere_status status = check_call( pbd, px, py, pz, inv_m, params, report );
 	if ( status != SERE_OK )
 	{
 		return status;
 	}
-	const int32_t* restrict ca = pbd->a;
-	const int32_t* restrict cb = pbd->b;
-	const float* restrict rest = pbd->rest;
-	float* restrict lambda = pbd->lambda;
-	const int32_t colors = pbd->coloring.color_count;
-	const int32_t* offsets = pbd->coloring.offsets;
-	const float k = params->stiffness, tolerance = params->tolerance;
-	const int xpbd = params->compliance > 0.0f;
-	const float alpha = xpbd ? params->compliance / ( params->dt * params->dt ) : 0.0f;
-	if ( xpbd )
+	solve_setup setup = setup_of( params, SOLVER_GAUSS_SEIDEL );
+	if ( params->linear_stiffness )
 	{
-		memset( lambda, 0, sizeof( float ) * (size_t) pbd->count );
+		/* (1 − k')^n = 1 − k after n sweeps. */
+		setup.k = (float) ( 1.0 - pow( 1.0 - (double) params->stiffness, 1.0 / (double) params->max_iterations ) );
 	}
-	int32_t iterations = 0;
-	float worst = 0.0f, after = INFINITY;
-	int degenerate = 0;
-#pragma omp parallel
-	{
-		for ( int32_t it = 0; it < params->max_iterations; ++it )
-		{
-#pragma omp single
-			worst = 0.0f;
-			for ( int32_t c = 0; c < colors; ++c )
-			{
-				/* No two constraints of a color share a particle: the gathers and scatters of a
-				 * batch are independent, so the batch runs in parallel and in SIMD lanes. */
-#pragma omp for simd schedule( static ) reduction( max : worst ) reduction( | : degenerate )
-				for ( int32_t q = offsets[c]; q < offsets[c + 1]; ++q )
-				{
-					int32_t ia = ca[q], ib = cb[q];
-					float dx = px[ib] - px[ia], dy = py[ib] - py[ia], dz = pz[ib] - pz[ia];
-					float length = sqrtf( dx * dx + dy * dy + dz * dz );
-					float wa = inv_m[ia], wb = inv_m[ib];
-					float constraint = length - rest[q]; /* Eq. 13 */
-					float strain = fabsf( constraint ) / rest[q];
-					worst = strain > worst ? strain : worst;
-					degenerate |= !( length > 0.0f );
-					float wsum = wa + wb;
-					float s;
-					if ( xpbd )
-					{
-						float dl = ( -constraint - alpha * lambda[q] ) / ( wsum + alpha );
-						lambda[q] += dl;
-						s = length > 0.0f ? -dl / length : 0.0f;
-					}
-					else
-					{
-						s = ( wsum > 0.0f && length > 0.0f ) ? k * constraint / ( wsum * length ) : 0.0f;
-					}
-					px[ia] += wa * s * dx;
-					py[ia] += wa * s * dy;
-					pz[ia] += wa * s * dz;
-					px[ib] -= wb * s * dx;
-					py[ib] -= wb * s * dy;
-					pz[ib] -= wb * s * dz;
-				}
-			}
-			/* Every thread reads the same reduced worst after the last batch's barrier. A sweep
-			 * measures each constraint before projecting it, so later batches can undo a little of
-			 * the earlier ones: when the sweep says converged, measure the state it left. */
-			int stop = degenerate || !( worst == worst );
-			if ( !stop && worst < tolerance )
-			{
-#pragma omp barrier
-#pragma omp single
-				after = 0.0f;
-#pragma omp for simd schedule( static ) reduction( max : after )
-				for ( int32_t q = 0; q < pbd->count; ++q )
-				{
-					int32_t ia = ca[q], ib = cb[q];
-					float dx = px[ib] - px[ia], dy = py[ib] - py[ia], dz = pz[ib] - pz[ia];
-					float strain = fabsf( sqrtf( dx * dx + dy * dy + dz * dz ) - rest[q] ) / rest[q];
-					after = strain > after ? strain : after;
-				}
-				stop = after < tolerance;
-			}
-#pragma omp single nowait
-			iterations = it + 1;
-			if ( stop )
-			{
-				break;
-			}
-#pragma omp barrier
-		}
-	}
-	report->iterations = iterations;
-	report->max_strain = after < tolerance ? after : worst;
-	report->hit_cap = !( after < tolerance );
-	if ( degenerate )
-	{
-		return SERE_ERR_GEOMETRY;
-	}
-	return isfinite( worst ) ? SERE_OK : SERE_ERR_NONFINITE;
+	return solve( pbd, px, py, pz, inv_m, &setup, report );
 }
 
 sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 									 const sere_pbd_params* params, sere_pbd_report* report )
 {
-	memset( report, 0, sizeof( *report ) );
-	sere_status status = check_params( pbd, px, py, pz, inv_m, params );
+	if ( report != NULL )
+	{
+		memset( report, 0, sizeof( *report ) );
+	}
+	sere_status status = check_call( pbd, px, py, pz, inv_m, params, report );
 	if ( status != SERE_OK )
 	{
 		return status;
 	}
-	const int32_t n = pbd->particle_count;
-	float *jx = pbd->jx, *jy = pbd->jy, *jz = pbd->jz;
-	const float k = params->stiffness;
-	float worst = 0.0f;
-	int32_t it = 0;
-	int degenerate = 0;
-	for ( ; it < params->max_iterations; ++it )
+	if ( !( params->relaxation > 0.0f && params->relaxation < 2.0f ) || params->linear_stiffness )
 	{
-		worst = 0.0f;
-		/* Every particle gathers its constraints' corrections from the same old positions. */
-#pragma omp parallel for schedule( static ) reduction( max : worst ) reduction( | : degenerate )
-		for ( int32_t i = 0; i < n; ++i )
-		{
-			float sx = 0.0f, sy = 0.0f, sz = 0.0f;
-			int32_t used = pbd->adjacency_offset[i + 1] - pbd->adjacency_offset[i];
-			for ( int32_t e = pbd->adjacency_offset[i]; e < pbd->adjacency_offset[i + 1]; ++e )
-			{
-				int32_t q = pbd->adjacency[e];
-				int32_t other = pbd->a[q] == i ? pbd->b[q] : pbd->a[q];
-				float dx = px[other] - px[i], dy = py[other] - py[i], dz = pz[other] - pz[i];
-				float length = sqrtf( dx * dx + dy * dy + dz * dz );
-				float constraint = length - pbd->rest[q];
-				float strain = fabsf( constraint ) / pbd->rest[q];
-				worst = strain > worst ? strain : worst;
-				degenerate |= !( length > 0.0f );
-				float wsum = inv_m[i] + inv_m[other];
-				float s = ( wsum > 0.0f && length > 0.0f ) ? k * constraint / ( wsum * length ) : 0.0f;
-				sx += inv_m[i] * s * dx;
-				sy += inv_m[i] * s * dy;
-				sz += inv_m[i] * s * dz;
-			}
-			float inv_used = used > 0 ? 1.0f / (float) used : 0.0f;
-			jx[i] = px[i] + sx * inv_used;
-			jy[i] = py[i] + sy * inv_used;
-			jz[i] = pz[i] + sz * inv_used;
-		}
-		memcpy( px, jx, sizeof( float ) * (size_t) n );
-		memcpy( py, jy, sizeof( float ) * (size_t) n );
-		memcpy( pz, jz, sizeof( float ) * (size_t) n );
-		if ( worst < params->tolerance || degenerate || !isfinite( worst ) )
-		{
-			it += 1;
-			break;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
-	report->iterations = it;
-	report->max_strain = worst;
-	report->hit_cap = !( worst < params->tolerance );
-	if ( degenerate )
+	solve_setup setup = setup_of( params, SOLVER_JACOBI );
+	return solve( pbd, px, py, pz, inv_m, &setup, report );
+}
+
+sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m )
+{
+	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL )
 	{
-		return SERE_ERR_GEOMETRY;
+		return SERE_ERR_ARGUMENT;
 	}
-	return isfinite( worst ) ? SERE_OK : SERE_ERR_NONFINITE;
+	solve_setup setup = { .kind = SOLVER_TOUCH, .k = 1.0f, .omega = 1.0f, .tolerance = 1.0f, .max_iterations = 1 };
+	sere_pbd_report report;
+	return solve( pbd, px, py, pz, inv_m, &setup, &report );
 }
