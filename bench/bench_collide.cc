@@ -1,11 +1,13 @@
 // Self-collision (Sec. 5.3, Eq. 14): BVH refit and build, the per-vertex proximity query, the
-// push-out response and the Voronoi restore, on a maple-sized sheet (78 × 60 vertices, 9086
-// triangles, thickness 0.005 on a sheet of width 1: Table 1's maple has 4680 vertices and 8517
-// triangles), flat, crumpled and U-folded; beside the brute-force twin and Embree 3 doing the
-// same vertex–triangle proximity search with rtcPointQuery.
+// push-out response and the Voronoi restore, on the Table 1 maple (bench/fixture.h: 4680
+// triangle-layer vertices, 8517 triangles, the leaf about 1 across, collision thickness 0.005)
+// flat, crumpled by a smooth random displacement field, and U-folded onto itself; beside the
+// brute-force twin and Embree 3 doing the same vertex–triangle proximity search with
+// rtcPointQuery.
 
 #include "bvh.h"
 #include "collide.h"
+#include "fixture.h"
 #include "ref/collide_ref.h"
 
 #include <benchmark/benchmark.h>
@@ -25,7 +27,6 @@
 namespace
 {
 
-constexpr int kColumns = 78, kRows = 60;
 constexpr float kThickness = 0.005f;
 constexpr double kPi = 3.14159265358979323846;
 
@@ -59,12 +60,14 @@ template <typename T> struct Aligned
 	Aligned& operator=( const Aligned& ) = delete;
 };
 
-// The sheet with its triangle layer first and one Voronoi particle per triangle after it, as
-// sere_model lays them out, plus the BVH and collision workspace made once.
+// The Table 1 maple's triangle layer (4680 vertices, 8517 triangles, Morton-ordered by
+// sere_model) with one Voronoi particle per triangle after it, as sere_model lays them out, plus
+// the BVH and collision workspace made once.
 struct Scene
 {
-	int32_t n = kColumns * kRows;
-	int32_t f = 2 * ( kColumns - 1 ) * ( kRows - 1 );
+	const sere_model* model = sere_bench_model( SERE_BENCH_MAPLE );
+	int32_t n = model->triangle_particles;
+	int32_t f = model->triangle_count;
 	std::vector<int32_t> tri;
 	Aligned<float> x, y, z, vx, vy, vz, inv_m, h;
 	std::vector<float> x0, y0, z0;
@@ -72,67 +75,12 @@ struct Scene
 	sere_collide* collide = nullptr;
 
 	explicit Scene( Shape shape )
-		: tri( 3 * (size_t) f ), x( n + f ), y( n + f ), z( n + f ), vx( n + f ), vy( n + f ), vz( n + f ), inv_m( n ),
-		  h( f )
+		: tri( model->tri, model->tri + 3 * (size_t) f ), x( n + f ), y( n + f ), z( n + f ), vx( n + f ), vy( n + f ),
+		  vz( n + f ), inv_m( n ), h( f )
 	{
 		uint64_t state = 17;
-		const double cell = 1.0 / ( kColumns - 1 );
-		std::vector<double> u( n ), v( n );
-		for ( int j = 0; j < kRows; ++j )
-		{
-			for ( int i = 0; i < kColumns; ++i )
-			{
-				bool interior = i > 0 && j > 0 && i < kColumns - 1 && j < kRows - 1;
-				double jx = interior ? 0.2 * cell * ( unit( &state ) - 0.5 ) : 0.0;
-				double jy = interior ? 0.2 * cell * ( unit( &state ) - 0.5 ) : 0.0;
-				u[j * kColumns + i] = i * cell + jx;
-				v[j * kColumns + i] = j * cell + jy;
-			}
-		}
-		// vertices and triangles in Morton order of their grid cell, as sere_model orders them
-		// for locality (neighbouring vertices query the BVH together)
-		std::vector<int32_t> rank( n ), order( n );
-		for ( int32_t k = 0; k < n; ++k )
-		{
-			order[k] = k;
-		}
-		auto morton = []( uint32_t i, uint32_t j ) {
-			uint64_t code = 0;
-			for ( int b = 0; b < 16; ++b )
-			{
-				code |= (uint64_t) ( ( i >> b ) & 1u ) << ( 2 * b ) | (uint64_t) ( ( j >> b ) & 1u ) << ( 2 * b + 1 );
-			}
-			return code;
-		};
-		std::sort( order.begin(), order.end(), [&]( int32_t a, int32_t b ) {
-			return morton( a % kColumns, a / kColumns ) < morton( b % kColumns, b / kColumns );
-		} );
-		for ( int32_t k = 0; k < n; ++k )
-		{
-			rank[order[k]] = k;
-		}
-		std::vector<std::pair<uint64_t, std::array<int32_t, 3>>> cells;
-		for ( int j = 0; j < kRows - 1; ++j )
-		{
-			for ( int i = 0; i < kColumns - 1; ++i )
-			{
-				int32_t a = j * kColumns + i, b = a + 1, c = a + kColumns + 1, d = a + kColumns;
-				uint64_t code = morton( i, j ) << 1;
-				cells.push_back( { code, { rank[a], rank[b], rank[c] } } );
-				cells.push_back( { code | 1u, { rank[a], rank[c], rank[d] } } );
-			}
-		}
-		std::sort( cells.begin(), cells.end() );
-		for ( size_t t = 0; t < cells.size(); ++t )
-		{
-			std::memcpy( &tri[3 * t], cells[t].second.data(), 3 * sizeof( int32_t ) );
-		}
-		std::vector<double> gu( u ), gv( v );
-		for ( int32_t k = 0; k < n; ++k )
-		{
-			u[rank[k]] = gu[k];
-			v[rank[k]] = gv[k];
-		}
+		// the leaf in its plane (sere_model's u, v: the shape before any initial shaping)
+		std::vector<double> u( model->u, model->u + n ), v( model->v, model->v + n );
 		for ( int32_t k = 0; k < n; ++k )
 		{
 			x.data[k] = (float) u[k];
@@ -168,28 +116,29 @@ struct Scene
 		else if ( shape == kFolded )
 		{
 			// U-fold: two halves facing each other at 0.8 × thickness, joined by a half circle
-			double gap = 0.8 * kThickness, r = 0.5 * gap, a = 0.5 * ( 1.0 - kPi * r );
+			double lo = *std::min_element( u.begin(), u.end() ), hi = *std::max_element( u.begin(), u.end() );
+			double gap = 0.8 * kThickness, r = 0.5 * gap, a = 0.5 * ( hi - lo - kPi * r );
 			for ( int32_t k = 0; k < n; ++k )
 			{
-				double s = u[k];
+				double s = u[k] - lo;
 				if ( s <= a )
 				{
-					x.data[k] = (float) s, z.data[k] = 0.0f;
+					x.data[k] = (float) ( lo + s ), z.data[k] = 0.0f;
 				}
 				else if ( s <= a + kPi * r )
 				{
-					x.data[k] = (float) ( a + r * std::sin( ( s - a ) / r ) );
+					x.data[k] = (float) ( lo + a + r * std::sin( ( s - a ) / r ) );
 					z.data[k] = (float) ( r - r * std::cos( ( s - a ) / r ) );
 				}
 				else
 				{
-					x.data[k] = (float) ( a - ( s - a - kPi * r ) ), z.data[k] = (float) gap;
+					x.data[k] = (float) ( lo + a - ( s - a - kPi * r ) ), z.data[k] = (float) gap;
 				}
 			}
 		}
 		for ( int32_t k = 0; k < f; ++k )
 		{
-			h.data[k] = 0.01f;
+			h.data[k] = model->h[k];
 		}
 		sere_collide_restore_voronoi( x.data, y.data, z.data, vx.data, vy.data, vz.data, tri.data(), f, n, h.data );
 		x0.assign( x.data, x.data + n + f );
