@@ -104,6 +104,7 @@ static double leaf_area( const sere_model* model )
 typedef struct snapshot
 {
 	float *x, *y, *z, *rwc;
+	long long frame;
 	char caption[96];
 } snapshot;
 
@@ -445,7 +446,15 @@ int sere_cmd_run( int argc, char** argv )
 			}
 			if ( frame % shot_every == 0 || last )
 			{
+				/* The final state replaces a panel less than half a spacing before it, so the
+				 * sheet never ends on two near-identical pictures. */
+				if ( last && shot_count > 1 && 2 * ( frame - shots[shot_count - 1].frame ) < shot_every )
+				{
+					snapshot* previous = shots + --shot_count;
+					free( previous->x ), free( previous->y ), free( previous->z ), free( previous->rwc );
+				}
 				snapshot* s = shots + shot_count++;
+				s->frame = frame;
 				size_t bytes = sizeof( float ) * (size_t) n;
 				s->x = malloc( bytes ), s->y = malloc( bytes ), s->z = malloc( bytes ), s->rwc = malloc( bytes );
 				memcpy( s->x, model.p.x, bytes ), memcpy( s->y, model.p.y, bytes ), memcpy( s->z, model.p.z, bytes );
