@@ -78,6 +78,7 @@ sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 	p.pbd.stiffness = (float) s->stiffness;
 	p.pbd.tolerance = (float) s->strain_tolerance;
 	p.pbd.max_iterations = (int32_t) s->max_iterations;
+	p.pbd_stall = (float) s->pbd_stall;
 	p.collide.thickness = (float) s->collision_thickness;
 	p.collisions = s->collision_thickness > 0.0;
 	p.restore_measured = s->restore_measured != 0.0;
@@ -369,7 +370,8 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,cg_iterations_t,"
-				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,contacts,desiccated,osmosis_ms,dynamics_ms,collisions_ms,"
+				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,desiccated,osmosis_ms,dynamics_ms,"
+				  "collisions_ms,"
 				  "total_ms\n" );
 
 	signal( SIGINT, on_signal );
@@ -380,7 +382,7 @@ int sere_cmd_run( int argc, char** argv )
 	write_frame( out, 0, 0.0, &model, rwc, names, pvd_times, &written );
 	curve_t[0] = 0.0, curve_rwc[0] = 1.0, curve_area[0] = 1.0;
 	double sum_osmosis = 0, sum_dynamics = 0, sum_collisions = 0, sum_total = 0;
-	long long done = 0, cap_hits = 0;
+	long long done = 0, cap_hits = 0, stalls = 0;
 	int32_t max_pbd_iterations = 0;
 	sere_leaf_stats stats = { 0 };
 	sere_progress progress;
@@ -405,16 +407,17 @@ int sere_cmd_run( int argc, char** argv )
 			sum_osmosis += stats.osmosis_ms, sum_dynamics += stats.dynamics_ms;
 			sum_collisions += stats.collisions_ms, sum_total += stats.total_ms;
 			cap_hits += stats.pbd_hit_cap;
+			stalls += stats.pbd_stalled;
 			max_pbd_iterations = stats.pbd_iterations > max_pbd_iterations ? stats.pbd_iterations : max_pbd_iterations;
 			double area = leaf_area( &model );
 			curve_t[frame] = frame * params.dt;
 			curve_rwc[frame] = stats.relative_water;
 			curve_area[frame] = area / area0;
-			fprintf( csv, "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f\n", frame,
+			fprintf( csv, "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f\n", frame,
 					 frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
 					 stats.max_strain, stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations,
-					 stats.pbd_hit_cap, stats.contacts, stats.desiccated, stats.osmosis_ms, stats.dynamics_ms,
-					 stats.collisions_ms, stats.total_ms );
+					 stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts, stats.desiccated, stats.osmosis_ms,
+					 stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
 			sere_leaf_relative_water( sim, rwc );
 			if ( frame % every == 0 || frame == frames )
 			{
@@ -521,12 +524,13 @@ int sere_cmd_run( int argc, char** argv )
 			"  \"interrupted\": %s,\n  \"threads\": %d,\n  \"particles\": %d,\n  \"springs\": %d,\n"
 			"  \"triangles\": %d,\n  \"relative_water\": %.6g,\n  \"relative_area\": %.6g,\n"
 			"  \"osmosis_ms\": %.4f,\n  \"dynamics_ms\": %.4f,\n  \"collisions_ms\": %.4f,\n  \"total_ms\": %.4f,\n"
-			"  \"pbd_tolerance\": %g,\n  \"pbd_cap\": %d,\n  \"pbd_cap_hits\": %lld,\n  \"pbd_max_iterations\": %d,\n"
+			"  \"pbd_tolerance\": %g,\n  \"pbd_cap\": %d,\n  \"pbd_cap_hits\": %lld,\n  \"pbd_stalls\": %lld,\n"
+			"  \"pbd_max_iterations\": %d,\n"
 			"  \"parameters\": {\n",
 			name, preset ? preset : "default", done, frames, interrupted ? "true" : "false", bound, model.p.count,
 			model.s.count, model.triangle_count, done > 0 ? stats.relative_water : 1.0, curve_area[done > 0 ? done : 0],
 			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
-			sum_total / frames_done, params.strain_tolerance, (int) params.max_iterations, cap_hits,
+			sum_total / frames_done, params.strain_tolerance, (int) params.max_iterations, cap_hits, stalls,
 			max_pbd_iterations );
 		sere_params_print( &params, summary, "    \"" );
 		fprintf( summary, "    \"end\": 0\n  }\n}\n" );
@@ -539,8 +543,13 @@ int sere_cmd_run( int argc, char** argv )
 	printf( "  ms per frame: osmotic flow %.3f, dynamics %.3f, collisions %.3f, total %.3f\n",
 			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
 			sum_total / frames_done );
-	printf( "  PBD: lambda_C %g, cap %d, cap reached in %lld of %lld frames\n", params.strain_tolerance,
+	printf( "  PBD: lambda_C %g, cap %d, cap reached in %lld of %lld frames", params.strain_tolerance,
 			(int) params.max_iterations, cap_hits, done );
+	if ( params.pbd_stall > 0.0 )
+	{
+		printf( ", stalled (pbd_stall %g) in %lld", params.pbd_stall, stalls );
+	}
+	printf( "\n" );
 	printf( "  pictures: %s/drying.png and %s/curves.png\n  frames:   %s/frames (PLY, VTP; open %s/leaf.pvd in "
 			"ParaView)\n  stats:    %s/stats.csv, %s/summary.json\n",
 			out, out, out, out, out, out );

@@ -29,17 +29,20 @@ int sere_cmd_table1( int argc, char** argv )
 {
 	long long frames = 20, threads = 0;
 	int json = 0;
+	const char* sets[64];
+	int set_count = 0;
 	for ( int i = 1; i < argc; ++i )
 	{
 		char* end;
 		if ( strcmp( argv[i], "--help" ) == 0 || strcmp( argv[i], "-h" ) == 0 )
 		{
 			printf(
-				"usage: sere table1 [--frames N] [--threads T] [--json]\n\n"
+				"usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
 				"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
 				"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
 				"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
-				"with hwloc (T = 0: one per core).\n" );
+				"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
+				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n" );
 			return 0;
 		}
 		else if ( strcmp( argv[i], "--json" ) == 0 )
@@ -54,6 +57,15 @@ int sere_cmd_table1( int argc, char** argv )
 				fprintf( stderr, "sere table1: --frames takes a whole number from 1 to 1000000, not '%s'\n", argv[i] );
 				return 2;
 			}
+		}
+		else if ( strcmp( argv[i], "--set" ) == 0 && i + 1 < argc )
+		{
+			if ( set_count == (int) ( sizeof( sets ) / sizeof( sets[0] ) ) )
+			{
+				fprintf( stderr, "sere table1: at most %d --set options\n", set_count );
+				return 2;
+			}
+			sets[set_count++] = argv[++i];
 		}
 		else if ( strcmp( argv[i], "--threads" ) == 0 && i + 1 < argc )
 		{
@@ -87,7 +99,7 @@ int sere_cmd_table1( int argc, char** argv )
 		const table1_row* row = rows + k;
 		char err[1024], name[128];
 		sere_sim_params params = sere_sim_params_default();
-		if ( sere_params_load_preset( &params, row->preset, err, sizeof( err ) ) != 0 )
+		if ( sere_params_apply( &params, row->preset, sets, set_count, err, sizeof( err ) ) != 0 )
 		{
 			fprintf( stderr, "sere table1: %s\n", err );
 			return 1;
@@ -104,7 +116,7 @@ int sere_cmd_table1( int argc, char** argv )
 		sere_status status = sere_leaf_create( &model, &sim );
 		sere_leaf_params leaf = sere_run_leaf_params( &params );
 		double osmosis = 0, dynamics = 0, collisions = 0, total = 0;
-		long long cap_hits = 0;
+		long long cap_hits = 0, stalls = 0;
 		sere_leaf_stats stats;
 		for ( long long f = 0; f < frames && status == SERE_OK; ++f )
 		{
@@ -112,6 +124,7 @@ int sere_cmd_table1( int argc, char** argv )
 			osmosis += stats.osmosis_ms, dynamics += stats.dynamics_ms;
 			collisions += stats.collisions_ms, total += stats.total_ms;
 			cap_hits += stats.pbd_hit_cap;
+			stalls += stats.pbd_stalled;
 		}
 		if ( status != SERE_OK )
 		{
@@ -125,17 +138,22 @@ int sere_cmd_table1( int argc, char** argv )
 				"%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
 				"\"collisions_ms\": %.4f, \"total_ms\": %.4f, \"paper_osmosis_ms\": %.2f, \"paper_dynamics_ms\": %.2f, "
 				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
-				"\"pbd_cap_hits\": %lld, \"frames\": %lld, \"threads\": %d}",
+				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"frames\": %lld, \"threads\": %d}",
 				k ? ", " : "", row->leaf, model.p.count, model.s.count, osmosis, dynamics, collisions, total,
 				row->osmosis, row->dynamics, row->collisions, row->total, params.strain_tolerance,
-				(int) params.max_iterations, cap_hits, frames, bound );
+				(int) params.max_iterations, cap_hits, params.pbd_stall, stalls, frames, bound );
 		}
 		else
 		{
 			printf(
-				"%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld\n",
+				"%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld",
 				row->leaf, model.p.count, model.s.count, osmosis, row->osmosis, dynamics, row->dynamics, collisions,
 				row->collisions, total, row->total, row->total / total, cap_hits, frames );
+			if ( params.pbd_stall > 0.0 )
+			{
+				printf( ", stalled %lld/%lld", stalls, frames );
+			}
+			printf( "\n" );
 		}
 		sere_leaf_destroy( sim );
 		sere_model_destroy( &model );
@@ -148,8 +166,17 @@ int sere_cmd_table1( int argc, char** argv )
 	{
 		sere_sim_params defaults = sere_sim_params_default();
 		printf( "\neach cell: ours / paper. PBD stops when max |C/l| < %g or after %g sweeps (presets); a frame that\n"
-				"stops at the cap counts as a cap hit.\n",
+				"stops at the cap counts as a cap hit.",
 				defaults.strain_tolerance, defaults.max_iterations );
+		if ( set_count > 0 )
+		{
+			printf( " Overrides:" );
+			for ( int k = 0; k < set_count; ++k )
+			{
+				printf( " %s", sets[k] );
+			}
+		}
+		printf( "\n" );
 	}
 	return 0;
 }

@@ -22,6 +22,7 @@ typedef struct sere_sim_params
 	double stiffness;			/* PBD k ∈ [0, 1] */
 	double strain_tolerance;	/* λ_C: projection stops when max |C/l| < λ_C */
 	double max_iterations;		/* PBD iteration cap */
+	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
 	double collision_thickness; /* vertex–triangle proximity distance, leaf units */
 	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	double conservative;		/* osmosis: 0 = the paper's Eq. 8, 1 = conservative weights */

@@ -35,6 +35,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.collisions = 1,
 		.restore_measured = 1,
 		.soften = 0,
+		.pbd_stall = 0.0f,
 	};
 	params.osmosis.tolerance = 1e-8;
 	return params;
@@ -134,6 +135,47 @@ static double layer_water( const double* w, int32_t first, int32_t count )
 	return sum;
 }
 
+/* The projection of lines 17–22 with the optional stall rule (sere_leaf_params.pbd_stall): the
+ * cap's sweeps run in chunks of SERE_LEAF_STALL_WINDOW, and the frame stops when a chunk ends
+ * with max |C/l| (of its last sweep) above (1 − stall) times the previous chunk's. Gauss–Seidel
+ * state carries over between chunks, so without a stall the positions equal one call's. */
+static sere_status project( sere_pbd* pbd, sere_particles* p, const sere_pbd_params* params, float stall,
+							sere_pbd_report* report, int* stalled )
+{
+	*stalled = 0;
+	if ( stall <= 0.0f || params->compliance > 0.0f || params->linear_stiffness )
+	{
+		return sere_pbd_project( pbd, p->px, p->py, p->pz, p->inv_m, params, report );
+	}
+	sere_pbd_params chunk = *params;
+	int32_t done = 0;
+	float previous = INFINITY;
+	while ( done < params->max_iterations )
+	{
+		int32_t left = params->max_iterations - done;
+		chunk.max_iterations = left < SERE_LEAF_STALL_WINDOW ? left : SERE_LEAF_STALL_WINDOW;
+		sere_status status = sere_pbd_project( pbd, p->px, p->py, p->pz, p->inv_m, &chunk, report );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
+		done += report->iterations;
+		if ( !report->hit_cap )
+		{
+			break;
+		}
+		if ( report->max_strain > ( 1.0f - stall ) * previous )
+		{
+			*stalled = done < params->max_iterations;
+			break;
+		}
+		previous = report->max_strain;
+	}
+	report->iterations = done;
+	report->hit_cap = report->hit_cap && !*stalled;
+	return SERE_OK;
+}
+
 sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
 {
 	memset( stats, 0, sizeof( *stats ) );
@@ -213,7 +255,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		pbd.stiffness = (float) ( params->pbd.stiffness * ( 0.25 + 0.75 * fmin( 1.0, rwc ) ) );
 	}
 	sere_pbd_report pbd_report;
-	status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &pbd, &pbd_report );
+	status = project( sim->pbd, p, &pbd, params->pbd_stall, &pbd_report, &stats->pbd_stalled );
 	if ( status != SERE_OK )
 	{
 		return status;

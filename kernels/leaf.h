@@ -15,6 +15,9 @@ extern "C"
 {
 #endif
 
+/* Sweeps per stall check of sere_leaf_params.pbd_stall. */
+#define SERE_LEAF_STALL_WINDOW 10
+
 typedef struct sere_leaf_params
 {
 	float dt;
@@ -30,6 +33,12 @@ typedef struct sere_leaf_params
 	int collisions;		  /* run the self-collision pass */
 	int restore_measured; /* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	int soften;			  /* Sec. 7: stiffness scaled by relative water content */
+	/* 0 (the paper): project until max |C/l| < λ_C or the cap. s > 0: also stop when a window of
+	 * SERE_LEAF_STALL_WINDOW sweeps lowered max |C/l| by less than the fraction s. Once the
+	 * shrunk layers disagree (their rest lengths admit no flat or bent shape that meets them all)
+	 * the residual has a floor above λ_C, and sweeps past the stall only creep toward it. Needs
+	 * compliance 0 and linear_stiffness 0 (it projects in chunks of the window). */
+	float pbd_stall;
 } sere_leaf_params;
 
 sere_leaf_params sere_leaf_params_default( void );
@@ -42,6 +51,7 @@ typedef struct sere_leaf_stats
 	int32_t pbd_iterations;
 	float max_strain; /* max |C/l| after projection */
 	int pbd_hit_cap;
+	int pbd_stalled; /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
 	int32_t contacts;
 	int desiccated; /* a layer ran dry: flow and shrinkage have stopped (Sec. 6) */
 	/* Table 1's breakdown, milliseconds of wall time */
