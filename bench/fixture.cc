@@ -1,5 +1,7 @@
 #include "fixture.h"
 
+#include "build.h"
+#include "leaf.h"
 #include "leafload.h"
 
 #include <cstdio>
@@ -12,16 +14,19 @@ struct table1_leaf
 	const char* path;
 	long long particles;
 	long long springs;
+	const char* preset;
 };
 
 const table1_leaf leaves[3] = {
-	{ "data/leaves/maple.leaf", 13197, 51102 },
-	{ "data/leaves/plane.leaf", 15069, 59550 },
-	{ "data/leaves/wisteria.leaf", 12750, 50436 },
+	{ "data/leaves/maple.leaf", 13197, 51102, "maple-green" },
+	{ "data/leaves/plane.leaf", 15069, 59550, "plane-tree" },
+	{ "data/leaves/wisteria.leaf", 12750, 50436, "wisteria" },
 };
 
 sere_model models[3];
 bool built[3];
+sere_model dried[3];
+int dried_frames[3];
 } // namespace
 
 const sere_model* sere_bench_model( sere_bench_leaf which )
@@ -54,4 +59,46 @@ const sere_model* sere_bench_model( sere_bench_leaf which )
 	}
 	built[k] = true;
 	return &models[k];
+}
+
+const sere_model* sere_bench_dried_model( sere_bench_leaf which, int frames )
+{
+	int k = static_cast<int>( which );
+	if ( dried_frames[k] == frames )
+	{
+		return &dried[k];
+	}
+	if ( dried_frames[k] != 0 )
+	{
+		sere_model_destroy( &dried[k] );
+		dried_frames[k] = 0;
+	}
+	std::fprintf( stderr, "sere-bench: drying %s for %d frames (preset %s) for the dried scenes\n", leaves[k].path,
+				  frames, leaves[k].preset );
+	char err[1024], name[128];
+	sere_sim_params params = sere_sim_params_default();
+	sere_build_report report;
+	if ( sere_params_load_preset( &params, leaves[k].preset, err, sizeof( err ) ) != 0 ||
+		 sere_harness_build( leaves[k].path, leaves[k].particles, leaves[k].springs, 0, &params, &dried[k], &report,
+							 name, sizeof( name ), err, sizeof( err ) ) != 0 )
+	{
+		std::fprintf( stderr, "sere-bench: %s (run from the repository root)\n", err );
+		std::exit( 1 );
+	}
+	sere_leaf_sim* sim = nullptr;
+	sere_status status = sere_leaf_create( &dried[k], &sim );
+	sere_leaf_params leaf = sere_run_leaf_params( &params );
+	sere_leaf_stats stats;
+	for ( int f = 0; f < frames && status == SERE_OK; ++f )
+	{
+		status = sere_leaf_step( sim, &leaf, &stats );
+	}
+	sere_leaf_destroy( sim );
+	if ( status != SERE_OK )
+	{
+		std::fprintf( stderr, "sere-bench: drying %s: %s\n", leaves[k].path, sere_status_text( status ) );
+		std::exit( 1 );
+	}
+	dried_frames[k] = frames;
+	return &dried[k];
 }

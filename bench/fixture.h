@@ -15,3 +15,8 @@ enum sere_bench_leaf
 // A model at rest (never modified by callers: copy what you deform). Aborts the benchmark
 // binary with a message if the leaf files cannot be read.
 const sere_model* sere_bench_model( sere_bench_leaf leaf );
+
+// The same leaf after `frames` frames of Algorithm 1 with its Table 1 preset (maple-green,
+// plane-tree, wisteria): a shrunk, curled and crumpled state for the collision benchmarks. Built
+// once per process (the maple's 400 frames take a few seconds) and never modified by callers.
+const sere_model* sere_bench_dried_model( sere_bench_leaf leaf, int frames );

@@ -1,13 +1,26 @@
 /* sere harness — a model from a leaf path and the command-line counts, shared by commands. */
 #pragma once
 
+#include "leaf.h"
 #include "model.h"
 #include "params.h"
 
 #include <stddef.h>
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
 
 /* particles/springs (both >= 0) ask for exact counts; otherwise points triangle-layer points
  * with B matched to the outline. Returns 0, or -1 with one line in err. */
 int sere_harness_build( const char* path, long long particles, long long springs, long long points,
 						const sere_sim_params* params, sere_model* model, sere_build_report* report, char* name,
 						size_t name_size, char* err, size_t err_size );
+
+/* The leaf-kernel parameters a set of named parameters stands for (harness/cmd_run.c). */
+sere_leaf_params sere_run_leaf_params( const sere_sim_params* s );
+
+#ifdef __cplusplus
+}
+#endif

@@ -23,8 +23,6 @@ static const table1_row rows[3] = {
 	{ "wisteria", "data/leaves/wisteria.leaf", "wisteria", 12750, 50436, 16.26, 1499.41, 23.16, 1538.83 },
 };
 
-sere_leaf_params sere_run_leaf_params( const sere_sim_params* s );
-
 int sere_cmd_table1( int argc, char** argv )
 {
 	long long frames = 20, threads = 0;

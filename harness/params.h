@@ -6,6 +6,11 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
 typedef struct sere_sim_params
 {
 	sere_layer_params layer; /* h_vein, h_surf, omega_*, D, m_min, m_max, mu0 */
@@ -54,3 +59,7 @@ void sere_params_describe( FILE* f );
 /* Finds a data file (relative to SERE_DATA, ./data, or SERE_DATA_DIR compiled in); writes the
  * full path and returns 0, or -1 when it does not exist. */
 int sere_data_path( const char* relative, char* path, size_t path_size );
+
+#ifdef __cplusplus
+}
+#endif
