@@ -52,6 +52,11 @@ struct sere_collide
 
 	/* Per touched vertex: displacement summed over the iterations, for the velocity update. */
 	float *acc_x, *acc_y, *acc_z;
+
+	/* The mesh's edges as sorted neighbour lists: vertex i's neighbours are
+	 * neighbor[neighbor_offset[i] .. neighbor_offset[i + 1]). */
+	int32_t* neighbor_offset; /* vertex_count + 1 */
+	int32_t* neighbor;
 };
 
 sere_collide_params sere_collide_params_default( void )
@@ -230,8 +235,8 @@ static void collide_free( sere_collide* c )
 	{
 		sere_free( *slot[i] );
 	}
-	void* arrays[] = { c->block_thread, c->block_start, c->block_found, c->entry_offset, c->entry_cursor,
-					   c->touched,		c->acc_x,		c->acc_y,		c->acc_z };
+	void* arrays[] = { c->block_thread, c->block_start, c->block_found, c->entry_offset,	c->entry_cursor, c->touched,
+					   c->acc_x,		c->acc_y,		c->acc_z,		c->neighbor_offset, c->neighbor };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -264,6 +269,93 @@ static sere_status alloc_contacts( sere_collide* c, int32_t capacity )
 	c->contact_count = 0;
 	c->touched_count = 0;
 	return SERE_OK;
+}
+
+/* Builds the sorted neighbour lists of the mesh's edges (each edge appears in two triangles at
+ * most, so a vertex has at most 2 × its triangle count neighbours before duplicates go). */
+static bool build_neighbors( sere_collide* c, const int32_t* tri, int32_t triangles )
+{
+	int32_t n = c->vertex_count;
+	c->neighbor_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	c->neighbor = sere_alloc( sizeof( int32_t ) * ( 6 * (size_t) triangles + 1 ) );
+	if ( c->neighbor_offset == NULL || c->neighbor == NULL )
+	{
+		return false;
+	}
+	int32_t* offset = c->neighbor_offset;
+	memset( offset, 0, sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	for ( int32_t t = 0; t < triangles; ++t )
+	{
+		for ( int r = 0; r < 3; ++r )
+		{
+			offset[tri[3 * t + r] + 1] += 2;
+		}
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		offset[i + 1] += offset[i];
+	}
+	/* fill each list, then sort it and drop repeats in place */
+	int32_t* cursor = c->entry_cursor;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		cursor[i] = offset[i];
+	}
+	for ( int32_t t = 0; t < triangles; ++t )
+	{
+		const int32_t* v = tri + 3 * (size_t) t;
+		for ( int r = 0; r < 3; ++r )
+		{
+			int32_t a = v[r];
+			c->neighbor[cursor[a]++] = v[( r + 1 ) % 3];
+			c->neighbor[cursor[a]++] = v[( r + 2 ) % 3];
+		}
+	}
+	int32_t write = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		int32_t begin = offset[i], end = offset[i + 1];
+		offset[i] = write;
+		/* insertion sort: lists are a dozen entries long */
+		for ( int32_t k = begin + 1; k < end; ++k )
+		{
+			int32_t value = c->neighbor[k], j = k;
+			while ( j > begin && c->neighbor[j - 1] > value )
+			{
+				c->neighbor[j] = c->neighbor[j - 1];
+				--j;
+			}
+			c->neighbor[j] = value;
+		}
+		for ( int32_t k = begin; k < end; ++k )
+		{
+			if ( write == offset[i] || c->neighbor[write - 1] != c->neighbor[k] )
+			{
+				c->neighbor[write++] = c->neighbor[k];
+			}
+		}
+	}
+	offset[n] = write;
+	return true;
+}
+
+/* Whether vertices a and b share an edge (binary search in a's list). */
+static inline bool adjacent( const int32_t* offset, const int32_t* neighbor, int32_t a, int32_t b )
+{
+	int32_t lo = offset[a], hi = offset[a + 1];
+	while ( lo < hi )
+	{
+		int32_t mid = ( lo + hi ) >> 1;
+		if ( neighbor[mid] < b )
+		{
+			lo = mid + 1;
+		}
+		else
+		{
+			hi = mid;
+		}
+	}
+	return lo < offset[a + 1] && neighbor[lo] == b;
 }
 
 sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out )
@@ -303,6 +395,7 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->acc_z = sere_alloc( sizeof( float ) * vn );
 	bool ok = c->block_thread && c->block_start && c->block_found && c->entry_offset && c->entry_cursor && c->touched &&
 			  c->acc_x && c->acc_y && c->acc_z;
+	ok = ok && build_neighbors( c, sere_bvh_triangles( bvh, &triangles ), triangles );
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
 		collide_free( c );
@@ -348,6 +441,7 @@ typedef struct detect_context
 {
 	const float *x, *y, *z;
 	const int32_t* tri;
+	const int32_t *neighbor_offset, *neighbor;
 	float px[SERE_BVH_WIDTH], py[SERE_BVH_WIDTH], pz[SERE_BVH_WIDTH];
 	int32_t first; /* the vertex of lane 0 */
 	float h2;
@@ -380,7 +474,13 @@ static void detect_visit( void* context, int32_t t, uint32_t lanes )
 		int32_t vertex = c->first + k;
 		float p[3] = { c->px[k], c->py[k], c->pz[k] }, w[3], q[3];
 		float d2 = closest_point( p, a, b, cc, w, q );
-		if ( !( d2 < c->h2 ) )
+		/* A vertex sharing an edge with a corner lies in the sheet right beside the triangle:
+		 * where edges are shorter than the thickness (fine outline and vein sampling, a shrunk
+		 * blade) it is closer than the thickness without any collision, and a push along the
+		 * normal would only buckle the sheet. */
+		if ( !( d2 < c->h2 ) || adjacent( c->neighbor_offset, c->neighbor, vertex, v[0] ) ||
+			 adjacent( c->neighbor_offset, c->neighbor, vertex, v[1] ) ||
+			 adjacent( c->neighbor_offset, c->neighbor, vertex, v[2] ) )
 		{
 			continue;
 		}
@@ -474,6 +574,8 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			.y = y,
 			.z = z,
 			.tri = tri,
+			.neighbor_offset = collide->neighbor_offset,
+			.neighbor = collide->neighbor,
 			.h2 = h2,
 			.buffer = collide->thread_contacts + (size_t) tid * (size_t) collide->capacity,
 			.capacity = collide->capacity,

@@ -10,7 +10,8 @@ extern "C"
 {
 #endif
 
-/* A contact: vertex closer than the thickness to a triangle it is not a corner of. The closest
+/* A contact: vertex closer than the thickness to a triangle it is not a corner of nor joined by
+ * an edge to a corner of (such a vertex sits in the sheet beside the triangle). The closest
  * point on the triangle is u a + v b + w c (barycentric, u + v + w = 1). side is +1 when the
  * vertex lies on the side the triangle's counter-clockwise normal n = (b − a) × (c − a) points to,
  * −1 otherwise, measured at detection as the sign of (p − closest) · n (+1 when zero); the
@@ -70,13 +71,12 @@ void sere_collide_destroy( sere_collide* collide );
 /* Grows the contact capacity (allocates: call it between frames after SERE_ERR_CAPACITY). */
 sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity );
 
-/* Every (vertex, triangle) pair with the vertex not a corner of the triangle and their distance
- * (sere_closest_point_triangle) below thickness. The BVH must be refit to these positions.
- * Eight consecutive vertices query it together (sere_bvh_query_group), so number the vertices
- * in a spatially coherent order (sere_model uses Morton order); blocks of vertices run in
- * parallel and the list keeps block order, then the tree's order within a group: it is the
- * same for every thread count. *contact_count gets the number found; SERE_ERR_CAPACITY when
- * it exceeds the capacity (the contacts are then dropped), SERE_ERR_NONFINITE for NaN or
+/* Every (vertex, triangle) pair with the vertex neither a corner of the triangle nor joined by a
+ * mesh edge to one, and their distance (sere_closest_point_triangle) below thickness. The BVH must be refit to these
+ * positions. Eight consecutive vertices query it together (sere_bvh_query_group), so number the vertices in a spatially
+ * coherent order (sere_model uses Morton order); blocks of vertices run in parallel and the list keeps block order,
+ * then the tree's order within a group: it is the same for every thread count. *contact_count gets the number found;
+ * SERE_ERR_CAPACITY when it exceeds the capacity (the contacts are then dropped), SERE_ERR_NONFINITE for NaN or
  * infinite positions. */
 sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 								 const float* z, float thickness, int32_t* contact_count );

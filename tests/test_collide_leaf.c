@@ -41,6 +41,11 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 		float* x = m.p.x;
 		float* y = m.p.y;
 		float* z = m.p.z;
+		float umin = m.u[0], umax = m.u[0];
+		for ( int32_t i = 1; i < n; ++i )
+		{
+			umin = fminf( umin, m.u[i] ), umax = fmaxf( umax, m.u[i] );
+		}
 		for ( int shape = 0; shape < 3; ++shape )
 		{
 			/* 0: gentle waves; 1: a roll about the midrib; 2: a crumple with vertex noise */
@@ -51,8 +56,11 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 					x[i] = u, y[i] = v, z[i] = 0.03f * sinf( 9.0f * u ) * cosf( 7.0f * v );
 				else if ( shape == 1 )
 				{
-					float angle = 5.5f * u; /* rolls the blade around the y axis */
-					x[i] = 0.18f * sinf( angle ), y[i] = v, z[i] = 0.18f * ( 1.0f - cosf( angle ) );
+					/* rolls the blade two turns around the y axis on a spiral whose turns lie
+					 * 0.006 apart, closer than the thickness: layers of the roll touch */
+					float angle = 4.0f * 3.14159265f * ( u - umin ) / ( umax - umin );
+					float r = 0.05f + 0.006f * angle / ( 2.0f * 3.14159265f );
+					x[i] = r * sinf( angle ), y[i] = v, z[i] = -r * cosf( angle );
 				}
 				else
 				{

@@ -4,6 +4,24 @@
 
 #include <math.h>
 
+/* Whether vertex i shares an edge with a corner of the triangle v: some triangle holds both. */
+static int near_corner( const int32_t* tri, int32_t triangle_count, int32_t i, const int32_t* v )
+{
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* u = tri + 3 * (size_t) t;
+		int has_i = u[0] == i || u[1] == i || u[2] == i;
+		for ( int r = 0; r < 3 && has_i; ++r )
+		{
+			if ( u[0] == v[r] || u[1] == v[r] || u[2] == v[r] )
+			{
+				return 1;
+			}
+		}
+	}
+	return 0;
+}
+
 int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, int32_t vertex_count,
 								const int32_t* tri, int32_t triangle_count, float thickness, int32_t* vertex,
 								int32_t* triangle, int64_t capacity )
@@ -24,7 +42,7 @@ int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, 
 			float b[3] = { x[v[1]], y[v[1]], z[v[1]] };
 			float c[3] = { x[v[2]], y[v[2]], z[v[2]] };
 			float w[3];
-			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 )
+			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 && !near_corner( tri, triangle_count, i, v ) )
 			{
 				if ( count < capacity )
 				{
