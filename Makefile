@@ -12,8 +12,8 @@ CC     := gcc
 CXX    := g++
 
 LEAF   ?= data/leaves/maple.leaf
-PRESET ?= maple-green
-FRAMES ?= 3000
+PRESET ?= maple-red
+FRAMES ?= 8000
 POINTS ?= 1000
 OUT    ?= out/run
 
