@@ -82,6 +82,7 @@ sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 	p.collide.thickness = (float) s->collision_thickness;
 	p.collisions = s->collision_thickness > 0.0;
 	p.restore_measured = s->restore_measured != 0.0;
+	p.restore_conserving = s->restore_conserving != 0.0;
 	p.soften = s->soften != 0.0;
 	return p;
 }

@@ -30,6 +30,7 @@ typedef struct sere_sim_params
 	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
 	double collision_thickness; /* vertex–triangle proximity distance, leaf units */
 	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
+	double restore_conserving;	/* Eq. 14 as written (0) or momentum-conserving (1) */
 	double conservative;		/* osmosis: 0 = the paper's Eq. 8, 1 = conservative weights */
 	double soften;				/* Sec. 7: stiffness scaled by relative water content (1) or constant (0) */
 	double crease;				/* Sec. 3.1 initial shaping: Voronoi vein springs shortened by this fraction */

@@ -36,6 +36,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.restore_measured = 1,
 		.soften = 0,
 		.pbd_stall = 0.0f,
+		.restore_conserving = 0,
 	};
 	params.osmosis.tolerance = 1e-8;
 	return params;
@@ -310,8 +311,11 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		}
 		stats->contacts = collide_stats.contacts;
 	}
-	status = sere_collide_restore_voronoi( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n,
-										   params->restore_measured ? sim->h_hat : model->h );
+	const float* h = params->restore_measured ? sim->h_hat : model->h;
+	status = params->restore_conserving
+				 ? sere_collide_restore_voronoi_conserving( p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m, model->tri,
+															f, n, h )
+				 : sere_collide_restore_voronoi( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n, h );
 	if ( status != SERE_OK )
 	{
 		return status;

@@ -32,7 +32,10 @@ typedef struct sere_leaf_params
 	sere_collide_params collide;
 	int collisions;		  /* run the self-collision pass */
 	int restore_measured; /* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
-	int soften;			  /* Sec. 7: stiffness scaled by relative water content */
+	/* Eq. 14 as written (0) or sharing each correction with the triangle's corners so that no
+	 * momentum is created (1, sere_collide_restore_voronoi_conserving) */
+	int restore_conserving;
+	int soften; /* Sec. 7: stiffness scaled by relative water content */
 	/* 0 (the paper): project until max |C/l| < λ_C or the cap. s > 0: also stop when a window of
 	 * SERE_LEAF_STALL_WINDOW sweeps lowered max |C/l| by less than the fraction s. Once the
 	 * shrunk layers disagree (their rest lengths admit no flat or bent shape that meets them all)

@@ -788,3 +788,150 @@ Test( collide, neighbours_in_the_sheet_are_not_contacts )
 	sere_bvh_destroy( bvh );
 	collide_sheet_free( &s );
 }
+
+/* A sheet with Voronoi particles off their places, random velocities and masses in [0.5, 2]. */
+static void conserving_sheet( collide_sheet* s, uint64_t seed )
+{
+	collide_sheet_make( s, 36, 24, seed );
+	int32_t n = s->n, f = s->triangles;
+	uint64_t state = seed;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		s->z[i] = (float) ( 0.05 * sin( 7.0 * s->u[i] + 3.0 * s->v[i] ) );
+	}
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		const int32_t* v = s->tri + 3 * t;
+		s->x[n + t] =
+			( s->x[v[0]] + s->x[v[1]] + s->x[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
+		s->y[n + t] =
+			( s->y[v[0]] + s->y[v[1]] + s->y[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
+		s->z[n + t] = ( s->z[v[0]] + s->z[v[1]] + s->z[v[2]] ) / 3.0f + (float) ( 0.02 * collide_unit( &state ) );
+	}
+	for ( int32_t i = 0; i < n + f; ++i )
+	{
+		s->vx[i] = (float) ( collide_unit( &state ) - 0.5 );
+		s->vy[i] = (float) ( collide_unit( &state ) - 0.5 );
+		s->vz[i] = (float) ( collide_unit( &state ) - 0.5 );
+		s->inv_m[i] = (float) ( 1.0 / ( 0.5 + 1.5 * collide_unit( &state ) ) );
+	}
+}
+
+static void centre_and_momentum( const collide_sheet* s, int32_t count, double out[6] )
+{
+	double mass = 0.0;
+	for ( int k = 0; k < 6; ++k )
+	{
+		out[k] = 0.0;
+	}
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		double m = 1.0 / s->inv_m[i];
+		mass += m;
+		out[0] += m * s->x[i], out[1] += m * s->y[i], out[2] += m * s->z[i];
+		out[3] += m * s->vx[i], out[4] += m * s->vy[i], out[5] += m * s->vz[i];
+	}
+	for ( int k = 0; k < 6; ++k )
+	{
+		out[k] /= mass;
+	}
+}
+
+Test( collide, conserving_restore_keeps_momentum_and_eq14 )
+{
+	collide_sheet s;
+	conserving_sheet( &s, 21 );
+	int32_t n = s.n, f = s.triangles;
+	float* h = malloc( sizeof( float ) * (size_t) f );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		h[t] = t % 3 == 0 ? -0.06f : 0.01f;
+	}
+	double before[6], after[6];
+	centre_and_momentum( &s, n + f, before );
+	cr_assert_eq( sere_collide_restore_voronoi_conserving( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, s.tri, f, n, h ),
+				  SERE_OK );
+	centre_and_momentum( &s, n + f, after );
+	/* Eq. 14 alone moves the centre of mass by ~3e-3 here (offsets up to 0.06 on a third of the
+	 * particles); what is left is float rounding of unit-size coordinates and velocities. */
+	for ( int k = 0; k < 6; ++k )
+	{
+		cr_expect( fabs( after[k] - before[k] ) < 1e-6, "%s %d moved by %g", k < 3 ? "centre" : "momentum", k % 3,
+				   after[k] - before[k] );
+	}
+	/* Eq. 14's relations hold: each particle on its triangle's normal line at h, velocity the
+	 * corner mean (both translation-invariant; float tolerance as in the restore test). */
+	float* again = malloc( sizeof( float ) * (size_t) f );
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again ), SERE_OK );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		const int32_t* v = s.tri + 3 * t;
+		cr_assert( fabsf( again[t] - h[t] ) < 1e-6f, "%d measures %g, restored %g", t, again[t], h[t] );
+		float mean = ( s.vz[v[0]] + s.vz[v[1]] + s.vz[v[2]] ) / 3.0f;
+		cr_assert( fabsf( s.vz[n + t] - mean ) < 1e-6f, "velocity %d is not the corner mean", t );
+	}
+	/* the uncorrected restore really does move the centre: the test above could fail */
+	collide_sheet paper;
+	conserving_sheet( &paper, 21 );
+	cr_assert_eq(
+		sere_collide_restore_voronoi( paper.x, paper.y, paper.z, paper.vx, paper.vy, paper.vz, paper.tri, f, n, h ),
+		SERE_OK );
+	centre_and_momentum( &paper, n + f, after );
+	cr_assert_gt( fabs( after[2] - before[2] ), 1e-4, "Eq. 14 as written moved the centre by only %g",
+				  after[2] - before[2] );
+	free( again );
+	free( h );
+	collide_sheet_free( &paper );
+	collide_sheet_free( &s );
+}
+
+Test( collide, conserving_restore_is_eq14_when_pinned_and_deterministic )
+{
+	float* result[2];
+	for ( int threads = 1; threads <= 2; ++threads )
+	{
+		omp_set_num_threads( threads );
+		collide_sheet s;
+		conserving_sheet( &s, 33 );
+		int32_t n = s.n, f = s.triangles;
+		float* h = malloc( sizeof( float ) * (size_t) f );
+		for ( int32_t t = 0; t < f; ++t )
+		{
+			h[t] = 0.01f;
+		}
+		cr_assert_eq(
+			sere_collide_restore_voronoi_conserving( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, s.tri, f, n, h ),
+			SERE_OK );
+		result[threads - 1] = malloc( sizeof( float ) * 3 * (size_t) ( n + f ) );
+		memcpy( result[threads - 1], s.x, sizeof( float ) * (size_t) ( n + f ) );
+		memcpy( result[threads - 1] + n + f, s.y, sizeof( float ) * (size_t) ( n + f ) );
+		memcpy( result[threads - 1] + 2 * ( n + f ), s.z, sizeof( float ) * (size_t) ( n + f ) );
+		if ( threads == 2 )
+		{
+			cr_expect_eq( memcmp( result[0], result[1], sizeof( float ) * 3 * (size_t) ( n + f ) ), 0,
+						  "1 and 2 threads differ" );
+		}
+		/* a pinned particle holds the leaf: exactly Eq. 14 as written */
+		collide_sheet pinned, paper;
+		conserving_sheet( &pinned, 34 );
+		conserving_sheet( &paper, 34 );
+		pinned.inv_m[0] = 0.0f;
+		cr_assert_eq( sere_collide_restore_voronoi_conserving( pinned.x, pinned.y, pinned.z, pinned.vx, pinned.vy,
+															   pinned.vz, pinned.inv_m, pinned.tri, f, n, h ),
+					  SERE_OK );
+		cr_assert_eq(
+			sere_collide_restore_voronoi( paper.x, paper.y, paper.z, paper.vx, paper.vy, paper.vz, paper.tri, f, n, h ),
+			SERE_OK );
+		cr_expect_eq( memcmp( pinned.z, paper.z, sizeof( float ) * (size_t) ( n + f ) ), 0 );
+		/* a negative inverse mass is refused */
+		pinned.inv_m[1] = -1.0f;
+		cr_expect_eq( sere_collide_restore_voronoi_conserving( pinned.x, pinned.y, pinned.z, pinned.vx, pinned.vy,
+															   pinned.vz, pinned.inv_m, pinned.tri, f, n, h ),
+					  SERE_ERR_ARGUMENT );
+		collide_sheet_free( &pinned );
+		collide_sheet_free( &paper );
+		collide_sheet_free( &s );
+		free( h );
+	}
+	free( result[0] ), free( result[1] );
+}
