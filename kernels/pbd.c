@@ -96,6 +96,8 @@ struct sere_pbd
 	float* lambda;			   /* per lane, XPBD multipliers */
 	float* factor;			   /* per lane, Jacobi: the f of the block below */
 	int32_t* slot;			   /* particle → slot (its place in breadth-first order) */
+	int32_t* particle;		   /* slot → particle, for slots < particle_count */
+	int32_t* band_start;	   /* bands + 1 slot offsets, multiples of 4 but the last (particle_count) */
 	int32_t slot_count;		   /* particles rounded up to 4, then a dummy pair per item */
 	float* packed[2];		   /* (x, y, z, w) per slot; Jacobi alternates the two, the others use [0] */
 	int32_t* adjacency_offset; /* per slot < particle_count, Jacobi */
@@ -137,6 +139,8 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->lambda );
 	sere_free( pbd->factor );
 	sere_free( pbd->slot );
+	sere_free( pbd->particle );
+	sere_free( pbd->band_start );
 	sere_free( pbd->packed[0] );
 	sere_free( pbd->packed[1] );
 	sere_free( pbd->adjacency_offset );
@@ -258,17 +262,21 @@ static int compare_lane_keys( const void* p, const void* q )
 	return ( u->constraint > v->constraint ) - ( u->constraint < v->constraint );
 }
 
-/* Band of each slot for R bands with boundaries on multiples of 4 slots (a 64-byte line of
- * records), so two bands never share a cache line. Returns 0 when some constraint joins two
- * bands that are not neighbors (bands thinner than a breadth-first level). */
+/* First slot of band r of R over n slots: on a multiple of 4 slots (a 64-byte line of
+ * records), so two bands never share a cache line. */
+static int32_t band_bound( int32_t r, int32_t bands, int32_t n )
+{
+	return r == 0 ? 0 : r == bands ? n : (int32_t) ( (int64_t) n * r / bands ) & ~3;
+}
+
+/* Band of each slot for R bands. Returns 0 when some constraint joins two bands that are not
+ * neighbors (bands thinner than a breadth-first level). */
 static int assign_bands( int32_t bands, int32_t n, const int32_t* a, const int32_t* b, int32_t count,
 						 const int32_t* slot, int32_t* band_of_slot )
 {
 	for ( int32_t r = 0; r < bands; ++r )
 	{
-		int32_t lo = r == 0 ? 0 : (int32_t) ( (int64_t) n * r / bands ) & ~3;
-		int32_t hi = r == bands - 1 ? n : (int32_t) ( (int64_t) n * ( r + 1 ) / bands ) & ~3;
-		for ( int32_t s = lo; s < hi; ++s )
+		for ( int32_t s = band_bound( r, bands, n ); s < band_bound( r + 1, bands, n ); ++s )
 		{
 			band_of_slot[s] = r;
 		}
@@ -305,11 +313,16 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 	pbd->items = 2 * bands - 1;
 	const int32_t segments = pbd->items * colors;
 	pbd->segment = sere_alloc( sizeof( int32_t ) * ( (size_t) segments + 1 ) );
+	pbd->band_start = sere_alloc( sizeof( int32_t ) * ( (size_t) bands + 1 ) );
 	int32_t* fill = calloc( (size_t) segments + 1, sizeof( int32_t ) );
-	if ( pbd->segment == NULL || fill == NULL )
+	if ( pbd->segment == NULL || pbd->band_start == NULL || fill == NULL )
 	{
 		free( band_of_slot ), free( keys ), free( fill );
 		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t r = 0; r <= bands; ++r )
+	{
+		pbd->band_start[r] = band_bound( r, bands, n );
 	}
 	pbd->interface_count = 0;
 	for ( int32_t k = 0; k < count; ++k )
@@ -449,10 +462,9 @@ sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, 
 	pbd->threads = sere_alloc( sizeof( thread_slot ) * MAX_THREADS );
 	pbd->counters = sere_alloc( sizeof( claim_counter ) * PHASE_COUNT * MAX_THREADS );
 	pbd->barrier = sere_alloc( sizeof( spin_barrier ) );
-	int32_t* order = malloc( sizeof( int32_t ) * (size_t) particle_count );
-	if ( !pbd->slot || !order || !pbd->threads || !pbd->counters || !pbd->barrier )
+	pbd->particle = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
+	if ( !pbd->slot || !pbd->particle || !pbd->threads || !pbd->counters || !pbd->barrier )
 	{
-		free( order );
 		sere_pbd_destroy( pbd );
 		return SERE_ERR_MEMORY;
 	}
@@ -462,12 +474,11 @@ sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, 
 	{
 		atomic_init( &pbd->counters[c].next, 0 );
 	}
-	status = order_particles( a, b, count, particle_count, order );
+	status = order_particles( a, b, count, particle_count, pbd->particle );
 	for ( int32_t s = 0; status == SERE_OK && s < particle_count; ++s )
 	{
-		pbd->slot[order[s]] = s;
+		pbd->slot[pbd->particle[s]] = s;
 	}
-	free( order );
 	if ( status == SERE_OK )
 	{
 		status = build_layout( pbd, a, b );
@@ -923,27 +934,36 @@ static void share( int32_t n, int t, int threads, int32_t* first, int32_t* last 
 	*last = (int32_t) ( (int64_t) n * ( t + 1 ) / threads );
 }
 
-/* Caller's arrays into records: a SIMD pass over thread t's share checks every value once
- * (streaming the caller's arrays), then each particle's record is written to its slot. */
+/* Caller's arrays into records. Thread t writes the records of the bands it starts the
+ * band phase with, in slot order: whole cache lines that no other thread writes (written in
+ * the caller's order, the two threads' records shared lines, and at 2 threads the false
+ * sharing cost more than the rest of a call), and that this thread then reads first. Every
+ * value is checked once, on the records just written. */
 static int32_t pack( sere_pbd* pbd, const float* px, const float* py, const float* pz, const float* inv_m, int t,
 					 int threads )
 {
-	int32_t first, last, flags = 0;
-	share( pbd->particle_count, t, threads, &first, &last );
-#pragma omp simd reduction( | : flags )
-	for ( int32_t i = first; i < last; ++i )
-	{
-		int finite = ( fabsf( px[i] ) <= FLT_MAX ) & ( fabsf( py[i] ) <= FLT_MAX ) & ( fabsf( pz[i] ) <= FLT_MAX ) &
-					 ( fabsf( inv_m[i] ) <= FLT_MAX );
-		flags |= ( finite ? 0 : FLAG_NONFINITE ) | ( inv_m[i] < 0.0f ? FLAG_NEGATIVE_MASS : 0 );
-	}
+	const int32_t first = pbd->band_start[(int64_t) pbd->bands * t / threads];
+	const int32_t last = pbd->band_start[(int64_t) pbd->bands * ( t + 1 ) / threads];
+	const int32_t* particle = pbd->particle;
 	float* packed = pbd->packed[0];
-	for ( int32_t i = first; i < last; ++i )
+	for ( int32_t s = first; s < last; ++s )
 	{
-		float* record = packed + 4 * pbd->slot[i];
+		const int32_t i = particle[s];
+		float* record = packed + 4 * s;
 		record[0] = px[i], record[1] = py[i], record[2] = pz[i], record[3] = inv_m[i];
 	}
-	return flags;
+	/* Flags as 0/1 per record, combined after: this form vectorizes (a flag-valued select per
+	 * value did not, and cost twice the packing). */
+	int32_t nonfinite = 0, negative = 0;
+#pragma omp simd reduction( | : nonfinite, negative )
+	for ( int32_t s = first; s < last; ++s )
+	{
+		const float* record = packed + 4 * s;
+		nonfinite |= !( fabsf( record[0] ) <= FLT_MAX ) | !( fabsf( record[1] ) <= FLT_MAX ) |
+					 !( fabsf( record[2] ) <= FLT_MAX ) | !( fabsf( record[3] ) <= FLT_MAX );
+		negative |= record[3] < 0.0f;
+	}
+	return ( nonfinite ? FLAG_NONFINITE : 0 ) | ( negative ? FLAG_NEGATIVE_MASS : 0 );
 }
 
 static void unpack( const float* packed, const int32_t* slot, int32_t n, float* px, float* py, float* pz, int t,
@@ -1045,12 +1065,12 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 		int32_t flags = 0;
 		sweep( pbd, ctx, mode, setup->xpbd, t, threads, parity, &worst, &flags );
 		result.iterations += 1, result.flags = flags, result.strain = worst;
-		if ( flags != 0 || setup->kind == SOLVER_TOUCH )
+		if ( flags != 0 )
 		{
-			result.converged = flags == 0;
 			break;
 		}
-		if ( worst < setup->tolerance )
+		/* The floor runs its sweeps to the cap, exchanges included. */
+		if ( setup->kind != SOLVER_TOUCH && worst < setup->tolerance )
 		{
 			/* Residuals were taken before each projection; check the positions left. */
 			worst = 0.0f;
@@ -1223,13 +1243,18 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 	return solve( pbd, px, py, pz, inv_m, &setup, report );
 }
 
-sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m )
+sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps )
 {
-	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL )
+	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || sweeps < 1 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	solve_setup setup = { .kind = SOLVER_TOUCH, .k = 1.0f, .omega = 1.0f, .tolerance = 1.0f, .max_iterations = 1 };
+	solve_setup setup = { .kind = SOLVER_TOUCH, .k = 1.0f, .omega = 1.0f, .tolerance = 1.0f, .max_iterations = sweeps };
 	sere_pbd_report report;
 	return solve( pbd, px, py, pz, inv_m, &setup, &report );
+}
+
+sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m )
+{
+	return sere_pbd_touch_sweeps( pbd, px, py, pz, inv_m, 1 );
 }

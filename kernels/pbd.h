@@ -112,6 +112,11 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
  * Leaves the positions bitwise unchanged. */
 sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m );
 
+/* sere_pbd_touch with `sweeps` sweeps in one call: the floor of a sere_pbd_project call that
+ * runs that many sweeps (the same entry check, packing, parallel region, barriers and per-sweep
+ * exchange, unpacking). SERE_ERR_ARGUMENT for sweeps < 1. */
+sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps );
+
 /* v = (p − x)/dt and x = p for particles [0, count) (Sec. 5.2: Δv = Δx/Δt). */
 void sere_pbd_finish( int32_t count, float* x, float* y, float* z, float* vx, float* vy, float* vz, const float* px,
 					  const float* py, const float* pz, float dt );

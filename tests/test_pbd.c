@@ -481,6 +481,16 @@ Test( pbd, touch_leaves_positions_unchanged )
 	cr_expect_eq( memcmp( before, m.x, bytes ), 0 );
 	cr_expect_eq( memcmp( before + m.n, m.y, bytes ), 0 );
 	cr_expect_eq( memcmp( before + 2 * m.n, m.z, bytes ), 0 );
+	/* The multi-sweep floor, at both thread counts. */
+	for ( int threads = 1; threads <= 2; ++threads )
+	{
+		omp_set_num_threads( threads );
+		cr_assert_eq( sere_pbd_touch_sweeps( pbd, m.x, m.y, m.z, m.inv_m, 7 ), SERE_OK );
+		cr_expect_eq( memcmp( before, m.x, bytes ), 0, "%d threads", threads );
+		cr_expect_eq( memcmp( before + m.n, m.y, bytes ), 0, "%d threads", threads );
+		cr_expect_eq( memcmp( before + 2 * m.n, m.z, bytes ), 0, "%d threads", threads );
+	}
+	cr_expect_eq( sere_pbd_touch_sweeps( pbd, m.x, m.y, m.z, m.inv_m, 0 ), SERE_ERR_ARGUMENT );
 	sere_pbd_info info = sere_pbd_get_info( pbd );
 	cr_expect_eq( info.lanes % 16, 0 );
 	cr_expect_geq( info.lanes, m.count );
@@ -576,4 +586,42 @@ Test( pbd, bad_input_gives_errors_and_leaves_positions )
 	cr_expect_eq( sere_pbd_create( self, self, 1, 3, &none ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_pbd_create( a, out_of_range, 1, 3, &none ), SERE_ERR_ARGUMENT );
 	cr_expect_null( none );
+}
+
+Test( pbd, bad_values_are_found_in_every_band_at_both_thread_counts )
+{
+	/* Each thread checks the records of its own bands: a bad value in the first, a middle or
+	 * the last particle is found wherever it lands, and nothing is written back. */
+	test_mesh m;
+	double_layer( &m, 60, 40, 0.05f, 0.01f, 0.2f );
+	sere_pbd* pbd = make_solver( &m, m.rest );
+	cr_assert_gt( sere_pbd_get_info( pbd ).bands, 1 );
+	size_t bytes = sizeof( float ) * (size_t) m.n;
+	float* before = malloc( bytes );
+	memcpy( before, m.x, bytes );
+	sere_pbd_params params = sere_pbd_params_default();
+	sere_pbd_report report;
+	const int32_t where[3] = { 0, m.n / 2, m.n - 1 };
+	for ( int threads = 1; threads <= 2; ++threads )
+	{
+		omp_set_num_threads( threads );
+		for ( int k = 0; k < 3; ++k )
+		{
+			int32_t i = where[k];
+			float saved = m.y[i];
+			m.y[i] = NAN;
+			cr_expect_eq( sere_pbd_project( pbd, m.x, m.y, m.z, m.inv_m, &params, &report ), SERE_ERR_NONFINITE,
+						  "NaN at %d, %d threads", i, threads );
+			m.y[i] = saved;
+			saved = m.inv_m[i];
+			m.inv_m[i] = -1.0f;
+			cr_expect_eq( sere_pbd_project( pbd, m.x, m.y, m.z, m.inv_m, &params, &report ), SERE_ERR_ARGUMENT,
+						  "negative mass at %d, %d threads", i, threads );
+			m.inv_m[i] = saved;
+			cr_expect_eq( memcmp( before, m.x, bytes ), 0, "nothing touched" );
+		}
+	}
+	free( before );
+	sere_pbd_destroy( pbd );
+	mesh_free( &m );
 }
