@@ -6,6 +6,7 @@
 #include "render.h"
 #include "topo.h"
 
+#include <dirent.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -182,6 +183,33 @@ static int draw_panel( void* user, int index, cairo_t* cr, double x, double y, d
 	return sere_render_mesh_draw( cr, x, y, w, h, &mesh, &c->view, NULL, err, err_size );
 }
 
+/* A run into a directory used before replaces its frames: frame_NNNNN.ply/.vtp left by a longer
+ * or differently spaced run would otherwise sit among the new ones (leaf.pvd lists only the
+ * new). Only names this command writes are removed. */
+static void remove_old_frames( const char* frames_dir )
+{
+	DIR* dir = opendir( frames_dir );
+	if ( dir == NULL )
+	{
+		return;
+	}
+	struct dirent* entry;
+	while ( ( entry = readdir( dir ) ) != NULL )
+	{
+		int number = 0, length = 0;
+		char ext[4] = { 0 };
+		if ( sscanf( entry->d_name, "frame_%5d.%3[a-z]%n", &number, ext, &length ) == 2 &&
+			 length == (int) strlen( entry->d_name ) && strlen( entry->d_name ) == 15 &&
+			 ( strcmp( ext, "ply" ) == 0 || strcmp( ext, "vtp" ) == 0 ) )
+		{
+			char path[4096 + 32];
+			snprintf( path, sizeof( path ), "%.4095s/%.16s", frames_dir, entry->d_name );
+			remove( path );
+		}
+	}
+	closedir( dir );
+}
+
 int sere_cmd_run( int argc, char** argv )
 {
 	const char* path = NULL;
@@ -318,6 +346,7 @@ int sere_cmd_run( int argc, char** argv )
 		sere_model_destroy( &model );
 		return 1;
 	}
+	remove_old_frames( frames_dir );
 	sere_leaf_sim* sim = NULL;
 	sere_status status = sere_leaf_create( &model, &sim );
 	if ( status != SERE_OK )

@@ -215,3 +215,41 @@ Test( cli, osmosis_dump_is_a_solved_system )
 	snprintf( path, sizeof( path ), "rm -rf %s", dir );
 	cr_expect_eq( system( path ), 0 );
 }
+
+Test( cli, rerun_replaces_old_frames_only )
+{
+	char dir[] = "/tmp/sere-rerun-XXXXXX";
+	cr_assert_not_null( mkdtemp( dir ) );
+	char path[512], args[1024], err[4096];
+	snprintf( path, sizeof( path ), "%s/frames", dir );
+	cr_assert_eq( mkdir( path, 0755 ), 0 );
+	/* a frame a longer earlier run left, and files that are not ours */
+	const char* planted[] = { "frame_09999.ply", "frame_09999.vtp", "notes.txt", "frame_1.ply" };
+	for ( size_t k = 0; k < 4; ++k )
+	{
+		snprintf( path, sizeof( path ), "%s/frames/%s", dir, planted[k] );
+		FILE* f = fopen( path, "w" );
+		cr_assert_not_null( f );
+		fputs( "x\n", f );
+		fclose( f );
+	}
+	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --preset wisteria --frames 2 --points 300 --out %s",
+			  dir );
+	cr_assert_eq( run( args, err, sizeof( err ) ), 0, "%s", err );
+	for ( size_t k = 0; k < 4; ++k )
+	{
+		snprintf( path, sizeof( path ), "%s/frames/%s", dir, planted[k] );
+		if ( k < 2 )
+		{
+			cr_expect_lt( file_size( path ), 0, "%s survived the new run", planted[k] );
+		}
+		else
+		{
+			cr_expect_gt( file_size( path ), 0, "%s was removed", planted[k] );
+		}
+	}
+	snprintf( path, sizeof( path ), "%s/frames/frame_00002.ply", dir );
+	cr_expect_gt( file_size( path ), 0, "the new run's last frame is missing" );
+	snprintf( args, sizeof( args ), "rm -rf %s", dir );
+	cr_expect_eq( system( args ), 0 );
+}
