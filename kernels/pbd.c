@@ -40,16 +40,13 @@ typedef enum block_mode
 	MODE_TOUCH,		   /* load and store both ends unchanged (the memory floor) */
 } block_mode;
 
-/* Work lists a sweep claims items from: the bands, the cuts between bands r and r+1 for even
- * r, for odd r, and every item (the read-only and Jacobi passes). */
-typedef enum phase
+/* What a pass claims items from: a sweep's work lists (bands, then the cuts between them) or
+ * every item (the read-only and Jacobi passes). */
+typedef enum pass_kind
 {
-	PHASE_BANDS,
-	PHASE_EVEN_CUTS,
-	PHASE_ODD_CUTS,
-	PHASE_ALL,
-	PHASE_COUNT
-} phase;
+	PASS_SWEEP,
+	PASS_ALL,
+} pass_kind;
 
 enum
 {
@@ -66,10 +63,11 @@ typedef struct thread_slot
 	int32_t flags[2];
 } thread_slot;
 
-typedef struct claim_counter
+/* A counter alone on its cache line. */
+typedef struct padded_counter
 {
-	_Alignas( 64 ) atomic_int next;
-} claim_counter;
+	_Alignas( 64 ) atomic_int value;
+} padded_counter;
 
 /* A sense-free spin barrier. libgomp's barrier makes a futex system call at every release,
  * about 1 µs on this machine's virtual CPUs even for one thread; a sweep crosses several per
@@ -105,8 +103,9 @@ struct sere_pbd
 	float* inv_degree;		   /* per slot: 1/n_i, 0 for a particle without constraints */
 	float one;				   /* 1.0f, opaque to the compiler so sere_pbd_touch keeps its stores */
 	int rest_valid;
-	thread_slot* threads;	 /* MAX_THREADS */
-	claim_counter* counters; /* PHASE_COUNT × MAX_THREADS */
+	thread_slot* threads;	  /* MAX_THREADS */
+	padded_counter* counters; /* 2 × MAX_THREADS: next item of each thread's list, by pass parity */
+	padded_counter* done;	  /* per item: the sweep of the current call that last projected it */
 	spin_barrier* barrier;
 };
 
@@ -148,6 +147,7 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->inv_degree );
 	sere_free( pbd->threads );
 	sere_free( pbd->counters );
+	sere_free( pbd->done );
 	sere_free( pbd->barrier );
 	sere_free( pbd );
 }
@@ -262,23 +262,35 @@ static int compare_lane_keys( const void* p, const void* q )
 	return ( u->constraint > v->constraint ) - ( u->constraint < v->constraint );
 }
 
-/* First slot of band r of R over n slots: on a multiple of 4 slots (a 64-byte line of
- * records), so two bands never share a cache line. */
-static int32_t band_bound( int32_t r, int32_t bands, int32_t n )
-{
-	return r == 0 ? 0 : r == bands ? n : (int32_t) ( (int64_t) n * r / bands ) & ~3;
-}
-
-/* Band of each slot for R bands. Returns 0 when some constraint joins two bands that are not
+/* Cuts the n slots into R bands, start[0..R], each holding about the same share of the
+ * constraint ends (ends[s]: ends in slots before s), so that threads get equal work (bands of
+ * equal particle counts differed by 9% in constraints on the maple); the bounds sit on
+ * multiples of 4 slots (a 64-byte line of records), so two bands never share a cache line.
+ * Returns 0 when one of several bands would be empty or some constraint joins two bands that are not
  * neighbors (bands thinner than a breadth-first level). */
-static int assign_bands( int32_t bands, int32_t n, const int32_t* a, const int32_t* b, int32_t count,
-						 const int32_t* slot, int32_t* band_of_slot )
+static int assign_bands( int32_t bands, int32_t n, const int32_t* ends, const int32_t* a, const int32_t* b,
+						 int32_t count, const int32_t* slot, int32_t* start, int32_t* band_of_slot )
 {
+	start[0] = 0, start[bands] = n;
+	int32_t s = 0;
+	for ( int32_t r = 1; r < bands; ++r )
+	{
+		const int64_t target = (int64_t) ends[n] * r / bands;
+		while ( ends[s] < target )
+		{
+			s += 1;
+		}
+		start[r] = s & ~3;
+	}
 	for ( int32_t r = 0; r < bands; ++r )
 	{
-		for ( int32_t s = band_bound( r, bands, n ); s < band_bound( r + 1, bands, n ); ++s )
+		if ( start[r + 1] <= start[r] && bands > 1 )
 		{
-			band_of_slot[s] = r;
+			return 0;
+		}
+		for ( int32_t q = start[r]; q < start[r + 1]; ++q )
+		{
+			band_of_slot[q] = r;
 		}
 	}
 	for ( int32_t k = 0; k < count; ++k )
@@ -296,33 +308,41 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 {
 	const int32_t n = pbd->particle_count, count = pbd->constraint_count, colors = pbd->colors;
 	int32_t* band_of_slot = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t* ends = calloc( (size_t) n + 1, sizeof( int32_t ) );
 	lane_key* keys = malloc( sizeof( lane_key ) * (size_t) count );
-	if ( band_of_slot == NULL || keys == NULL )
+	pbd->band_start = sere_alloc( sizeof( int32_t ) * ( MAX_BANDS + 1 ) );
+	if ( band_of_slot == NULL || ends == NULL || keys == NULL || pbd->band_start == NULL )
 	{
-		free( band_of_slot ), free( keys );
+		free( band_of_slot ), free( ends ), free( keys );
 		return SERE_ERR_MEMORY;
 	}
-	/* The band count depends on the mesh only (never on threads): determinism. */
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		ends[pbd->slot[a[k]] + 1] += 1;
+		ends[pbd->slot[b[k]] + 1] += 1;
+	}
+	for ( int32_t s = 0; s < n; ++s )
+	{
+		ends[s + 1] += ends[s];
+	}
+	/* The band count depends on the mesh only (never on threads): determinism. One band
+	 * always passes (its only bounds are 0 and n). */
 	int32_t bands = n / BAND_PARTICLES;
 	bands = bands < 1 ? 1 : bands > MAX_BANDS ? MAX_BANDS : bands;
-	while ( !assign_bands( bands, n, a, b, count, pbd->slot, band_of_slot ) )
+	while ( !assign_bands( bands, n, ends, a, b, count, pbd->slot, pbd->band_start, band_of_slot ) )
 	{
 		bands -= 1;
 	}
+	free( ends );
 	pbd->bands = bands;
 	pbd->items = 2 * bands - 1;
 	const int32_t segments = pbd->items * colors;
 	pbd->segment = sere_alloc( sizeof( int32_t ) * ( (size_t) segments + 1 ) );
-	pbd->band_start = sere_alloc( sizeof( int32_t ) * ( (size_t) bands + 1 ) );
 	int32_t* fill = calloc( (size_t) segments + 1, sizeof( int32_t ) );
-	if ( pbd->segment == NULL || pbd->band_start == NULL || fill == NULL )
+	if ( pbd->segment == NULL || fill == NULL )
 	{
 		free( band_of_slot ), free( keys ), free( fill );
 		return SERE_ERR_MEMORY;
-	}
-	for ( int32_t r = 0; r <= bands; ++r )
-	{
-		pbd->band_start[r] = band_bound( r, bands, n );
 	}
 	pbd->interface_count = 0;
 	for ( int32_t k = 0; k < count; ++k )
@@ -460,19 +480,24 @@ sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, 
 	pbd->one = 1.0f;
 	pbd->slot = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
 	pbd->threads = sere_alloc( sizeof( thread_slot ) * MAX_THREADS );
-	pbd->counters = sere_alloc( sizeof( claim_counter ) * PHASE_COUNT * MAX_THREADS );
+	pbd->counters = sere_alloc( sizeof( padded_counter ) * 2 * MAX_THREADS );
+	pbd->done = sere_alloc( sizeof( padded_counter ) * ( 2 * MAX_BANDS - 1 ) );
 	pbd->barrier = sere_alloc( sizeof( spin_barrier ) );
 	pbd->particle = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
-	if ( !pbd->slot || !pbd->particle || !pbd->threads || !pbd->counters || !pbd->barrier )
+	if ( !pbd->slot || !pbd->particle || !pbd->threads || !pbd->counters || !pbd->done || !pbd->barrier )
 	{
 		sere_pbd_destroy( pbd );
 		return SERE_ERR_MEMORY;
 	}
 	atomic_init( &pbd->barrier->arrived, 0u );
 	atomic_init( &pbd->barrier->generation, 0u );
-	for ( int32_t c = 0; c < PHASE_COUNT * MAX_THREADS; ++c )
+	for ( int32_t c = 0; c < 2 * MAX_THREADS; ++c )
 	{
-		atomic_init( &pbd->counters[c].next, 0 );
+		atomic_init( &pbd->counters[c].value, 0 );
+	}
+	for ( int32_t item = 0; item < 2 * MAX_BANDS - 1; ++item )
+	{
+		atomic_init( &pbd->done[item].value, 0 );
 	}
 	status = order_particles( a, b, count, particle_count, pbd->particle );
 	for ( int32_t s = 0; status == SERE_OK && s < particle_count; ++s )
@@ -798,6 +823,41 @@ static inline void project_block( const block_context* ctx, int32_t q0, block_mo
 /* ---------------------------------------------------------------------------------------
  * Threads: work claiming and the barrier. */
 
+typedef struct wait_state
+{
+	double start;
+	unsigned spins;
+} wait_state;
+
+/* One turn of a wait loop. Spin while the wait is short (a sweep is tens of µs); past
+ * SPIN_SECONDS another thread has most likely lost its core to some other process, so nap
+ * instead: an idle core lets the scheduler move that thread over, where spinning (or
+ * yielding) would keep it queued behind the other process for a whole time slice
+ * (milliseconds). */
+static void wait_step( wait_state* wait )
+{
+	if ( ++wait->spins % 1024 == 0 )
+	{
+		double now = omp_get_wtime();
+		wait->start = wait->start < 0.0 ? now : wait->start;
+		if ( now - wait->start > SPIN_SECONDS )
+		{
+			const struct timespec nap = { 0, NAP_NANOSECONDS };
+			nanosleep( &nap, NULL );
+		}
+	}
+}
+
+/* Waits until item `item` has been projected in sweep `number` of this call. */
+static void wait_done( sere_pbd* pbd, int32_t item, int32_t number )
+{
+	wait_state wait = { -1.0, 0 };
+	while ( atomic_load_explicit( &pbd->done[item].value, memory_order_acquire ) < number )
+	{
+		wait_step( &wait );
+	}
+}
+
 static void barrier_wait( spin_barrier* barrier, int threads )
 {
 	if ( threads == 1 )
@@ -811,24 +871,10 @@ static void barrier_wait( spin_barrier* barrier, int threads )
 		atomic_store_explicit( &barrier->generation, generation + 1u, memory_order_release );
 		return;
 	}
-	/* Spin while the wait is short (every phase of a sweep is tens of µs); past SPIN_SECONDS
-	 * another thread has most likely lost its core to some other process, so nap instead:
-	 * an idle core lets the scheduler move that thread over, where spinning (or yielding) would
-	 * keep it queued behind the other process for a whole time slice (milliseconds). */
-	const struct timespec nap = { 0, NAP_NANOSECONDS };
-	double start = -1.0;
-	unsigned spins = 0;
+	wait_state wait = { -1.0, 0 };
 	while ( atomic_load_explicit( &barrier->generation, memory_order_acquire ) == generation )
 	{
-		if ( ++spins % 1024 == 0 )
-		{
-			double now = omp_get_wtime();
-			start = start < 0.0 ? now : start;
-			if ( now - start > SPIN_SECONDS )
-			{
-				nanosleep( &nap, NULL );
-			}
-		}
+		wait_step( &wait );
 	}
 }
 
@@ -852,75 +898,106 @@ static void exchange( sere_pbd* pbd, int t, int threads, int* parity, float* wor
 	*flags = all_flags;
 }
 
-static int32_t phase_items( const sere_pbd* pbd, phase p )
+/* Thread u's work list in a pass. In a sweep: its share of the bands [r0, r1), then the cuts
+ * c ∈ [r0, min(r1, R − 1)) below them (cut c joins bands c and c + 1), the even ones before
+ * the odd ones. In any other pass: its share of all items. Either way it starts with what it
+ * packed, so the records are in its own cache. */
+typedef struct work_list
 {
-	switch ( p )
+	int32_t first, count;		 /* bands (a sweep) or items (any other pass) */
+	int32_t cut_first, cut_last; /* a sweep's cuts */
+	int32_t length;
+} work_list;
+
+static work_list work_of( const sere_pbd* pbd, pass_kind kind, int u, int threads )
+{
+	work_list w = { 0, 0, 0, 0, 0 };
+	const int32_t n = kind == PASS_SWEEP ? pbd->bands : pbd->items;
+	w.first = (int32_t) ( (int64_t) n * u / threads );
+	w.count = (int32_t) ( (int64_t) n * ( u + 1 ) / threads ) - w.first;
+	w.length = w.count;
+	if ( kind == PASS_SWEEP && w.count > 0 )
 	{
-		case PHASE_BANDS:
-			return pbd->bands;
-		case PHASE_EVEN_CUTS:
-			return pbd->bands / 2;
-		case PHASE_ODD_CUTS:
-			return ( pbd->bands - 1 ) / 2;
-		default:
-			return pbd->items;
+		const int32_t end = w.first + w.count;
+		w.cut_first = w.first;
+		w.cut_last = end < pbd->bands - 1 ? end : pbd->bands - 1;
+		w.length += w.cut_last - w.cut_first;
 	}
+	return w;
 }
 
-static int32_t phase_item( const sere_pbd* pbd, phase p, int32_t j )
+/* The j-th item of a list. */
+static int32_t work_item( const sere_pbd* pbd, const work_list* w, int32_t j )
 {
-	switch ( p )
+	if ( j < w->count )
 	{
-		case PHASE_EVEN_CUTS:
-			return pbd->bands + 2 * j;
-		case PHASE_ODD_CUTS:
-			return pbd->bands + 2 * j + 1;
-		default:
-			return j;
+		return w->first + j;
 	}
+	j -= w->count;
+	const int32_t first_even = ( w->cut_first + 1 ) & ~1;
+	const int32_t evens = ( w->cut_last - first_even + 1 ) / 2;
+	const int32_t cut = j < evens ? first_even + 2 * j : ( w->cut_first | 1 ) + 2 * ( j - evens );
+	return pbd->bands + cut;
 }
 
-/* Thread t's own items of a phase are the t-th contiguous share (neighboring bands stay on
- * one thread, and on the same one from sweep to sweep); it takes them in order and then
- * helps the other threads with theirs, so a thread on a slower core does less. Which thread
- * projects an item never changes the result: items of a phase share no particle. */
-static void reset_counters( sere_pbd* pbd, int t, int threads, phase current )
+/* Before cut c of sweep `number`, what it reads must be final: bands c and c + 1 and, for an
+ * odd c, the even cuts c − 1 and c + 1 that share its bands. Together with the exchange that
+ * ends each sweep this keeps the order of one thread (bands, even cuts, odd cuts) for every
+ * pair of items that share a particle, so the result does not depend on the threads, while
+ * a sweep has one barrier instead of one per group. */
+static void wait_cut_inputs( sere_pbd* pbd, int32_t cut, int32_t number )
 {
-	for ( int p = 0; p < PHASE_COUNT; ++p )
+	const int32_t bands = pbd->bands;
+	wait_done( pbd, cut, number );
+	wait_done( pbd, cut + 1, number );
+	if ( cut & 1 )
 	{
-		if ( p != (int) current )
+		wait_done( pbd, bands + cut - 1, number );
+		if ( cut + 1 < bands - 1 )
 		{
-			int32_t first = (int32_t) ( (int64_t) phase_items( pbd, (phase) p ) * t / threads );
-			atomic_store_explicit( &pbd->counters[p * MAX_THREADS + t].next, first, memory_order_relaxed );
+			wait_done( pbd, bands + cut + 1, number );
 		}
 	}
 }
 
-static void run_phase( sere_pbd* pbd, const block_context* ctx, phase p, block_mode mode, int xpbd, int t, int threads,
-					   float* worst, int32_t* flags )
+/* Thread t takes the items of its own list in order, then helps the other threads with
+ * theirs, so a thread on a slower core does less. Which thread projects an item never changes
+ * the result (wait_cut_inputs). A thread that waits on a cut holds only an odd cut or an even
+ * one waiting on bands, and owners take their lists in order (bands, even, odd), so some
+ * thread can always go on. `number` is the sweep of this call (a PASS_SWEEP). */
+static void run_pass( sere_pbd* pbd, const block_context* ctx, pass_kind kind, int parity, int32_t number,
+					  block_mode mode, int xpbd, int t, int threads, float* worst, int32_t* flags )
 {
-	/* Counters of the other phases are idle until the barrier that ends this one. */
-	reset_counters( pbd, t, threads, p );
-	const int32_t count = phase_items( pbd, p ), colors = pbd->colors;
+	/* The other parity's counters are idle until the exchange that ends this pass. */
+	atomic_store_explicit( &pbd->counters[( 1 - parity ) * MAX_THREADS + t].value, 0, memory_order_relaxed );
+	const int32_t colors = pbd->colors;
 	lane_accum acc = lane_accum_start();
 	for ( int v = 0; v < threads; ++v )
 	{
-		int u = ( t + v ) % threads;
-		int32_t end = (int32_t) ( (int64_t) count * ( u + 1 ) / threads );
-		atomic_int* next = &pbd->counters[p * MAX_THREADS + u].next;
+		const int u = ( t + v ) % threads;
+		const work_list w = work_of( pbd, kind, u, threads );
+		atomic_int* next = &pbd->counters[parity * MAX_THREADS + u].value;
 		for ( ;; )
 		{
 			int32_t j = atomic_fetch_add_explicit( next, 1, memory_order_relaxed );
-			if ( j >= end )
+			if ( j >= w.length )
 			{
 				break;
 			}
-			const int32_t item = phase_item( pbd, p, j );
+			const int32_t item = kind == PASS_SWEEP ? work_item( pbd, &w, j ) : w.first + j;
+			if ( kind == PASS_SWEEP && item >= pbd->bands )
+			{
+				wait_cut_inputs( pbd, item - pbd->bands, number );
+			}
 			const int32_t first = pbd->segment[item * colors], last = pbd->segment[( item + 1 ) * colors];
 			/* Color after color; all lanes of one block have one color. */
 			for ( int32_t q = first; q < last; q += LANES )
 			{
 				project_block( ctx, q, mode, xpbd, &acc );
+			}
+			if ( kind == PASS_SWEEP )
+			{
+				atomic_store_explicit( &pbd->done[item].value, number, memory_order_release );
 			}
 		}
 	}
@@ -983,8 +1060,6 @@ static void unpack( const float* packed, const int32_t* slot, int32_t n, float* 
  * of a constraint move along their own d, which is how −w_b f d reads from b's side). */
 static void jacobi_apply( sere_pbd* pbd, const float* old, float* next, float omega, int t, int threads )
 {
-	/* No claimed work list is active in this pass: ready them all for the next one. */
-	reset_counters( pbd, t, threads, PHASE_COUNT );
 	int32_t first, last;
 	share( pbd->particle_count, t, threads, &first, &last );
 	const float* factor = pbd->factor;
@@ -1040,16 +1115,12 @@ typedef struct solve_result
 	int converged;
 } solve_result;
 
-/* One thread's part of a Gauss–Seidel (or touch) sweep: the bands, then the even cuts, then
- * the odd cuts, a barrier between; returns the combined result of the sweep. */
+/* One thread's part of sweep `number` of a Gauss–Seidel (or touch) call; returns the
+ * combined result of the sweep. */
 static void sweep( sere_pbd* pbd, const block_context* ctx, block_mode mode, int xpbd, int t, int threads, int* parity,
-				   float* worst, int32_t* flags )
+				   int32_t number, float* worst, int32_t* flags )
 {
-	run_phase( pbd, ctx, PHASE_BANDS, mode, xpbd, t, threads, worst, flags );
-	barrier_wait( pbd->barrier, threads );
-	run_phase( pbd, ctx, PHASE_EVEN_CUTS, mode, xpbd, t, threads, worst, flags );
-	barrier_wait( pbd->barrier, threads );
-	run_phase( pbd, ctx, PHASE_ODD_CUTS, mode, xpbd, t, threads, worst, flags );
+	run_pass( pbd, ctx, PASS_SWEEP, *parity, number, mode, xpbd, t, threads, worst, flags );
 	exchange( pbd, t, threads, parity, worst, flags );
 }
 
@@ -1063,7 +1134,7 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 	{
 		float worst = 0.0f;
 		int32_t flags = 0;
-		sweep( pbd, ctx, mode, setup->xpbd, t, threads, parity, &worst, &flags );
+		sweep( pbd, ctx, mode, setup->xpbd, t, threads, parity, result.iterations + 1, &worst, &flags );
 		result.iterations += 1, result.flags = flags, result.strain = worst;
 		if ( flags != 0 )
 		{
@@ -1074,7 +1145,7 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 		{
 			/* Residuals were taken before each projection; check the positions left. */
 			worst = 0.0f;
-			run_phase( pbd, ctx, PHASE_ALL, MODE_MEASURE, setup->xpbd, t, threads, &worst, &flags );
+			run_pass( pbd, ctx, PASS_ALL, *parity, 0, MODE_MEASURE, setup->xpbd, t, threads, &worst, &flags );
 			exchange( pbd, t, threads, parity, &worst, &flags );
 			result.flags = flags;
 			if ( flags != 0 || worst < setup->tolerance )
@@ -1098,7 +1169,7 @@ static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup
 		float worst = 0.0f;
 		int32_t flags = 0;
 		ctx->packed = pbd->packed[*front];
-		run_phase( pbd, ctx, PHASE_ALL, MODE_JACOBI, setup->xpbd, t, threads, &worst, &flags );
+		run_pass( pbd, ctx, PASS_ALL, *parity, 0, MODE_JACOBI, setup->xpbd, t, threads, &worst, &flags );
 		exchange( pbd, t, threads, parity, &worst, &flags );
 		result.iterations += 1, result.flags = flags, result.strain = worst;
 		/* Measured on the positions as they are: converged means exactly that. */
@@ -1145,7 +1216,14 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 			share( pbd->lanes, t, threads, &first, &last );
 			memset( pbd->lambda + first, 0, sizeof( float ) * (size_t) ( last - first ) );
 		}
-		reset_counters( pbd, t, threads, PHASE_COUNT );
+		/* Work lists from their start; no item projected yet in this call. The exchange below
+		 * publishes both before any pass. */
+		atomic_store_explicit( &pbd->counters[t].value, 0, memory_order_relaxed );
+		atomic_store_explicit( &pbd->counters[MAX_THREADS + t].value, 0, memory_order_relaxed );
+		for ( int32_t item = t; item < pbd->items; item += threads )
+		{
+			atomic_store_explicit( &pbd->done[item].value, 0, memory_order_relaxed );
+		}
 		exchange( pbd, t, threads, &parity, &worst, &flags );
 		solve_result result = { 0, flags, 0.0f, 0 };
 		if ( flags == 0 )

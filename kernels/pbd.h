@@ -84,7 +84,10 @@ void sere_pbd_predict( int32_t count, const float* x, const float* y, const floa
  * order, cut into bands. A sweep projects the constraints inside each band (bands in parallel,
  * each one color after another, 16 constraints of one color per SIMD step), then those joining
  * bands r and r+1 for even r, then for odd r. The order depends on the constraints only, never
- * on the thread count, so 1 and 2 threads give bitwise the same positions.
+ * on the thread count, so 1 and 2 threads give bitwise the same positions. Bands hold equal
+ * shares of the constraint ends; threads meet once per sweep (to decide whether to stop), and
+ * within a sweep each band interface waits only for the bands and interfaces it shares
+ * particles with.
  *
  * Stopping: a sweep records max |C/l| of each constraint just before projecting it; when that
  * is below λ_C a read-only pass measures the positions the sweep left and the call stops only
