@@ -11,7 +11,10 @@
 // workload (kernels/leaf.c) asks for up to 200 sweeps per frame in one call (10 per call when
 // the stall stop is on), so the sweeps:20 and sweeps:200 rows are the ones that matter; the
 // colored solver and its floor run the same calls, so their ratio at equal threads and sweeps
-// is the ratio of arithmetic plus memory to memory alone.
+// is the ratio of arithmetic plus memory to memory alone. On this 2-core shared machine the
+// 2-thread rows of short calls swing by 2x with other processes' load: packing and unpacking
+// move half the records between the cores' caches, and a thread that loses its core stalls the
+// other at the next synchronization; compare rows of one run.
 //
 // The Voronoi springs are shortened by 10% so every sweep has work to do. Each benchmark
 // iteration continues from the state the previous one left: none of the solvers branches on the
@@ -183,8 +186,9 @@ void BM_PBDReference( benchmark::State& state )
 
 // The floor of the straightforward SoA layout: color after color, the loads and stores of both
 // ends as AVX-512 gathers and scatters (what the compiler emits for the loop below), an OpenMP
-// barrier per color. On this machine it costs about three times sere_pbd_touch, which is why
-// the solver keeps (x, y, z, w) records and transposes them instead.
+// barrier per color. On this machine it costs 3 to 6 times a sweep of sere_pbd_touch_sweeps
+// (a 1-sweep call to a sweep of a 200-sweep call), which is why the solver keeps (x, y, z, w)
+// records and transposes them instead.
 void BM_GatherScatterSoA( benchmark::State& state )
 {
 	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
