@@ -1388,3 +1388,143 @@ sere_status sere_leaf_from_png( const char* path, sere_leaf_file* leaf, char* er
 {
 	return sere_leaf_from_png_mapped( path, leaf, NULL, err, err_size );
 }
+
+/* Without a blue dot the base is where a leaf drawn petiole down has its petiole: the outline
+ * point nearest the middle of the bottom of the silhouette's bounding box. */
+static void bottom_middle( const points* traced, double* x, double* y )
+{
+	double x_min = INFINITY, x_max = -INFINITY, y_max = -INFINITY;
+	for ( int32_t i = 0; i < traced->count; ++i )
+	{
+		x_min = fmin( x_min, traced->xy[2 * i] );
+		x_max = fmax( x_max, traced->xy[2 * i] );
+		y_max = fmax( y_max, traced->xy[2 * i + 1] );
+	}
+	*x = 0.5 * ( x_min + x_max );
+	*y = y_max;
+}
+
+sere_status sere_silhouette_from_png( const char* path, double** xy, int32_t* count, int32_t* width, int32_t* height,
+									  char* err, size_t err_size )
+{
+	if ( err != NULL && err_size > 0 )
+	{
+		err[0] = '\0';
+	}
+	reader r = { 0 };
+	r.path = path != NULL ? path : "(null)";
+	r.err = err;
+	r.err_size = err_size;
+	if ( path == NULL || xy == NULL || count == NULL || width == NULL || height == NULL )
+	{
+		return fail( &r, SERE_ERR_ARGUMENT, "no file name or no place for the outline" );
+	}
+	*xy = NULL;
+	*count = 0;
+	sere_status status = load_png( &r );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	points traced = { 0 };
+	outline o = { 0 };
+	r.kind = malloc( (size_t) r.n );
+	r.ink = malloc( (size_t) r.n );
+	r.ink_max = malloc( (size_t) r.n );
+	r.region = malloc( (size_t) r.n );
+	r.queue = malloc( sizeof( int32_t ) * (size_t) r.n );
+	if ( r.kind == NULL || r.ink == NULL || r.ink_max == NULL || r.region == NULL || r.queue == NULL )
+	{
+		status = fail( &r, SERE_ERR_MEMORY, "out of memory for a %d x %d image", r.w, r.h );
+		goto done;
+	}
+	classify( &r );
+	free( r.rgba );
+	r.rgba = NULL;
+	int32_t blade = silhouette( &r );
+	if ( blade < MIN_BLADE_PIXELS )
+	{
+		status = fail( &r, SERE_ERR_GEOMETRY,
+					   "no leaf: fewer than %d non-background pixels (background is white or transparent)",
+					   MIN_BLADE_PIXELS );
+		goto done;
+	}
+	status = trace_outline( &r, blade, &traced );
+	if ( status != SERE_OK )
+	{
+		goto done;
+	}
+	double base_x = 0.0, base_y = 0.0, radius = 0.0;
+	if ( base_dot( &r, &base_x, &base_y, &radius ) == 0 )
+	{
+		bottom_middle( &traced, &base_x, &base_y );
+	}
+	status = SERE_ERR_GEOMETRY;
+	for ( int level = 0; level < 3 && status == SERE_ERR_GEOMETRY; ++level )
+	{
+		status = make_outline( &traced, level < 1, level < 2, base_x, base_y, &o );
+	}
+	if ( status != SERE_OK )
+	{
+		status = status == SERE_ERR_MEMORY ? fail( &r, status, "out of memory for the outline" )
+										   : fail( &r, status, "the traced outline is not a simple polygon" );
+		goto done;
+	}
+	/* back from leaf units to pixels (make_outline's mapping inverted) */
+	for ( int32_t i = 0; i < o.count; ++i )
+	{
+		double x = o.xy[2 * i], y = o.xy[2 * i + 1];
+		o.xy[2 * i] = o.base_px + x * o.scale;
+		o.xy[2 * i + 1] = o.base_py - y * o.scale;
+	}
+	*xy = o.xy;
+	*count = o.count;
+	*width = r.w;
+	*height = r.h;
+	o.xy = NULL;
+
+done:
+	free( o.xy );
+	free( traced.xy );
+	free( r.kind ), free( r.ink ), free( r.ink_max ), free( r.region ), free( r.queue ), free( r.rgba );
+	return status;
+}
+
+sere_status sere_png_read_gray( const char* path, float** gray, int32_t* width, int32_t* height, char* err,
+								size_t err_size )
+{
+	if ( err != NULL && err_size > 0 )
+	{
+		err[0] = '\0';
+	}
+	reader r = { 0 };
+	r.path = path != NULL ? path : "(null)";
+	r.err = err;
+	r.err_size = err_size;
+	if ( path == NULL || gray == NULL || width == NULL || height == NULL )
+	{
+		return fail( &r, SERE_ERR_ARGUMENT, "no file name or no place for the image" );
+	}
+	*gray = NULL;
+	sere_status status = load_png( &r );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	float* g = malloc( sizeof( float ) * (size_t) r.n );
+	if ( g == NULL )
+	{
+		free( r.rgba );
+		return fail( &r, SERE_ERR_MEMORY, "out of memory for a %d x %d image", r.w, r.h );
+	}
+	for ( int32_t i = 0; i < r.n; ++i )
+	{
+		const uint8_t* p = r.rgba + 4 * (size_t) i;
+		g[i] = (float) ( ( 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2] ) * p[3] / ( 255.0 * 255.0 ) );
+	}
+	free( r.rgba );
+	*gray = g;
+	*width = r.w;
+	*height = r.h;
+	return SERE_OK;
+}

@@ -54,6 +54,22 @@ sere_status sere_leaf_from_png( const char* path, sere_leaf_file* leaf, char* er
 sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, sere_leaf_image_map* map, char* err,
 									   size_t err_size );
 
+/* The silhouette alone (seed 002, Sec. 3: the key points a user would click along the edge of
+ * a scanned leaf): the largest non-background region of a PNG (the blade colors above), traced,
+ * smoothed and simplified as above, in pixel coordinates (x right, y down), counter-clockwise as
+ * seen with y up. Point 0 is the base: the outline point nearest the centre of a blue base dot if
+ * the image has one, else the outline point nearest the middle of the bottom edge of the
+ * silhouette's bounding box (a leaf drawn petiole down). *xy (2 per point) is the caller's to
+ * free. Errors as sere_leaf_from_png, one line "PATH: problem". */
+sere_status sere_silhouette_from_png( const char* path, double** xy, int32_t* count, int32_t* width, int32_t* height,
+									  char* err, size_t err_size );
+
+/* Any PNG as 8-bit gray, row 0 at the top: the luminance (0.299 R + 0.587 G + 0.114 B) / 255
+ * in [0, 1], transparent pixels black. *gray is the caller's to free. Errors: cannot open, not a
+ * PNG, corrupt, too large. */
+sere_status sere_png_read_gray( const char* path, float** gray, int32_t* width, int32_t* height, char* err,
+								size_t err_size );
+
 #ifdef __cplusplus
 }
 #endif
