@@ -422,3 +422,121 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 	sere_cg_destroy( w );
 	free_csr( &a ), free_csr( &indefinite ), free_csr( &singular );
 }
+
+/* An irregular SPD matrix over several blocks: a weighted graph Laplacian (ring plus
+ * pseudo-random long edges, so threads read each other's rows) plus a positive diagonal. */
+static sere_csr irregular_spd( int32_t n )
+{
+	enum
+	{
+		extra = 3
+	};
+	int32_t max_nnz = n * ( 3 + 2 * extra );
+	sere_csr a = { n, 0, malloc( sizeof( int32_t ) * ( n + 1 ) ), malloc( sizeof( int32_t ) * max_nnz ),
+				   malloc( sizeof( double ) * max_nnz ) };
+	int32_t* degree = calloc( n, sizeof( int32_t ) );
+	int32_t( *edges )[2] = malloc( sizeof( int32_t[2] ) * n * ( 1 + extra ) );
+	int32_t edge_count = 0;
+	uint32_t state = 12345u;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		edges[edge_count][0] = i, edges[edge_count][1] = ( i + 1 ) % n, ++edge_count;
+		for ( int e = 0; e < extra && i % ( e + 2 ) == 0; ++e )
+		{
+			state = state * 1664525u + 1013904223u;
+			int32_t j = (int32_t) ( state % (uint32_t) n );
+			if ( j != i && j != ( i + 1 ) % n && ( j + 1 ) % n != i )
+			{
+				edges[edge_count][0] = i, edges[edge_count][1] = j, ++edge_count;
+			}
+		}
+	}
+	/* dense row scratch is fine at test sizes: n ≤ a few thousand */
+	double* row = calloc( n, sizeof( double ) );
+	int32_t** adjacency = malloc( sizeof( int32_t* ) * n );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		adjacency[i] = malloc( sizeof( int32_t ) * ( 2 + 2 * extra + 8 ) );
+	}
+	for ( int32_t e = 0; e < edge_count; ++e )
+	{
+		int32_t i = edges[e][0], j = edges[e][1];
+		adjacency[i][degree[i]++] = j;
+		adjacency[j][degree[j]++] = i;
+	}
+	a.row_ptr[0] = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double diagonal = 0.01 * ( 1 + i % 7 );
+		for ( int32_t k = 0; k < degree[i]; ++k )
+		{
+			int32_t j = adjacency[i][k];
+			double weight = 0.5 + 0.25 * ( ( i + j ) % 5 );
+			row[j] -= weight;
+			diagonal += weight;
+		}
+		row[i] += diagonal;
+		for ( int32_t j = 0; j < n; ++j )
+		{
+			if ( row[j] != 0.0 )
+			{
+				a.col[a.nnz] = j;
+				a.val[a.nnz++] = row[j];
+				row[j] = 0.0;
+			}
+		}
+		a.row_ptr[i + 1] = a.nnz;
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		free( adjacency[i] );
+	}
+	free( adjacency ), free( row ), free( edges ), free( degree );
+	return a;
+}
+
+Test( cg, bitwise_identical_for_1_2_3_threads )
+{
+	const int32_t n = 3 * SERE_CG_BLOCK + 77; /* several blocks and a short last one */
+	sere_csr a = irregular_spd( n );
+	double* b = malloc( sizeof( double ) * n );
+	double* x[3];
+	sere_cg_result result[3];
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		b[i] = sin( 0.01 * i ) + 0.5;
+	}
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( n, &w ), SERE_OK );
+	for ( int t = 0; t < 3; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		x[t] = malloc( sizeof( double ) * n );
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			x[t][i] = 0.1 * cos( 0.02 * i ); /* warm start */
+		}
+		cr_assert_eq( sere_cg_solve( w, &a, b, x[t], 1e-11, 2000, &result[t] ), SERE_OK );
+		cr_expect_leq( result[t].residual, 1e-11 );
+	}
+	for ( int t = 1; t < 3; ++t )
+	{
+		cr_expect_eq( result[t].iterations, result[0].iterations );
+		cr_expect_eq( memcmp( &result[t].residual, &result[0].residual, sizeof( double ) ), 0 );
+		cr_expect_eq( memcmp( x[t], x[0], sizeof( double ) * n ), 0, "%d threads differ from 1", t + 1 );
+	}
+	/* The solution satisfies A x = b to the tolerance, checked independently. */
+	double* ax = malloc( sizeof( double ) * n );
+	sere_csr_spmv( &a, x[0], ax );
+	double rr = 0.0, bb = 0.0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		rr += ( b[i] - ax[i] ) * ( b[i] - ax[i] );
+		bb += b[i] * b[i];
+	}
+	cr_expect_leq( sqrt( rr / bb ), 2e-11 );
+	omp_set_num_threads( 2 );
+	sere_cg_destroy( w );
+	free( ax ), free( b ), free( x[0] ), free( x[1] ), free( x[2] );
+	free_csr( &a );
+}
