@@ -121,7 +121,7 @@ install: all
 	install -m 755 $(SERE) $(DESTDIR)$(PREFIX)/bin/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' scripts/sere.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/sere.pc
 	install -d $(DESTDIR)$(PREFIX)/share/sere
-	cp -r data/presets data/leaves $(wildcard data/skeletons) $(DESTDIR)$(PREFIX)/share/sere/
+	cp -r data/presets data/leaves data/seasons data/masks $(wildcard data/skeletons) $(DESTDIR)$(PREFIX)/share/sere/
 
 format:
 	clang-format -i $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC)

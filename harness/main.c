@@ -17,6 +17,8 @@ static const command commands[] = {
 	  "osmotic water flow alone: CG iterations, residuals, water per layer; --dump the system" },
 	{ "run", sere_cmd_run, "dry a leaf (Algorithm 1): frames, statistics, summary and pictures" },
 	{ "table1", sere_cmd_table1, "the three Table 1 leaves: our ms per frame beside the paper's" },
+	{ "season", sere_cmd_season,
+	  "seasonal leaves on an L-system tree (seed 002): Markov chain of leaf states under a weather schedule" },
 	{ "wilt", sere_cmd_wilt, "wilt a leaf or a plant on a stem (venation skeleton, seed 003): PLY/VTK/PNG frames" },
 	{ "topo", sere_cmd_topo, "show the hwloc topology and how threads are bound" },
 };
