@@ -416,33 +416,6 @@ static void season_help( void )
 			"summary.json.\n" );
 }
 
-static int parse_long( const char* option, const char* text, long lo, long hi, long* value )
-{
-	char* end;
-	errno = 0;
-	long v = strtol( text, &end, 10 );
-	if ( *text == '\0' || *end != '\0' || errno != 0 || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere season: %s takes a whole number from %ld to %ld, not '%s'\n", option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
-static int parse_real( const char* option, const char* text, double lo, double hi, double* value )
-{
-	char* end;
-	double v = strtod( text, &end );
-	if ( *text == '\0' || *end != '\0' || !isfinite( v ) || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere season: %s takes a number from %g to %g, not '%s'\n", option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
 /* 0 to run, 1 for --help, 2 for bad input. */
 static int parse_options( int argc, char** argv, options* o )
 {
@@ -510,27 +483,27 @@ static int parse_options( int argc, char** argv, options* o )
 		else if ( strcmp( a, "--out" ) == 0 )
 			o->out = v;
 		else if ( strcmp( a, "--days" ) == 0 )
-			bad = parse_long( a, v, 1, MAX_DAYS, &o->days );
+			bad = sere_parse_long( "season", a, v, 1, MAX_DAYS, &o->days );
 		else if ( strcmp( a, "--temperature" ) == 0 )
-			bad = parse_real( a, v, -90.0, 70.0, &o->temperature );
+			bad = sere_parse_real( "season", a, v, -90.0, 70.0, &o->temperature );
 		else if ( strcmp( a, "--humidity" ) == 0 )
-			bad = parse_real( a, v, 0.0, 1.0, &o->humidity );
+			bad = sere_parse_real( "season", a, v, 0.0, 1.0, &o->humidity );
 		else if ( strcmp( a, "--leaves" ) == 0 )
-			bad = parse_long( a, v, 1, 1000000000L, &o->leaves );
+			bad = sere_parse_long( "season", a, v, 1, 1000000000L, &o->leaves );
 		else if ( strcmp( a, "--seed" ) == 0 )
-			bad = parse_long( a, v, 0, 2147483647L, &o->seed );
+			bad = sere_parse_long( "season", a, v, 0, 2147483647L, &o->seed );
 		else if ( strcmp( a, "--threads" ) == 0 )
-			bad = parse_long( a, v, 0, 256, &o->threads );
+			bad = sere_parse_long( "season", a, v, 0, 256, &o->threads );
 		else if ( strcmp( a, "--iterations" ) == 0 )
-			bad = parse_long( a, v, 0, 9, &o->iterations );
+			bad = sere_parse_long( "season", a, v, 0, 9, &o->iterations );
 		else if ( strcmp( a, "--samples" ) == 0 )
-			bad = parse_long( a, v, 8, 2000, &o->samples );
+			bad = sere_parse_long( "season", a, v, 8, 2000, &o->samples );
 		else if ( strcmp( a, "--optimize" ) == 0 )
-			bad = parse_long( a, v, 0, 10000, &o->optimize );
+			bad = sere_parse_long( "season", a, v, 0, 10000, &o->optimize );
 		else if ( strcmp( a, "--steps" ) == 0 )
-			bad = parse_long( a, v, 0, 100000, &o->steps );
+			bad = sere_parse_long( "season", a, v, 0, 100000, &o->steps );
 		else if ( strcmp( a, "--size" ) == 0 )
-			bad = parse_long( a, v, 200, 4000, &o->size );
+			bad = sere_parse_long( "season", a, v, 200, 4000, &o->size );
 		if ( bad )
 		{
 			return 2;

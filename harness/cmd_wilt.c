@@ -72,33 +72,6 @@ static void wilt_help( void )
 /* ------------------------------------------------------------------------------------------- */
 /* Option parsing: one clear line and exit status 2 on a bad value. */
 
-static int parse_long( const char* option, const char* text, long lo, long hi, long* value )
-{
-	char* end;
-	errno = 0;
-	long v = strtol( text, &end, 10 );
-	if ( *text == '\0' || *end != '\0' || errno != 0 || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere wilt: %s takes a whole number from %ld to %ld, not '%s'\n", option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
-static int parse_real( const char* option, const char* text, double lo, double hi, double* value )
-{
-	char* end;
-	double v = strtod( text, &end );
-	if ( *text == '\0' || *end != '\0' || !isfinite( v ) || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere wilt: %s takes a number from %g to %g, not '%s'\n", option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
 static int parse_pair( const char* option, const char* text, char separator, double lo, double hi, double* a,
 					   double* b )
 {
@@ -756,96 +729,96 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		int bad = 0;
 		if ( strcmp( a, "--length" ) == 0 )
 		{
-			bad = parse_real( a, v, 1e-6, 1e6, &o->length );
+			bad = sere_parse_real( "wilt", a, v, 1e-6, 1e6, &o->length );
 		}
 		else if ( strcmp( a, "--width" ) == 0 )
 		{
-			bad = parse_real( a, v, 1e-6, 1e6, &o->width );
+			bad = sere_parse_real( "wilt", a, v, 1e-6, 1e6, &o->width );
 		}
 		else if ( strcmp( a, "--features" ) == 0 )
 		{
-			bad = parse_long( a, v, 3, 10000, &o->features );
+			bad = sere_parse_long( "wilt", a, v, 3, 10000, &o->features );
 		}
 		else if ( strcmp( a, "--spacing" ) == 0 )
 		{
-			bad = parse_real( a, v, 1e-9, 1e6, &o->spacing );
+			bad = sere_parse_real( "wilt", a, v, 1e-9, 1e6, &o->spacing );
 		}
 		else if ( strcmp( a, "--subdivide" ) == 0 )
 		{
-			bad = parse_long( a, v, 0, 8, &o->subdivide );
+			bad = sere_parse_long( "wilt", a, v, 0, 8, &o->subdivide );
 		}
 		else if ( strcmp( a, "--min-edge" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 1e6, &o->min_edge );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 1e6, &o->min_edge );
 		}
 		else if ( strcmp( a, "--mid-segments" ) == 0 )
 		{
-			bad = parse_long( a, v, 1, SERE_MAX_SEGMENTS, &n );
+			bad = sere_parse_long( "wilt", a, v, 1, SERE_MAX_SEGMENTS, &n );
 			o->venation.mid_segments = (int32_t) n;
 		}
 		else if ( strcmp( a, "--veins" ) == 0 )
 		{
-			bad = parse_long( a, v, 0, 64, &n );
+			bad = sere_parse_long( "wilt", a, v, 0, 64, &n );
 			o->venation.secondary_count = (int32_t) n;
 		}
 		else if ( strcmp( a, "--vein-segments" ) == 0 )
 		{
-			bad = parse_long( a, v, 1, SERE_MAX_SEGMENTS, &n );
+			bad = sere_parse_long( "wilt", a, v, 1, SERE_MAX_SEGMENTS, &n );
 			o->venation.secondary_segments = (int32_t) n;
 		}
 		else if ( strcmp( a, "--vein-angle" ) == 0 )
 		{
-			bad = parse_real( a, v, 1.0, 179.0, &d );
+			bad = sere_parse_real( "wilt", a, v, 1.0, 179.0, &d );
 			o->venation.angle = (float) ( d * PI / 180.0 );
 		}
 		else if ( strcmp( a, "--mid-bend" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 180.0, &d );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 180.0, &d );
 			o->venation.mid_bend = (float) ( d * PI / 180.0 );
 		}
 		else if ( strcmp( a, "--vein-bend" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 180.0, &d );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 180.0, &d );
 			o->venation.secondary_bend = (float) ( d * PI / 180.0 );
 		}
 		else if ( strcmp( a, "--droop" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 1e6, &d );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 1e6, &d );
 			o->wilt.droop_max = (float) d;
 		}
 		else if ( strcmp( a, "--min-angle" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 180.0, &d );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 180.0, &d );
 			o->wilt.min_angle = (float) ( d * PI / 180.0 );
 		}
 		else if ( strcmp( a, "--spread" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 0.99, &d );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 0.99, &d );
 			o->wilt.spread = (float) d;
 		}
 		else if ( strcmp( a, "--leaves" ) == 0 )
 		{
-			bad = parse_long( a, v, 1, 10000, &o->leaves );
+			bad = sere_parse_long( "wilt", a, v, 1, 10000, &o->leaves );
 		}
 		else if ( strcmp( a, "--stagger" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 100.0, &o->stagger );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 100.0, &o->stagger );
 		}
 		else if ( strcmp( a, "--internode" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 1e6, &o->internode );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 1e6, &o->internode );
 		}
 		else if ( strcmp( a, "--elevation" ) == 0 )
 		{
-			bad = parse_real( a, v, -80.0, 80.0, &o->elevation );
+			bad = sere_parse_real( "wilt", a, v, -80.0, 80.0, &o->elevation );
 		}
 		else if ( strcmp( a, "--frames" ) == 0 )
 		{
-			bad = parse_long( a, v, 1, 1000000, &o->frames );
+			bad = sere_parse_long( "wilt", a, v, 1, 1000000, &o->frames );
 		}
 		else if ( strcmp( a, "--speed" ) == 0 )
 		{
-			bad = parse_real( a, v, 0.0, 100.0, &o->speed );
+			bad = sere_parse_real( "wilt", a, v, 0.0, 100.0, &o->speed );
 		}
 		else if ( strcmp( a, "--out" ) == 0 )
 		{
@@ -857,7 +830,7 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		}
 		else if ( strcmp( a, "--every" ) == 0 )
 		{
-			bad = parse_long( a, v, 1, 1000000, &o->every );
+			bad = sere_parse_long( "wilt", a, v, 1, 1000000, &o->every );
 		}
 		else if ( strcmp( a, "--size" ) == 0 )
 		{
@@ -874,7 +847,7 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		}
 		else
 		{
-			bad = parse_long( a, v, 0, 256, &o->threads );
+			bad = sere_parse_long( "wilt", a, v, 0, 256, &o->threads );
 		}
 		if ( bad )
 		{

@@ -1,4 +1,4 @@
-/* sere harness — files that are never half-written, mesh writers, and a progress bar. */
+/* sere harness — files that are never half-written, mesh writers, a progress bar and option values. */
 #pragma once
 
 #include <stdint.h>
@@ -60,3 +60,8 @@ void sere_progress_end( sere_progress* progress );
 
 /* Wall-clock seconds from a monotonic clock. */
 double sere_now( void );
+
+/* An option's value: 0 when text is a whole number (or a finite number) in [lo, hi]; otherwise
+ * one line "sere COMMAND: OPTION takes ..., not 'TEXT'" on stderr and -1. */
+int sere_parse_long( const char* command, const char* option, const char* text, long lo, long hi, long* value );
+int sere_parse_real( const char* command, const char* option, const char* text, double lo, double hi, double* value );

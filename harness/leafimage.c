@@ -1237,8 +1237,8 @@ static int base_dot( reader* r, double* x, double* y, double* radius )
 	return best;
 }
 
-sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, sere_leaf_image_map* map, char* err,
-									   size_t err_size )
+/* A reader for one public call: the caller's error buffer cleared, the path named in messages. */
+static reader reader_start( const char* path, char* err, size_t err_size )
 {
 	if ( err != NULL && err_size > 0 )
 	{
@@ -1248,6 +1248,48 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 	r.path = path != NULL ? path : "(null)";
 	r.err = err;
 	r.err_size = err_size;
+	return r;
+}
+
+static void reader_free( reader* r )
+{
+	free( r->kind ), free( r->ink ), free( r->ink_max ), free( r->region ), free( r->queue ), free( r->rgba );
+}
+
+/* Loads the PNG, classifies its pixels, finds the silhouette and traces its outline into
+ * traced; no_leaf names what was missing when the silhouette is too small. The caller frees
+ * traced.xy and the reader's buffers whatever the status. */
+static sere_status trace_png( reader* r, points* traced, const char* no_leaf )
+{
+	sere_status status = load_png( r );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	r->kind = malloc( (size_t) r->n );
+	r->ink = malloc( (size_t) r->n );
+	r->ink_max = malloc( (size_t) r->n );
+	r->region = malloc( (size_t) r->n );
+	r->queue = malloc( sizeof( int32_t ) * (size_t) r->n );
+	if ( r->kind == NULL || r->ink == NULL || r->ink_max == NULL || r->region == NULL || r->queue == NULL )
+	{
+		return fail( r, SERE_ERR_MEMORY, "out of memory for a %d x %d image", r->w, r->h );
+	}
+	classify( r );
+	free( r->rgba );
+	r->rgba = NULL;
+	int32_t blade = silhouette( r );
+	if ( blade < MIN_BLADE_PIXELS )
+	{
+		return fail( r, SERE_ERR_GEOMETRY, "no leaf: fewer than %d %s", MIN_BLADE_PIXELS, no_leaf );
+	}
+	return trace_outline( r, blade, traced );
+}
+
+sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, sere_leaf_image_map* map, char* err,
+									   size_t err_size )
+{
+	reader r = reader_start( path, err, err_size );
 	if ( path == NULL || leaf == NULL )
 	{
 		return fail( &r, SERE_ERR_ARGUMENT, path == NULL ? "no file name" : "no leaf to fill" );
@@ -1257,37 +1299,10 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 	{
 		memset( map, 0, sizeof( *map ) );
 	}
-	sere_status status = load_png( &r );
-	if ( status != SERE_OK )
-	{
-		return status;
-	}
 	points traced = { 0 };
 	outline o = { 0 };
 	veins_work v = { 0 };
-	r.kind = malloc( (size_t) r.n );
-	r.ink = malloc( (size_t) r.n );
-	r.ink_max = malloc( (size_t) r.n );
-	r.region = malloc( (size_t) r.n );
-	r.queue = malloc( sizeof( int32_t ) * (size_t) r.n );
-	if ( r.kind == NULL || r.ink == NULL || r.ink_max == NULL || r.region == NULL || r.queue == NULL )
-	{
-		status = fail( &r, SERE_ERR_MEMORY, "out of memory for a %d x %d image", r.w, r.h );
-		goto done;
-	}
-	classify( &r );
-	free( r.rgba );
-	r.rgba = NULL;
-
-	int32_t blade = silhouette( &r );
-	if ( blade < MIN_BLADE_PIXELS )
-	{
-		status = fail( &r, SERE_ERR_GEOMETRY,
-					   "no leaf: fewer than %d blade pixels (the blade is any color but white or transparent)",
-					   MIN_BLADE_PIXELS );
-		goto done;
-	}
-	status = trace_outline( &r, blade, &traced );
+	sere_status status = trace_png( &r, &traced, "blade pixels (the blade is any color but white or transparent)" );
 	if ( status != SERE_OK )
 	{
 		goto done;
@@ -1380,7 +1395,7 @@ done:
 	veins_work_free( &v );
 	free( o.xy );
 	free( traced.xy );
-	free( r.kind ), free( r.ink ), free( r.ink_max ), free( r.region ), free( r.queue ), free( r.rgba );
+	reader_free( &r );
 	return status;
 }
 
@@ -1407,49 +1422,16 @@ static void bottom_middle( const points* traced, double* x, double* y )
 sere_status sere_silhouette_from_png( const char* path, double** xy, int32_t* count, int32_t* width, int32_t* height,
 									  char* err, size_t err_size )
 {
-	if ( err != NULL && err_size > 0 )
-	{
-		err[0] = '\0';
-	}
-	reader r = { 0 };
-	r.path = path != NULL ? path : "(null)";
-	r.err = err;
-	r.err_size = err_size;
+	reader r = reader_start( path, err, err_size );
 	if ( path == NULL || xy == NULL || count == NULL || width == NULL || height == NULL )
 	{
 		return fail( &r, SERE_ERR_ARGUMENT, "no file name or no place for the outline" );
 	}
 	*xy = NULL;
 	*count = 0;
-	sere_status status = load_png( &r );
-	if ( status != SERE_OK )
-	{
-		return status;
-	}
 	points traced = { 0 };
 	outline o = { 0 };
-	r.kind = malloc( (size_t) r.n );
-	r.ink = malloc( (size_t) r.n );
-	r.ink_max = malloc( (size_t) r.n );
-	r.region = malloc( (size_t) r.n );
-	r.queue = malloc( sizeof( int32_t ) * (size_t) r.n );
-	if ( r.kind == NULL || r.ink == NULL || r.ink_max == NULL || r.region == NULL || r.queue == NULL )
-	{
-		status = fail( &r, SERE_ERR_MEMORY, "out of memory for a %d x %d image", r.w, r.h );
-		goto done;
-	}
-	classify( &r );
-	free( r.rgba );
-	r.rgba = NULL;
-	int32_t blade = silhouette( &r );
-	if ( blade < MIN_BLADE_PIXELS )
-	{
-		status = fail( &r, SERE_ERR_GEOMETRY,
-					   "no leaf: fewer than %d non-background pixels (background is white or transparent)",
-					   MIN_BLADE_PIXELS );
-		goto done;
-	}
-	status = trace_outline( &r, blade, &traced );
+	sere_status status = trace_png( &r, &traced, "non-background pixels (background is white or transparent)" );
 	if ( status != SERE_OK )
 	{
 		goto done;
@@ -1486,21 +1468,14 @@ sere_status sere_silhouette_from_png( const char* path, double** xy, int32_t* co
 done:
 	free( o.xy );
 	free( traced.xy );
-	free( r.kind ), free( r.ink ), free( r.ink_max ), free( r.region ), free( r.queue ), free( r.rgba );
+	reader_free( &r );
 	return status;
 }
 
 sere_status sere_png_read_gray( const char* path, float** gray, int32_t* width, int32_t* height, char* err,
 								size_t err_size )
 {
-	if ( err != NULL && err_size > 0 )
-	{
-		err[0] = '\0';
-	}
-	reader r = { 0 };
-	r.path = path != NULL ? path : "(null)";
-	r.err = err;
-	r.err_size = err_size;
+	reader r = reader_start( path, err, err_size );
 	if ( path == NULL || gray == NULL || width == NULL || height == NULL )
 	{
 		return fail( &r, SERE_ERR_ARGUMENT, "no file name or no place for the image" );
