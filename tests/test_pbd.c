@@ -629,3 +629,133 @@ Test( pbd, bad_values_are_found_in_every_band_at_both_thread_counts )
 	sere_pbd_destroy( pbd );
 	mesh_free( &m );
 }
+
+/* The sign of the Gaussian curvature of the least-squares quadric z = a x² + b xy + c y² + d x
+ * + e y + f through the triangle layer (x, y about the sheet's centre): 4ac − b², which has the
+ * sign of K at the centre. */
+static double quadric_curvature( const test_mesh* m, float cx, float cy )
+{
+	double a[6][7] = { { 0 } };
+	for ( int32_t i = 0; i < m->nt; ++i )
+	{
+		double x = m->x[i] - cx, y = m->y[i] - cy;
+		double row[6] = { x * x, x * y, y * y, x, y, 1.0 };
+		for ( int r = 0; r < 6; ++r )
+		{
+			for ( int c = 0; c < 6; ++c )
+			{
+				a[r][c] += row[r] * row[c];
+			}
+			a[r][6] += row[r] * m->z[i];
+		}
+	}
+	/* the normal equations are SPD: elimination without pivoting */
+	for ( int k = 0; k < 6; ++k )
+	{
+		for ( int r = k + 1; r < 6; ++r )
+		{
+			double f = a[r][k] / a[k][k];
+			for ( int c = k; c < 7; ++c )
+			{
+				a[r][c] -= f * a[k][c];
+			}
+		}
+	}
+	double q[6];
+	for ( int k = 5; k >= 0; --k )
+	{
+		double sum = a[k][6];
+		for ( int c = k + 1; c < 6; ++c )
+		{
+			sum -= a[k][c] * q[c];
+		}
+		q[k] = sum / a[k][k];
+	}
+	return 4.0 * q[0] * q[2] - q[1] * q[1];
+}
+
+typedef enum shrink_profile
+{
+	SHRINK_UNIFORM,
+	SHRINK_CENTRE_MORE,
+	SHRINK_RIM_MORE,
+} shrink_profile;
+
+/* Fig. 14 (b, c): a thin double layer (1.2 wide, 0.005 thick, the paper's 1:0.002–0.001 order)
+ * whose two layers shrink alike, by a loss that depends on the distance from the centre, ramped
+ * in over 200 frames as drying would and then left to settle for 200 more, without gravity.
+ * Reports the triangle layer's out-of-plane extent and the curvature sign of its quadric. */
+static void buckle( shrink_profile profile, double* extent, double* curvature )
+{
+	const int32_t nx = 24;
+	const float spacing = 0.05f, half = 0.5f * spacing * (float) nx;
+	test_mesh m;
+	double_layer( &m, nx, nx, spacing, 0.005f, 0.2f );
+	float* loss = malloc( sizeof( float ) * (size_t) m.count );
+	float* rest = malloc( sizeof( float ) * (size_t) m.count );
+	for ( int32_t s = 0; s < m.count; ++s )
+	{
+		float mx = 0.5f * ( m.x[m.a[s]] + m.x[m.b[s]] ) - half, my = 0.5f * ( m.y[m.a[s]] + m.y[m.b[s]] ) - half;
+		float r = fminf( sqrtf( mx * mx + my * my ) / half, 1.0f );
+		loss[s] = profile == SHRINK_UNIFORM ? 0.05f : profile == SHRINK_CENTRE_MORE ? 0.1f * ( 1.0f - r ) : 0.1f * r;
+	}
+	/* a perturbation far below the thickness, so that the flat state is not an exact symmetry */
+	for ( int32_t i = 0; i < m.n; ++i )
+	{
+		m.z[i] += 1e-4f * sinf( 3.1f * m.x[i] + 1.7f * m.y[i] * m.y[i] );
+	}
+	sere_pbd* pbd = make_solver( &m, m.rest );
+	sere_pbd_params params = sere_pbd_params_default();
+	params.max_iterations = 100;
+	size_t bytes = sizeof( float ) * (size_t) m.n;
+	float *vx = calloc( 1, bytes ), *vy = calloc( 1, bytes ), *vz = calloc( 1, bytes );
+	float *px = malloc( bytes ), *py = malloc( bytes ), *pz = malloc( bytes );
+	const float gravity[3] = { 0.0f, 0.0f, 0.0f };
+	for ( int frame = 0; frame < 400; ++frame )
+	{
+		float ramp = fminf( 1.0f, (float) frame / 200.0f );
+		for ( int32_t s = 0; s < m.count; ++s )
+		{
+			rest[s] = m.rest[s] * ( 1.0f - ramp * loss[s] );
+		}
+		cr_assert_eq( sere_pbd_set_rest( pbd, rest ), SERE_OK );
+		sere_pbd_predict( m.n, m.x, m.y, m.z, vx, vy, vz, px, py, pz, m.inv_m, gravity, params.dt );
+		sere_pbd_report report;
+		cr_assert_eq( sere_pbd_project( pbd, px, py, pz, m.inv_m, &params, &report ), SERE_OK );
+		sere_pbd_finish( m.n, m.x, m.y, m.z, vx, vy, vz, px, py, pz, params.dt );
+		for ( int32_t i = 0; i < m.n; ++i )
+		{
+			vx[i] *= 0.98f, vy[i] *= 0.98f, vz[i] *= 0.98f; /* air damping, so the sheet settles */
+		}
+	}
+	double lo = INFINITY, hi = -INFINITY;
+	for ( int32_t i = 0; i < m.nt; ++i )
+	{
+		lo = fmin( lo, m.z[i] ), hi = fmax( hi, m.z[i] );
+	}
+	*extent = hi - lo;
+	*curvature = quadric_curvature( &m, half, half );
+	free( vx ), free( vy ), free( vz ), free( px ), free( py ), free( pz ), free( loss ), free( rest );
+	sere_pbd_destroy( pbd );
+	mesh_free( &m );
+}
+
+Test( pbd, fig14_uneven_shrinkage_buckles )
+{
+	double extent, curvature;
+	/* Shrinking the same everywhere leaves a stress-free, smaller flat sheet: its extent stays
+	 * at the order of the 1e-4 perturbation and the strain the sweeps leave (measured 1.2e-3;
+	 * bound 1% of the width). */
+	buckle( SHRINK_UNIFORM, &extent, &curvature );
+	cr_expect_lt( extent, 0.012, "uniform shrinkage buckled: extent %g", extent );
+	/* (b) the centre shrinks more: the rim is too long for it and the sheet takes negative
+	 * Gaussian curvature, a saddle (measured extent 0.28, 4ac − b² = −0.17). */
+	buckle( SHRINK_CENTRE_MORE, &extent, &curvature );
+	cr_expect_gt( extent, 0.1, "centre shrinking more: extent %g", extent );
+	cr_expect_lt( curvature, -0.02, "centre shrinking more: 4ac - b^2 = %g, not a saddle", curvature );
+	/* (c) the rim shrinks more: the centre has too much area and bulges, positive curvature
+	 * (measured extent 0.21, 4ac − b² = +0.24). */
+	buckle( SHRINK_RIM_MORE, &extent, &curvature );
+	cr_expect_gt( extent, 0.1, "rim shrinking more: extent %g", extent );
+	cr_expect_gt( curvature, 0.02, "rim shrinking more: 4ac - b^2 = %g, not a dome", curvature );
+}
