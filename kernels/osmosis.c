@@ -13,6 +13,8 @@ struct sere_osmosis
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
 	int32_t spring_count;
 	double *rhs, *c, *edge_sum, *length;
+	double* last; /* the concentration the previous step started from */
+	int has_last;
 	sere_cg_workspace* cg;
 };
 
@@ -46,6 +48,7 @@ void sere_osmosis_destroy( sere_osmosis* o )
 	sere_free( o->diagonal );
 	sere_free( o->rhs );
 	sere_free( o->c );
+	sere_free( o->last );
 	sere_free( o->edge_sum );
 	sere_free( o->length );
 	sere_cg_destroy( o->cg );
@@ -86,11 +89,12 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	o->diagonal = sere_alloc( sizeof( int32_t ) * (size_t) count );
 	o->rhs = sere_alloc( sizeof( double ) * (size_t) count );
 	o->c = sere_alloc( sizeof( double ) * (size_t) count );
+	o->last = sere_alloc( sizeof( double ) * (size_t) count );
 	o->edge_sum = sere_alloc( sizeof( double ) * (size_t) count );
 	o->length = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
 	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) count );
 	if ( !o->a.row_ptr || !o->a.col || !o->a.val || !o->neighbor_spring || !o->diagonal || !o->rhs || !o->c ||
-		 !o->edge_sum || !o->length || !fill || sere_cg_create( count, &o->cg ) != SERE_OK )
+		 !o->last || !o->edge_sum || !o->length || !fill || sere_cg_create( count, &o->cg ) != SERE_OK )
 	{
 		free( fill );
 		sere_osmosis_destroy( o );
@@ -249,8 +253,11 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		double scale = params->mode == SERE_OSMOSIS_CONSERVATIVE ? 1.0 : 0.5 * ei;
 		o->a.val[o->diagonal[i]] = scale * mi - off_sum;
 		o->rhs[i] = scale * ( w[gi] + rate_dt );
-		/* initial guess: the current concentration (warm start) */
-		o->c[i] = w[gi] / mi;
+		/* initial guess: the current concentration extrapolated along its last change (a
+		 * concentration is never negative, so neither is the guess) */
+		double now = w[gi] / mi, ahead = 2.0 * now - o->last[i];
+		o->c[i] = o->has_last && ahead > 0.0 ? ahead : o->has_last ? 0.0 : now;
+		o->last[i] = now;
 	}
 	for ( int32_t k = 0; k < params->supply_count; ++k )
 	{
@@ -263,6 +270,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		o->rhs[i] += scale * params->supply_rate * dt;
 	}
 
+	o->has_last = 1;
 	sere_cg_result result;
 	sere_status status =
 		sere_cg_solve( o->cg, &o->a, o->rhs, o->c, params->tolerance, params->max_iterations, &result );
