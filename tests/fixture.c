@@ -1,6 +1,9 @@
+#define _POSIX_C_SOURCE 200809L
 #include "fixture.h"
 
+#include <stdio.h>
 #include <stdlib.h>
+#include <sys/wait.h>
 
 static double next_unit( uint64_t* state )
 {
@@ -102,4 +105,27 @@ void sere_test_plane_free( sere_test_plane* plane )
 	free( plane->y );
 	free( plane->tri );
 	free( plane->veins );
+}
+
+const char* sere_test_bin( void )
+{
+	const char* bin = getenv( "SERE_BIN" );
+	return bin != NULL ? bin : "build/sere";
+}
+
+int sere_test_run( const char* args, char* err, size_t err_size )
+{
+	char command[2048];
+	snprintf( command, sizeof( command ), "%s %s 2>&1 >/dev/null", sere_test_bin(), args );
+	err[0] = '\0';
+	FILE* pipe = popen( command, "r" );
+	if ( pipe == NULL )
+	{
+		snprintf( err, err_size, "cannot run %s", command );
+		return 128;
+	}
+	size_t used = fread( err, 1, err_size - 1, pipe );
+	err[used] = '\0';
+	int status = pclose( pipe );
+	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
 }

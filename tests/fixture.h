@@ -4,6 +4,8 @@
 
 #include "layers.h"
 
+#include <stddef.h>
+
 /* A rectangle [0, width] x [0, height] as a grid of nx x ny cells, each cut into two
  * triangles, with jitter (fraction of a cell) on interior points from a fixed seed. The
  * boundary points come first, counter-clockwise from (0, 0); the horizontal middle row, if
@@ -20,3 +22,10 @@ typedef struct sere_test_plane
 void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, double width, double height, double jitter,
 						   int vein_row, uint64_t seed );
 void sere_test_plane_free( sere_test_plane* plane );
+
+/* The sere binary under test: $SERE_BIN (make test sets it), else build/sere. */
+const char* sere_test_bin( void );
+
+/* Runs "BIN ARGS" through the shell with stdout discarded and stderr captured into err (NUL
+ * terminated, cut at err_size − 1); returns the exit status, 128 when it did not exit. */
+int sere_test_run( const char* args, char* err, size_t err_size );

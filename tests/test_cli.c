@@ -1,6 +1,8 @@
 /* The sere command as a user meets it: bad input gives one clear line and a non-zero exit;
  * an interrupted run leaves complete outputs. SERE_BIN names the binary under test. */
 #define _DEFAULT_SOURCE
+#include "fixture.h"
+
 #include <criterion/criterion.h>
 #include <math.h>
 #include <signal.h>
@@ -12,29 +14,10 @@
 #include <time.h>
 #include <unistd.h>
 
-static const char* sere_bin( void )
-{
-	const char* bin = getenv( "SERE_BIN" );
-	return bin != NULL ? bin : "build/sere";
-}
-
-/* Runs sere with args; captures stderr; returns the exit status. */
-static int run( const char* args, char* err, size_t err_size )
-{
-	char command[2048];
-	snprintf( command, sizeof( command ), "%s %s 2>&1 >/dev/null", sere_bin(), args );
-	FILE* pipe = popen( command, "r" );
-	cr_assert_not_null( pipe );
-	size_t used = fread( err, 1, err_size - 1, pipe );
-	err[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
-}
-
 static void expect_error( const char* args, const char* phrase )
 {
 	char err[4096];
-	int code = run( args, err, sizeof( err ) );
+	int code = sere_test_run( args, err, sizeof( err ) );
 	cr_expect_neq( code, 0, "'%s' should fail", args );
 	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
 	/* one line, ending in a newline */
@@ -65,7 +48,7 @@ Test( cli, help_describes_every_command )
 	for ( size_t k = 0; k < sizeof( commands ) / sizeof( commands[0] ); ++k )
 	{
 		char command[512], out[8192];
-		snprintf( command, sizeof( command ), "%s %s --help", sere_bin(), commands[k] );
+		snprintf( command, sizeof( command ), "%s %s --help", sere_test_bin(), commands[k] );
 		FILE* pipe = popen( command, "r" );
 		size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
 		out[used] = '\0';
@@ -78,7 +61,7 @@ Test( cli, model_json_table1_counts )
 {
 	char command[512], out[8192];
 	snprintf( command, sizeof( command ), "%s model data/leaves/wisteria.leaf --particles 12750 --springs 50436 --json",
-			  sere_bin() );
+			  sere_test_bin() );
 	FILE* pipe = popen( command, "r" );
 	size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
 	out[used] = '\0';
@@ -104,8 +87,8 @@ Test( cli, interrupted_run_leaves_complete_outputs )
 	{
 		freopen( "/dev/null", "w", stdout );
 		freopen( "/dev/null", "w", stderr );
-		execl( sere_bin(), sere_bin(), "run", "data/leaves/hickory.leaf", "--points", "600", "--frames", "100000",
-			   "--every", "5", "--out", dir, (char*) NULL );
+		execl( sere_test_bin(), sere_test_bin(), "run", "data/leaves/hickory.leaf", "--points", "600", "--frames",
+			   "100000", "--every", "5", "--out", dir, (char*) NULL );
 		_exit( 127 );
 	}
 	/* Wait until a few frames are on disk, then interrupt. */
@@ -153,7 +136,7 @@ Test( cli, osmosis_dump_is_a_solved_system )
 	cr_assert_not_null( mkdtemp( dir ) );
 	char command[1024], err[4096];
 	snprintf( command, sizeof( command ), "osmosis data/leaves/wisteria.leaf --points 300 --steps 2 --dump %s", dir );
-	cr_assert_eq( run( command, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_test_run( command, err, sizeof( err ) ), 0, "%s", err );
 	/* Read A (symmetric, lower triangle), b and x back and check A x = b: CG stopped at a
 	 * relative residual of 1e-10 and %.17g round-trips doubles, so 1e-9 leaves room. */
 	char path[512];
@@ -235,7 +218,7 @@ Test( cli, rerun_replaces_old_frames_only )
 	}
 	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --preset wisteria --frames 2 --points 300 --out %s",
 			  dir );
-	cr_assert_eq( run( args, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
 	for ( size_t k = 0; k < 4; ++k )
 	{
 		snprintf( path, sizeof( path ), "%s/frames/%s", dir, planted[k] );

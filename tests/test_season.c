@@ -5,6 +5,8 @@
 #include "lsystem.h"
 #include "seasonleaf.h"
 
+#include "fixture.h"
+
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -246,22 +248,11 @@ Test( seasonleaf, bad_input_is_named )
 /* ------------------------------------------------------------------------------------------- */
 /* sere season */
 
-static const char* sere_bin( void )
-{
-	const char* bin = getenv( "SERE_BIN" );
-	return bin != NULL ? bin : "build/sere";
-}
-
 static int run_season( const char* args, char* err, size_t err_size )
 {
-	char command[2048];
-	snprintf( command, sizeof( command ), "%s season %s 2>&1 >/dev/null", sere_bin(), args );
-	FILE* pipe = popen( command, "r" );
-	cr_assert_not_null( pipe );
-	size_t used = fread( err, 1, err_size - 1, pipe );
-	err[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+	char command[1100];
+	snprintf( command, sizeof( command ), "season %s", args );
+	return sere_test_run( command, err, err_size );
 }
 
 static char* slurp( const char* path )
