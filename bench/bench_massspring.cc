@@ -23,14 +23,13 @@
 // Counters: springs/s = (structural + flexion springs) x steps / wall time; sweeps, limited,
 // hit_cap = the step's report averaged over the timed steps.
 //
-// Measured (medians of 5 repetitions, 2-core shared machine, quiet): 1 thread 407 us (63M
-// springs/s), reference 521-528 us (48-49M springs/s): the optimized kernel is only 1.3x the
-// scalar twin. 2 threads vary from run to run, 287-423 us (0.96x-1.42x of 1 thread), though steady
-// within a run: a step has about 70 barriers (10 colors per sweep plus the sweep's reductions, ~5
-// sweeps) around a few microseconds of work per color. Under load (another process on the second
-// core) a 2-thread step takes hundreds of milliseconds: a thread that loses its core stalls every
-// barrier. A 1-thread profile puts a third of the step in the limiter sweeps and a fifth in the
-// per-particle gather of the spring forces.
+// Measured (2-core shared machine): with the band schedule (a sweep meets at 3 barriers: after
+// the bands, the even cuts and the odd cuts) 1 thread 371-384 us and 2 threads 262-380 us,
+// against 405-429 and 423-459 us with one barrier per color (10 per sweep), medians of 5 in
+// five interleaved runs of both builds; the reference 532-547 us. 2-thread times depend on
+// whether the second core is free: a thread that loses its core stalls every barrier. A 1-thread
+// profile puts a third of the step in the limiter sweeps and a fifth in the per-particle gather
+// of the spring forces.
 #include "fixture.h"
 #include "massspring.h"
 #include "ref/massspring_ref.h"

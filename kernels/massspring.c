@@ -15,11 +15,19 @@ struct sere_massspring
 	int32_t vertex_count;
 	int32_t structural_count;
 	int32_t flexion_count;
-	int32_t* a; /* structural springs in color order, then flexion springs */
+	int32_t* a; /* structural springs in sweep order (below), then flexion springs */
 	int32_t* b;
 	float* rest0;
 	int32_t color_count;
-	int32_t color_offsets[SERE_MAX_COLORS + 1];
+	/* The sweep (Eq. 2) works on bands: the particles cut by breadth-first level into
+	 * band_count ranges, so that a structural spring lies inside one band or joins two
+	 * neighbouring ones. A sweep limits the springs inside the bands (bands in parallel: they
+	 * share no particle, and each band's thread takes its colors in turn with no barrier), then
+	 * the springs joining bands c and c + 1 for even c, then for odd c. The structural springs
+	 * are stored in that order, item by item (bands, even cuts, odd cuts), each item by color:
+	 * run k = item k / color_count, color k % color_count is [run_offsets[k], run_offsets[k+1]). */
+	int32_t band_count;
+	int32_t* run_offsets;
 	/* Particle → springs incidence (CSR), each list in ascending spring order, with the sign
 	 * the spring's force takes at that particle: the fixed gather order makes the sum the same
 	 * for any thread count. */
@@ -86,6 +94,7 @@ void sere_massspring_destroy( sere_massspring* ms )
 	sere_free( ms->a );
 	sere_free( ms->b );
 	sere_free( ms->rest0 );
+	sere_free( ms->run_offsets );
 	sere_free( ms->incidence_offsets );
 	sere_free( ms->incidence );
 	sere_free( ms->incidence_sign );
@@ -123,6 +132,166 @@ static float distance( const float* x, const float* y, const float* z, int32_t i
 {
 	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
 	return sqrtf( ( dx * dx + dy * dy ) + dz * dz );
+}
+
+/* Bands hold at least this many particles, so that the springs joining two bands stay a
+ * small share; at most MAX_BANDS of them. The count depends on the mesh only, never on the
+ * thread count, so every thread count limits the springs in the same order. */
+#define BAND_PARTICLES 512
+#define MAX_BANDS	   16
+
+/* Breadth-first levels over the structural springs (each connected piece continues the level
+ * count of the previous one), then bands of whole levels holding about equal shares of the
+ * particles. Fills band_of (per particle) and returns the band count. */
+static int32_t cut_bands( const int32_t* sa, const int32_t* sb, int32_t edges, int32_t n, int32_t* band_of,
+						  int32_t* scratch )
+{
+	int32_t* start = scratch;		   /* n + 1: adjacency offsets */
+	int32_t* adjacent = start + n + 1; /* 2 edges */
+	int32_t* level = adjacent + 2 * (size_t) edges;
+	int32_t* queue = level + n;
+	memset( start, 0, sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	for ( int32_t e = 0; e < edges; ++e )
+	{
+		++start[sa[e] + 1], ++start[sb[e] + 1];
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		start[i + 1] += start[i];
+	}
+	int32_t* fill = queue; /* the queue is not in use yet */
+	memcpy( fill, start, sizeof( int32_t ) * (size_t) n );
+	for ( int32_t e = 0; e < edges; ++e )
+	{
+		adjacent[fill[sa[e]]++] = sb[e];
+		adjacent[fill[sb[e]]++] = sa[e];
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		level[i] = -1;
+	}
+	int32_t head = 0, tail = 0, top = 0;
+	for ( int32_t root = 0; root < n; ++root )
+	{
+		if ( level[root] >= 0 )
+		{
+			continue;
+		}
+		level[root] = top;
+		queue[tail++] = root;
+		while ( head < tail )
+		{
+			int32_t i = queue[head++];
+			top = level[i] > top ? level[i] : top;
+			for ( int32_t k = start[i]; k < start[i + 1]; ++k )
+			{
+				if ( level[adjacent[k]] < 0 )
+				{
+					level[adjacent[k]] = level[i] + 1;
+					queue[tail++] = adjacent[k];
+				}
+			}
+		}
+		top += 1;
+	}
+	/* particles per level, then bands of whole levels */
+	int32_t* per_level = start; /* reuse: top ≤ n levels */
+	memset( per_level, 0, sizeof( int32_t ) * ( (size_t) top + 1 ) );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		++per_level[level[i]];
+	}
+	int32_t bands = n / BAND_PARTICLES;
+	bands = bands < 1 ? 1 : bands > MAX_BANDS ? MAX_BANDS : bands;
+	for ( ;; )
+	{
+		/* level l goes to the band its first particle's rank falls in */
+		int32_t before = 0, used = 0, previous = -1;
+		for ( int32_t l = 0; l < top; ++l )
+		{
+			int32_t band = (int32_t) ( (int64_t) before * bands / n );
+			used += band != previous;
+			previous = band;
+			queue[l] = band;
+			before += per_level[l];
+		}
+		if ( used == bands || bands == 1 )
+		{
+			break;
+		}
+		bands -= 1; /* a level wider than a band's share: fewer, wider bands */
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		band_of[i] = queue[level[i]];
+	}
+	return bands;
+}
+
+/* Stores the structural springs in sweep order (see the struct) and their runs. */
+static sere_status sweep_order( sere_massspring* ms, const int32_t* sa, const int32_t* sb, const float* srest,
+								int32_t edges, int32_t n, const sere_coloring* coloring )
+{
+	int32_t* band_of = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t* scratch = malloc( sizeof( int32_t ) * ( 3 * (size_t) n + 1 + 2 * (size_t) edges ) );
+	if ( band_of == NULL || scratch == NULL )
+	{
+		free( band_of ), free( scratch );
+		return SERE_ERR_MEMORY;
+	}
+	const int32_t bands = cut_bands( sa, sb, edges, n, band_of, scratch );
+	const int32_t colors = coloring->color_count, cuts = bands - 1, items = bands + cuts;
+	/* item rank: bands 0..R−1, then even cuts, then odd cuts */
+	int32_t rank_of_cut[MAX_BANDS];
+	int32_t next = bands;
+	for ( int32_t c = 0; c < cuts; c += 2 )
+	{
+		rank_of_cut[c] = next++;
+	}
+	for ( int32_t c = 1; c < cuts; c += 2 )
+	{
+		rank_of_cut[c] = next++;
+	}
+	ms->band_count = bands;
+	ms->run_offsets = sere_alloc( sizeof( int32_t ) * ( (size_t) items * colors + 1 ) );
+	if ( ms->run_offsets == NULL )
+	{
+		free( band_of ), free( scratch );
+		return SERE_ERR_MEMORY;
+	}
+	/* counting sort by run (item rank, color), stable in the coloring's order */
+	int32_t* offsets = ms->run_offsets;
+	memset( offsets, 0, sizeof( int32_t ) * ( (size_t) items * colors + 1 ) );
+	int32_t* run_of = scratch; /* per position in the coloring's order */
+	for ( int32_t k = 0; k < edges; ++k )
+	{
+		int32_t s = coloring->order[k];
+		int32_t ra = band_of[sa[s]], rb = band_of[sb[s]];
+		int32_t item = ra == rb ? ra : rank_of_cut[ra < rb ? ra : rb];
+		run_of[k] = item * colors + coloring->color[s];
+		++offsets[run_of[k] + 1];
+	}
+	for ( int32_t r = 0; r < items * colors; ++r )
+	{
+		offsets[r + 1] += offsets[r];
+	}
+	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) items * colors );
+	if ( fill == NULL )
+	{
+		free( band_of ), free( scratch );
+		return SERE_ERR_MEMORY;
+	}
+	memcpy( fill, offsets, sizeof( int32_t ) * (size_t) items * colors );
+	for ( int32_t k = 0; k < edges; ++k )
+	{
+		int32_t s = coloring->order[k], at = fill[run_of[k]]++;
+		ms->a[at] = sa[s];
+		ms->b[at] = sb[s];
+		ms->rest0[at] = srest[s];
+	}
+	ms->color_count = colors;
+	free( band_of ), free( scratch ), free( fill );
+	return SERE_OK;
 }
 
 sere_status sere_massspring_create( const float* x, const float* y, const float* z, int32_t vertex_count,
@@ -269,15 +438,10 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 	}
 	if ( status == SERE_OK )
 	{
-		/* Store the structural springs in color order: a color is then one contiguous range. */
-		for ( int32_t k = 0; k < edges; ++k )
-		{
-			ms->a[k] = sa[coloring.order[k]];
-			ms->b[k] = sb[coloring.order[k]];
-			ms->rest0[k] = srest[coloring.order[k]];
-		}
-		ms->color_count = coloring.color_count;
-		memcpy( ms->color_offsets, coloring.offsets, sizeof( coloring.offsets ) );
+		status = sweep_order( ms, sa, sb, srest, edges, vertex_count, &coloring );
+	}
+	if ( status == SERE_OK )
+	{
 
 		int32_t total = edges + hinges;
 		int32_t* offsets = ms->incidence_offsets;
@@ -334,7 +498,9 @@ sere_ms_topology sere_massspring_topology( const sere_massspring* ms )
 		t.b = ms->b;
 		t.rest0 = ms->rest0;
 		t.color_count = ms->color_count;
-		t.color_offsets = ms->color_offsets;
+		t.band_count = ms->band_count;
+		t.run_count = ( 2 * ms->band_count - 1 ) * ms->color_count;
+		t.run_offsets = ms->run_offsets;
 	}
 	return t;
 }
@@ -544,13 +710,13 @@ static void integrate_velocities( sere_massspring* ms, int32_t count, const sere
 	}
 }
 
-/* Eq. 2 on the structural springs of one color [first, first + count): no two of them share a
- * particle, so they are limited at the same time. Each spring off [lo_factor L, hi_factor L]
- * gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the nearer
- * bound. Raises *worst_io to the largest distance off the band (relative to L) this thread
- * found before correcting and adds the number of its springs that were off to *off_band. */
-static void limit_color( sere_massspring* ms, int32_t first, int32_t count, float keep, float lo_factor,
-						 float hi_factor, float dt, float* worst_io, int32_t* off_band )
+/* Eq. 2 on one run of structural springs [first, first + count), by the calling thread: no two
+ * of them share a particle, so they are limited at the same time (16 to a SIMD step). Each spring off [lo_factor L,
+ * hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the nearer bound.
+ * Raises *worst_io to the largest distance off the band (relative to L) this thread found before correcting and adds
+ * the number of its springs that were off to *off_band. */
+static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float keep, float lo_factor, float hi_factor,
+					   float dt, float* worst_io, int32_t* off_band )
 {
 	const int32_t* restrict sa = ms->a;
 	const int32_t* restrict sb = ms->b;
@@ -563,7 +729,6 @@ static void limit_color( sere_massspring* ms, int32_t first, int32_t count, floa
 	const int32_t chunks = ( count + 15 ) / 16;
 	const __m512 vkeep = _mm512_set1_ps( keep ), vlo = _mm512_set1_ps( lo_factor ), vhi = _mm512_set1_ps( hi_factor );
 	const __m512 vdt = _mm512_set1_ps( dt ), one = _mm512_set1_ps( 1.0f ), zero = _mm512_setzero_ps();
-#pragma omp for schedule( static )
 	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
 	{
 		const int32_t s = first + 16 * chunk;
@@ -600,7 +765,6 @@ static void limit_color( sere_massspring* ms, int32_t first, int32_t count, floa
 				 _mm512_sub_ps( bvy, _mm512_mul_ps( sb_, py ) ), _mm512_sub_ps( bvz, _mm512_mul_ps( sb_, pz ) ), bvw );
 	}
 #else
-#pragma omp for schedule( static )
 	for ( int32_t s = first; s < first + count; ++s )
 	{
 		const float* a = xr + 4 * sa[s];
@@ -754,11 +918,21 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_ms_particles* p, con
 			}
 			float mine = 0.0f;
 			int32_t mine_limited = 0;
-			for ( int32_t c = 0; c < ms->color_count; ++c )
+			/* The bands, then the even cuts, then the odd ones (items [0, R), [R, R + E),
+			 * [R + E, 2R − 1)): within a phase the items share no particle. */
+			const int32_t bands = ms->band_count, colors = ms->color_count, even = bands / 2;
+			const int32_t phase_start[4] = { 0, bands, bands + even, 2 * bands - 1 };
+			for ( int phase = 0; phase < 3; ++phase )
 			{
-				const int32_t first = ms->color_offsets[c];
-				limit_color( ms, first, ms->color_offsets[c + 1] - first, keep, inner_lo, inner_hi, dt, &mine,
-							 &mine_limited );
+#pragma omp for schedule( static )
+				for ( int32_t item = phase_start[phase]; item < phase_start[phase + 1]; ++item )
+				{
+					for ( int32_t c = 0; c < colors; ++c )
+					{
+						const int32_t* run = ms->run_offsets + item * colors + c;
+						limit_run( ms, run[0], run[1] - run[0], keep, inner_lo, inner_hi, dt, &mine, &mine_limited );
+					}
+				}
 			}
 			/* A maximum and an integer sum: the same in any order of the threads. */
 #pragma omp critical( sere_massspring_worst )

@@ -32,8 +32,9 @@
  * structural spring (a, b) the relative position after the step is p = x_ab + v_ab Δt. When |p|
  * lies outside [(1 − τ_c) L, (1 + τ_c) L] the relative velocity along p is changed so that |p|
  * lands on the band; the change is shared by inverse mass. Springs inside the band keep their
- * velocities. Sweeps over all structural springs (Gauss–Seidel; in parallel by graph coloring,
- * see color.h) aim at the band narrowed by the tolerance δ on both sides and repeat until a
+ * velocities. Sweeps over all structural springs (Gauss–Seidel; in parallel by particle bands
+ * and, inside a band or a cut between bands, by graph coloring, see sere_ms_topology and
+ * color.h) aim at the band narrowed by the tolerance δ on both sides and repeat until a
  * sweep finds no spring more than δ L off that inner band and a measurement confirms every
  * spring inside the true band, so a converged step keeps every structural spring within τ_c of
  * its natural length (up to float rounding of the positions, ~1e-6 relative). Gauss–Seidel
@@ -98,8 +99,12 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 									const int32_t* tri, int32_t triangle_count, sere_massspring** out );
 void sere_massspring_destroy( sere_massspring* ms );
 
-/* The springs as stored: structural springs in color order (color c is the index range
- * [color_offsets[c], color_offsets[c + 1])), then the flexion springs. a[k] < b[k]. */
+/* The springs as stored: structural springs in the order a sweep limits them, then the
+ * flexion springs. a[k] < b[k]. The structural springs come in runs [run_offsets[k],
+ * run_offsets[k + 1]) of one color within one band or one cut between neighbouring bands (the
+ * particles cut by breadth-first level into band_count bands); no two springs of a run share a
+ * particle. Limiting the runs one after another in index order is what a sweep does, so a
+ * serial twin reproduces it. */
 typedef struct sere_ms_topology
 {
 	int32_t vertex_count;
@@ -107,9 +112,11 @@ typedef struct sere_ms_topology
 	int32_t flexion_count;
 	const int32_t* a; /* structural_count + flexion_count entries */
 	const int32_t* b;
-	const float* rest0; /* natural length L⁰ */
-	int32_t color_count;
-	const int32_t* color_offsets; /* color_count + 1 entries */
+	const float* rest0;			/* natural length L⁰ */
+	int32_t color_count;		/* colors of the structural springs */
+	int32_t band_count;			/* particle bands */
+	int32_t run_count;			/* (2 band_count − 1) color_count runs, some empty */
+	const int32_t* run_offsets; /* run_count + 1 entries */
 } sere_ms_topology;
 
 sere_ms_topology sere_massspring_topology( const sere_massspring* ms );

@@ -151,20 +151,48 @@ Test( massspring, springs_of_a_mesh )
 	const int32_t edges = s.vertex_count + s.triangle_count - 1;
 	cr_expect_eq( t.structural_count, edges );
 	cr_expect_eq( t.flexion_count, edges - 4 * s.n );
-	cr_expect_eq( t.color_offsets[0], 0 );
-	cr_expect_eq( t.color_offsets[t.color_count], t.structural_count );
-	/* Springs of one color never share a particle (so they are limited at the same time). */
+	cr_expect_eq( t.run_count, ( 2 * t.band_count - 1 ) * t.color_count );
+	cr_expect_eq( t.run_offsets[0], 0 );
+	cr_expect_eq( t.run_offsets[t.run_count], t.structural_count );
+	/* Springs of one run never share a particle (so they are limited at the same time). */
 	uint8_t* seen = calloc( (size_t) s.vertex_count, 1 );
-	for ( int32_t c = 0; c < t.color_count; ++c )
+	for ( int32_t r = 0; r < t.run_count; ++r )
 	{
 		memset( seen, 0, (size_t) s.vertex_count );
-		for ( int32_t k = t.color_offsets[c]; k < t.color_offsets[c + 1]; ++k )
+		for ( int32_t k = t.run_offsets[r]; k < t.run_offsets[r + 1]; ++k )
 		{
 			cr_expect( t.a[k] < t.b[k] );
-			cr_expect( !seen[t.a[k]] && !seen[t.b[k]], "color %d shares a particle", c );
+			cr_expect( !seen[t.a[k]] && !seen[t.b[k]], "run %d shares a particle", r );
 			seen[t.a[k]] = seen[t.b[k]] = 1;
 		}
 	}
+	/* Within each phase of a sweep (the bands, the even cuts, the odd cuts) the items, which
+	 * threads take in parallel, share no particle: that makes the sweep's result the same for
+	 * any thread count. */
+	int32_t* owner = malloc( sizeof( int32_t ) * (size_t) s.vertex_count );
+	const int32_t bands = t.band_count, phase_start[4] = { 0, bands, bands + bands / 2, 2 * bands - 1 };
+	for ( int phase = 0; phase < 3; ++phase )
+	{
+		for ( int32_t i = 0; i < s.vertex_count; ++i )
+		{
+			owner[i] = -1;
+		}
+		for ( int32_t item = phase_start[phase]; item < phase_start[phase + 1]; ++item )
+		{
+			for ( int32_t k = t.run_offsets[item * t.color_count]; k < t.run_offsets[( item + 1 ) * t.color_count];
+				  ++k )
+			{
+				const int32_t ends[2] = { t.a[k], t.b[k] };
+				for ( int e = 0; e < 2; ++e )
+				{
+					cr_expect( owner[ends[e]] < 0 || owner[ends[e]] == item, "phase %d: items %d and %d share %d",
+							   phase, owner[ends[e]], item, ends[e] );
+					owner[ends[e]] = item;
+				}
+			}
+		}
+	}
+	free( owner );
 	/* Natural lengths are the rest-shape distances: cell edges 1/9, diagonals √2/9, and the
 	 * flexion springs across a diagonal join two cell corners √2/9 apart or across a cell side. */
 	for ( int32_t k = 0; k < t.structural_count; ++k )
@@ -318,9 +346,10 @@ Test( massspring, darker_regions_move_more )
 
 /* The optimized kernel against the scalar twin, stepping the same flag under moderate gravity
  * so that the limit acts at times. */
-Test( massspring, matches_the_reference_twin )
+/* The kernel against its serial twin on a sheet of n × n cells (one band for 14, four for 48). */
+static void match_twin( int32_t n )
 {
-	sheet s = sheet_make( 14, 0.05f ), r = sheet_make( 14, 0.05f );
+	sheet s = sheet_make( n, 0.05f ), r = sheet_make( n, 0.05f );
 	for ( int32_t i = 0; i <= s.n; ++i )
 	{
 		s.inv_m[i] = r.inv_m[i] = 0.0f;
@@ -364,36 +393,59 @@ Test( massspring, matches_the_reference_twin )
 	sheet_free( &r );
 }
 
+Test( massspring, matches_the_reference_twin )
+{
+	match_twin( 14 );
+	match_twin( 48 );
+}
+
 /* A sheet hanging from one corner: long chains at the limit, many sweeps and colors. */
 Test( massspring, one_and_two_threads_bitwise_equal )
 {
-	sheet s[2] = { sheet_make( 12, 0.05f ), sheet_make( 12, 0.05f ) };
-	sere_ms_params params = sere_ms_params_default();
-	params.gravity[2] = -20.0f;
-	params.curl = 0.1f;
-	for ( int k = 0; k < 2; ++k )
+	/* 13 x 13 particles make one band; 49 x 49 make four, so the sweep's band and cut phases
+	 * run on threads that split them differently (1, 2 and 3 threads). */
+	const int32_t sizes[2] = { 12, 48 };
+	for ( int size = 0; size < 2; ++size )
 	{
-		s[k].inv_m[0] = 0.0f;
-		sere_massspring* ms = sheet_springs( &s[k] );
-		sere_ms_particles p = sheet_particles( &s[k] );
-		omp_set_num_threads( k + 1 );
-		for ( int step = 0; step < 60; ++step )
+		sheet s[3];
+		sere_ms_params params = sere_ms_params_default();
+		params.gravity[2] = -20.0f;
+		params.curl = 0.1f;
+		for ( int k = 0; k < 3; ++k )
 		{
-			cr_assert_eq( sere_massspring_step( ms, &p, &params, NULL ), SERE_OK );
+			s[k] = sheet_make( sizes[size], 0.05f );
+			s[k].inv_m[0] = 0.0f;
+			sere_massspring* ms = sheet_springs( &s[k] );
+			if ( size == 1 )
+			{
+				cr_expect_gt( sere_massspring_topology( ms ).band_count, 2 );
+			}
+			sere_ms_particles p = sheet_particles( &s[k] );
+			omp_set_num_threads( k + 1 );
+			for ( int step = 0; step < 60; ++step )
+			{
+				cr_assert_eq( sere_massspring_step( ms, &p, &params, NULL ), SERE_OK );
+			}
+			sere_massspring_destroy( ms );
 		}
-		sere_massspring_destroy( ms );
+		omp_set_num_threads( 1 );
+		size_t bytes = (size_t) s[0].vertex_count * sizeof( float );
+		for ( int k = 1; k < 3; ++k )
+		{
+			cr_expect_eq( memcmp( s[0].x, s[k].x, bytes ), 0, "%d particles, %d threads", s[0].vertex_count, k + 1 );
+			cr_expect_eq( memcmp( s[0].y, s[k].y, bytes ), 0 );
+			cr_expect_eq( memcmp( s[0].z, s[k].z, bytes ), 0 );
+			cr_expect_eq( memcmp( s[0].vx, s[k].vx, bytes ), 0 );
+			cr_expect_eq( memcmp( s[0].vz, s[k].vz, bytes ), 0 );
+		}
+		/* Free fall would take the far corner 0.036 below its start of 0.025 in 60 steps. */
+		cr_expect( s[0].z[s[0].vertex_count - 1] < 0.0f, "the sheet did not fall" );
+		for ( int k = 0; k < 3; ++k )
+		{
+			sheet_free( &s[k] );
+		}
 	}
-	omp_set_num_threads( 1 );
-	size_t bytes = (size_t) s[0].vertex_count * sizeof( float );
-	cr_expect_eq( memcmp( s[0].x, s[1].x, bytes ), 0 );
-	cr_expect_eq( memcmp( s[0].y, s[1].y, bytes ), 0 );
-	cr_expect_eq( memcmp( s[0].z, s[1].z, bytes ), 0 );
-	cr_expect_eq( memcmp( s[0].vx, s[1].vx, bytes ), 0 );
-	cr_expect_eq( memcmp( s[0].vz, s[1].vz, bytes ), 0 );
-	/* Free fall would take the far corner 0.036 below its start of 0.025 in 60 steps. */
-	cr_expect( s[0].z[s[0].vertex_count - 1] < 0.0f, "the sheet did not fall" );
-	sheet_free( &s[0] );
-	sheet_free( &s[1] );
+	omp_set_num_threads( 2 );
 }
 
 Test( massspring, sweep_cap_is_reported )
