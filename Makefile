@@ -20,8 +20,12 @@ OUT    ?= out/run
 WARN      := -Wall -Wextra -Wpedantic -Werror
 DEPFLAGS  := -MMD -MP
 # -ffp-contract=off: no silent FMA contraction, so 1 and 2 threads (and the reference twins)
-# round identically; determinism is a contract (DESIGN.md).
-COMMON    := $(OPT) $(ARCH) -g -ffp-contract=off -fopenmp -fPIC $(DEPFLAGS)
+# round identically; determinism is a contract (DESIGN.md). -fno-trapping-math: we never unmask
+# floating-point exceptions, so the vectorizer may compute both sides of a select (a division
+# included) instead of branching; -fno-math-errno: nothing reads errno after sqrt, so sqrt
+# needs no branch to a library call for negative input. Neither changes a result (no
+# reassociation, no contraction, the same correctly rounded sqrt).
+COMMON    := $(OPT) $(ARCH) -g -ffp-contract=off -fno-trapping-math -fno-math-errno -fopenmp -fPIC $(DEPFLAGS)
 ifeq ($(SAN),1)
 COMMON    += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 LDSAN     := -fsanitize=address,undefined

@@ -14,8 +14,11 @@
 /* Below this many contacts the response runs on the calling thread alone. */
 #define RESPOND_PARALLEL 512
 
-/* Contact roles in the per-vertex gather lists: corner a, b, c of the triangle, or the vertex. */
-#define ROLE_VERTEX 3
+/* Contacts evaluated per work item of the response (a static share of whole blocks per thread). */
+#define EVALUATE_BLOCK 256
+
+/* Per-thread counters one cache line apart, so that two threads' writes never share a line. */
+#define FAR_STRIDE 16
 
 struct sere_collide
 {
@@ -31,24 +34,30 @@ struct sere_collide
 	int32_t* block_start;
 	int64_t* block_found;
 
-	/* Gather lists: for each vertex, the contacts it takes part in (as vertex or corner),
-	 * entries[entry_offset[i] ..] = contact << 2 | role, in contact order. */
+	/* Gather lists: for each vertex, the contacts it takes part in (as vertex or corner), in
+	 * contact order: entry e = entry_offset[i] .. names contact entries[e], whose correction
+	 * λ n̂ moves the vertex by entry_coef[e] λ n̂ / m (−u, −v, −w for corners a, b, c, +1 for
+	 * the vertex). The coefficient sits beside the index so a gather reads one list in order
+	 * and one correction per entry. */
 	int32_t* entry_offset; /* vertex_count + 1 */
 	int32_t* entry_cursor; /* vertex_count */
 	int32_t* entries;	   /* 4 × capacity */
+	float* entry_coef;	   /* 4 × capacity */
 	int32_t* touched;	   /* vertices with at least one entry, ascending */
 	int32_t touched_count;
 
 	/* Per contact, structure of arrays for the response. Fixed at detection: the vertex, the
-	 * triangle's corners, the side and weight[4k + r] = (u, v, w, −1), so that the correction
-	 * of role r is −weight[4k + r] λ n̂ (an entry indexes it directly). Per response: 1 / W. Per
-	 * iteration: the correction λ n̂ and whether the contact pushes. */
+	 * triangle's corners, the side and the barycentric weights (u, v, w). Per response: 1 / W.
+	 * Per iteration: corr[4k ..] = (λ n̂, 1) when contact k pushes, else zero: one 16-byte read
+	 * per gather entry gives the correction and the count. */
 	int32_t *contact_vertex, *contact_a, *contact_b, *contact_c;
 	float* contact_side;
-	float* weight;
+	float *bary_u, *bary_v, *bary_w;
 	float* inv_weight;
-	float *corr_x, *corr_y, *corr_z;
-	uint8_t* active;
+	float* corr;
+
+	/* Per thread of the response, FAR_STRIDE apart: its count of contacts beyond the tolerance. */
+	int32_t* far_count;
 
 	/* Per touched vertex: displacement summed over the iterations, for the velocity update. */
 	float *acc_x, *acc_y, *acc_z;
@@ -208,19 +217,22 @@ static inline void load3( const float* x, const float* y, const float* z, int32_
 static void contact_arrays( sere_collide* c, void*** slot, size_t* size )
 {
 	void** slots[CONTACT_ARRAYS] = {
-		(void**) &c->contacts,	(void**) &c->thread_contacts, (void**) &c->entries,	  (void**) &c->contact_vertex,
-		(void**) &c->contact_a, (void**) &c->contact_b,		  (void**) &c->contact_c, (void**) &c->contact_side,
-		(void**) &c->weight,	(void**) &c->inv_weight,	  (void**) &c->corr_x,	  (void**) &c->corr_y,
-		(void**) &c->corr_z,	(void**) &c->active,
+		(void**) &c->contacts,		 (void**) &c->thread_contacts,
+		(void**) &c->entries,		 (void**) &c->entry_coef,
+		(void**) &c->contact_vertex, (void**) &c->contact_a,
+		(void**) &c->contact_b,		 (void**) &c->contact_c,
+		(void**) &c->contact_side,	 (void**) &c->bary_u,
+		(void**) &c->bary_v,		 (void**) &c->bary_w,
+		(void**) &c->inv_weight,	 (void**) &c->corr,
 	};
 	size_t sizes[CONTACT_ARRAYS] = {
 		sizeof( sere_contact ), sizeof( sere_contact ) * (size_t) c->slots,
-		4 * sizeof( int32_t ),	sizeof( int32_t ),
+		4 * sizeof( int32_t ),	4 * sizeof( float ),
 		sizeof( int32_t ),		sizeof( int32_t ),
-		sizeof( int32_t ),		sizeof( float ),
-		4 * sizeof( float ),	sizeof( float ),
+		sizeof( int32_t ),		sizeof( int32_t ),
 		sizeof( float ),		sizeof( float ),
-		sizeof( float ),		sizeof( uint8_t ),
+		sizeof( float ),		sizeof( float ),
+		sizeof( float ),		4 * sizeof( float ),
 	};
 	memcpy( slot, slots, sizeof( slots ) );
 	memcpy( size, sizes, sizeof( sizes ) );
@@ -235,8 +247,9 @@ static void collide_free( sere_collide* c )
 	{
 		sere_free( *slot[i] );
 	}
-	void* arrays[] = { c->block_thread, c->block_start, c->block_found, c->entry_offset,	c->entry_cursor, c->touched,
-					   c->acc_x,		c->acc_y,		c->acc_z,		c->neighbor_offset, c->neighbor };
+	void* arrays[] = { c->block_thread, c->block_start,		c->block_found, c->entry_offset,
+					   c->entry_cursor, c->touched,			c->acc_x,		c->acc_y,
+					   c->acc_z,		c->neighbor_offset, c->neighbor,	c->far_count };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -339,25 +352,6 @@ static bool build_neighbors( sere_collide* c, const int32_t* tri, int32_t triang
 	return true;
 }
 
-/* Whether vertices a and b share an edge (binary search in a's list). */
-static inline bool adjacent( const int32_t* offset, const int32_t* neighbor, int32_t a, int32_t b )
-{
-	int32_t lo = offset[a], hi = offset[a + 1];
-	while ( lo < hi )
-	{
-		int32_t mid = ( lo + hi ) >> 1;
-		if ( neighbor[mid] < b )
-		{
-			lo = mid + 1;
-		}
-		else
-		{
-			hi = mid;
-		}
-	}
-	return lo < offset[a + 1] && neighbor[lo] == b;
-}
-
 sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out )
 {
 	if ( out == NULL )
@@ -393,8 +387,9 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->acc_x = sere_alloc( sizeof( float ) * vn );
 	c->acc_y = sere_alloc( sizeof( float ) * vn );
 	c->acc_z = sere_alloc( sizeof( float ) * vn );
+	c->far_count = sere_alloc( sizeof( int32_t ) * FAR_STRIDE * (size_t) c->slots );
 	bool ok = c->block_thread && c->block_start && c->block_found && c->entry_offset && c->entry_cursor && c->touched &&
-			  c->acc_x && c->acc_y && c->acc_z;
+			  c->acc_x && c->acc_y && c->acc_z && c->far_count;
 	ok = ok && build_neighbors( c, sere_bvh_triangles( bvh, &triangles ), triangles );
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
@@ -435,8 +430,17 @@ const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t*
 	return collide->contacts;
 }
 
-/* One group of up to eight consecutive vertices querying the BVH together, and the calling
- * thread's contact buffer. */
+/* Candidate pairs are tested CLOSEST_LANES at a time by one straight-line pass (closest_lanes). */
+#define CLOSEST_LANES 8
+
+/* Candidate (triangle, group lane) pairs gathered from the tree walk before the exact test:
+ * a triangle overlaps 1.6 of a group's eight cubes on average (maple after drying), so testing
+ * the pairs in full vectors keeps every lane busy where testing a triangle against its group
+ * would leave most of them idle. */
+#define PAIR_BUFFER 256
+
+/* One group of up to eight consecutive vertices querying the BVH together, its candidate
+ * pairs, and the calling thread's contact buffer. */
 typedef struct detect_context
 {
 	const float *x, *y, *z;
@@ -445,23 +449,172 @@ typedef struct detect_context
 	float px[SERE_BVH_WIDTH], py[SERE_BVH_WIDTH], pz[SERE_BVH_WIDTH];
 	int32_t first; /* the vertex of lane 0 */
 	float h2;
+	int32_t pair_triangle[PAIR_BUFFER];
+	int32_t pair_lane[PAIR_BUFFER];
+	int32_t pair_count;
 	sere_contact* buffer;
 	int32_t used;
 	int32_t capacity;
 	int64_t found;
 } detect_context;
 
-/* The exact test of one triangle against every group vertex whose cube overlaps its box: the
- * triangle's corners are loaded once for all of them. */
+/* closest_point for CLOSEST_LANES point–triangle pairs at once, as selects instead of branches:
+ * every region's result is formed by the same operations as in closest_point and the first
+ * region whose test holds is kept, so each lane gets closest_point's bits. A lane that reaches
+ * the degenerate fallback is flagged in slow (its outputs are not meaningful) for the caller to
+ * redo with closest_point. Rows are x, y, z; columns are lanes. (The inputs are read only; they
+ * are not const because C17 does not convert float[3][8] to const float[3][8].) */
+static void closest_lanes( float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES], float b[3][CLOSEST_LANES],
+						   float c[3][CLOSEST_LANES], float w[3][CLOSEST_LANES], float q[3][CLOSEST_LANES],
+						   float d2[CLOSEST_LANES], int32_t slow[CLOSEST_LANES] )
+{
+#pragma omp simd
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		float ab[3], ac[3], bc[3], ap[3], bp[3], cp[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			ab[r] = b[r][l] - a[r][l], ac[r] = c[r][l] - a[r][l], bc[r] = c[r][l] - b[r][l];
+			ap[r] = p[r][l] - a[r][l], bp[r] = p[r][l] - b[r][l], cp[r] = p[r][l] - c[r][l];
+		}
+		float d1 = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2];
+		float d2a = ac[0] * ap[0] + ac[1] * ap[1] + ac[2] * ap[2];
+		float d3 = ab[0] * bp[0] + ab[1] * bp[1] + ab[2] * bp[2];
+		float d4 = ac[0] * bp[0] + ac[1] * bp[1] + ac[2] * bp[2];
+		float d5 = ab[0] * cp[0] + ab[1] * cp[1] + ab[2] * cp[2];
+		float d6 = ac[0] * cp[0] + ac[1] * cp[1] + ac[2] * cp[2];
+		float vc = d1 * d4 - d3 * d2a;
+		float vb = d5 * d2a - d1 * d6;
+		float va = d3 * d6 - d5 * d4;
+		float sum = va + vb + vc;
+
+		/* the regions in closest_point's order, each only if none before it holds (& and |, not
+		 * && and ||: no branches, so the loop vectorizes) */
+		int at_a = ( d1 <= 0.0f ) & ( d2a <= 0.0f );
+		int at_b = !at_a & ( d3 >= 0.0f ) & ( d4 <= d3 );
+		int at_c = !at_a & !at_b & ( d6 >= 0.0f ) & ( d5 <= d6 );
+		int vertex = at_a | at_b | at_c;
+		int on_ab = !vertex & ( vc <= 0.0f ) & ( d1 >= 0.0f ) & ( d3 <= 0.0f ) & ( d1 - d3 > 0.0f );
+		int on_ac = !vertex & !on_ab & ( vb <= 0.0f ) & ( d2a >= 0.0f ) & ( d6 <= 0.0f ) & ( d2a - d6 > 0.0f );
+		int on_bc = !vertex & !on_ab & !on_ac & ( va <= 0.0f ) & ( d4 - d3 >= 0.0f ) & ( d5 - d6 >= 0.0f ) &
+					( ( d4 - d3 ) + ( d5 - d6 ) > 0.0f );
+		int edge = on_ab | on_ac | on_bc;
+		float ab2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+		float ac2 = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2];
+		int face =
+			!vertex & !edge & ( vb >= 0.0f ) & ( vc >= 0.0f ) & ( vb + vc <= sum ) & ( sum > 0x1p-20f * ab2 * ac2 );
+
+		float s_ab = d1 / ( d1 - d3 );
+		float s_ac = d2a / ( d2a - d6 );
+		float s_bc = ( d4 - d3 ) / ( ( d4 - d3 ) + ( d5 - d6 ) );
+		float v_face = vb / sum, t_face = vc / sum;
+		float u = at_a ? 1.0f : ( on_ab ? 1.0f - s_ab : ( on_ac ? 1.0f - s_ac : 0.0f ) );
+		float v = at_b ? 1.0f : ( on_ab ? s_ab : ( on_bc ? 1.0f - s_bc : 0.0f ) );
+		float t = at_c ? 1.0f : ( on_ac ? s_ac : ( on_bc ? s_bc : 0.0f ) );
+		u = face ? 1.0f - v_face - t_face : u;
+		v = face ? v_face : v;
+		t = face ? t_face : t;
+		float dist2 = 0.0f;
+		for ( int r = 0; r < 3; ++r )
+		{
+			float point = at_a ? a[r][l] : ( at_b ? b[r][l] : c[r][l] );
+			point = on_ab ? a[r][l] + s_ab * ab[r] : point;
+			point = on_ac ? a[r][l] + s_ac * ac[r] : point;
+			point = on_bc ? b[r][l] + s_bc * bc[r] : point;
+			point = face ? a[r][l] + v_face * ab[r] + t_face * ac[r] : point;
+			q[r][l] = point;
+			float d = p[r][l] - point;
+			dist2 += d * d;
+		}
+		w[0][l] = u, w[1][l] = v, w[2][l] = t;
+		d2[l] = dist2;
+		slow[l] = !( vertex || edge || face );
+	}
+}
+
+/* Whether vertex a shares an edge with one of v[0], v[1], v[2]: one pass over a's neighbour
+ * list (a dozen entries), no early exit to mispredict. */
+static inline bool adjacent_any( const int32_t* offset, const int32_t* neighbor, int32_t a, const int32_t v[3] )
+{
+	bool hit = false;
+	for ( int32_t e = offset[a]; e < offset[a + 1]; ++e )
+	{
+		hit |= ( neighbor[e] == v[0] ) | ( neighbor[e] == v[1] ) | ( neighbor[e] == v[2] );
+	}
+	return hit;
+}
+
+/* Appends the contact of a vertex–triangle pair found within the thickness. */
+static void detect_emit( detect_context* c, int32_t vertex, int32_t t, const float p[3], const float a[3],
+						 const float b[3], const float cc[3], const float w[3], const float q[3], float d2 )
+{
+	c->found += 1;
+	if ( c->used < c->capacity )
+	{
+		float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+		float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
+		float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+		float s = ( p[0] - q[0] ) * n[0] + ( p[1] - q[1] ) * n[1] + ( p[2] - q[2] ) * n[2];
+		c->buffer[c->used++] = ( sere_contact ){ vertex, t, w[0], w[1], w[2], sqrtf( d2 ), s < 0.0f ? -1.0f : 1.0f };
+	}
+}
+
+/* The exact test of the buffered pairs, CLOSEST_LANES at a time, in the order they were
+ * buffered (the tree's, then the lanes'), so the contact list does not depend on the batching. */
+static void detect_flush( detect_context* c )
+{
+	for ( int32_t start = 0; start < c->pair_count; start += CLOSEST_LANES )
+	{
+		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
+		float p[3][CLOSEST_LANES], a[3][CLOSEST_LANES], b[3][CLOSEST_LANES], cc[3][CLOSEST_LANES];
+		float w[3][CLOSEST_LANES], q[3][CLOSEST_LANES], d2[CLOSEST_LANES];
+		int32_t slow[CLOSEST_LANES];
+		for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
+		{
+			/* lanes past the end repeat the last pair and are ignored */
+			int32_t k = start + ( l < count ? l : count - 1 );
+			int32_t lane = c->pair_lane[k];
+			const int32_t* v = c->tri + 3 * (size_t) c->pair_triangle[k];
+			p[0][l] = c->px[lane], p[1][l] = c->py[lane], p[2][l] = c->pz[lane];
+			a[0][l] = c->x[v[0]], a[1][l] = c->y[v[0]], a[2][l] = c->z[v[0]];
+			b[0][l] = c->x[v[1]], b[1][l] = c->y[v[1]], b[2][l] = c->z[v[1]];
+			cc[0][l] = c->x[v[2]], cc[1][l] = c->y[v[2]], cc[2][l] = c->z[v[2]];
+		}
+		closest_lanes( p, a, b, cc, w, q, d2, slow );
+		uint32_t candidates = 0;
+		for ( int32_t l = 0; l < count; ++l )
+		{
+			candidates |= (uint32_t) ( slow[l] | ( d2[l] < c->h2 ) ) << l;
+		}
+		while ( candidates != 0 )
+		{
+			int32_t l = __builtin_ctz( candidates );
+			candidates &= candidates - 1;
+			float pl[3] = { p[0][l], p[1][l], p[2][l] }, al[3] = { a[0][l], a[1][l], a[2][l] };
+			float bl[3] = { b[0][l], b[1][l], b[2][l] }, cl[3] = { cc[0][l], cc[1][l], cc[2][l] };
+			float wl[3] = { w[0][l], w[1][l], w[2][l] }, ql[3] = { q[0][l], q[1][l], q[2][l] };
+			float dl = slow[l] ? closest_point( pl, al, bl, cl, wl, ql ) : d2[l];
+			int32_t t = c->pair_triangle[start + l];
+			int32_t vertex = c->first + c->pair_lane[start + l];
+			/* A vertex sharing an edge with a corner lies in the sheet right beside the
+			 * triangle: where edges are shorter than the thickness (fine outline and vein
+			 * sampling, a shrunk blade) it is closer than the thickness without any collision,
+			 * and a push along the normal would only buckle the sheet. */
+			if ( dl < c->h2 && !adjacent_any( c->neighbor_offset, c->neighbor, vertex, c->tri + 3 * (size_t) t ) )
+			{
+				detect_emit( c, vertex, t, pl, al, bl, cl, wl, ql, dl );
+			}
+		}
+	}
+	c->pair_count = 0;
+}
+
+/* Buffers the pairs of one triangle with every group vertex whose cube overlaps its box but
+ * the triangle's own corners (dropped without a branch per lane). */
 static void detect_visit( void* context, int32_t t, uint32_t lanes )
 {
 	detect_context* c = context;
 	const int32_t* v = c->tri + 3 * (size_t) t;
-	float a[3], b[3], cc[3];
-	load3( c->x, c->y, c->z, v[0], a );
-	load3( c->x, c->y, c->z, v[1], b );
-	load3( c->x, c->y, c->z, v[2], cc );
-	/* drop the lanes of the triangle's own corners without a branch per lane */
 	for ( int r = 0; r < 3; ++r )
 	{
 		uint32_t lane = (uint32_t) ( v[r] - c->first );
@@ -469,32 +622,14 @@ static void detect_visit( void* context, int32_t t, uint32_t lanes )
 	}
 	while ( lanes != 0 )
 	{
-		int k = __builtin_ctz( lanes );
+		if ( c->pair_count == PAIR_BUFFER )
+		{
+			detect_flush( c );
+		}
+		c->pair_triangle[c->pair_count] = t;
+		c->pair_lane[c->pair_count] = __builtin_ctz( lanes );
+		c->pair_count += 1;
 		lanes &= lanes - 1;
-		int32_t vertex = c->first + k;
-		float p[3] = { c->px[k], c->py[k], c->pz[k] }, w[3], q[3];
-		float d2 = closest_point( p, a, b, cc, w, q );
-		/* A vertex sharing an edge with a corner lies in the sheet right beside the triangle:
-		 * where edges are shorter than the thickness (fine outline and vein sampling, a shrunk
-		 * blade) it is closer than the thickness without any collision, and a push along the
-		 * normal would only buckle the sheet. */
-		if ( !( d2 < c->h2 ) || adjacent( c->neighbor_offset, c->neighbor, vertex, v[0] ) ||
-			 adjacent( c->neighbor_offset, c->neighbor, vertex, v[1] ) ||
-			 adjacent( c->neighbor_offset, c->neighbor, vertex, v[2] ) )
-		{
-			continue;
-		}
-		c->found += 1;
-		if ( c->used < c->capacity )
-		{
-			float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
-			float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
-			float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2],
-						   ab[0] * ac[1] - ab[1] * ac[0] };
-			float s = ( p[0] - q[0] ) * n[0] + ( p[1] - q[1] ) * n[1] + ( p[2] - q[2] ) * n[2];
-			c->buffer[c->used++] =
-				( sere_contact ){ vertex, t, w[0], w[1], w[2], sqrtf( d2 ), s < 0.0f ? -1.0f : 1.0f };
-		}
 	}
 }
 
@@ -535,12 +670,17 @@ static void build_gather( sere_collide* c, const int32_t* tri )
 	c->touched_count = touched;
 	for ( int32_t k = 0; k < c->contact_count; ++k )
 	{
-		const int32_t* v = tri + 3 * (size_t) c->contacts[k].triangle;
-		for ( int32_t r = 0; r < 3; ++r )
+		const sere_contact* contact = c->contacts + k;
+		const int32_t* v = tri + 3 * (size_t) contact->triangle;
+		/* the corners move against the push by their barycentric weight, the vertex with it */
+		float coef[4] = { -contact->u, -contact->v, -contact->w, 1.0f };
+		int32_t member[4] = { v[0], v[1], v[2], contact->vertex };
+		for ( int32_t r = 0; r < 4; ++r )
 		{
-			c->entries[c->entry_cursor[v[r]]++] = k << 2 | r;
+			int32_t e = c->entry_cursor[member[r]]++;
+			c->entries[e] = k;
+			c->entry_coef[e] = coef[r];
 		}
-		c->entries[c->entry_cursor[c->contacts[k].vertex]++] = k << 2 | ROLE_VERTEX;
 	}
 }
 
@@ -603,6 +743,7 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 					c.px[k] = p[0], c.py[k] = p[1], c.pz[k] = p[2];
 				}
 				sere_bvh_query_group( bvh, &group, detect_visit, &c );
+				detect_flush( &c );
 			}
 			collide->block_thread[block] = tid;
 			collide->block_start[block] = start;
@@ -650,8 +791,7 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			collide->contact_vertex[k] = contact->vertex;
 			collide->contact_a[k] = v[0], collide->contact_b[k] = v[1], collide->contact_c[k] = v[2];
 			collide->contact_side[k] = contact->side;
-			float* w = collide->weight + 4 * k;
-			w[0] = contact->u, w[1] = contact->v, w[2] = contact->w, w[3] = -1.0f;
+			collide->bary_u[k] = contact->u, collide->bary_v[k] = contact->v, collide->bary_w[k] = contact->w;
 		}
 	}
 	collide->contact_count = (int32_t) total;
@@ -659,66 +799,91 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	return SERE_OK;
 }
 
-/* Evaluates contact k at the current positions (see sere_collide_respond) at its point of
- * detection q = u a + v b + w c: stores the correction λ n̂ and returns whether it pushes, and in
- * *far whether its deficit exceeds the tolerance. Branch-light straight-line code over the
- * contact arrays. */
-static inline bool evaluate_contact( sere_collide* c, int32_t k, const sere_collide_state* s, float h2, float tolerance,
-									 bool* far )
+/* Evaluates contacts [begin, end), at most EVALUATE_BLOCK of them, at the current positions (see
+ * sere_collide_respond) at their points of detection q = u a + v b + w c: stores
+ * corr[4k ..] = (λ n̂, 1) for a contact that pushes, zeros for one that does not, and returns
+ * how many push by more than the tolerance. The four points are gathered first by scalar loads
+ * (the compiler will not emit vector gathers for this CPU, and they are no faster on it), then
+ * the arithmetic runs as straight-line vector code across contacts. */
+static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, const sere_collide_state* s, float h2,
+								  float tolerance )
 {
-	const float* w = c->weight + 4 * (size_t) k;
-	float p[3], a[3], b[3], cc[3];
-	load3( s->x, s->y, s->z, c->contact_vertex[k], p );
-	load3( s->x, s->y, s->z, c->contact_a[k], a );
-	load3( s->x, s->y, s->z, c->contact_b[k], b );
-	load3( s->x, s->y, s->z, c->contact_c[k], cc );
-	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
-	float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
-	float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
-	float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-	float scale = length2 > 0.0f ? c->contact_side[k] / sqrtf( length2 ) : 0.0f;
-	n[0] *= scale, n[1] *= scale, n[2] *= scale;
-	float d[3];
-	for ( int r = 0; r < 3; ++r )
+	float point[12][EVALUATE_BLOCK];
+	int32_t count = end - begin;
+	for ( int32_t m = 0; m < count; ++m )
 	{
-		d[r] = p[r] - ( w[0] * a[r] + w[1] * b[r] + w[2] * cc[r] );
+		int32_t k = begin + m;
+		int32_t index[4] = { c->contact_vertex[k], c->contact_a[k], c->contact_b[k], c->contact_c[k] };
+		for ( int r = 0; r < 4; ++r )
+		{
+			point[3 * r][m] = s->x[index[r]];
+			point[3 * r + 1][m] = s->y[index[r]];
+			point[3 * r + 2][m] = s->z[index[r]];
+		}
 	}
-	float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-	float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
-	float room = h2 - ( l[0] * l[0] + l[1] * l[1] + l[2] * l[2] );
-	float deficit = ( room > 0.0f ? sqrtf( room ) : 0.0f ) - height;
-	/* a degenerate triangle (scale 0: no normal) or an immovable contact (1/W = 0) never pushes */
-	bool push = room > 0.0f && deficit > 0.0f && scale != 0.0f && c->inv_weight[k] > 0.0f;
-	float lambda = push ? deficit * c->inv_weight[k] : 0.0f;
-	c->corr_x[k] = lambda * n[0];
-	c->corr_y[k] = lambda * n[1];
-	c->corr_z[k] = lambda * n[2];
-	c->active[k] = push;
-	*far = push && deficit > tolerance;
-	return push;
+	const float* restrict bu = c->bary_u + begin, * restrict bv = c->bary_v + begin, * restrict bw = c->bary_w + begin;
+	const float* restrict side = c->contact_side + begin, * restrict inv_weight = c->inv_weight + begin;
+	float* restrict corr = c->corr + 4 * (size_t) begin;
+	int32_t far = 0;
+#pragma omp simd reduction( + : far )
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		float p[3] = { point[0][k], point[1][k], point[2][k] };
+		float a[3] = { point[3][k], point[4][k], point[5][k] };
+		float b[3] = { point[6][k], point[7][k], point[8][k] };
+		float cc[3] = { point[9][k], point[10][k], point[11][k] };
+		float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+		float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
+		float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+		float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+		/* a degenerate triangle has no normal (scale 0) and never pushes */
+		/* side[k] is ±1, so side / |n| = side · (1 / |n|) exactly; written as a product used on
+		 * every path, its load stays a plain vector load instead of a masked one */
+		float inverse_length = length2 > 0.0f ? 1.0f / sqrtf( length2 > 0.0f ? length2 : 1.0f ) : 0.0f;
+		float scale = side[k] * inverse_length;
+		float inverse = inv_weight[k];
+		n[0] *= scale, n[1] *= scale, n[2] *= scale;
+		float d[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			d[r] = p[r] - ( bu[k] * a[r] + bv[k] * b[r] + bw[k] * cc[r] );
+		}
+		float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+		float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
+		float room = h2 - ( l[0] * l[0] + l[1] * l[1] + l[2] * l[2] );
+		float deficit = sqrtf( room > 0.0f ? room : 0.0f ) - height;
+		/* an immovable contact (1/W = 0) never pushes either */
+		int push = ( room > 0.0f ) & ( deficit > 0.0f ) & ( scale != 0.0f ) & ( inverse > 0.0f );
+		float lambda = push ? deficit * inverse : 0.0f;
+		corr[4 * k] = lambda * n[0];
+		corr[4 * k + 1] = lambda * n[1];
+		corr[4 * k + 2] = lambda * n[2];
+		corr[4 * k + 3] = push ? 1.0f : 0.0f;
+		far += push & ( deficit > tolerance );
+	}
+	return far;
 }
 
 /* Moves touched vertex slot j by ω times the mean of its pushing contacts' corrections, summed
- * in contact order: the correction of entry e is −weight[e] λ n̂ times the vertex's 1/m. */
+ * in contact order (a contact that does not push has a zero correction and counts 0). */
 static void gather_apply( sere_collide* c, int32_t j, const sere_collide_state* s, float relaxation )
 {
 	int32_t i = c->touched[j];
-	float dx = 0.0f, dy = 0.0f, dz = 0.0f;
-	int32_t count = 0;
+	float dx = 0.0f, dy = 0.0f, dz = 0.0f, count = 0.0f;
 	for ( int32_t e = c->entry_offset[i]; e < c->entry_offset[i + 1]; ++e )
 	{
-		int32_t entry = c->entries[e], k = entry >> 2;
-		float coefficient = c->active[k] ? -c->weight[entry] : 0.0f;
-		dx += coefficient * c->corr_x[k];
-		dy += coefficient * c->corr_y[k];
-		dz += coefficient * c->corr_z[k];
-		count += c->active[k];
+		const float* corr = c->corr + 4 * (size_t) c->entries[e];
+		float coefficient = c->entry_coef[e];
+		dx += coefficient * corr[0];
+		dy += coefficient * corr[1];
+		dz += coefficient * corr[2];
+		count += corr[3];
 	}
-	if ( count == 0 )
+	if ( count == 0.0f )
 	{
 		return;
 	}
-	float scale = relaxation * s->inv_m[i] / (float) count;
+	float scale = relaxation * s->inv_m[i] / count;
 	dx *= scale, dy *= scale, dz *= scale;
 	s->x[i] += dx;
 	s->y[i] += dy;
@@ -773,9 +938,9 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp for schedule( static )
 		for ( int32_t k = 0; k < contacts; ++k )
 		{
-			const float* w = collide->weight + 4 * (size_t) k;
-			float weight = inv_m[collide->contact_vertex[k]] + inv_m[collide->contact_a[k]] * w[0] * w[0] +
-						   inv_m[collide->contact_b[k]] * w[1] * w[1] + inv_m[collide->contact_c[k]] * w[2] * w[2];
+			float u = collide->bary_u[k], v = collide->bary_v[k], w = collide->bary_w[k];
+			float weight = inv_m[collide->contact_vertex[k]] + inv_m[collide->contact_a[k]] * u * u +
+						   inv_m[collide->contact_b[k]] * v * v + inv_m[collide->contact_c[k]] * w * w;
 			collide->inv_weight[k] = weight > 0.0f ? 1.0f / weight : 0.0f;
 		}
 	}
@@ -786,26 +951,40 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	float h = params->thickness, h2 = h * h;
 	float tolerance = SERE_COLLIDE_TOLERANCE * h;
 	float inv_dt = 1.0f / params->dt;
-	int far = 0, remaining = 0;
-	int32_t applied = 0;
-#pragma omp parallel if ( parallel )
+	int32_t blocks = ( contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
+	int32_t remaining = 0, applied = 0;
+	int32_t* far = collide->far_count;
+	int threads = omp_get_max_threads() < collide->slots ? omp_get_max_threads() : collide->slots;
+	/* Per-thread counts of contacts still short of the tolerance, summed by every thread after
+	 * a barrier: two barriers per iteration (this one and the gather's), no reduction clause. */
+#pragma omp parallel num_threads( threads ) if ( parallel )
 	{
-		for ( int32_t it = 0; it < params->iterations; ++it )
+		int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		for ( int32_t it = 0; it <= params->iterations; ++it )
 		{
-#pragma omp single
-			far = 0;
-#pragma omp for reduction( + : far ) schedule( static )
-			for ( int32_t k = 0; k < contacts; ++k )
+			int32_t mine = 0;
+#pragma omp for schedule( static ) nowait
+			for ( int32_t block = 0; block < blocks; ++block )
 			{
-				bool beyond;
-				evaluate_contact( collide, k, state, h2, tolerance, &beyond );
-				far += beyond;
+				int32_t end = ( block + 1 ) * EVALUATE_BLOCK < contacts ? ( block + 1 ) * EVALUATE_BLOCK : contacts;
+				mine += evaluate_contacts( collide, block * EVALUATE_BLOCK, end, state, h2, tolerance );
 			}
-			/* every contact within the tolerance: stop (the same decision for every thread) */
-			if ( far == 0 )
+			far[tid * FAR_STRIDE] = mine;
+#pragma omp barrier
+			int32_t total = 0;
+			for ( int t = 0; t < team; ++t )
 			{
+				total += far[t * FAR_STRIDE];
+			}
+			/* every contact within the tolerance, or the iterations spent (the last evaluation
+			 * only counts what is left): the same decision on every thread */
+			if ( total == 0 || it == params->iterations )
+			{
+#pragma omp single nowait
+				remaining = total;
 				break;
 			}
+			/* the gather's barrier also keeps far[] from being rewritten before all have read it */
 #pragma omp for schedule( static )
 			for ( int32_t j = 0; j < touched; ++j )
 			{
@@ -814,13 +993,7 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp single nowait
 			applied += 1;
 		}
-#pragma omp for reduction( + : remaining ) schedule( static )
-		for ( int32_t k = 0; k < contacts; ++k )
-		{
-			bool beyond;
-			evaluate_contact( collide, k, state, h2, tolerance, &beyond );
-			remaining += beyond;
-		}
+		/* the same static schedule as the gather: each thread reads the sums it wrote */
 #pragma omp for schedule( static )
 		for ( int32_t j = 0; j < touched; ++j )
 		{

@@ -168,6 +168,22 @@ static int32_t collide_check_pairs( collide_sheet* s, sere_bvh* bvh, sere_collid
 		pairs[2 * k] = contacts[k].vertex;
 		pairs[2 * k + 1] = contacts[k].triangle;
 		cr_assert( contacts[k].distance < h, "%s: contact %d at %g", what, k, contacts[k].distance );
+		/* Detection tests pairs eight at a time with selects in place of closest_point's
+		 * branches, built to give the same bits: weights and distance must equal the scalar
+		 * sere_closest_point_triangle exactly (tolerance 0), whichever path a pair took. */
+		const int32_t* v = s->tri + 3 * contacts[k].triangle;
+		int32_t i = contacts[k].vertex;
+		float p[3] = { s->x[i], s->y[i], s->z[i] }, corner[3][3], w[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			corner[r][0] = s->x[v[r]], corner[r][1] = s->y[v[r]], corner[r][2] = s->z[v[r]];
+		}
+		float d2 = sere_closest_point_triangle( p, corner[0], corner[1], corner[2], w );
+		cr_assert( contacts[k].u == w[0] && contacts[k].v == w[1] && contacts[k].w == w[2] &&
+					   contacts[k].distance == sqrtf( d2 ),
+				   "%s: contact %d (%d, %d): weights (%.9g %.9g %.9g) at %.9g, scalar (%.9g %.9g %.9g) at %.9g", what,
+				   k, i, contacts[k].triangle, contacts[k].u, contacts[k].v, contacts[k].w, contacts[k].distance, w[0],
+				   w[1], w[2], sqrtf( d2 ) );
 	}
 	qsort( pairs, (size_t) count, 2 * sizeof( int32_t ), collide_cmp_pair );
 	for ( int32_t k = 0; k < count; ++k )
@@ -329,6 +345,57 @@ Test( collide, pairs_match_brute_force_on_crumpled_sheet )
 
 /* One vertex over the middle of a triangle, everything else far away: a single contact whose
  * solution is known in closed form. */
+/* Slivers and collapsed triangles take closest_point's nearest-edge fallback, which the
+ * eight-wide test hands back to the scalar code: pairs and weights must still be exact. */
+Test( collide, pairs_match_brute_force_with_degenerate_triangles )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 9 );
+	float h = 0.3f * s.cell;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_fold( &s, 0.8 * h );
+	/* on the upper half, put a corner of every fifth triangle on the midpoint of the other two
+	 * (zero area), or a millionth of a cell beside it (a sliver) */
+	int32_t collapsed = 0;
+	for ( int32_t t = 0; t < s.triangles; t += 5 )
+	{
+		const int32_t* v = s.tri + 3 * t;
+		if ( s.u[v[0]] < 0.6 || s.u[v[1]] < 0.6 || s.u[v[2]] < 0.6 )
+		{
+			continue;
+		}
+		float offset = ( collapsed & 1 ) ? 1e-6f * s.cell : 0.0f;
+		s.x[v[2]] = 0.5f * ( s.x[v[0]] + s.x[v[1]] ) + offset;
+		s.y[v[2]] = 0.5f * ( s.y[v[0]] + s.y[v[1]] );
+		s.z[v[2]] = 0.5f * ( s.z[v[0]] + s.z[v[1]] );
+		collapsed += 1;
+	}
+	cr_assert_gt( collapsed, 50 );
+	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t near = collide_check_pairs( &s, bvh, c, h, "fold with collapsed triangles" );
+	cr_assert_gt( near, s.n / 2 );
+	/* some contact must lie on a collapsed triangle for the fallback to have been exercised */
+	int32_t count, on_degenerate = 0;
+	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		const int32_t* v = s.tri + 3 * contacts[k].triangle;
+		float ab[3] = { s.x[v[1]] - s.x[v[0]], s.y[v[1]] - s.y[v[0]], s.z[v[1]] - s.z[v[0]] };
+		float ac[3] = { s.x[v[2]] - s.x[v[0]], s.y[v[2]] - s.y[v[0]], s.z[v[2]] - s.z[v[0]] };
+		float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+		float area2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+		float ab2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+		on_degenerate += area2 <= 1e-6f * ab2 * ab2;
+	}
+	cr_assert_gt( on_degenerate, 0, "no contact on a collapsed triangle: the fallback was not exercised" );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
 Test( collide, single_contact_shared_by_inverse_mass )
 {
 	/* triangle 0 = (0, 1, 2) in z = 0; triangle 1 = (3, 4, 5) holds the vertex 3 above it */
