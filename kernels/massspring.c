@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined( __AVX512F__ )
+#if defined( __AVX512F__ ) || defined( __AVX__ )
 #include <immintrin.h>
 #endif
 
@@ -583,6 +583,94 @@ static inline __m512 norm3( __m512 x, __m512 y, __m512 z )
 	return _mm512_sqrt_ps(
 		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( x, x ), _mm512_mul_ps( y, y ) ), _mm512_mul_ps( z, z ) ) );
 }
+#elif defined( __AVX__ )
+/* The AVX (256-bit) build: the same operations as the AVX-512 one, eight springs to a step.
+ * Without it a machine lacking AVX-512 ran the one-spring loops, slower than the reference. */
+
+/* Lane j of c0..c3 receives the four floats of record at[j] (the 128-bit loads and in-lane
+ * 4 × 4 transpose of load16). */
+static inline void load8( const float* rec, const int32_t* at, __m256* c0, __m256* c1, __m256* c2, __m256* c3 )
+{
+	__m256 r[4];
+	for ( int k = 0; k < 4; ++k )
+	{
+		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( rec + 4 * at[k] ) ),
+									 _mm_load_ps( rec + 4 * at[k + 4] ), 1 );
+	}
+	__m256 t0 = _mm256_unpacklo_ps( r[0], r[1] ), t1 = _mm256_unpackhi_ps( r[0], r[1] );
+	__m256 t2 = _mm256_unpacklo_ps( r[2], r[3] ), t3 = _mm256_unpackhi_ps( r[2], r[3] );
+	*c0 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
+	*c1 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
+	*c2 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
+	*c3 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
+}
+
+/* The inverse of load8 for the first `lanes` lanes. */
+static inline void store8( float* rec, const int32_t* at, int32_t lanes, __m256 c0, __m256 c1, __m256 c2, __m256 c3 )
+{
+	_Alignas( 32 ) float tmp[32];
+	__m256 t0 = _mm256_unpacklo_ps( c0, c1 ), t1 = _mm256_unpackhi_ps( c0, c1 );
+	__m256 t2 = _mm256_unpacklo_ps( c2, c3 ), t3 = _mm256_unpackhi_ps( c2, c3 );
+	_mm256_store_ps( tmp, _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) ) );
+	_mm256_store_ps( tmp + 8,
+					 _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) ) );
+	_mm256_store_ps( tmp + 16,
+					 _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) ) );
+	_mm256_store_ps( tmp + 24,
+					 _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) ) );
+	for ( int32_t j = 0; j < lanes; ++j )
+	{
+		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 8 * ( j % 4 ) + 4 * ( j / 4 ) ) );
+	}
+}
+
+/* The spring indices of a chunk of 8 from [s, s + left); lanes past the end repeat lane 0 (see
+ * chunk_ends). */
+static inline int32_t chunk_ends8( const int32_t* sa, const int32_t* sb, int32_t s, int32_t left, int32_t* ia,
+								   int32_t* ib )
+{
+	const int32_t lanes = left < 8 ? left : 8;
+	for ( int32_t j = 0; j < 8; ++j )
+	{
+		ia[j] = sa[s + ( j < lanes ? j : 0 )];
+		ib[j] = sb[s + ( j < lanes ? j : 0 )];
+	}
+	return lanes;
+}
+
+/* All ones in the first `lanes` lanes. */
+static inline __m256i lane_mask8( int32_t lanes )
+{
+	return _mm256_cmpgt_epi32( _mm256_set1_epi32( lanes ), _mm256_setr_epi32( 0, 1, 2, 3, 4, 5, 6, 7 ) );
+}
+
+/* rest0[s ..] in the first `lanes` lanes, 1 in the others (as _mm512_mask_loadu_ps with 1). */
+static inline __m256 load_rest8( const float* rest0, int32_t s, int32_t lanes )
+{
+	__m256i m = lane_mask8( lanes );
+	return _mm256_blendv_ps( _mm256_set1_ps( 1.0f ), _mm256_maskload_ps( rest0 + s, m ), _mm256_castsi256_ps( m ) );
+}
+
+static inline __m256 norm3_8( __m256 x, __m256 y, __m256 z )
+{
+	return _mm256_sqrt_ps(
+		_mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( x, x ), _mm256_mul_ps( y, y ) ), _mm256_mul_ps( z, z ) ) );
+}
+
+/* Largest of the lanes of v whose sign bit is set in mask (−inf when none). */
+static inline float masked_max8( __m256 v, __m256 mask )
+{
+	v = _mm256_blendv_ps( _mm256_set1_ps( -INFINITY ), v, mask );
+	__m128 m = _mm_max_ps( _mm256_castps256_ps128( v ), _mm256_extractf128_ps( v, 1 ) );
+	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
+	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
+	return _mm_cvtss_f32( m );
+}
+
+static inline __m256 abs8( __m256 v )
+{
+	return _mm256_and_ps( v, _mm256_castsi256_ps( _mm256_set1_epi32( 0x7fffffff ) ) );
+}
 #endif
 
 /* Packs the particles into records (x, y, z, 1/m) and (vx, vy, vz, 0). */
@@ -644,6 +732,36 @@ static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, sp
 		_mm512_mask_storeu_ps( fx + s, m, _mm512_mul_ps( f, nx ) );
 		_mm512_mask_storeu_ps( fy + s, m, _mm512_mul_ps( f, ny ) );
 		_mm512_mask_storeu_ps( fz + s, m, _mm512_mul_ps( f, nz ) );
+	}
+#elif defined( __AVX__ )
+	const int32_t chunks = ( count + 7 ) / 8;
+	const __m256 keep = _mm256_set1_ps( law.keep ), k = _mm256_set1_ps( law.k ), c = _mm256_set1_ps( law.c );
+	const __m256 one = _mm256_set1_ps( 1.0f ), zero = _mm256_setzero_ps();
+#pragma omp for schedule( static )
+	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
+	{
+		const int32_t s = first + 8 * chunk;
+		int32_t ia[8], ib[8];
+		const int32_t lanes = chunk_ends8( sa, sb, s, count - 8 * chunk, ia, ib );
+		const __m256i m = lane_mask8( lanes );
+		__m256 ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
+		load8( xr, ia, &ax, &ay, &az, &aw );
+		load8( xr, ib, &bx, &by, &bz, &bw );
+		load8( vr, ia, &avx, &avy, &avz, &unused );
+		load8( vr, ib, &bvx, &bvy, &bvz, &unused );
+		__m256 dx = _mm256_sub_ps( bx, ax ), dy = _mm256_sub_ps( by, ay ), dz = _mm256_sub_ps( bz, az );
+		__m256 len = norm3_8( dx, dy, dz );
+		__m256 inv = _mm256_and_ps( _mm256_cmp_ps( len, zero, _CMP_GT_OQ ), _mm256_div_ps( one, len ) );
+		__m256 nx = _mm256_mul_ps( dx, inv ), ny = _mm256_mul_ps( dy, inv ), nz = _mm256_mul_ps( dz, inv );
+		__m256 rest = _mm256_mul_ps( load_rest8( rest0, s, lanes ), keep );
+		__m256 strain = _mm256_div_ps( _mm256_sub_ps( len, rest ), rest );
+		__m256 rvx = _mm256_sub_ps( bvx, avx ), rvy = _mm256_sub_ps( bvy, avy ), rvz = _mm256_sub_ps( bvz, avz );
+		__m256 along = _mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( rvx, nx ), _mm256_mul_ps( rvy, ny ) ),
+									  _mm256_mul_ps( rvz, nz ) );
+		__m256 f = _mm256_add_ps( _mm256_mul_ps( k, strain ), _mm256_mul_ps( c, along ) );
+		_mm256_maskstore_ps( fx + s, m, _mm256_mul_ps( f, nx ) );
+		_mm256_maskstore_ps( fy + s, m, _mm256_mul_ps( f, ny ) );
+		_mm256_maskstore_ps( fz + s, m, _mm256_mul_ps( f, nz ) );
 	}
 #else
 #pragma omp for schedule( static )
@@ -711,10 +829,10 @@ static void integrate_velocities( sere_massspring* ms, int32_t count, const sere
 }
 
 /* Eq. 2 on one run of structural springs [first, first + count), by the calling thread: no two
- * of them share a particle, so they are limited at the same time (16 to a SIMD step). Each spring off [lo_factor L,
- * hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the nearer bound.
- * Raises *worst_io to the largest distance off the band (relative to L) this thread found before correcting and adds
- * the number of its springs that were off to *off_band. */
+ * of them share a particle, so they are limited at the same time (16, or 8 with AVX, to a SIMD step). Each spring off
+ * [lo_factor L, hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the
+ * nearer bound. Raises *worst_io to the largest distance off the band (relative to L) this thread found before
+ * correcting and adds the number of its springs that were off to *off_band. */
 static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float keep, float lo_factor, float hi_factor,
 					   float dt, float* worst_io, int32_t* off_band )
 {
@@ -763,6 +881,46 @@ static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float 
 				 _mm512_add_ps( avy, _mm512_mul_ps( sa_, py ) ), _mm512_add_ps( avz, _mm512_mul_ps( sa_, pz ) ), avw );
 		store16( vr, ib, lanes, _mm512_sub_ps( bvx, _mm512_mul_ps( sb_, px ) ),
 				 _mm512_sub_ps( bvy, _mm512_mul_ps( sb_, py ) ), _mm512_sub_ps( bvz, _mm512_mul_ps( sb_, pz ) ), bvw );
+	}
+#elif defined( __AVX__ )
+	const int32_t chunks = ( count + 7 ) / 8;
+	const __m256 vkeep = _mm256_set1_ps( keep ), vlo = _mm256_set1_ps( lo_factor ), vhi = _mm256_set1_ps( hi_factor );
+	const __m256 vdt = _mm256_set1_ps( dt ), zero = _mm256_setzero_ps();
+	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
+	{
+		const int32_t s = first + 8 * chunk;
+		int32_t ia[8], ib[8];
+		const int32_t lanes = chunk_ends8( sa, sb, s, count - 8 * chunk, ia, ib );
+		const __m256 m = _mm256_castsi256_ps( lane_mask8( lanes ) );
+		__m256 ax, ay, az, wa, bx, by, bz, wb, avx, avy, avz, avw, bvx, bvy, bvz, bvw;
+		load8( xr, ia, &ax, &ay, &az, &wa );
+		load8( xr, ib, &bx, &by, &bz, &wb );
+		load8( vr, ia, &avx, &avy, &avz, &avw );
+		load8( vr, ib, &bvx, &bvy, &bvz, &bvw );
+		__m256 px = _mm256_add_ps( _mm256_sub_ps( bx, ax ), _mm256_mul_ps( vdt, _mm256_sub_ps( bvx, avx ) ) );
+		__m256 py = _mm256_add_ps( _mm256_sub_ps( by, ay ), _mm256_mul_ps( vdt, _mm256_sub_ps( bvy, avy ) ) );
+		__m256 pz = _mm256_add_ps( _mm256_sub_ps( bz, az ), _mm256_mul_ps( vdt, _mm256_sub_ps( bvz, avz ) ) );
+		__m256 len = norm3_8( px, py, pz );
+		__m256 rest = _mm256_mul_ps( load_rest8( rest0, s, lanes ), vkeep );
+		__m256 target = _mm256_min_ps( _mm256_max_ps( len, _mm256_mul_ps( rest, vlo ) ), _mm256_mul_ps( rest, vhi ) );
+		__m256 off = _mm256_sub_ps( len, target );
+		__m256 violated = _mm256_and_ps( m, _mm256_cmp_ps( off, zero, _CMP_NEQ_UQ ) );
+		int violated_bits = _mm256_movemask_ps( violated );
+		if ( violated_bits == 0 )
+		{
+			continue;
+		}
+		n += __builtin_popcount( (unsigned) violated_bits );
+		worst = fmaxf( worst, masked_max8( _mm256_div_ps( abs8( off ), rest ), violated ) );
+		__m256 w = _mm256_add_ps( wa, wb );
+		__m256 move = _mm256_and_ps( _mm256_and_ps( violated, _mm256_cmp_ps( w, zero, _CMP_GT_OQ ) ),
+									 _mm256_cmp_ps( len, zero, _CMP_GT_OQ ) );
+		__m256 scale = _mm256_and_ps( move, _mm256_div_ps( off, _mm256_mul_ps( _mm256_mul_ps( len, vdt ), w ) ) );
+		__m256 sa_ = _mm256_mul_ps( wa, scale ), sb_ = _mm256_mul_ps( wb, scale );
+		store8( vr, ia, lanes, _mm256_add_ps( avx, _mm256_mul_ps( sa_, px ) ),
+				_mm256_add_ps( avy, _mm256_mul_ps( sa_, py ) ), _mm256_add_ps( avz, _mm256_mul_ps( sa_, pz ) ), avw );
+		store8( vr, ib, lanes, _mm256_sub_ps( bvx, _mm256_mul_ps( sb_, px ) ),
+				_mm256_sub_ps( bvy, _mm256_mul_ps( sb_, py ) ), _mm256_sub_ps( bvz, _mm256_mul_ps( sb_, pz ) ), bvw );
 	}
 #else
 	for ( int32_t s = first; s < first + count; ++s )
@@ -840,6 +998,34 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 		__m512 out = _mm512_max_ps( _mm512_sub_ps( ratio, hi ), _mm512_sub_ps( lo, ratio ) );
 		excess = fmaxf( excess, _mm512_mask_reduce_max_ps( m, out ) );
 		strain = fmaxf( strain, _mm512_mask_reduce_max_ps( m, _mm512_abs_ps( _mm512_sub_ps( ratio, one ) ) ) );
+	}
+#elif defined( __AVX__ )
+	const int32_t count = ms->structural_count;
+	const int32_t chunks = ( count + 7 ) / 8;
+	const __m256 vkeep = _mm256_set1_ps( keep ), vdt = _mm256_set1_ps( dt ), one = _mm256_set1_ps( 1.0f );
+	const __m256 hi = _mm256_set1_ps( 1.0f + tau ), lo = _mm256_set1_ps( 1.0f - tau );
+#pragma omp for schedule( static )
+	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
+	{
+		const int32_t s = 8 * chunk;
+		int32_t ia[8], ib[8];
+		const int32_t lanes = chunk_ends8( sa, sb, s, count - s, ia, ib );
+		const __m256 m = _mm256_castsi256_ps( lane_mask8( lanes ) );
+		__m256 ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
+		load8( xr, ia, &ax, &ay, &az, &aw );
+		load8( xr, ib, &bx, &by, &bz, &bw );
+		load8( vr, ia, &avx, &avy, &avz, &unused );
+		load8( vr, ib, &bvx, &bvy, &bvz, &unused );
+		__m256 px = _mm256_sub_ps( _mm256_add_ps( bx, _mm256_mul_ps( bvx, vdt ) ),
+								   _mm256_add_ps( ax, _mm256_mul_ps( avx, vdt ) ) );
+		__m256 py = _mm256_sub_ps( _mm256_add_ps( by, _mm256_mul_ps( bvy, vdt ) ),
+								   _mm256_add_ps( ay, _mm256_mul_ps( avy, vdt ) ) );
+		__m256 pz = _mm256_sub_ps( _mm256_add_ps( bz, _mm256_mul_ps( bvz, vdt ) ),
+								   _mm256_add_ps( az, _mm256_mul_ps( avz, vdt ) ) );
+		__m256 ratio = _mm256_div_ps( norm3_8( px, py, pz ), _mm256_mul_ps( load_rest8( rest0, s, lanes ), vkeep ) );
+		__m256 out = _mm256_max_ps( _mm256_sub_ps( ratio, hi ), _mm256_sub_ps( lo, ratio ) );
+		excess = fmaxf( excess, masked_max8( out, m ) );
+		strain = fmaxf( strain, masked_max8( abs8( _mm256_sub_ps( ratio, one ) ), m ) );
 	}
 #else
 #pragma omp for schedule( static )
