@@ -1,6 +1,6 @@
-// Osmotic flow systems of the Table 1 maple (T and V layers): our SpMV and Jacobi PCG at 1 and
-// 2 threads beside Eigen 3.4's ConjugateGradient with a diagonal preconditioner, same matrix,
-// same tolerance (relative residual 1e-8), in one binary.
+// Osmotic flow systems of the Table 1 maple (T and V layers): our SpMV (CSR and SELL-C-sigma) and
+// Jacobi PCG at 1 and 2 threads beside Eigen 3.4's ConjugateGradient with a diagonal
+// preconditioner, same matrix, same tolerance (relative residual 1e-8), in one binary.
 #include "cg.h"
 #include "fixture.h"
 #include "osmosis.h"
@@ -62,11 +62,54 @@ void BM_SpMV( benchmark::State& state )
 												 benchmark::Counter::kIsRate );
 }
 
+// Args: layer, threads, sigma (the sorting window).
+void BM_SellSpMV( benchmark::State& state )
+{
+	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
+	system_t& s = maple_system( static_cast<int>( state.range( 0 ) ) );
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sell* sell;
+	if ( sere_sell_create( a, static_cast<int32_t>( state.range( 2 ) ), &sell ) != SERE_OK )
+	{
+		state.SkipWithError( "sere_sell_create failed" );
+		return;
+	}
+	std::vector<double> x( a->rows, 1.0 ), y( a->rows );
+	for ( auto _ : state )
+	{
+		sere_sell_spmv( sell, x.data(), y.data() );
+		benchmark::DoNotOptimize( y.data() );
+	}
+	state.counters["GFLOP/s"] =
+		benchmark::Counter( 2.0 * a->nnz * state.iterations() * 1e-9, benchmark::Counter::kIsRate );
+	state.counters["padding"] = static_cast<double>( sell->chunk_ptr[sell->chunks] - a->nnz ) / a->nnz;
+	sere_sell_destroy( sell );
+}
+
+// Copying new values into a kept SELL layout (the osmosis instead writes them while assembling).
+void BM_SellUpdate( benchmark::State& state )
+{
+	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
+	system_t& s = maple_system( static_cast<int>( state.range( 0 ) ) );
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sell* sell;
+	sere_sell_create( a, SERE_SELL_SIGMA, &sell );
+	for ( auto _ : state )
+	{
+		sere_sell_update( sell, a );
+		benchmark::DoNotOptimize( sell->val );
+	}
+	sere_sell_destroy( sell );
+}
+
+// One solve on the SELL layout the osmosis step keeps and fills while assembling.
 void BM_PCG( benchmark::State& state )
 {
 	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
 	system_t& s = maple_system( static_cast<int>( state.range( 0 ) ) );
 	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sell* sell;
+	sere_sell_create( a, SERE_SELL_SIGMA, &sell );
 	sere_cg_workspace* w;
 	sere_cg_create( a->rows, &w );
 	std::vector<double> x( a->rows );
@@ -74,12 +117,14 @@ void BM_PCG( benchmark::State& state )
 	for ( auto _ : state )
 	{
 		std::fill( x.begin(), x.end(), 0.0 );
-		sere_cg_solve( w, a, s.b.data(), x.data(), 1e-8, 10000, &result );
+		sere_cg_solve( w, sell, s.b.data(), x.data(), 1e-8, 10000, &result );
 		benchmark::DoNotOptimize( x.data() );
 	}
 	state.counters["iterations"] = result.iterations;
+	state.counters["residual"] = result.residual;
 	state.counters["rows"] = a->rows;
 	sere_cg_destroy( w );
+	sere_sell_destroy( sell );
 }
 
 void BM_EigenCG( benchmark::State& state )
@@ -116,6 +161,11 @@ void BM_EigenCG( benchmark::State& state )
 
 // Args: layer (0 = T, 1 = V), threads.
 BENCHMARK( BM_SpMV )->ArgNames( { "layer", "threads" } )->ArgsProduct( { { 0, 1 }, { 1, 2 } } )->UseRealTime();
+BENCHMARK( BM_SellSpMV )
+	->ArgNames( { "layer", "threads", "sigma" } )
+	->ArgsProduct( { { 0, 1 }, { 1, 2 }, { 8, 64, 512 } } )
+	->UseRealTime();
+BENCHMARK( BM_SellUpdate )->ArgNames( { "layer", "threads" } )->ArgsProduct( { { 0, 1 }, { 1, 2 } } )->UseRealTime();
 BENCHMARK( BM_PCG )
 	->ArgNames( { "layer", "threads" } )
 	->ArgsProduct( { { 0, 1 }, { 1, 2 } } )

@@ -4,57 +4,11 @@
 #include <omp.h>
 #include <stdlib.h>
 
-struct sere_cg_workspace
+enum
 {
-	int32_t capacity;
-	int32_t block_capacity;
-	double *r, *z, *p, *q, *inv_diag;
-	double* partial; /* 3 sums per block */
+	LANES = SERE_SELL_C,
+	CHUNKS_PER_BLOCK = SERE_CG_BLOCK / SERE_SELL_C
 };
-
-sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
-{
-	if ( n <= 0 || out == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	sere_cg_workspace* w = calloc( 1, sizeof( *w ) );
-	if ( w == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
-	size_t bytes = sizeof( double ) * (size_t) sere_pad( n );
-	w->capacity = n;
-	w->block_capacity = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
-	w->r = sere_alloc( bytes );
-	w->z = sere_alloc( bytes );
-	w->p = sere_alloc( bytes );
-	w->q = sere_alloc( bytes );
-	w->inv_diag = sere_alloc( bytes );
-	w->partial = sere_alloc( sizeof( double ) * 3 * (size_t) w->block_capacity );
-	if ( !w->r || !w->z || !w->p || !w->q || !w->inv_diag || !w->partial )
-	{
-		sere_cg_destroy( w );
-		return SERE_ERR_MEMORY;
-	}
-	*out = w;
-	return SERE_OK;
-}
-
-void sere_cg_destroy( sere_cg_workspace* w )
-{
-	if ( w == NULL )
-	{
-		return;
-	}
-	sere_free( w->r );
-	sere_free( w->z );
-	sere_free( w->p );
-	sere_free( w->q );
-	sere_free( w->inv_diag );
-	sere_free( w->partial );
-	free( w );
-}
 
 static inline double row_dot( const sere_csr* a, int32_t i, const double* x )
 {
@@ -75,6 +29,288 @@ void sere_csr_spmv( const sere_csr* a, const double* x, double* y )
 	}
 }
 
+void sere_sell_destroy( sere_sell* s )
+{
+	if ( s == NULL )
+	{
+		return;
+	}
+	sere_free( s->chunk_ptr );
+	sere_free( s->row );
+	sere_free( s->col );
+	sere_free( s->val );
+	sere_free( s->slot );
+	free( s );
+}
+
+typedef struct row_length
+{
+	int32_t row, length;
+} row_length;
+
+/* Longest first; ties keep row order, so the order is total and rows stay near their neighbours. */
+static int by_length( const void* left, const void* right )
+{
+	const row_length *l = left, *r = right;
+	if ( l->length != r->length )
+	{
+		return l->length > r->length ? -1 : 1;
+	}
+	return l->row < r->row ? -1 : l->row > r->row;
+}
+
+sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out )
+{
+	if ( a == NULL || out == NULL || a->rows <= 0 || a->nnz < 0 || a->row_ptr == NULL || sigma < LANES ||
+		 sigma % LANES != 0 || SERE_CG_BLOCK % sigma != 0 || a->row_ptr[0] != 0 || a->row_ptr[a->rows] != a->nnz )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = a->rows;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( a->row_ptr[i + 1] < a->row_ptr[i] )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
+	for ( int32_t k = 0; k < a->nnz; ++k )
+	{
+		if ( a->col[k] < 0 || a->col[k] >= n )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
+	sere_sell* s = calloc( 1, sizeof( *s ) );
+	row_length* order = malloc( sizeof( row_length ) * (size_t) n );
+	if ( s == NULL || order == NULL )
+	{
+		free( s );
+		free( order );
+		return SERE_ERR_MEMORY;
+	}
+	s->rows = n;
+	s->nnz = a->nnz;
+	s->sigma = sigma;
+	s->chunks = ( n + LANES - 1 ) / LANES;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		order[i] = ( row_length ){ i, a->row_ptr[i + 1] - a->row_ptr[i] };
+	}
+	for ( int32_t start = 0; start < n; start += sigma )
+	{
+		int32_t count = n - start < sigma ? n - start : sigma;
+		qsort( order + start, (size_t) count, sizeof( row_length ), by_length );
+	}
+	s->chunk_ptr = sere_alloc( sizeof( int32_t ) * ( (size_t) s->chunks + 1 ) );
+	s->row = sere_alloc( sizeof( int32_t ) * (size_t) s->chunks * LANES );
+	if ( s->chunk_ptr == NULL || s->row == NULL )
+	{
+		free( order );
+		sere_sell_destroy( s );
+		return SERE_ERR_MEMORY;
+	}
+	int64_t slots = 0;
+	for ( int32_t c = 0; c < s->chunks; ++c )
+	{
+		int32_t width = 0;
+		for ( int32_t l = 0; l < LANES; ++l )
+		{
+			int32_t i = c * LANES + l;
+			s->row[c * LANES + l] = i < n ? order[i].row : -1;
+			width = i < n && order[i].length > width ? order[i].length : width;
+		}
+		slots += (int64_t) width * LANES;
+		if ( slots > INT32_MAX )
+		{
+			free( order );
+			sere_sell_destroy( s );
+			return SERE_ERR_ARGUMENT;
+		}
+		s->chunk_ptr[c + 1] = (int32_t) slots;
+	}
+	free( order );
+	/* At least one slot, so an all-empty matrix still has arrays to point at. */
+	size_t stored = slots > 0 ? (size_t) slots : 1;
+	s->col = sere_alloc( sizeof( int32_t ) * stored );
+	s->val = sere_alloc( sizeof( double ) * stored );
+	s->slot = sere_alloc( sizeof( int32_t ) * ( a->nnz > 0 ? (size_t) a->nnz : 1 ) );
+	if ( s->col == NULL || s->val == NULL || s->slot == NULL )
+	{
+		sere_sell_destroy( s );
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t c = 0; c < s->chunks; ++c )
+	{
+		int32_t width = ( s->chunk_ptr[c + 1] - s->chunk_ptr[c] ) / LANES;
+		for ( int32_t l = 0; l < LANES; ++l )
+		{
+			int32_t i = s->row[c * LANES + l];
+			int32_t begin = i >= 0 ? a->row_ptr[i] : 0, length = i >= 0 ? a->row_ptr[i + 1] - begin : 0;
+			/* Padding repeats the row's last column: x_j is read anyway, so padding touches no
+			 * new cache line and meets a non-finite x_j only where the row itself does. */
+			int32_t pad = length > 0 ? a->col[begin + length - 1] : ( i >= 0 ? i : 0 );
+			for ( int32_t k = 0; k < width; ++k )
+			{
+				int32_t at = s->chunk_ptr[c] + k * LANES + l;
+				s->col[at] = k < length ? a->col[begin + k] : pad;
+				s->val[at] = k < length ? a->val[begin + k] : 0.0;
+				if ( k < length )
+				{
+					s->slot[begin + k] = at;
+				}
+			}
+		}
+	}
+	*out = s;
+	return SERE_OK;
+}
+
+sere_status sere_sell_update( sere_sell* s, const sere_csr* a )
+{
+	if ( s == NULL || a == NULL || a->rows != s->rows || a->nnz != s->nnz )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int mismatch = 0;
+#pragma omp parallel for schedule( static ) reduction( | : mismatch )
+	for ( int32_t k = 0; k < a->nnz; ++k )
+	{
+		s->val[s->slot[k]] = a->val[k];
+		mismatch |= s->col[s->slot[k]] != a->col[k];
+	}
+	return mismatch ? SERE_ERR_ARGUMENT : SERE_OK;
+}
+
+/* A chunk's sums live in two 4-lane vectors (a vector type, not a double[8]: gcc keeps an
+ * array in memory, and every step of the sums then waits on a store and a reload; 4 lanes, one
+ * AVX2 register, because gcc lowers wider vector types through memory where they are not
+ * native). Values pass through pointers so that no vector crosses a call ABI. */
+typedef double half_t __attribute__( ( vector_size( 4 * sizeof( double ) ) ) );
+_Static_assert( SERE_SELL_C == 8, "a chunk is two 4-lane vectors" );
+
+typedef struct lanes_t
+{
+	half_t lo, hi;
+} lanes_t;
+
+static inline void gather( half_t* out, const double* x, const int32_t* col )
+{
+	*out = ( half_t ){ x[col[0]], x[col[1]], x[col[2]], x[col[3]] };
+}
+
+/* Rows of chunk c times x, entries in CSR order. */
+static inline void chunk_product( const sere_sell* a, int32_t c, const double* x, lanes_t* out )
+{
+	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
+	for ( int32_t s = a->chunk_ptr[c]; s < a->chunk_ptr[c + 1]; s += LANES )
+	{
+		gather( &xlo, x, a->col + s );
+		gather( &xhi, x, a->col + s + 4 );
+		lo += *(const half_t*) ( a->val + s ) * xlo;
+		hi += *(const half_t*) ( a->val + s + 4 ) * xhi;
+	}
+	out->lo = lo;
+	out->hi = hi;
+}
+
+/* Rows of chunk c times z + βp, the next CG direction formed on the fly. */
+static inline void chunk_product_direction( const sere_sell* a, int32_t c, const double* z, const double* p,
+											double beta, lanes_t* out )
+{
+	half_t lo = { 0.0 }, hi = { 0.0 }, zlo, zhi, plo, phi;
+	for ( int32_t s = a->chunk_ptr[c]; s < a->chunk_ptr[c + 1]; s += LANES )
+	{
+		gather( &zlo, z, a->col + s );
+		gather( &zhi, z, a->col + s + 4 );
+		gather( &plo, p, a->col + s );
+		gather( &phi, p, a->col + s + 4 );
+		lo += *(const half_t*) ( a->val + s ) * ( zlo + beta * plo );
+		hi += *(const half_t*) ( a->val + s + 4 ) * ( zhi + beta * phi );
+	}
+	out->lo = lo;
+	out->hi = hi;
+}
+
+/* Lane l of a chunk's sums. */
+static inline double lane( const lanes_t* sum, int32_t l )
+{
+	return l < 4 ? sum->lo[l] : sum->hi[l - 4];
+}
+
+static inline int32_t chunk_lanes( const sere_sell* a, int32_t c )
+{
+	return a->rows - c * LANES < LANES ? a->rows - c * LANES : LANES;
+}
+
+void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
+{
+#pragma omp parallel for schedule( static )
+	for ( int32_t c = 0; c < a->chunks; ++c )
+	{
+		lanes_t sum;
+		chunk_product( a, c, x, &sum );
+		for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
+		{
+			y[a->row[c * LANES + l]] = lane( &sum, l );
+		}
+	}
+}
+
+struct sere_cg_workspace
+{
+	int32_t capacity;
+	int32_t block_capacity;
+	double *r, *z, *p, *p_next, *q, *inv_diag;
+	double* partial; /* 3 sums per block */
+};
+
+sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
+{
+	if ( n <= 0 || out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sere_cg_workspace* w = calloc( 1, sizeof( *w ) );
+	if ( w == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	size_t bytes = sizeof( double ) * (size_t) sere_pad( n );
+	w->capacity = n;
+	w->block_capacity = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	w->r = sere_alloc( bytes );
+	w->z = sere_alloc( bytes );
+	w->p = sere_alloc( bytes );
+	w->p_next = sere_alloc( bytes );
+	w->q = sere_alloc( bytes );
+	w->inv_diag = sere_alloc( bytes );
+	w->partial = sere_alloc( sizeof( double ) * 3 * (size_t) w->block_capacity );
+	if ( !w->r || !w->z || !w->p || !w->p_next || !w->q || !w->inv_diag || !w->partial )
+	{
+		sere_cg_destroy( w );
+		return SERE_ERR_MEMORY;
+	}
+	*out = w;
+	return SERE_OK;
+}
+
+void sere_cg_destroy( sere_cg_workspace* w )
+{
+	if ( w == NULL )
+	{
+		return;
+	}
+	sere_free( w->r );
+	sere_free( w->z );
+	sere_free( w->p );
+	sere_free( w->p_next );
+	sere_free( w->q );
+	sere_free( w->inv_diag );
+	sere_free( w->partial );
+	free( w );
+}
+
 /* Sum of partial[slot], partial[slot + 3], ... over blocks in block order. */
 static double block_sum( const double* partial, int32_t blocks, int slot )
 {
@@ -86,19 +322,19 @@ static double block_sum( const double* partial, int32_t blocks, int slot )
 	return sum;
 }
 
-sere_status sere_cg_solve( sere_cg_workspace* w, const sere_csr* a, const double* b, double* x, double tolerance,
+sere_status sere_cg_solve( sere_cg_workspace* w, const sere_sell* a, const double* b, double* x, double tolerance,
 						   int32_t max_iterations, sere_cg_result* result )
 {
 	result->iterations = 0;
 	result->residual = 0.0;
-	if ( w == NULL || a == NULL || b == NULL || x == NULL || a->rows <= 0 || a->rows > w->capacity ||
-		 !( tolerance >= 0.0 ) || max_iterations < 0 )
+	if ( w == NULL || a == NULL || b == NULL || x == NULL || a->rows <= 0 || a->rows > w->capacity || a->sigma <= 0 ||
+		 SERE_CG_BLOCK % a->sigma != 0 || !( tolerance >= 0.0 ) || max_iterations < 0 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
 	const int32_t n = a->rows;
 	const int32_t blocks = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
-	double *r = w->r, *z = w->z, *p = w->p, *q = w->q, *inv_diag = w->inv_diag, *partial = w->partial;
+	double *r = w->r, *z = w->z, *q = w->q, *inv_diag = w->inv_diag, *partial = w->partial;
 	sere_status status = SERE_OK;
 	int32_t iterations = 0;
 	double relative = 0.0;
@@ -106,25 +342,39 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_csr* a, const double
 
 	/* One parallel region for the whole solve: the systems are small (thousands of rows), so
 	 * fork/join per kernel would cost more than the kernels. Every thread takes the same
-	 * decisions from the same block sums, so no broadcast is needed. */
+	 * decisions from the same block sums, so no broadcast is needed. A block's rows are whole
+	 * chunks (σ divides the block), so a block's products are written and then read back in row
+	 * order by the same thread. */
 #pragma omp parallel
 	{
+		double *p = w->p, *p_next = w->p_next;
 #pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite )
 		for ( int32_t blk = 0; blk < blocks; ++blk )
 		{
+			int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
+			for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < chunk_end; ++c )
+			{
+				lanes_t sum;
+				chunk_product( a, c, x, &sum );
+				for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
+				{
+					int32_t i = a->row[c * LANES + l];
+					double diagonal = 0.0;
+					for ( int32_t s = a->chunk_ptr[c] + l; s < a->chunk_ptr[c + 1]; s += LANES )
+					{
+						diagonal += a->col[s] == i ? a->val[s] : 0.0;
+					}
+					inv_diag[i] = diagonal > 0.0 ? 1.0 / diagonal : 0.0;
+					bad_diagonal |= !( diagonal > 0.0 );
+					q[i] = lane( &sum, l );
+				}
+			}
 			int32_t end = ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
 			double bb = 0.0, rz = 0.0, rr = 0.0;
 			for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
 			{
-				double diagonal = 0.0;
-				for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
-				{
-					diagonal += a->col[k] == i ? a->val[k] : 0.0;
-				}
-				bad_diagonal |= !( diagonal > 0.0 );
 				nonfinite |= !isfinite( b[i] ) || !isfinite( x[i] );
-				inv_diag[i] = diagonal > 0.0 ? 1.0 / diagonal : 0.0;
-				r[i] = b[i] - row_dot( a, i, x );
+				r[i] = b[i] - q[i];
 				z[i] = inv_diag[i] * r[i];
 				p[i] = z[i];
 				bb += b[i] * b[i];
@@ -154,21 +404,61 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_csr* a, const double
 		double rel = b_norm > 0.0 ? sqrt( rr ) / b_norm : 0.0;
 		done = done || rel <= tolerance;
 		int32_t it = 0;
+		double beta = 0.0;
 		int local_status = SERE_OK;
 		while ( !done && it < max_iterations )
 		{
-			/* q = A p and pᵀq, per block */
+			/* q = A p and pᵀq per block. After the first iteration the direction is
+			 * p_next = z + βp, formed on the fly inside the product from the z and p every
+			 * thread can read since the last barrier, and written for the block's own rows to
+			 * the other buffer (p itself is still being read by the neighbours' products). */
 #pragma omp for schedule( static )
 			for ( int32_t blk = 0; blk < blocks; ++blk )
 			{
+				int32_t chunk_end =
+					( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
+				for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < chunk_end; ++c )
+				{
+					lanes_t sum;
+					if ( it == 0 )
+					{
+						chunk_product( a, c, p, &sum );
+					}
+					else
+					{
+						chunk_product_direction( a, c, z, p, beta, &sum );
+					}
+					for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
+					{
+						q[a->row[c * LANES + l]] = lane( &sum, l );
+					}
+				}
 				int32_t end = ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
 				double pq = 0.0;
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
+				if ( it == 0 )
 				{
-					q[i] = row_dot( a, i, p );
-					pq += p[i] * q[i];
+#pragma omp simd reduction( + : pq )
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
+					{
+						pq += p[i] * q[i];
+					}
+				}
+				else
+				{
+#pragma omp simd reduction( + : pq )
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
+					{
+						p_next[i] = z[i] + beta * p[i];
+						pq += p_next[i] * q[i];
+					}
 				}
 				partial[3 * blk] = pq;
+			}
+			if ( it > 0 )
+			{
+				double* swap = p;
+				p = p_next;
+				p_next = swap;
 			}
 			double pq = block_sum( partial, blocks, 0 );
 			if ( !isfinite( pq ) )
@@ -216,13 +506,8 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_csr* a, const double
 			{
 				break;
 			}
-			double beta = rz_new / rz;
+			beta = rz_new / rz;
 			rz = rz_new;
-#pragma omp for schedule( static )
-			for ( int32_t i = 0; i < n; ++i )
-			{
-				p[i] = z[i] + beta * p[i];
-			}
 		}
 #pragma omp single
 		{

@@ -8,6 +8,8 @@ struct sere_osmosis
 {
 	int32_t first, count;
 	sere_csr a;
+	sere_sell* sell;		  /* a's SELL layout for the CG, built once (the pattern never changes) and
+							   * written by the assembly beside a, through sell->slot */
 	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
@@ -52,6 +54,7 @@ void sere_osmosis_destroy( sere_osmosis* o )
 	sere_free( o->edge_sum );
 	sere_free( o->length );
 	sere_cg_destroy( o->cg );
+	sere_sell_destroy( o->sell );
 	free( o );
 }
 
@@ -144,6 +147,12 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 				o->diagonal[i] = k;
 			}
 		}
+	}
+	sere_status status = sere_sell_create( &o->a, SERE_SELL_SIGMA, &o->sell );
+	if ( status != SERE_OK )
+	{
+		sere_osmosis_destroy( o );
+		return status;
 	}
 	*out = o;
 	return SERE_OK;
@@ -248,10 +257,12 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 			}
 			double value = -dt * kij;
 			o->a.val[k] = value;
+			o->sell->val[o->sell->slot[k]] = value;
 			off_sum += value;
 		}
 		double scale = params->mode == SERE_OSMOSIS_CONSERVATIVE ? 1.0 : 0.5 * ei;
 		o->a.val[o->diagonal[i]] = scale * mi - off_sum;
+		o->sell->val[o->sell->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
 		o->rhs[i] = scale * ( w[gi] + rate_dt );
 		/* initial guess: the current concentration extrapolated along its last change (a
 		 * concentration is never negative, so neither is the guess) */
@@ -273,7 +284,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	o->has_last = 1;
 	sere_cg_result result;
 	sere_status status =
-		sere_cg_solve( o->cg, &o->a, o->rhs, o->c, params->tolerance, params->max_iterations, &result );
+		sere_cg_solve( o->cg, o->sell, o->rhs, o->c, params->tolerance, params->max_iterations, &result );
 	report->iterations = result.iterations;
 	report->residual = result.residual;
 	if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )

@@ -1,5 +1,7 @@
 #include "cg.h"
 #include "fixture.h"
+#include "leafload.h"
+#include "model.h"
 #include "osmosis.h"
 #include "ref/osmosis_ref.h"
 
@@ -346,6 +348,17 @@ static void free_csr( sere_csr* a )
 	free( a->row_ptr ), free( a->col ), free( a->val );
 }
 
+/* sere_cg_solve on a CSR matrix: its SELL layout made for this one solve. */
+static sere_status solve_csr( sere_cg_workspace* w, const sere_csr* a, const double* b, double* x, double tolerance,
+							  int32_t max_iterations, sere_cg_result* result )
+{
+	sere_sell* sell;
+	cr_assert_eq( sere_sell_create( a, SERE_SELL_SIGMA, &sell ), SERE_OK );
+	sere_status status = sere_cg_solve( w, sell, b, x, tolerance, max_iterations, result );
+	sere_sell_destroy( sell );
+	return status;
+}
+
 Test( cg, solves_spd_and_rejects_bad_matrices )
 {
 	/* 1D Laplacian + identity: SPD; exact solution known by construction. */
@@ -374,7 +387,7 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 	sere_cg_workspace* w;
 	cr_assert_eq( sere_cg_create( n, &w ), SERE_OK );
 	sere_cg_result result;
-	cr_assert_eq( sere_cg_solve( w, &a, b, x, 1e-12, 200, &result ), SERE_OK );
+	cr_assert_eq( solve_csr( w, &a, b, x, 1e-12, 200, &result ), SERE_OK );
 	for ( int i = 0; i < n; ++i )
 	{
 		/* condition number ≤ 5: residual 1e-12 bounds the error by ~5e-12 */
@@ -386,7 +399,7 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 	dense[5 * n + 5] = -3.0;
 	sere_csr indefinite = dense_csr( dense, n );
 	memset( x, 0, sizeof( x ) );
-	cr_expect_eq( sere_cg_solve( w, &indefinite, b, x, 1e-12, 200, &result ), SERE_ERR_NOT_SPD );
+	cr_expect_eq( solve_csr( w, &indefinite, b, x, 1e-12, 200, &result ), SERE_ERR_NOT_SPD );
 	dense[5 * n + 5] = 3.0;
 
 	/* Singular: a graph Laplacian (constant null space) with b outside its range. */
@@ -402,7 +415,7 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 		b[i] = 1.0; /* Σ b ≠ 0: no solution */
 		x[i] = 0.0;
 	}
-	sere_status status = sere_cg_solve( w, &singular, b, x, 1e-12, 500, &result );
+	sere_status status = solve_csr( w, &singular, b, x, 1e-12, 500, &result );
 	cr_expect( status == SERE_ERR_NOT_SPD || status == SERE_ERR_NO_CONVERGE, "status %d", status );
 	for ( int i = 0; i < n; ++i )
 	{
@@ -411,12 +424,12 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 
 	/* NaN right-hand side. */
 	b[3] = NAN;
-	cr_expect_eq( sere_cg_solve( w, &a, b, x, 1e-12, 200, &result ), SERE_ERR_NONFINITE );
+	cr_expect_eq( solve_csr( w, &a, b, x, 1e-12, 200, &result ), SERE_ERR_NONFINITE );
 
 	/* b = 0 gives x = 0 with no iteration. */
 	memset( b, 0, sizeof( b ) );
 	x[0] = 5.0;
-	cr_expect_eq( sere_cg_solve( w, &a, b, x, 1e-12, 200, &result ), SERE_OK );
+	cr_expect_eq( solve_csr( w, &a, b, x, 1e-12, 200, &result ), SERE_OK );
 	cr_expect_eq( x[0], 0.0 );
 	cr_expect_eq( result.iterations, 0 );
 	sere_cg_destroy( w );
@@ -516,7 +529,7 @@ Test( cg, bitwise_identical_for_1_2_3_threads )
 		{
 			x[t][i] = 0.1 * cos( 0.02 * i ); /* warm start */
 		}
-		cr_assert_eq( sere_cg_solve( w, &a, b, x[t], 1e-11, 2000, &result[t] ), SERE_OK );
+		cr_assert_eq( solve_csr( w, &a, b, x[t], 1e-11, 2000, &result[t] ), SERE_OK );
 		cr_expect_leq( result[t].residual, 1e-11 );
 	}
 	for ( int t = 1; t < 3; ++t )
@@ -588,4 +601,284 @@ Test( osmosis, extrapolated_start_saves_iterations_not_accuracy )
 	sere_osmosis_destroy( kept );
 	sere_model_destroy( &kept_model );
 	sere_model_destroy( &fresh_model );
+}
+
+/* A matrix no mesh gives: row lengths from 0 to 300 (empty rows, a few very long ones), columns
+ * anywhere and in no particular order, values of both signs. */
+static sere_csr ragged_csr( int32_t n, uint32_t seed )
+{
+	uint32_t state = seed;
+	int32_t* length = malloc( sizeof( int32_t ) * n );
+	int32_t nnz = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		state = state * 1664525u + 1013904223u;
+		uint32_t pick = ( state >> 8 ) % 100u;
+		length[i] = pick < 10 ? 0 : pick < 97 ? (int32_t) ( pick % 13 ) : 100 + (int32_t) ( pick * 2 );
+		nnz += length[i];
+	}
+	sere_csr a = { n, nnz, malloc( sizeof( int32_t ) * ( n + 1 ) ), malloc( sizeof( int32_t ) * nnz ),
+				   malloc( sizeof( double ) * nnz ) };
+	a.row_ptr[0] = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		a.row_ptr[i + 1] = a.row_ptr[i] + length[i];
+		for ( int32_t k = a.row_ptr[i]; k < a.row_ptr[i + 1]; ++k )
+		{
+			state = state * 1664525u + 1013904223u;
+			a.col[k] = (int32_t) ( ( state >> 4 ) % (uint32_t) n );
+			a.val[k] = sin( 0.37 * k + 1.1 * i ) * ( 1.0 + ( k % 5 ) );
+		}
+	}
+	free( length );
+	return a;
+}
+
+/* y from sere_sell_spmv and from sere_csr_spmv, compared bit for bit at 1, 2 and 3 threads. */
+static void expect_sell_equals_csr( const sere_csr* a, const sere_sell* sell, const double* x, const char* what )
+{
+	double *y_csr = malloc( sizeof( double ) * a->rows ), *y_sell = malloc( sizeof( double ) * a->rows );
+	for ( int t = 1; t <= 3; ++t )
+	{
+		omp_set_num_threads( t );
+		sere_csr_spmv( a, x, y_csr );
+		memset( y_sell, 0xff, sizeof( double ) * a->rows ); /* NaN: a row SELL forgot would show */
+		sere_sell_spmv( sell, x, y_sell );
+		int32_t first = -1;
+		for ( int32_t i = 0; i < a->rows && first < 0; ++i )
+		{
+			first = memcmp( &y_csr[i], &y_sell[i], sizeof( double ) ) != 0 ? i : -1;
+		}
+		cr_expect_eq( first, -1, "%s, sigma %d, %d threads: row %d: CSR %.17g, SELL %.17g", what, sell->sigma, t, first,
+					  first >= 0 ? y_csr[first] : 0.0, first >= 0 ? y_sell[first] : 0.0 );
+	}
+	omp_set_num_threads( 2 );
+	free( y_csr ), free( y_sell );
+}
+
+Test( cg, sell_spmv_bitwise_equals_csr_on_ragged_rows )
+{
+	const int32_t n = 3 * SERE_CG_BLOCK + 77; /* a short last window and a short last chunk */
+	sere_csr a = ragged_csr( n, 777u );
+	int32_t empty = 0, longest = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		int32_t length = a.row_ptr[i + 1] - a.row_ptr[i];
+		empty += length == 0;
+		longest = length > longest ? length : longest;
+	}
+	cr_assert_gt( empty, 50 );
+	cr_assert_gt( longest, 250 );
+	double* x = malloc( sizeof( double ) * n );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		x[i] = i % 11 == 0 ? 0.0 : cos( 0.7 * i ) * ( i % 3 == 0 ? -1e3 : 1e-3 );
+	}
+	const int32_t sigmas[] = { SERE_SELL_C, SERE_SELL_SIGMA, SERE_CG_BLOCK };
+	for ( int k = 0; k < 3; ++k )
+	{
+		sere_sell* sell;
+		cr_assert_eq( sere_sell_create( &a, sigmas[k], &sell ), SERE_OK );
+		expect_sell_equals_csr( &a, sell, x, "ragged" );
+		/* New values through the kept layout give what a fresh layout gives. */
+		for ( int32_t e = 0; e < a.nnz; ++e )
+		{
+			a.val[e] = -0.5 * a.val[e] + 1e-3 * e;
+		}
+		cr_assert_eq( sere_sell_update( sell, &a ), SERE_OK );
+		expect_sell_equals_csr( &a, sell, x, "ragged, updated" );
+		sere_sell_destroy( sell );
+	}
+	/* A changed pattern is refused, not silently multiplied. */
+	sere_sell* sell;
+	cr_assert_eq( sere_sell_create( &a, SERE_SELL_SIGMA, &sell ), SERE_OK );
+	int32_t last = a.nnz - 1;
+	a.col[last] = ( a.col[last] + 1 ) % n;
+	cr_expect_eq( sere_sell_update( sell, &a ), SERE_ERR_ARGUMENT );
+	sere_sell_destroy( sell );
+	/* σ must be a multiple of SERE_SELL_C dividing SERE_CG_BLOCK. */
+	cr_expect_eq( sere_sell_create( &a, 12, &sell ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_sell_create( &a, 4, &sell ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_sell_create( &a, 2 * SERE_CG_BLOCK, &sell ), SERE_ERR_ARGUMENT );
+	free( x );
+	free_csr( &a );
+}
+
+/* The Table 1 maple's T (layer 0) and V (layer 1) osmosis systems as bench_cg.cc times them:
+ * the leaf at rest, maple-green's λ = 0.04, one step assembled. */
+typedef struct maple_system
+{
+	sere_osmosis* osmosis;
+	double* b;
+} maple_system;
+
+static void maple_systems( sere_model* model, maple_system systems[2] )
+{
+	char err[1024];
+	sere_leaf leaf;
+	cr_assert_eq( sere_leaf_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ), 0, "%s", err );
+	sere_build_params params = sere_build_params_default();
+	cr_assert_eq( sere_counts_solve( 13197, 51102, &params.point_count, &params.boundary_count ), SERE_OK );
+	cr_assert_eq( sere_model_build( &leaf.file.shape, &params, model, NULL ), SERE_OK );
+	sere_leaf_free( &leaf );
+	double* w = malloc( sizeof( double ) * model->p.count );
+	double* mass = malloc( sizeof( double ) * model->p.count );
+	for ( int layer = 0; layer < 2; ++layer )
+	{
+		int32_t first = layer == 0 ? 0 : model->triangle_particles;
+		int32_t count = layer == 0 ? model->triangle_particles : model->triangle_count;
+		int32_t s0 = layer == 0 ? 0 : model->t_springs;
+		int32_t sc = layer == 0 ? model->t_springs : model->v_springs;
+		cr_assert_eq(
+			sere_osmosis_create( first, count, model->s.a + s0, model->s.b + s0, sc, &systems[layer].osmosis ),
+			SERE_OK );
+		memcpy( w, model->p.w, sizeof( double ) * model->p.count );
+		memcpy( mass, model->p.m, sizeof( double ) * model->p.count );
+		sere_osmosis_params osmosis = sere_osmosis_params_default();
+		osmosis.lambda_min = osmosis.lambda_max = 0.04;
+		sere_osmosis_report report;
+		cr_assert_eq( sere_osmosis_step( systems[layer].osmosis, model->p.x, model->p.y, model->p.z, model->p.tau,
+										 model->p.M, w, mass, &osmosis, &report ),
+					  SERE_OK );
+		systems[layer].b = malloc( sizeof( double ) * count );
+		memcpy( systems[layer].b, sere_osmosis_rhs( systems[layer].osmosis ), sizeof( double ) * count );
+	}
+	free( w ), free( mass );
+}
+
+/* Jacobi PCG exactly as the textbook (and sere before its SELL version) writes it: serial,
+ * q = A p by CSR, every sum a plain loop, three sweeps per iteration. */
+static int32_t textbook_pcg( const sere_csr* a, const double* b, double* x, double tolerance, int32_t cap,
+							 double* residual )
+{
+	int32_t n = a->rows;
+	double *r = malloc( sizeof( double ) * n ), *z = malloc( sizeof( double ) * n );
+	double *p = malloc( sizeof( double ) * n ), *q = malloc( sizeof( double ) * n );
+	double *d = malloc( sizeof( double ) * n ), bb = 0.0, rz = 0.0, rr = 0.0;
+	sere_csr_spmv( a, x, q );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		d[i] = 0.0;
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			d[i] += a->col[k] == i ? a->val[k] : 0.0;
+		}
+		r[i] = b[i] - q[i];
+		z[i] = r[i] / d[i];
+		p[i] = z[i];
+		bb += b[i] * b[i], rz += r[i] * z[i], rr += r[i] * r[i];
+	}
+	int32_t it = 0;
+	*residual = sqrt( rr / bb );
+	while ( *residual > tolerance && it < cap )
+	{
+		sere_csr_spmv( a, p, q );
+		double pq = 0.0;
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			pq += p[i] * q[i];
+		}
+		double alpha = rz / pq, rz_new = 0.0;
+		rr = 0.0;
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			x[i] += alpha * p[i];
+			r[i] -= alpha * q[i];
+			z[i] = r[i] / d[i];
+			rz_new += r[i] * z[i], rr += r[i] * r[i];
+		}
+		it += 1;
+		*residual = sqrt( rr / bb );
+		double beta = rz_new / rz;
+		rz = rz_new;
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			p[i] = z[i] + beta * p[i];
+		}
+	}
+	free( r ), free( z ), free( p ), free( q ), free( d );
+	return it;
+}
+
+Test( cg, maple_systems_sell_and_two_barrier_cg, .timeout = 120 )
+{
+	sere_model model;
+	maple_system systems[2];
+	maple_systems( &model, systems );
+	const char* names[2] = { "T", "V" };
+	for ( int layer = 0; layer < 2; ++layer )
+	{
+		const sere_csr* a = sere_osmosis_matrix( systems[layer].osmosis );
+		const int32_t n = a->rows;
+		double* x = malloc( sizeof( double ) * n );
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			x[i] = 1.0 + 0.5 * sin( 0.013 * i ) - ( i % 7 == 0 ? 2.0 : 0.0 );
+		}
+		const int32_t sigmas[] = { SERE_SELL_C, SERE_SELL_SIGMA, SERE_CG_BLOCK };
+		for ( int k = 0; k < 3; ++k )
+		{
+			sere_sell* sell;
+			cr_assert_eq( sere_sell_create( a, sigmas[k], &sell ), SERE_OK );
+			expect_sell_equals_csr( a, sell, x, names[layer] );
+			sere_sell_destroy( sell );
+		}
+
+		sere_sell* sell;
+		cr_assert_eq( sere_sell_create( a, SERE_SELL_SIGMA, &sell ), SERE_OK );
+		sere_cg_workspace* w;
+		cr_assert_eq( sere_cg_create( n, &w ), SERE_OK );
+		double *ours = malloc( sizeof( double ) * n ), *textbook = malloc( sizeof( double ) * n );
+		const double tolerances[2] = { 1e-8, 1e-12 };
+		for ( int k = 0; k < 2; ++k )
+		{
+			double residual;
+			memset( textbook, 0, sizeof( double ) * n );
+			int32_t textbook_iterations = textbook_pcg( a, systems[layer].b, textbook, tolerances[k], 1000, &residual );
+			for ( int t = 1; t <= 3; ++t )
+			{
+				omp_set_num_threads( t );
+				memset( x, 0, sizeof( double ) * n );
+				sere_cg_result result;
+				cr_assert_eq( sere_cg_solve( w, sell, systems[layer].b, x, tolerances[k], 1000, &result ), SERE_OK );
+				if ( t == 1 )
+				{
+					memcpy( ours, x, sizeof( double ) * n );
+					/* The same recurrence; only the order in which pᵀq, rᵀz and rᵀr are summed
+					 * differs, which perturbs each iterate at rounding level (1e-16 relative), and
+					 * the few dozen iterations here do not amplify that much. Measured on the
+					 * maple: the same iteration counts, residuals equal to 6 digits, x equal to
+					 * 2e-15 of its largest entry. The bounds leave 3 orders of magnitude for
+					 * other compilers and still lie far below what a changed algorithm (another
+					 * recurrence, a lost iteration) would give: about the tolerance itself. */
+					cr_expect_eq( result.iterations, textbook_iterations,
+								  "%s, tolerance %g: %d iterations, textbook %d", names[layer], tolerances[k],
+								  result.iterations, textbook_iterations );
+					cr_expect_leq( fabs( result.residual - residual ), 1e-3 * residual,
+								   "%s, tolerance %g: residual %g, textbook %g", names[layer], tolerances[k],
+								   result.residual, residual );
+					double worst = 0.0, largest = 0.0;
+					for ( int32_t i = 0; i < n; ++i )
+					{
+						worst = fmax( worst, fabs( x[i] - textbook[i] ) );
+						largest = fmax( largest, fabs( textbook[i] ) );
+					}
+					cr_expect_leq( worst, 1e-12 * largest, "%s, tolerance %g: x differs by %g of %g", names[layer],
+								   tolerances[k], worst, largest );
+				}
+				else
+				{
+					cr_expect_eq( memcmp( x, ours, sizeof( double ) * n ), 0, "%s: %d threads differ from 1",
+								  names[layer], t );
+				}
+			}
+		}
+		omp_set_num_threads( 2 );
+		free( x ), free( ours ), free( textbook );
+		sere_cg_destroy( w );
+		sere_sell_destroy( sell );
+		sere_osmosis_destroy( systems[layer].osmosis );
+		free( systems[layer].b );
+	}
+	sere_model_destroy( &model );
 }
