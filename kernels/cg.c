@@ -214,24 +214,6 @@ static inline void chunk_product( const sere_sell* a, int32_t c, const double* x
 	out->hi = hi;
 }
 
-/* Rows of chunk c times z + βp, the next CG direction formed on the fly. */
-static inline void chunk_product_direction( const sere_sell* a, int32_t c, const double* z, const double* p,
-											double beta, lanes_t* out )
-{
-	half_t lo = { 0.0 }, hi = { 0.0 }, zlo, zhi, plo, phi;
-	for ( int32_t s = a->chunk_ptr[c]; s < a->chunk_ptr[c + 1]; s += LANES )
-	{
-		gather( &zlo, z, a->col + s );
-		gather( &zhi, z, a->col + s + 4 );
-		gather( &plo, p, a->col + s );
-		gather( &phi, p, a->col + s + 4 );
-		lo += *(const half_t*) ( a->val + s ) * ( zlo + beta * plo );
-		hi += *(const half_t*) ( a->val + s + 4 ) * ( zhi + beta * phi );
-	}
-	out->lo = lo;
-	out->hi = hi;
-}
-
 /* Lane l of a chunk's sums. */
 static inline double lane( const lanes_t* sum, int32_t l )
 {
@@ -261,8 +243,8 @@ struct sere_cg_workspace
 {
 	int32_t capacity;
 	int32_t block_capacity;
-	double *r, *z, *p, *p_next, *q, *inv_diag;
-	double* partial; /* 3 sums per block */
+	double *r, *u, *w, *p, *s, *inv_diag;
+	double* partial; /* 4 sums per block: rᵀr, uᵀw, rᵀu, bᵀb */
 };
 
 sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
@@ -280,13 +262,13 @@ sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
 	w->capacity = n;
 	w->block_capacity = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	w->r = sere_alloc( bytes );
-	w->z = sere_alloc( bytes );
+	w->u = sere_alloc( bytes );
+	w->w = sere_alloc( bytes );
 	w->p = sere_alloc( bytes );
-	w->p_next = sere_alloc( bytes );
-	w->q = sere_alloc( bytes );
+	w->s = sere_alloc( bytes );
 	w->inv_diag = sere_alloc( bytes );
-	w->partial = sere_alloc( sizeof( double ) * 3 * (size_t) w->block_capacity );
-	if ( !w->r || !w->z || !w->p || !w->p_next || !w->q || !w->inv_diag || !w->partial )
+	w->partial = sere_alloc( sizeof( double ) * 4 * (size_t) w->block_capacity );
+	if ( !w->r || !w->u || !w->w || !w->p || !w->s || !w->inv_diag || !w->partial )
 	{
 		sere_cg_destroy( w );
 		return SERE_ERR_MEMORY;
@@ -302,39 +284,79 @@ void sere_cg_destroy( sere_cg_workspace* w )
 		return;
 	}
 	sere_free( w->r );
-	sere_free( w->z );
+	sere_free( w->u );
+	sere_free( w->w );
 	sere_free( w->p );
-	sere_free( w->p_next );
-	sere_free( w->q );
+	sere_free( w->s );
 	sere_free( w->inv_diag );
 	sere_free( w->partial );
 	free( w );
 }
 
-/* Sum of partial[slot], partial[slot + 3], ... over blocks in block order. */
+/* Sum of partial[slot], partial[slot + 4], ... over blocks in block order. */
 static double block_sum( const double* partial, int32_t blocks, int slot )
 {
 	double sum = 0.0;
 	for ( int32_t k = 0; k < blocks; ++k )
 	{
-		sum += partial[3 * k + slot];
+		sum += partial[4 * k + slot];
 	}
 	return sum;
 }
 
-sere_status sere_cg_solve( sere_cg_workspace* w, const sere_sell* a, const double* b, double* x, double tolerance,
+static inline int32_t block_end( int32_t blk, int32_t n )
+{
+	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
+}
+
+static inline int32_t block_chunk_end( const sere_sell* a, int32_t blk )
+{
+	return ( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
+}
+
+/* y = A v for block blk's rows, then its partial sums of uᵀy (slot 1) and γ = rᵀu (slot 2). A
+ * block's rows are whole chunks (σ divides the block), so the thread that writes y for a block
+ * reads it back. */
+static inline void block_product( const sere_sell* a, int32_t blk, int32_t n, const double* v, const double* r,
+								  double* y, double* partial )
+{
+	for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < block_chunk_end( a, blk ); ++c )
+	{
+		lanes_t sum;
+		chunk_product( a, c, v, &sum );
+		for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
+		{
+			y[a->row[c * LANES + l]] = lane( &sum, l );
+		}
+	}
+	double delta = 0.0, gamma = 0.0;
+	/* Vector partial sums: the block, not the thread, decides how the sum is split, so every
+	 * thread count gets the same bits (and 1 thread runs faster than the serial chain of
+	 * dependent adds that -ffp-contract=off and no -ffast-math would otherwise leave). */
+#pragma omp simd reduction( + : delta, gamma )
+	for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, n ); ++i )
+	{
+		delta += v[i] * y[i];
+		gamma += r[i] * v[i];
+	}
+	partial[4 * blk + 1] = delta;
+	partial[4 * blk + 2] = gamma;
+}
+
+sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const double* b, double* x, double tolerance,
 						   int32_t max_iterations, sere_cg_result* result )
 {
 	result->iterations = 0;
 	result->residual = 0.0;
-	if ( w == NULL || a == NULL || b == NULL || x == NULL || a->rows <= 0 || a->rows > w->capacity || a->sigma <= 0 ||
+	if ( ws == NULL || a == NULL || b == NULL || x == NULL || a->rows <= 0 || a->rows > ws->capacity || a->sigma <= 0 ||
 		 SERE_CG_BLOCK % a->sigma != 0 || !( tolerance >= 0.0 ) || max_iterations < 0 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
 	const int32_t n = a->rows;
 	const int32_t blocks = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
-	double *r = w->r, *z = w->z, *q = w->q, *inv_diag = w->inv_diag, *partial = w->partial;
+	double *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s, *inv_diag = ws->inv_diag;
+	double* partial = ws->partial;
 	sere_status status = SERE_OK;
 	int32_t iterations = 0;
 	double relative = 0.0;
@@ -342,17 +364,23 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_sell* a, const doubl
 
 	/* One parallel region for the whole solve: the systems are small (thousands of rows), so
 	 * fork/join per kernel would cost more than the kernels. Every thread takes the same
-	 * decisions from the same block sums, so no broadcast is needed. A block's rows are whole
-	 * chunks (σ divides the block), so a block's products are written and then read back in row
-	 * order by the same thread. */
+	 * decisions from the same block sums, so no broadcast is needed.
+	 *
+	 * The recurrence is Chronopoulos and Gear's (1989) form of Jacobi PCG: besides x, r and
+	 * u = D⁻¹r it carries w = Au and s = Ap, updated as s = w + βs, so the one product per
+	 * iteration is w = Au, and both sums it needs, δ = uᵀw and γ = rᵀu, come out of that same
+	 * sweep; pᵀAp = δ − βγ/α_prev follows from them. An iteration is then two sweeps and two
+	 * barriers (the product needs every block's u; the step needs the sums), and the product
+	 * gathers one vector, where the textbook form needs a third barrier before q = Ap or, to
+	 * avoid it, forms p = z + βp inside the product and gathers two. In exact arithmetic the
+	 * iterates are the textbook's. */
 #pragma omp parallel
 	{
-		double *p = w->p, *p_next = w->p_next;
+		/* r = b − Ax, u = D⁻¹r; s = p = 0, so that the first step's p = u + 0·p is u. */
 #pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite )
 		for ( int32_t blk = 0; blk < blocks; ++blk )
 		{
-			int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
-			for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < chunk_end; ++c )
+			for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < block_chunk_end( a, blk ); ++c )
 			{
 				lanes_t sum;
 				chunk_product( a, c, x, &sum );
@@ -360,37 +388,31 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_sell* a, const doubl
 				{
 					int32_t i = a->row[c * LANES + l];
 					double diagonal = 0.0;
-					for ( int32_t s = a->chunk_ptr[c] + l; s < a->chunk_ptr[c + 1]; s += LANES )
+					for ( int32_t k = a->chunk_ptr[c] + l; k < a->chunk_ptr[c + 1]; k += LANES )
 					{
-						diagonal += a->col[s] == i ? a->val[s] : 0.0;
+						diagonal += a->col[k] == i ? a->val[k] : 0.0;
 					}
 					inv_diag[i] = diagonal > 0.0 ? 1.0 / diagonal : 0.0;
 					bad_diagonal |= !( diagonal > 0.0 );
-					q[i] = lane( &sum, l );
+					w[i] = lane( &sum, l );
 				}
 			}
-			int32_t end = ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
-			double bb = 0.0, rz = 0.0, rr = 0.0;
-			for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
+			double bb = 0.0, rr = 0.0;
+			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, n ); ++i )
 			{
 				nonfinite |= !isfinite( b[i] ) || !isfinite( x[i] );
-				r[i] = b[i] - q[i];
-				z[i] = inv_diag[i] * r[i];
-				p[i] = z[i];
+				r[i] = b[i] - w[i];
+				u[i] = inv_diag[i] * r[i];
+				p[i] = 0.0;
+				s[i] = 0.0;
 				bb += b[i] * b[i];
-				rz += r[i] * z[i];
 				rr += r[i] * r[i];
 			}
-			partial[3 * blk] = bb;
-			partial[3 * blk + 1] = rz;
-			partial[3 * blk + 2] = rr;
+			partial[4 * blk] = rr;
+			partial[4 * blk + 3] = bb;
 		}
-		double bb = block_sum( partial, blocks, 0 );
-		double rz = block_sum( partial, blocks, 1 );
-		double rr = block_sum( partial, blocks, 2 );
-		double b_norm = sqrt( bb );
-		/* Everyone has read the block sums before the loop overwrites them. */
-#pragma omp barrier
+		double b_norm = sqrt( block_sum( partial, blocks, 3 ) );
+		double rr = block_sum( partial, blocks, 0 );
 		int done = bad_diagonal || nonfinite || !isfinite( rr );
 		if ( !done && b_norm == 0.0 )
 		{
@@ -403,98 +425,55 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_sell* a, const doubl
 		}
 		double rel = b_norm > 0.0 ? sqrt( rr ) / b_norm : 0.0;
 		done = done || rel <= tolerance;
-		int32_t it = 0;
-		double beta = 0.0;
-		int local_status = SERE_OK;
-		while ( !done && it < max_iterations )
+		if ( !done && max_iterations > 0 )
 		{
-			/* q = A p and pᵀq per block. After the first iteration the direction is
-			 * p_next = z + βp, formed on the fly inside the product from the z and p every
-			 * thread can read since the last barrier, and written for the block's own rows to
-			 * the other buffer (p itself is still being read by the neighbours' products). */
 #pragma omp for schedule( static )
 			for ( int32_t blk = 0; blk < blocks; ++blk )
 			{
-				int32_t chunk_end =
-					( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
-				for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < chunk_end; ++c )
-				{
-					lanes_t sum;
-					if ( it == 0 )
-					{
-						chunk_product( a, c, p, &sum );
-					}
-					else
-					{
-						chunk_product_direction( a, c, z, p, beta, &sum );
-					}
-					for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
-					{
-						q[a->row[c * LANES + l]] = lane( &sum, l );
-					}
-				}
-				int32_t end = ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
-				double pq = 0.0;
-				if ( it == 0 )
-				{
-#pragma omp simd reduction( + : pq )
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
-					{
-						pq += p[i] * q[i];
-					}
-				}
-				else
-				{
-#pragma omp simd reduction( + : pq )
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
-					{
-						p_next[i] = z[i] + beta * p[i];
-						pq += p_next[i] * q[i];
-					}
-				}
-				partial[3 * blk] = pq;
+				block_product( a, blk, n, u, r, w, partial );
 			}
-			if ( it > 0 )
-			{
-				double* swap = p;
-				p = p_next;
-				p_next = swap;
-			}
-			double pq = block_sum( partial, blocks, 0 );
-			if ( !isfinite( pq ) )
+		}
+		int32_t it = 0;
+		double alpha_prev = 0.0, gamma_prev = 0.0;
+		int local_status = SERE_OK;
+		while ( !done && it < max_iterations )
+		{
+			double delta = block_sum( partial, blocks, 1 );
+			double gamma = block_sum( partial, blocks, 2 );
+			double beta = it == 0 ? 0.0 : gamma / gamma_prev;
+			double pap = it == 0 ? delta : delta - beta * gamma / alpha_prev; /* pᵀAp */
+			if ( !isfinite( pap ) || !isfinite( gamma ) )
 			{
 				local_status = SERE_ERR_NONFINITE;
 				break;
 			}
-			if ( !( pq > 0.0 ) )
+			if ( !( pap > 0.0 ) )
 			{
 				local_status = SERE_ERR_NOT_SPD;
 				break;
 			}
-			double alpha = rz / pq;
-			/* x += αp, r −= αq, z = D⁻¹r and the new rᵀz, rᵀr, fused in one sweep */
+			double alpha = gamma / pap;
+			/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
 #pragma omp for schedule( static )
 			for ( int32_t blk = 0; blk < blocks; ++blk )
 			{
-				int32_t end = ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
-				double rz_block = 0.0, rr_block = 0.0;
-/* Vector partial sums: the block, not the thread, decides how the sum is split, so every
- * thread count still gets the same bits (and 1 thread runs 15% faster than with the serial
- * chain of dependent adds -ffp-contract=off and no -ffast-math would otherwise leave). */
-#pragma omp simd reduction( + : rz_block, rr_block )
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < end; ++i )
+				double rr_block = 0.0;
+#pragma omp simd reduction( + : rr_block )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, n ); ++i )
 				{
+					p[i] = u[i] + beta * p[i];
+					s[i] = w[i] + beta * s[i];
 					x[i] += alpha * p[i];
-					r[i] -= alpha * q[i];
-					z[i] = inv_diag[i] * r[i];
-					rz_block += r[i] * z[i];
+					r[i] -= alpha * s[i];
+					u[i] = inv_diag[i] * r[i];
 					rr_block += r[i] * r[i];
 				}
-				partial[3 * blk + 1] = rz_block;
-				partial[3 * blk + 2] = rr_block;
+				partial[4 * blk] = rr_block;
 			}
-			double rz_new = block_sum( partial, blocks, 1 );
-			rr = block_sum( partial, blocks, 2 );
+			/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
+			 * step rewrites it only after every thread has passed the product's barrier, so
+			 * after reading it here. */
+			rr = block_sum( partial, blocks, 0 );
 			it += 1;
 			rel = sqrt( rr ) / b_norm;
 			if ( !isfinite( rel ) )
@@ -502,12 +481,17 @@ sere_status sere_cg_solve( sere_cg_workspace* w, const sere_sell* a, const doubl
 				local_status = SERE_ERR_NONFINITE;
 				break;
 			}
-			if ( rel <= tolerance )
+			if ( rel <= tolerance || it == max_iterations )
 			{
 				break;
 			}
-			beta = rz_new / rz;
-			rz = rz_new;
+#pragma omp for schedule( static )
+			for ( int32_t blk = 0; blk < blocks; ++blk )
+			{
+				block_product( a, blk, n, u, r, w, partial );
+			}
+			alpha_prev = alpha;
+			gamma_prev = gamma;
 		}
 #pragma omp single
 		{

@@ -92,10 +92,10 @@ typedef struct sere_cg_result
  *
  * The matrix is SELL because the solve is a sequence of products with one matrix: the layout
  * pays for itself within one solve, and the caller keeps it across solves (sere_sell_update).
- * Each iteration meets at two barriers, not three: the product with the new direction
- * p = z + βp is taken as Σ_j a_ij (z_j + β p_j), forming p on the fly from the previous one, so
- * it needs no barrier of its own; the arithmetic is the textbook recurrence's, only the
- * summation order of pᵀAp differs from a serial loop. */
+ * The recurrence is Chronopoulos and Gear's: one product per iteration (with the preconditioned
+ * residual, gathering one vector) yields both sums the step needs, so an iteration is two sweeps
+ * and two barriers. Its iterates equal the textbook PCG's in exact arithmetic and differ only by
+ * rounding (tests compare the two). */
 sere_status sere_cg_solve( sere_cg_workspace* workspace, const sere_sell* a, const double* b, double* x,
 						   double tolerance, int32_t max_iterations, sere_cg_result* result );
 
