@@ -3,6 +3,7 @@
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
+#include <string.h>
 
 enum
 {
@@ -40,6 +41,8 @@ void sere_sell_destroy( sere_sell* s )
 	sere_free( s->col );
 	sere_free( s->val );
 	sere_free( s->slot );
+	sere_free( s->local_col );
+	sere_free( s->diagonal );
 	free( s );
 }
 
@@ -135,10 +138,22 @@ sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out 
 	s->col = sere_alloc( sizeof( int32_t ) * stored );
 	s->val = sere_alloc( sizeof( double ) * stored );
 	s->slot = sere_alloc( sizeof( int32_t ) * ( a->nnz > 0 ? (size_t) a->nnz : 1 ) );
-	if ( s->col == NULL || s->val == NULL || s->slot == NULL )
+	s->local_col = sere_alloc( sizeof( int32_t ) * stored );
+	s->diagonal = sere_alloc( sizeof( int32_t ) * (size_t) s->chunks * LANES );
+	int32_t* position = malloc( sizeof( int32_t ) * (size_t) n );
+	if ( s->col == NULL || s->val == NULL || s->slot == NULL || s->local_col == NULL || s->diagonal == NULL ||
+		 position == NULL )
 	{
+		free( position );
 		sere_sell_destroy( s );
 		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t at = 0; at < s->chunks * LANES; ++at )
+	{
+		if ( s->row[at] >= 0 )
+		{
+			position[s->row[at]] = at;
+		}
 	}
 	for ( int32_t c = 0; c < s->chunks; ++c )
 	{
@@ -154,14 +169,30 @@ sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out 
 			{
 				int32_t at = s->chunk_ptr[c] + k * LANES + l;
 				s->col[at] = k < length ? a->col[begin + k] : pad;
+				s->local_col[at] = position[s->col[at]];
 				s->val[at] = k < length ? a->val[begin + k] : 0.0;
 				if ( k < length )
 				{
 					s->slot[begin + k] = at;
 				}
 			}
+			s->diagonal[c * LANES + l] = -1;
+			for ( int32_t k = 0; k < length; ++k )
+			{
+				if ( a->col[begin + k] == i && s->diagonal[c * LANES + l] >= 0 )
+				{
+					free( position );
+					sere_sell_destroy( s );
+					return SERE_ERR_ARGUMENT;
+				}
+				if ( a->col[begin + k] == i )
+				{
+					s->diagonal[c * LANES + l] = s->chunk_ptr[c] + k * LANES + l;
+				}
+			}
 		}
 	}
+	free( position );
 	*out = s;
 	return SERE_OK;
 }
@@ -199,14 +230,15 @@ static inline void gather( half_t* out, const double* x, const int32_t* col )
 	*out = ( half_t ){ x[col[0]], x[col[1]], x[col[2]], x[col[3]] };
 }
 
-/* Rows of chunk c times x, entries in CSR order. */
-static inline void chunk_product( const sere_sell* a, int32_t c, const double* x, lanes_t* out )
+/* Rows of chunk c times x, entries in CSR order; col is the layout's col (x indexed by row) or
+ * local_col (x indexed by position). */
+static inline void chunk_product( const sere_sell* a, const int32_t* col, int32_t c, const double* x, lanes_t* out )
 {
 	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
 	for ( int32_t s = a->chunk_ptr[c]; s < a->chunk_ptr[c + 1]; s += LANES )
 	{
-		gather( &xlo, x, a->col + s );
-		gather( &xhi, x, a->col + s + 4 );
+		gather( &xlo, x, col + s );
+		gather( &xhi, x, col + s + 4 );
 		lo += *(const half_t*) ( a->val + s ) * xlo;
 		hi += *(const half_t*) ( a->val + s + 4 ) * xhi;
 	}
@@ -231,7 +263,7 @@ void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
 	for ( int32_t c = 0; c < a->chunks; ++c )
 	{
 		lanes_t sum;
-		chunk_product( a, c, x, &sum );
+		chunk_product( a, a->col, c, x, &sum );
 		for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
 		{
 			y[a->row[c * LANES + l]] = lane( &sum, l );
@@ -239,11 +271,12 @@ void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
 	}
 }
 
+/* Vectors of the solve, indexed by position (see sere_sell): x and b as permuted in. */
 struct sere_cg_workspace
 {
 	int32_t capacity;
 	int32_t block_capacity;
-	double *r, *u, *w, *p, *s, *inv_diag;
+	double *x, *b, *r, *u, *w, *p, *s, *inv_diag;
 	double* partial; /* 4 sums per block: rᵀr, uᵀw, rᵀu, bᵀb */
 };
 
@@ -258,17 +291,20 @@ sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
 	{
 		return SERE_ERR_MEMORY;
 	}
+	/* Positions run to ⌈n / SERE_SELL_C⌉ · SERE_SELL_C ≤ sere_pad( n ). */
+	_Static_assert( SERE_PAD % SERE_SELL_C == 0, "padding covers the last chunk" );
 	size_t bytes = sizeof( double ) * (size_t) sere_pad( n );
 	w->capacity = n;
-	w->block_capacity = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
-	w->r = sere_alloc( bytes );
-	w->u = sere_alloc( bytes );
-	w->w = sere_alloc( bytes );
-	w->p = sere_alloc( bytes );
-	w->s = sere_alloc( bytes );
-	w->inv_diag = sere_alloc( bytes );
+	w->block_capacity = ( sere_pad( n ) + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	double** vectors[] = { &w->x, &w->b, &w->r, &w->u, &w->w, &w->p, &w->s, &w->inv_diag };
+	int failed = 0;
+	for ( size_t k = 0; k < sizeof( vectors ) / sizeof( vectors[0] ); ++k )
+	{
+		*vectors[k] = sere_alloc( bytes );
+		failed |= *vectors[k] == NULL;
+	}
 	w->partial = sere_alloc( sizeof( double ) * 4 * (size_t) w->block_capacity );
-	if ( !w->r || !w->u || !w->w || !w->p || !w->s || !w->inv_diag || !w->partial )
+	if ( failed || w->partial == NULL )
 	{
 		sere_cg_destroy( w );
 		return SERE_ERR_MEMORY;
@@ -283,12 +319,11 @@ void sere_cg_destroy( sere_cg_workspace* w )
 	{
 		return;
 	}
-	sere_free( w->r );
-	sere_free( w->u );
-	sere_free( w->w );
-	sere_free( w->p );
-	sere_free( w->s );
-	sere_free( w->inv_diag );
+	double* vectors[] = { w->x, w->b, w->r, w->u, w->w, w->p, w->s, w->inv_diag };
+	for ( size_t k = 0; k < sizeof( vectors ) / sizeof( vectors[0] ); ++k )
+	{
+		sere_free( vectors[k] );
+	}
 	sere_free( w->partial );
 	free( w );
 }
@@ -309,54 +344,51 @@ static inline int32_t block_end( int32_t blk, int32_t n )
 	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
 }
 
-static inline int32_t block_chunk_end( const sere_sell* a, int32_t blk )
+/* y = A v for block blk's positions, each chunk one contiguous store. */
+static inline void block_product( const sere_sell* a, int32_t blk, const double* v, double* y )
 {
-	return ( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
-}
-
-/* y = A v for block blk's rows, then its partial sums of uᵀy (slot 1) and γ = rᵀu (slot 2). A
- * block's rows are whole chunks (σ divides the block), so the thread that writes y for a block
- * reads it back. */
-static inline void block_product( const sere_sell* a, int32_t blk, int32_t n, const double* v, const double* r,
-								  double* y, double* partial )
-{
-	for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < block_chunk_end( a, blk ); ++c )
+	int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < a->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : a->chunks;
+	for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < chunk_end; ++c )
 	{
 		lanes_t sum;
-		chunk_product( a, c, v, &sum );
-		for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
-		{
-			y[a->row[c * LANES + l]] = lane( &sum, l );
-		}
+		chunk_product( a, a->local_col, c, v, &sum );
+		memcpy( y + c * LANES, &sum, sizeof( sum ) );
 	}
+}
+
+/* w = Au for block blk, then its partial sums of δ = uᵀw (slot 1) and γ = rᵀu (slot 2). */
+static inline void block_product_sums( const sere_sell* a, int32_t blk, int32_t np, const double* u, const double* r,
+									   double* w, double* partial )
+{
+	block_product( a, blk, u, w );
 	double delta = 0.0, gamma = 0.0;
 	/* Vector partial sums: the block, not the thread, decides how the sum is split, so every
 	 * thread count gets the same bits (and 1 thread runs faster than the serial chain of
 	 * dependent adds that -ffp-contract=off and no -ffast-math would otherwise leave). */
 #pragma omp simd reduction( + : delta, gamma )
-	for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, n ); ++i )
+	for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 	{
-		delta += v[i] * y[i];
-		gamma += r[i] * v[i];
+		delta += u[i] * w[i];
+		gamma += r[i] * u[i];
 	}
 	partial[4 * blk + 1] = delta;
 	partial[4 * blk + 2] = gamma;
 }
 
-sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const double* b, double* x, double tolerance,
-						   int32_t max_iterations, sere_cg_result* result )
+sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const double* b_in, double* x_in,
+						   double tolerance, int32_t max_iterations, sere_cg_result* result )
 {
 	result->iterations = 0;
 	result->residual = 0.0;
-	if ( ws == NULL || a == NULL || b == NULL || x == NULL || a->rows <= 0 || a->rows > ws->capacity || a->sigma <= 0 ||
-		 SERE_CG_BLOCK % a->sigma != 0 || !( tolerance >= 0.0 ) || max_iterations < 0 )
+	if ( ws == NULL || a == NULL || b_in == NULL || x_in == NULL || a->rows <= 0 || a->rows > ws->capacity ||
+		 a->sigma <= 0 || SERE_CG_BLOCK % a->sigma != 0 || !( tolerance >= 0.0 ) || max_iterations < 0 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	const int32_t n = a->rows;
-	const int32_t blocks = ( n + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
-	double *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s, *inv_diag = ws->inv_diag;
-	double* partial = ws->partial;
+	const int32_t np = a->chunks * LANES; /* positions, the last chunk's padding lanes included */
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	double *x = ws->x, *b = ws->b, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *inv_diag = ws->inv_diag, *partial = ws->partial;
 	sere_status status = SERE_OK;
 	int32_t iterations = 0;
 	double relative = 0.0;
@@ -364,7 +396,8 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 
 	/* One parallel region for the whole solve: the systems are small (thousands of rows), so
 	 * fork/join per kernel would cost more than the kernels. Every thread takes the same
-	 * decisions from the same block sums, so no broadcast is needed.
+	 * decisions from the same block sums, so no broadcast is needed. Blocks are whole chunks
+	 * (σ divides SERE_CG_BLOCK), so a block's products are written and read by one thread.
 	 *
 	 * The recurrence is Chronopoulos and Gear's (1989) form of Jacobi PCG: besides x, r and
 	 * u = D⁻¹r it carries w = Au and s = Ap, updated as s = w + βs, so the one product per
@@ -376,35 +409,31 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 	 * iterates are the textbook's. */
 #pragma omp parallel
 	{
-		/* r = b − Ax, u = D⁻¹r; s = p = 0, so that the first step's p = u + 0·p is u. */
+		/* Into positions; padding lanes get b = x = 0 and D⁻¹ = 0, so they stay 0 throughout
+		 * and add nothing to any sum. s = p = 0, so that the first step's p = u + 0·p is u. */
 #pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite )
+		for ( int32_t at = 0; at < np; ++at )
+		{
+			int32_t i = a->row[at];
+			b[at] = i >= 0 ? b_in[i] : 0.0;
+			x[at] = i >= 0 ? x_in[i] : 0.0;
+			nonfinite |= !isfinite( b[at] ) || !isfinite( x[at] );
+			double diagonal = a->diagonal[at] >= 0 ? a->val[a->diagonal[at]] : 0.0;
+			bad_diagonal |= i >= 0 && !( diagonal > 0.0 );
+			inv_diag[at] = diagonal > 0.0 ? 1.0 / diagonal : 0.0;
+			p[at] = 0.0;
+			s[at] = 0.0;
+		}
+		/* r = b − Ax, u = D⁻¹r */
+#pragma omp for schedule( static )
 		for ( int32_t blk = 0; blk < blocks; ++blk )
 		{
-			for ( int32_t c = blk * CHUNKS_PER_BLOCK; c < block_chunk_end( a, blk ); ++c )
-			{
-				lanes_t sum;
-				chunk_product( a, c, x, &sum );
-				for ( int32_t l = 0; l < chunk_lanes( a, c ); ++l )
-				{
-					int32_t i = a->row[c * LANES + l];
-					double diagonal = 0.0;
-					for ( int32_t k = a->chunk_ptr[c] + l; k < a->chunk_ptr[c + 1]; k += LANES )
-					{
-						diagonal += a->col[k] == i ? a->val[k] : 0.0;
-					}
-					inv_diag[i] = diagonal > 0.0 ? 1.0 / diagonal : 0.0;
-					bad_diagonal |= !( diagonal > 0.0 );
-					w[i] = lane( &sum, l );
-				}
-			}
+			block_product( a, blk, x, w );
 			double bb = 0.0, rr = 0.0;
-			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, n ); ++i )
+			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 			{
-				nonfinite |= !isfinite( b[i] ) || !isfinite( x[i] );
 				r[i] = b[i] - w[i];
 				u[i] = inv_diag[i] * r[i];
-				p[i] = 0.0;
-				s[i] = 0.0;
 				bb += b[i] * b[i];
 				rr += r[i] * r[i];
 			}
@@ -417,7 +446,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 		if ( !done && b_norm == 0.0 )
 		{
 #pragma omp for schedule( static )
-			for ( int32_t i = 0; i < n; ++i )
+			for ( int32_t i = 0; i < np; ++i )
 			{
 				x[i] = 0.0;
 			}
@@ -430,7 +459,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 #pragma omp for schedule( static )
 			for ( int32_t blk = 0; blk < blocks; ++blk )
 			{
-				block_product( a, blk, n, u, r, w, partial );
+				block_product_sums( a, blk, np, u, r, w, partial );
 			}
 		}
 		int32_t it = 0;
@@ -459,7 +488,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 			{
 				double rr_block = 0.0;
 #pragma omp simd reduction( + : rr_block )
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, n ); ++i )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 				{
 					p[i] = u[i] + beta * p[i];
 					s[i] = w[i] + beta * s[i];
@@ -488,10 +517,19 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 #pragma omp for schedule( static )
 			for ( int32_t blk = 0; blk < blocks; ++blk )
 			{
-				block_product( a, blk, n, u, r, w, partial );
+				block_product_sums( a, blk, np, u, r, w, partial );
 			}
 			alpha_prev = alpha;
 			gamma_prev = gamma;
+		}
+		/* Out of positions: the last iterate, whatever stopped the solve. */
+#pragma omp for schedule( static )
+		for ( int32_t at = 0; at < np; ++at )
+		{
+			if ( a->row[at] >= 0 )
+			{
+				x_in[a->row[at]] = x[at];
+			}
 		}
 #pragma omp single
 		{

@@ -41,7 +41,12 @@ void sere_csr_spmv( const sere_csr* a, const double* x, double* y );
  * The layout depends only on the CSR pattern, which for a simulation is usually fixed while the
  * values change every step (the osmosis matrix does): build it once with sere_sell_create, then
  * either copy new values in with sere_sell_update (one pass over the entries) or, cheaper, write
- * each value where slot says while assembling it (the osmosis does). */
+ * each value where slot says while assembling it (the osmosis does).
+ *
+ * Positions: lane l of chunk c is position c·SERE_SELL_C + l. The CG runs in that order (its
+ * vectors indexed by position, local_col naming columns by position), so a chunk's products are
+ * one contiguous vector store and every vector sweep is contiguous; it permutes b and x in and x
+ * out once per solve. */
 #define SERE_SELL_C 8
 
 typedef struct sere_sell
@@ -55,13 +60,17 @@ typedef struct sere_sell
 	int32_t* col;		/* per slot, lane fastest */
 	double* val;		/* per slot; 0 in padding */
 	int32_t* slot;		/* per CSR entry k: the slot holding it, val[slot[k]] */
+	int32_t* local_col; /* per slot, the column as a position in the layout's row order (below) */
+	int32_t* diagonal;	/* per position, the slot of the row's diagonal entry; −1 if it has none */
 } sere_sell;
 
 /* Builds the layout and values of a. σ is a multiple of SERE_SELL_C that divides SERE_CG_BLOCK
- * (8, 16, ..., 512), so that windows never straddle a CG block and the CG can keep its block
- * sums in row order. SERE_SELL_SIGMA: on the maple osmosis matrices σ = 8 pads the T layer by
- * 21%, σ = 64 by 4% and σ = 512 by 0.7%; 64 and 512 time within the machine's noise.
- * SERE_ERR_ARGUMENT for another σ, an empty matrix or a column out of range. */
+ * (8, 16, ..., 512), so that windows never straddle a CG block: a block's positions are then its
+ * own rows, and its sums do not depend on how blocks are shared among threads.
+ * SERE_SELL_SIGMA: on the maple osmosis matrices σ = 8 pads the T layer by 21%, σ = 64 by 4% and
+ * σ = 512 by 0.7%; 64 and 512 time within the machine's noise. SERE_ERR_ARGUMENT for another σ,
+ * an empty matrix, a column out of range, or a row holding its diagonal entry twice (the CG reads
+ * the diagonal from one slot). */
 #define SERE_SELL_SIGMA 64
 sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out );
 void sere_sell_destroy( sere_sell* sell );

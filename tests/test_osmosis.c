@@ -400,6 +400,11 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 	sere_csr indefinite = dense_csr( dense, n );
 	memset( x, 0, sizeof( x ) );
 	cr_expect_eq( solve_csr( w, &indefinite, b, x, 1e-12, 200, &result ), SERE_ERR_NOT_SPD );
+	/* A row with no diagonal entry stored. */
+	dense[5 * n + 5] = 0.0;
+	sere_csr no_diagonal = dense_csr( dense, n );
+	memset( x, 0, sizeof( x ) );
+	cr_expect_eq( solve_csr( w, &no_diagonal, b, x, 1e-12, 200, &result ), SERE_ERR_NOT_SPD );
 	dense[5 * n + 5] = 3.0;
 
 	/* Singular: a graph Laplacian (constant null space) with b outside its range. */
@@ -433,7 +438,7 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 	cr_expect_eq( x[0], 0.0 );
 	cr_expect_eq( result.iterations, 0 );
 	sere_cg_destroy( w );
-	free_csr( &a ), free_csr( &indefinite ), free_csr( &singular );
+	free_csr( &a ), free_csr( &indefinite ), free_csr( &no_diagonal ), free_csr( &singular );
 }
 
 /* An irregular SPD matrix over several blocks: a weighted graph Laplacian (ring plus
@@ -696,6 +701,15 @@ Test( cg, sell_spmv_bitwise_equals_csr_on_ragged_rows )
 	a.col[last] = ( a.col[last] + 1 ) % n;
 	cr_expect_eq( sere_sell_update( sell, &a ), SERE_ERR_ARGUMENT );
 	sere_sell_destroy( sell );
+	/* A diagonal entry stored twice is refused: the CG reads one slot per diagonal. */
+	int32_t row = 0;
+	while ( a.row_ptr[row + 1] - a.row_ptr[row] < 2 )
+	{
+		row += 1;
+	}
+	a.col[a.row_ptr[row]] = row;
+	a.col[a.row_ptr[row] + 1] = row;
+	cr_expect_eq( sere_sell_create( &a, SERE_SELL_SIGMA, &sell ), SERE_ERR_ARGUMENT );
 	/* σ must be a multiple of SERE_SELL_C dividing SERE_CG_BLOCK. */
 	cr_expect_eq( sere_sell_create( &a, 12, &sell ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_sell_create( &a, 4, &sell ), SERE_ERR_ARGUMENT );
