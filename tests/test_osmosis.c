@@ -562,8 +562,8 @@ Test( cg, bitwise_identical_for_1_2_3_threads )
 Test( osmosis, extrapolated_start_saves_iterations_not_accuracy )
 {
 	/* A steadily drying layer with a large λ (the plane tree's 100): one workspace kept across
-	 * the steps starts CG from 2 c_n − c_{n−1}; the other is made anew every step, so it starts
-	 * from c_n, as a first step does. */
+	 * the steps starts CG from 3 c_n − 3 c_{n−1} + c_{n−2}; the other is made anew every step,
+	 * so it starts from c_n, as a first step does. */
 	sere_model kept_model, fresh_model;
 	grid_model( &kept_model, 60, 40, 3.0, 2.0 );
 	grid_model( &fresh_model, 60, 40, 3.0, 2.0 );
@@ -596,10 +596,14 @@ Test( osmosis, extrapolated_start_saves_iterations_not_accuracy )
 		largest = fmax( largest, fabs( fresh_model.p.w[i] ) );
 	}
 	cr_expect_leq( worst, 1e-6 * largest, "water differs by %g (largest %g)", worst, largest );
-	/* Iteration counts are deterministic, so this is not a timing test. Measured: 3315 against
-	 * 6626 iterations over the 100 steps, and 20 against 66 in the last one, when the drying
-	 * has become steady; the bounds leave room for other compilers' rounding. */
-	cr_expect_lt( 10 * kept_sum, 7 * fresh_sum, "extrapolated start: %d iterations in 100 steps, plain start %d",
+	/* Iteration counts are deterministic, so this is not a timing test. Measured: 2193 against
+	 * 6626 iterations over the 100 steps, and 10 against 66 in the last one, when the drying
+	 * has become steady (the line through two steps instead of the parabola took 3315, so the
+	 * 0.4 bound below also checks that the guess is the parabola); the bounds leave room for
+	 * other compilers' rounding. */
+	cr_log_info( "extrapolated start: %d iterations in 100 steps (last %d), plain start %d (last %d)", kept_sum,
+				 kept_report.iterations, fresh_sum, fresh_report.iterations );
+	cr_expect_lt( 10 * kept_sum, 4 * fresh_sum, "extrapolated start: %d iterations in 100 steps, plain start %d",
 				  kept_sum, fresh_sum );
 	cr_expect_lt( 2 * kept_report.iterations, fresh_report.iterations, "last step: %d vs %d iterations",
 				  kept_report.iterations, fresh_report.iterations );
