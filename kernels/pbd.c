@@ -15,6 +15,11 @@
 #include <immintrin.h>
 #endif
 
+/* For the block functions: each pass mode gets its own copy of the block loop (project_colors),
+ * and GCC's size limits would otherwise leave the block an out-of-line call with its operands
+ * in memory. */
+#define FORCE_INLINE static inline __attribute__( ( always_inline ) )
+
 enum
 {
 	/* Constraints per block: one 512-bit register of floats (two 256-bit halves with AVX). */
@@ -607,13 +612,13 @@ typedef struct lane_accum
 	__mmask16 zero, nonfinite;
 } lane_accum;
 
-static inline lane_accum lane_accum_start( void )
+FORCE_INLINE lane_accum lane_accum_start( void )
 {
 	lane_accum acc = { _mm512_setzero_ps(), 0, 0 };
 	return acc;
 }
 
-static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
+FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
 {
 	float w = _mm512_reduce_max_ps( acc->worst );
 	*worst = w > *worst ? w : *worst;
@@ -623,7 +628,7 @@ static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32
 /* Four (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
  * lane j of register r, then a 4×4 transpose inside each 128-bit lane. This replaces AVX-512
  * gathers and scatters, which on this machine cost 3× as much for the same sweep. */
-static inline void load_records( const float* packed, const int32_t* at, __m512* x, __m512* y, __m512* z, __m512* w )
+FORCE_INLINE void load_records( const float* packed, const int32_t* at, __m512* x, __m512* y, __m512* z, __m512* w )
 {
 	__m512 r0 = _mm512_castps128_ps512( _mm_load_ps( packed + at[0] ) );
 	__m512 r1 = _mm512_castps128_ps512( _mm_load_ps( packed + at[1] ) );
@@ -652,7 +657,7 @@ static inline void load_records( const float* packed, const int32_t* at, __m512*
 }
 
 /* The inverse of load_records: four components into records, 16 stores of 128 bits. */
-static inline void store_records( float* packed, const int32_t* at, __m512 x, __m512 y, __m512 z, __m512 w )
+FORCE_INLINE void store_records( float* packed, const int32_t* at, __m512 x, __m512 y, __m512 z, __m512 w )
 {
 	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( x, y ) );
 	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( x, y ) );
@@ -680,7 +685,7 @@ static inline void store_records( float* packed, const int32_t* at, __m512 x, __
 	_mm_store_ps( packed + at[15], _mm512_extractf32x4_ps( r3, 3 ) );
 }
 
-static inline void project_block( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
 {
 	__m512 ax, ay, az, aw, bx, by, bz, bw;
 	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
@@ -745,23 +750,23 @@ static inline void project_block( const block_context* ctx, int32_t q, block_mod
 
 #elif defined( __AVX__ )
 
-/* AVX (256-bit) build: each block of LANES constraints as two halves of eight, one after the
- * other. Lanes of a block share no particle, so the halves are independent and the result has
- * the bits of the AVX-512 and portable builds. Without it a machine lacking AVX-512 ran the
- * one-lane portable loop, 7-10x slower per sweep. */
+/* AVX (256-bit) build: each block of LANES constraints as two halves of eight. Lanes of a
+ * block share no particle, so the halves are independent and the result has the bits of the
+ * AVX-512 and portable builds. Without it a machine lacking AVX-512 ran the one-lane portable
+ * loop, 7-10x slower per sweep. */
 typedef struct lane_accum
 {
 	__m256 worst;
 	int zero, nonfinite;
 } lane_accum;
 
-static inline lane_accum lane_accum_start( void )
+FORCE_INLINE lane_accum lane_accum_start( void )
 {
 	lane_accum acc = { _mm256_setzero_ps(), 0, 0 };
 	return acc;
 }
 
-static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
+FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
 {
 	__m128 m = _mm_max_ps( _mm256_castps256_ps128( acc->worst ), _mm256_extractf128_ps( acc->worst, 1 ) );
 	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
@@ -771,18 +776,29 @@ static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32
 	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
 }
 
+/* The record of lane j of a half. Offsets are read two at a time with one 64-bit load (x86 is
+ * little-endian: lane 2i in the low half): a half takes four loads for its eight offsets
+ * instead of eight, and a sweep reads every offset twice (to load and to store). Offsets are
+ * non-negative, so zero extension is exact. */
+FORCE_INLINE float* record_at( float* packed, const int32_t* at, int j )
+{
+	uint64_t pair;
+	memcpy( &pair, at + ( j & ~1 ), sizeof( pair ) );
+	return packed + ( j & 1 ? (uint32_t) ( pair >> 32 ) : (uint32_t) pair );
+}
+
 /* Eight (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
  * lane j of register r, then a 4×4 transpose inside each 128-bit lane (as the AVX-512 path). */
-static inline void load_records( const float* packed, const int32_t* at, __m256* x, __m256* y, __m256* z, __m256* w )
+FORCE_INLINE void load_records( float* packed, const int32_t* at, __m256* x, __m256* y, __m256* z, __m256* w )
 {
-	__m256 r0 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( packed + at[0] ) ),
-									  _mm_load_ps( packed + at[4] ), 1 );
-	__m256 r1 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( packed + at[1] ) ),
-									  _mm_load_ps( packed + at[5] ), 1 );
-	__m256 r2 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( packed + at[2] ) ),
-									  _mm_load_ps( packed + at[6] ), 1 );
-	__m256 r3 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( packed + at[3] ) ),
-									  _mm_load_ps( packed + at[7] ), 1 );
+	__m256 r0 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 0 ) ) ),
+									  _mm_load_ps( record_at( packed, at, 4 ) ), 1 );
+	__m256 r1 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 1 ) ) ),
+									  _mm_load_ps( record_at( packed, at, 5 ) ), 1 );
+	__m256 r2 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 2 ) ) ),
+									  _mm_load_ps( record_at( packed, at, 6 ) ), 1 );
+	__m256 r3 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 3 ) ) ),
+									  _mm_load_ps( record_at( packed, at, 7 ) ), 1 );
 	__m256d t0 = _mm256_castps_pd( _mm256_unpacklo_ps( r0, r1 ) ); /* x0 x1 y0 y1 per lane */
 	__m256d t1 = _mm256_castps_pd( _mm256_unpackhi_ps( r0, r1 ) ); /* z0 z1 w0 w1 */
 	__m256d t2 = _mm256_castps_pd( _mm256_unpacklo_ps( r2, r3 ) );
@@ -794,7 +810,7 @@ static inline void load_records( const float* packed, const int32_t* at, __m256*
 }
 
 /* The inverse of load_records: four components into records, 8 stores of 128 bits. */
-static inline void store_records( float* packed, const int32_t* at, __m256 x, __m256 y, __m256 z, __m256 w )
+FORCE_INLINE void store_records( float* packed, const int32_t* at, __m256 x, __m256 y, __m256 z, __m256 w )
 {
 	__m256d t0 = _mm256_castps_pd( _mm256_unpacklo_ps( x, y ) );
 	__m256d t1 = _mm256_castps_pd( _mm256_unpackhi_ps( x, y ) );
@@ -804,32 +820,31 @@ static inline void store_records( float* packed, const int32_t* at, __m256 x, __
 	__m256 r1 = _mm256_castpd_ps( _mm256_unpackhi_pd( t0, t2 ) );
 	__m256 r2 = _mm256_castpd_ps( _mm256_unpacklo_pd( t1, t3 ) );
 	__m256 r3 = _mm256_castpd_ps( _mm256_unpackhi_pd( t1, t3 ) );
-	_mm_store_ps( packed + at[0], _mm256_castps256_ps128( r0 ) );
-	_mm_store_ps( packed + at[1], _mm256_castps256_ps128( r1 ) );
-	_mm_store_ps( packed + at[2], _mm256_castps256_ps128( r2 ) );
-	_mm_store_ps( packed + at[3], _mm256_castps256_ps128( r3 ) );
-	_mm_store_ps( packed + at[4], _mm256_extractf128_ps( r0, 1 ) );
-	_mm_store_ps( packed + at[5], _mm256_extractf128_ps( r1, 1 ) );
-	_mm_store_ps( packed + at[6], _mm256_extractf128_ps( r2, 1 ) );
-	_mm_store_ps( packed + at[7], _mm256_extractf128_ps( r3, 1 ) );
+	_mm_store_ps( record_at( packed, at, 0 ), _mm256_castps256_ps128( r0 ) );
+	_mm_store_ps( record_at( packed, at, 1 ), _mm256_castps256_ps128( r1 ) );
+	_mm_store_ps( record_at( packed, at, 2 ), _mm256_castps256_ps128( r2 ) );
+	_mm_store_ps( record_at( packed, at, 3 ), _mm256_castps256_ps128( r3 ) );
+	_mm_store_ps( record_at( packed, at, 4 ), _mm256_extractf128_ps( r0, 1 ) );
+	_mm_store_ps( record_at( packed, at, 5 ), _mm256_extractf128_ps( r1, 1 ) );
+	_mm_store_ps( record_at( packed, at, 6 ), _mm256_extractf128_ps( r2, 1 ) );
+	_mm_store_ps( record_at( packed, at, 7 ), _mm256_extractf128_ps( r3, 1 ) );
 }
 
-static inline void project_half( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+/* What the measuring part of a half leaves for the moving part: both ends and the factor f. */
+typedef struct half_state
 {
-	__m256 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	if ( mode == MODE_TOUCH )
-	{
-		const __m256 one = _mm256_set1_ps( ctx->one );
-		store_records( ctx->packed, ctx->ia + q, _mm256_mul_ps( ax, one ), _mm256_mul_ps( ay, one ),
-					   _mm256_mul_ps( az, one ), aw );
-		store_records( ctx->packed, ctx->ib + q, _mm256_mul_ps( bx, one ), _mm256_mul_ps( by, one ),
-					   _mm256_mul_ps( bz, one ), bw );
-		return;
-	}
+	__m256 ax, ay, az, aw, bx, by, bz, bw, f;
+} half_state;
+
+/* Loads both ends of the half at q and measures it (Eq. 13): the residual into acc and, unless
+ * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
+FORCE_INLINE half_state measure_half( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+{
+	half_state h;
+	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
+	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
 	const __m256 zero = _mm256_setzero_ps();
-	__m256 dx = _mm256_sub_ps( bx, ax ), dy = _mm256_sub_ps( by, ay ), dz = _mm256_sub_ps( bz, az );
+	__m256 dx = _mm256_sub_ps( h.bx, h.ax ), dy = _mm256_sub_ps( h.by, h.ay ), dz = _mm256_sub_ps( h.bz, h.az );
 	__m256 len2 =
 		_mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( dx, dx ), _mm256_mul_ps( dy, dy ) ), _mm256_mul_ps( dz, dz ) );
 	__m256 len = _mm256_sqrt_ps( len2 );
@@ -837,7 +852,7 @@ static inline void project_half( const block_context* ctx, int32_t q, block_mode
 	__m256 c = _mm256_sub_ps( len, rest ); /* Eq. 13 */
 	acc->zero |= _mm256_movemask_ps( _mm256_cmp_ps( len, zero, _CMP_EQ_OQ ) );
 	acc->nonfinite |= _mm256_movemask_ps( _mm256_cmp_ps( len, _mm256_set1_ps( FLT_MAX ), _CMP_NLE_UQ ) );
-	__m256 wsum = _mm256_add_ps( aw, bw );
+	__m256 wsum = _mm256_add_ps( h.aw, h.bw );
 	__m256 lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
@@ -847,12 +862,12 @@ static inline void project_half( const block_context* ctx, int32_t q, block_mode
 	}
 	const __m256 magnitude = _mm256_castsi256_ps( _mm256_set1_epi32( 0x7fffffff ) );
 	acc->worst = _mm256_max_ps( acc->worst, _mm256_div_ps( _mm256_and_ps( residual, magnitude ), rest ) );
+	h.f = zero;
 	if ( mode == MODE_MEASURE )
 	{
-		return;
+		return h;
 	}
 	/* a masked-off lane's quotient (0/0 or x/0) is replaced by zero, as the AVX-512 maskz_div */
-	__m256 f;
 	if ( xpbd )
 	{
 		__m256 denominator = _mm256_add_ps( wsum, alpha );
@@ -860,30 +875,89 @@ static inline void project_half( const block_context* ctx, int32_t q, block_mode
 		__m256 numerator = _mm256_sub_ps( _mm256_sub_ps( zero, c ), _mm256_mul_ps( alpha, lambda ) );
 		__m256 dlambda = _mm256_and_ps( movable, _mm256_div_ps( numerator, denominator ) );
 		_mm256_store_ps( ctx->lambda + q, _mm256_add_ps( lambda, dlambda ) );
-		f = _mm256_div_ps( _mm256_sub_ps( zero, dlambda ), len );
+		h.f = _mm256_div_ps( _mm256_sub_ps( zero, dlambda ), len );
 	}
 	else
 	{
 		__m256 movable = _mm256_cmp_ps( wsum, zero, _CMP_GT_OQ );
-		f = _mm256_and_ps( movable,
-						   _mm256_div_ps( _mm256_mul_ps( _mm256_set1_ps( ctx->k ), c ), _mm256_mul_ps( wsum, len ) ) );
+		h.f = _mm256_and_ps(
+			movable, _mm256_div_ps( _mm256_mul_ps( _mm256_set1_ps( ctx->k ), c ), _mm256_mul_ps( wsum, len ) ) );
 	}
 	if ( mode == MODE_JACOBI )
 	{
-		_mm256_store_ps( ctx->factor + q, f );
-		return;
+		_mm256_store_ps( ctx->factor + q, h.f );
 	}
-	__m256 fa = _mm256_mul_ps( aw, f ), fb = _mm256_mul_ps( bw, f );
-	store_records( ctx->packed, ctx->ia + q, _mm256_add_ps( ax, _mm256_mul_ps( fa, dx ) ),
-				   _mm256_add_ps( ay, _mm256_mul_ps( fa, dy ) ), _mm256_add_ps( az, _mm256_mul_ps( fa, dz ) ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm256_sub_ps( bx, _mm256_mul_ps( fb, dx ) ),
-				   _mm256_sub_ps( by, _mm256_mul_ps( fb, dy ) ), _mm256_sub_ps( bz, _mm256_mul_ps( fb, dz ) ), bw );
+	return h;
 }
 
-static inline void project_block( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+/* The moving part of a Gauss–Seidel half: p_a += (w_a f) d, p_b −= (w_b f) d (Eq. 13), stored.
+ * d = p_b − p_a again, the same operation on the same values as in measure_half, so the same
+ * bits; recomputing it keeps three registers fewer alive between the two parts. */
+FORCE_INLINE void move_half( const block_context* ctx, int32_t q, const half_state* h )
 {
-	project_half( ctx, q, mode, xpbd, acc );
-	project_half( ctx, q + LANES / 2, mode, xpbd, acc );
+	__m256 dx = _mm256_sub_ps( h->bx, h->ax ), dy = _mm256_sub_ps( h->by, h->ay ), dz = _mm256_sub_ps( h->bz, h->az );
+	__m256 fa = _mm256_mul_ps( h->aw, h->f ), fb = _mm256_mul_ps( h->bw, h->f );
+	store_records( ctx->packed, ctx->ia + q, _mm256_add_ps( h->ax, _mm256_mul_ps( fa, dx ) ),
+				   _mm256_add_ps( h->ay, _mm256_mul_ps( fa, dy ) ), _mm256_add_ps( h->az, _mm256_mul_ps( fa, dz ) ),
+				   h->aw );
+	store_records( ctx->packed, ctx->ib + q, _mm256_sub_ps( h->bx, _mm256_mul_ps( fb, dx ) ),
+				   _mm256_sub_ps( h->by, _mm256_mul_ps( fb, dy ) ), _mm256_sub_ps( h->bz, _mm256_mul_ps( fb, dz ) ),
+				   h->bw );
+}
+
+FORCE_INLINE void touch_half( const block_context* ctx, int32_t q )
+{
+	__m256 ax, ay, az, aw, bx, by, bz, bw;
+	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
+	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
+	const __m256 one = _mm256_set1_ps( ctx->one );
+	store_records( ctx->packed, ctx->ia + q, _mm256_mul_ps( ax, one ), _mm256_mul_ps( ay, one ),
+				   _mm256_mul_ps( az, one ), aw );
+	store_records( ctx->packed, ctx->ib + q, _mm256_mul_ps( bx, one ), _mm256_mul_ps( by, one ),
+				   _mm256_mul_ps( bz, one ), bw );
+}
+
+/* Lanes [first, last) of one color of one item, a multiple of LANES.
+ *
+ * Gauss–Seidel is software-pipelined by one half: the next half is measured before this one
+ * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
+ * and a half's moves wait at its end; issued in program order they filled the out-of-order
+ * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
+ * so an AVX2 core worked on about one half at a time. Measured one half ahead, a half's moves
+ * find f ready. On the maple at one thread this took a sweep from 2.2 to 1.8 times its floor
+ * (sere_pbd_touch_sweeps). All lanes of one color share no particle, so reading the next half
+ * before this one is stored reads the same values. */
+FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
+								   lane_accum* acc )
+{
+	const int32_t half = LANES / 2;
+	if ( mode != MODE_GAUSS_SEIDEL )
+	{
+		for ( int32_t q = first; q < last; q += half )
+		{
+			if ( mode == MODE_TOUCH )
+			{
+				touch_half( ctx, q );
+			}
+			else
+			{
+				measure_half( ctx, q, mode, xpbd, acc );
+			}
+		}
+		return;
+	}
+	if ( first == last )
+	{
+		return;
+	}
+	half_state current = measure_half( ctx, first, mode, xpbd, acc );
+	for ( int32_t q = first; q + half < last; q += half )
+	{
+		half_state next = measure_half( ctx, q + half, mode, xpbd, acc );
+		move_half( ctx, q, &current );
+		current = next;
+	}
+	move_half( ctx, last - half, &current );
 }
 
 #else
@@ -896,19 +970,19 @@ typedef struct lane_accum
 	int zero, nonfinite;
 } lane_accum;
 
-static inline lane_accum lane_accum_start( void )
+FORCE_INLINE lane_accum lane_accum_start( void )
 {
 	lane_accum acc = { 0.0f, 0, 0 };
 	return acc;
 }
 
-static inline void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
+FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
 {
 	*worst = acc->worst > *worst ? acc->worst : *worst;
 	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
 }
 
-static inline void project_block( const block_context* ctx, int32_t q0, block_mode mode, int xpbd, lane_accum* acc )
+FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mode mode, int xpbd, lane_accum* acc )
 {
 	for ( int32_t q = q0; q < q0 + LANES; ++q )
 	{
@@ -961,6 +1035,18 @@ static inline void project_block( const block_context* ctx, int32_t q0, block_mo
 	}
 }
 
+#endif
+
+#if defined( __AVX512F__ ) || !defined( __AVX__ )
+/* Lanes [first, last) of one color of one item, a multiple of LANES: block after block. */
+FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
+								   lane_accum* acc )
+{
+	for ( int32_t q = first; q < last; q += LANES )
+	{
+		project_block( ctx, q, mode, xpbd, acc );
+	}
+}
 #endif
 
 /* ---------------------------------------------------------------------------------------
@@ -1103,6 +1189,46 @@ static void wait_cut_inputs( sere_pbd* pbd, int32_t cut, int32_t number )
 	}
 }
 
+/* One item, color after color (all lanes of one block have one color), with its own copy of
+ * the loop for each mode: with mode and xpbd constant the branches leave the loop and the
+ * accumulator stays in registers. The context is copied too: stores through its float pointers
+ * could otherwise alias it, and every block reloaded its pointers. */
+FORCE_INLINE void project_colors( const block_context* ctx, const int32_t* segment, int32_t colors, block_mode mode,
+								  int xpbd, lane_accum* acc )
+{
+	const block_context local_ctx = *ctx;
+	lane_accum local = *acc;
+	for ( int32_t c = 0; c < colors; ++c )
+	{
+		project_segment( &local_ctx, segment[c], segment[c + 1], mode, xpbd, &local );
+	}
+	*acc = local;
+}
+
+/* segment: the item's colors + 1 lane offsets. */
+static void project_item( const block_context* ctx, const int32_t* segment, int32_t colors, block_mode mode, int xpbd,
+						  lane_accum* acc )
+{
+	switch ( mode )
+	{
+		case MODE_GAUSS_SEIDEL:
+			xpbd ? project_colors( ctx, segment, colors, MODE_GAUSS_SEIDEL, 1, acc )
+				 : project_colors( ctx, segment, colors, MODE_GAUSS_SEIDEL, 0, acc );
+			break;
+		case MODE_JACOBI:
+			xpbd ? project_colors( ctx, segment, colors, MODE_JACOBI, 1, acc )
+				 : project_colors( ctx, segment, colors, MODE_JACOBI, 0, acc );
+			break;
+		case MODE_MEASURE:
+			xpbd ? project_colors( ctx, segment, colors, MODE_MEASURE, 1, acc )
+				 : project_colors( ctx, segment, colors, MODE_MEASURE, 0, acc );
+			break;
+		case MODE_TOUCH:
+			project_colors( ctx, segment, colors, MODE_TOUCH, 0, acc );
+			break;
+	}
+}
+
 /* Thread t takes the items of its own list in order, then helps the other threads with
  * theirs, so a thread on a slower core does less. Which thread projects an item never changes
  * the result (wait_cut_inputs). A thread that waits on a cut holds only an odd cut or an even
@@ -1132,12 +1258,7 @@ static void run_pass( sere_pbd* pbd, const block_context* ctx, pass_kind kind, i
 			{
 				wait_cut_inputs( pbd, item - pbd->bands, number );
 			}
-			const int32_t first = pbd->segment[item * colors], last = pbd->segment[( item + 1 ) * colors];
-			/* Color after color; all lanes of one block have one color. */
-			for ( int32_t q = first; q < last; q += LANES )
-			{
-				project_block( ctx, q, mode, xpbd, &acc );
-			}
+			project_item( ctx, pbd->segment + item * colors, colors, mode, xpbd, &acc );
 			if ( kind == PASS_SWEEP )
 			{
 				atomic_store_explicit( &pbd->done[item].value, number, memory_order_release );
