@@ -7,8 +7,10 @@
 
 #include <criterion/criterion.h>
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 typedef struct pair
 {
@@ -115,4 +117,99 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 		sere_model_destroy( &m );
 		sere_leaf_free( &leaf );
 	}
+}
+
+/* The crumpled shipped maple at a thickness that brings thousands of vertex–triangle pairs
+ * together (past the parallel response's threshold, with vertices in dozens of contacts): the
+ * contact list, the pushed positions and the velocities are bitwise the same for 1, 2 and 3
+ * threads, and the list is still the brute-force pair set. */
+Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
+{
+	sere_leaf leaf;
+	char err[1024];
+	cr_assert_eq( sere_leaf_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ), 0, "%s", err );
+	sere_build_params params = sere_build_params_default();
+	params.point_count = 1500;
+	params.boundary_count =
+		sere_boundary_for_points( sere_shape_area( &leaf.file.shape ), sere_shape_perimeter( &leaf.file.shape ), 1500 );
+	sere_model m;
+	cr_assert_eq( sere_model_build( &leaf.file.shape, &params, &m, NULL ), SERE_OK );
+	int32_t n = m.triangle_particles, f = m.triangle_count;
+	float* rest[3] = { malloc( sizeof( float ) * n ), malloc( sizeof( float ) * n ), malloc( sizeof( float ) * n ) };
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		float u = m.u[i], v = m.v[i];
+		float noise = sinf( 12.9898f * i ) * 43758.5453f;
+		noise -= floorf( noise );
+		rest[0][i] = 0.5f * u + 0.05f * sinf( 11.0f * v );
+		rest[1][i] = 0.5f * v + 0.05f * sinf( 13.0f * u );
+		rest[2][i] = 0.08f * sinf( 8.0f * u + 5.0f * v ) + 0.004f * ( noise - 0.5f );
+	}
+	const float thickness = 0.02f;
+	int saved = omp_get_max_threads();
+	float* first = NULL;
+	sere_contact* first_contacts = NULL;
+	int32_t first_count = 0;
+	size_t bytes = sizeof( float ) * 6 * (size_t) n;
+	for ( int threads = 1; threads <= 3; ++threads )
+	{
+		omp_set_num_threads( threads );
+		float* state = calloc( 6 * (size_t) n, sizeof( float ) );
+		float* inv_m = malloc( sizeof( float ) * n );
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			state[i] = rest[0][i], state[n + i] = rest[1][i], state[2 * n + i] = rest[2][i];
+			inv_m[i] = 1.0f + (float) ( i % 3 );
+		}
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( m.tri, f, n, state, state + n, state + 2 * n, &bvh ), SERE_OK );
+		sere_collide* collide;
+		cr_assert_eq( sere_collide_create( bvh, 64 * n, &collide ), SERE_OK );
+		int32_t count = 0;
+		cr_assert_eq( sere_collide_detect( collide, bvh, state, state + n, state + 2 * n, thickness, &count ),
+					  SERE_OK );
+		int32_t listed;
+		const sere_contact* contacts = sere_collide_contacts( collide, &listed );
+		cr_assert_gt( listed, 2000, "%d contacts", listed );
+		if ( threads == 1 )
+		{
+			int64_t capacity = 64 * (int64_t) n;
+			int32_t* rv = malloc( sizeof( int32_t ) * capacity );
+			int32_t* rt = malloc( sizeof( int32_t ) * capacity );
+			int64_t brute =
+				sere_collide_ref_pairs( state, state + n, state + 2 * n, n, m.tri, f, thickness, rv, rt, capacity );
+			cr_assert_eq( listed, brute, "BVH %d pairs, brute force %lld", listed, (long long) brute );
+			free( rv ), free( rt );
+			first_count = listed;
+			first_contacts = malloc( sizeof( sere_contact ) * (size_t) listed );
+			memcpy( first_contacts, contacts, sizeof( sere_contact ) * (size_t) listed );
+		}
+		else
+		{
+			cr_assert_eq( listed, first_count );
+			cr_assert_eq( memcmp( contacts, first_contacts, sizeof( sere_contact ) * (size_t) listed ), 0,
+						  "%d threads: contact list differs", threads );
+		}
+		sere_collide_params p = sere_collide_params_default();
+		p.thickness = thickness;
+		sere_collide_state s = { state, state + n, state + 2 * n, state + 3 * n, state + 4 * n, state + 5 * n, inv_m };
+		cr_assert_eq( sere_collide_respond( collide, bvh, &s, &p, NULL ), SERE_OK );
+		if ( threads == 1 )
+		{
+			first = state;
+		}
+		else
+		{
+			cr_assert_eq( memcmp( state, first, bytes ), 0, "%d threads: response differs", threads );
+			free( state );
+		}
+		free( inv_m );
+		sere_collide_destroy( collide );
+		sere_bvh_destroy( bvh );
+	}
+	omp_set_num_threads( saved );
+	free( first ), free( first_contacts );
+	free( rest[0] ), free( rest[1] ), free( rest[2] );
+	sere_model_destroy( &m );
+	sere_leaf_free( &leaf );
 }
