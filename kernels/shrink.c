@@ -28,7 +28,13 @@ static inline double pow_unit( double x, double alpha )
 	uint64_t mantissa_bits = ( bits & 0x000FFFFFFFFFFFFFull ) | 0x3FF0000000000000ull;
 	uint64_t high = mantissa_bits > SQRT2_BITS;
 	mantissa_bits -= high << 52;
-	int64_t e = (int64_t) ( bits >> 52 ) - 1023 + (int64_t) high;
+	/* The exponent e = (bits >> 52) − 1023 + high as a double, through the bits of 2^52 + that
+	 * count (< 2^12) less 2^52, both exact: AVX2 has no int64 → double conversion, and one such
+	 * conversion kept gcc from vectorizing the whole loop. */
+	uint64_t count_bits = 0x4330000000000000ull | ( ( bits >> 52 ) + high );
+	double count;
+	memcpy( &count, &count_bits, sizeof( count ) );
+	double de = ( count - 4503599627370496.0 ) - 1023.0;
 	double mantissa;
 	memcpy( &mantissa, &mantissa_bits, sizeof( mantissa ) );
 
@@ -49,7 +55,6 @@ static inline double pow_unit( double x, double alpha )
 	series = series * t2 + 1.0 / 3.0;
 	series = series * t2 + 1.0;
 	double ln_mantissa = 2.0 * t * series;
-	double de = (double) e;
 	double y = alpha * ( de * LN2_HI + ( de * LN2_LO + ln_mantissa ) );
 
 	/* exp(y) = 2^n e^r with n the integer nearest y/ln 2 and |r| ≤ ln2/2. n is read from the
