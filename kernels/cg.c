@@ -176,19 +176,21 @@ sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out 
 					s->slot[begin + k] = at;
 				}
 			}
-			s->diagonal[c * LANES + l] = -1;
+			int32_t* diagonal = s->diagonal + c * LANES + l;
+			*diagonal = -1;
 			for ( int32_t k = 0; k < length; ++k )
 			{
-				if ( a->col[begin + k] == i && s->diagonal[c * LANES + l] >= 0 )
+				if ( a->col[begin + k] != i )
+				{
+					continue;
+				}
+				if ( *diagonal >= 0 )
 				{
 					free( position );
 					sere_sell_destroy( s );
 					return SERE_ERR_ARGUMENT;
 				}
-				if ( a->col[begin + k] == i )
-				{
-					s->diagonal[c * LANES + l] = s->chunk_ptr[c] + k * LANES + l;
-				}
+				*diagonal = s->chunk_ptr[c] + k * LANES + l;
 			}
 		}
 	}

@@ -54,10 +54,11 @@ void sere_osmosis_destroy( sere_osmosis* osmosis );
 
 /* One implicit step: assemble, solve for c, w = max(0, M c), m = M + w (Eq. 10). Arrays are
  * global particle arrays; only the layer's entries are read or written. M must be positive.
- * CG starts from the concentration w/M extrapolated along its change since the previous step
- * (2 c_n − c_{n−1}, at least 0); a steadily drying layer changes almost linearly, so this
- * guess is far closer than c_n alone (plane tree, λ = 100: 556 iterations per step down to
- * a handful once the drying is steady). The first step starts from c_n. */
+ * CG starts from the concentration w/M extrapolated from the previous steps: the parabola
+ * 3 c_n − 3 c_{n−1} + c_{n−2} once there are three, the line 2 c_n − c_{n−1} at the second
+ * step, c_n at the first, and never below 0. A drying layer's concentration moves smoothly, so
+ * this guess is far closer than c_n alone (plane tree, λ = 100: 556 iterations per step in the
+ * first frames, 18875 over 200 frames against 29738 with the line alone). */
 sere_status sere_osmosis_step( sere_osmosis* osmosis, const float* x, const float* y, const float* z, const float* tau,
 							   const double* M, double* w, double* m, const sere_osmosis_params* params,
 							   sere_osmosis_report* report );
