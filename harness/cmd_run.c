@@ -82,6 +82,7 @@ sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 	p.pbd_stall = (float) s->pbd_stall;
 	p.collide.thickness = (float) s->collision_thickness;
 	p.collisions = s->collision_thickness > 0.0;
+	p.scale_thickness = s->collision_scaling != 0.0;
 	p.restore_measured = s->restore_measured != 0.0;
 	p.restore_conserving = s->restore_conserving != 0.0;
 	p.soften = s->soften != 0.0;
@@ -400,7 +401,8 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,cg_iterations_t,"
-				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,desiccated,osmosis_ms,dynamics_ms,"
+				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,unresolved,thickness,desiccated,"
+				  "osmosis_ms,dynamics_ms,"
 				  "collisions_ms,"
 				  "total_ms\n" );
 
@@ -443,11 +445,11 @@ int sere_cmd_run( int argc, char** argv )
 			curve_t[frame] = frame * params.dt;
 			curve_rwc[frame] = stats.relative_water;
 			curve_area[frame] = area / area0;
-			fprintf( csv, "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f\n", frame,
-					 frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
+			fprintf( csv, "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
+					 frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
 					 stats.max_strain, stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations,
-					 stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts, stats.desiccated, stats.osmosis_ms,
-					 stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
+					 stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts, stats.unresolved, stats.collision_thickness,
+					 stats.desiccated, stats.osmosis_ms, stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
 			sere_leaf_relative_water( sim, rwc );
 			if ( frame % every == 0 || frame == frames )
 			{

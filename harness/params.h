@@ -29,6 +29,7 @@ typedef struct sere_sim_params
 	double max_iterations;		/* PBD iteration cap */
 	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
 	double collision_thickness; /* vertex–triangle proximity distance, leaf units */
+	double collision_scaling;	/* the thickness shrinks with the triangle layer (1) or stays fixed (0) */
 	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	double restore_conserving;	/* Eq. 14 as written (0) or momentum-conserving (1) */
 	double conservative;		/* osmosis: 0 = the paper's Eq. 8, 1 = conservative weights */

@@ -1208,7 +1208,31 @@ static int32_t touched_split( const sere_collide* c, int part, int parts )
 
 static bool state_valid( const sere_collide_state* s )
 {
-	return s != NULL && s->x && s->y && s->z && s->vx && s->vy && s->vz && s->inv_m;
+	return s != NULL && s->x && s->y && s->z && s->vx && s->vy && s->vz && s->inv_m &&
+		   ( s->x0 == NULL ) == ( s->y0 == NULL ) && ( s->x0 == NULL ) == ( s->z0 == NULL );
+}
+
+/* The side of contact k's triangle its vertex was on at the start of the step: the sign of
+ * (p₀ − q₀) · n₀ at the detection weights, or the detection side when that is not positive nor
+ * negative (the vertex in the plane, a degenerate triangle, or NaN, which respond refuses). */
+static inline float history_side( const sere_collide* c, const sere_collide_state* s, int32_t k )
+{
+	int32_t member[4] = { c->contact_vertex[k], c->contact_a[k], c->contact_b[k], c->contact_c[k] };
+	float point[4][3];
+	for ( int r = 0; r < 4; ++r )
+	{
+		load3( s->x0, s->y0, s->z0, member[r], point[r] );
+	}
+	float u = c->bary_u[k], v = c->bary_v[k], w = c->bary_w[k];
+	float ab[3], ac[3], d[3];
+	for ( int r = 0; r < 3; ++r )
+	{
+		ab[r] = point[2][r] - point[1][r], ac[r] = point[3][r] - point[1][r];
+		d[r] = point[0][r] - ( u * point[1][r] + v * point[2][r] + w * point[3][r] );
+	}
+	float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+	float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+	return height > 0.0f ? 1.0f : ( height < 0.0f ? -1.0f : c->contact_side[k] );
 }
 
 static bool params_valid( const sere_collide_params* p )
@@ -1245,6 +1269,8 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			int32_t i = collide->touched[j];
 			bad |= !( isfinite( state->vx[i] ) && isfinite( state->vy[i] ) && isfinite( state->vz[i] ) &&
 					  isfinite( inv_m[i] ) && inv_m[i] >= 0.0f );
+			bad |= state->x0 != NULL &&
+				   !( isfinite( state->x0[i] ) && isfinite( state->y0[i] ) && isfinite( state->z0[i] ) );
 			float* position = collide->position + 4 * (size_t) i;
 			position[0] = state->x[i], position[1] = state->y[i], position[2] = state->z[i], position[3] = 0.0f;
 			float* acc = collide->acc + 4 * (size_t) j;
@@ -1254,6 +1280,10 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp for schedule( static )
 		for ( int32_t k = 0; k < contacts; ++k )
 		{
+			if ( state->x0 != NULL )
+			{
+				collide->contact_side[k] = collide->contacts[k].side = history_side( collide, state, k );
+			}
 			float u = collide->bary_u[k], v = collide->bary_v[k], w = collide->bary_w[k];
 			float weight = inv_m[collide->contact_vertex[k]] + inv_m[collide->contact_a[k]] * u * u +
 						   inv_m[collide->contact_b[k]] * v * v + inv_m[collide->contact_c[k]] * w * w;

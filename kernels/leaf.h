@@ -30,7 +30,11 @@ typedef struct sere_leaf_params
 	sere_shrink_params shrink;
 	sere_pbd_params pbd;
 	sere_collide_params collide;
-	int collisions;		  /* run the self-collision pass */
+	int collisions; /* run the self-collision pass */
+	/* 1: collide.thickness is the thickness at rest and shrinks with the triangle layer, times
+	 * sere_leaf_thickness_scale every frame, as the leaf's own thickness shrinks with its
+	 * springs (Sec. 5.1). 0: the thickness stays fixed. */
+	int scale_thickness;
 	int restore_measured; /* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	/* Eq. 14 as written (0) or sharing each correction with the triangle's corners so that no
 	 * momentum is created (1, sere_collide_restore_voronoi_conserving) */
@@ -56,7 +60,9 @@ typedef struct sere_leaf_stats
 	int pbd_hit_cap;
 	int pbd_stalled; /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
 	int32_t contacts;
-	int desiccated; /* a layer ran dry: flow and shrinkage have stopped (Sec. 6) */
+	int32_t unresolved;		   /* contacts still short of the thickness after the pass */
+	float collision_thickness; /* the thickness the pass used */
+	int desiccated;			   /* a layer ran dry: flow and shrinkage have stopped (Sec. 6) */
 	/* Table 1's breakdown, milliseconds of wall time */
 	double osmosis_ms, dynamics_ms, collisions_ms, total_ms;
 } sere_leaf_stats;
@@ -74,6 +80,12 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
  * and the other Voronoi springs lengthened by curl (fractions of l⁰), projected to rest, and the
  * result taken as the new rest state (l⁰ and positions). */
 sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float curl, const sere_pbd_params* pbd );
+
+/* Σ l / Σ l⁰ over the model's T springs: how far the triangle layer has shrunk (1 at rest). A
+ * fixed collision thickness outgrows a shrinking sheet: once its edges are not much longer than
+ * the thickness, vertices touch the triangles a few rings away in their own sheet. Summed in
+ * spring order, so the same bits for every thread count. */
+float sere_leaf_thickness_scale( const sere_model* model );
 
 /* Per-particle relative water content w / w⁰ (0 where w⁰ = 0), for colors and outputs. */
 void sere_leaf_relative_water( const sere_leaf_sim* sim, float* out );

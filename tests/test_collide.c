@@ -413,7 +413,7 @@ Test( collide, single_contact_shared_by_inverse_mass )
 	params.thickness = 0.05f;
 	params.dt = 0.01f;
 	params.rounds = 1;
-	sere_collide_state state = { x, y, z, vx, vy, vz, inv_m };
+	sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
 	sere_collide_stats stats;
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
 	cr_assert_eq( stats.contacts, 1 );
@@ -442,6 +442,54 @@ Test( collide, single_contact_shared_by_inverse_mass )
 	sere_bvh_destroy( bvh );
 }
 
+/* A vertex the step carried through a triangle: detection finds it below, 0.02 under the
+ * plane; at the start of the step it was 0.03 above. Without the start-of-step positions the
+ * push continues downward (the gap becomes −thickness); with them it goes back up to
+ * +thickness. W = 4/3 as above: λ = (0.05 + 0.02) / W = 0.0525, the vertex rises by λ and each
+ * corner sinks by λ / 3. Tolerance 1e-7: float rounding of one exact push. */
+Test( collide, start_of_step_side_returns_a_vertex_through_a_triangle )
+{
+	int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
+	float inv_m[6] = { 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f };
+	float x0[6] = { 0.0f, 1.0f, 0.0f, 1.0f / 3.0f, 5.0f, 5.0f };
+	float y0[6] = { 0.0f, 0.0f, 1.0f, 1.0f / 3.0f, 5.0f, 6.0f };
+	float z0[6] = { 0.0f, 0.0f, 0.0f, 0.03f, 5.0f, 5.0f };
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = 0.05f;
+	params.dt = 0.01f;
+	for ( int history = 0; history < 2; ++history )
+	{
+		float x[6], y[6], z[6], vx[6] = { 0 }, vy[6] = { 0 }, vz[6] = { 0 };
+		memcpy( x, x0, sizeof( x ) ), memcpy( y, y0, sizeof( y ) ), memcpy( z, z0, sizeof( z ) );
+		z[3] = -0.02f;
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
+		sere_collide* c;
+		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
+		if ( history )
+		{
+			state.x0 = x0, state.y0 = y0, state.z0 = z0;
+		}
+		sere_collide_stats stats;
+		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		cr_assert_eq( stats.contacts, 1 );
+		cr_assert_eq( stats.unresolved, 0 );
+		int32_t count;
+		const sere_contact* contact = sere_collide_contacts( c, &count );
+		cr_assert_eq( contact[0].side, history ? 1.0f : -1.0f, "history %d: side %g", history, contact[0].side );
+		float gap = z[3] - z[0];
+		cr_assert_float_eq( gap, history ? 0.05f : -0.05f, 1e-7f, "history %d: gap %g", history, gap );
+		if ( history )
+		{
+			cr_assert_float_eq( z[3], -0.02f + 0.0525f, 1e-7f );
+			cr_assert_float_eq( z[0], -0.0175f, 1e-7f );
+		}
+		sere_collide_destroy( c );
+		sere_bvh_destroy( bvh );
+	}
+}
+
 /* The U-fold closer than the thickness: after the response no vertex is closer than the
  * thickness to a non-incident triangle, up to SERE_COLLIDE_TOLERANCE (0.1%: Jacobi averaging
  * approaches the target from below). */
@@ -468,7 +516,7 @@ Test( collide, response_separates_u_fold )
 		float* before = malloc( sizeof( float ) * (size_t) s.n );
 		memcpy( before, s.z, sizeof( float ) * (size_t) s.n );
 		cr_assert_gt( collide_violations( &s, h, SERE_COLLIDE_TOLERANCE ), s.n );
-		sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+		sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 		sere_collide_stats stats;
 		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
 		cr_assert_gt( stats.contacts, s.n );
@@ -505,7 +553,7 @@ Test( collide, response_on_crumpled_sheet_is_bounded )
 	params.iterations = 16;
 	params.rounds = 3;
 	int64_t initial = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	sere_collide_stats stats;
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
 	int64_t left = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
@@ -614,12 +662,20 @@ Test( collide, voronoi_restore_eq14 )
 
 /* Runs one collision pass (three rounds) plus the Voronoi restore with the given thread count
  * and returns the state as one buffer. */
-static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), int32_t* contacts_out )
+static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), bool history, int32_t* contacts_out )
 {
 	collide_sheet s;
 	collide_sheet_make( &s, 36, 24, 12 );
 	shape( &s );
 	int32_t n = s.n, f = s.triangles;
+	/* start-of-step positions: the shape moved off the sheet by up to half the thickness, so
+	 * some contacts keep their detection side and others take the opposite one */
+	float* start = malloc( sizeof( float ) * 3 * (size_t) n );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		start[i] = s.x[i], start[n + i] = s.y[i];
+		start[2 * n + i] = s.z[i] + 0.15f * s.cell * sinf( 0.7f * (float) i );
+	}
 	float* h = malloc( sizeof( float ) * (size_t) f );
 	for ( int32_t t = 0; t < f; ++t )
 	{
@@ -633,11 +689,16 @@ static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), 
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
 	params.rounds = 3;
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
+	if ( history )
+	{
+		state.x0 = start, state.y0 = start + n, state.z0 = start + 2 * n;
+	}
 	sere_collide_stats stats;
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
 	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_OK );
 	*contacts_out = stats.contacts;
+	free( start );
 	size_t all = (size_t) ( n + f );
 	float* out = malloc( sizeof( float ) * 6 * all );
 	const float* arrays[6] = { s.x, s.y, s.z, s.vx, s.vy, s.vz };
@@ -669,12 +730,14 @@ Test( collide, identical_with_one_two_and_three_threads )
 {
 	void ( *shapes[2] )( collide_sheet* ) = { collide_shape_fold, collide_shape_crumple };
 	int saved = omp_get_max_threads();
-	for ( int k = 0; k < 2; ++k )
+	for ( int run = 0; run < 4; ++run )
 	{
+		int k = run % 2;
+		bool history = run >= 2;
 		int32_t c1, c2, c3;
-		float* one = collide_run_pass( 1, shapes[k], &c1 );
-		float* two = collide_run_pass( 2, shapes[k], &c2 );
-		float* three = collide_run_pass( 3, shapes[k], &c3 );
+		float* one = collide_run_pass( 1, shapes[k], history, &c1 );
+		float* two = collide_run_pass( 2, shapes[k], history, &c2 );
+		float* three = collide_run_pass( 3, shapes[k], history, &c3 );
 		collide_sheet probe;
 		collide_sheet_make( &probe, 36, 24, 12 );
 		size_t bytes = sizeof( float ) * 6 * (size_t) ( probe.n + probe.triangles );
@@ -684,8 +747,8 @@ Test( collide, identical_with_one_two_and_three_threads )
 		cr_assert_gt( c1, k == 0 ? 512 : 20, "shape %d: %d contacts", k, c1 );
 		cr_assert_eq( c1, c2 );
 		cr_assert_eq( c1, c3 );
-		cr_assert_eq( memcmp( one, two, bytes ), 0, "shape %d: 1 and 2 threads differ", k );
-		cr_assert_eq( memcmp( one, three, bytes ), 0, "shape %d: 1 and 3 threads differ", k );
+		cr_assert_eq( memcmp( one, two, bytes ), 0, "shape %d, history %d: 1 and 2 threads differ", k, history );
+		cr_assert_eq( memcmp( one, three, bytes ), 0, "shape %d, history %d: 1 and 3 threads differ", k, history );
 		free( one );
 		free( two );
 		free( three );
@@ -712,7 +775,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_NONFINITE );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
 	s.x[7] = saved[7];
 	cr_assert( memcmp( saved, s.x, bytes ) == 0 && memcmp( saved + n + f, s.y, bytes ) == 0 &&
@@ -732,6 +795,21 @@ Test( collide, nonfinite_inputs_are_refused )
 	cr_assert( touched, "vertex 0 should be in contact in the fold" );
 	cr_assert_eq( sere_collide_respond( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
+	s.vz[0] = 0.0f;
+
+	/* a NaN start-of-step position of a vertex in contact; x0 without y0 and z0 */
+	float* start = malloc( sizeof( float ) * (size_t) n );
+	memcpy( start, s.z, sizeof( float ) * (size_t) n );
+	start[0] = NAN;
+	sere_collide_state history = state;
+	history.x0 = s.x, history.y0 = s.y, history.z0 = start;
+	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
+	history.y0 = NULL;
+	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
+	free( start );
+	s.vz[0] = INFINITY;
 
 	/* Eq. 14 with a NaN thickness or velocity writes nothing */
 	float* h = malloc( sizeof( float ) * (size_t) f );
@@ -776,7 +854,7 @@ Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
 	memcpy( saved, s.z, sizeof( float ) * (size_t) s.n );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	sere_collide_stats stats;
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_ERR_CAPACITY );
 	int32_t needed = stats.contacts;
@@ -809,7 +887,7 @@ Test( collide, bad_arguments_are_refused )
 	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.0f, &count ), SERE_ERR_ARGUMENT );
 	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, NAN, &count ), SERE_ERR_ARGUMENT );
 	sere_collide_params params = sere_collide_params_default();
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m };
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	params.dt = 0.0f;
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
 	params = sere_collide_params_default();

@@ -192,7 +192,8 @@ Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 		}
 		sere_collide_params p = sere_collide_params_default();
 		p.thickness = thickness;
-		sere_collide_state s = { state, state + n, state + 2 * n, state + 3 * n, state + 4 * n, state + 5 * n, inv_m };
+		sere_collide_state s = { state,			state + n, state + 2 * n, state + 3 * n, state + 4 * n,
+								 state + 5 * n, inv_m,	   NULL,		  NULL,			 NULL };
 		cr_assert_eq( sere_collide_respond( collide, bvh, &s, &p, NULL ), SERE_OK );
 		if ( threads == 1 )
 		{

@@ -86,6 +86,46 @@ Test( leaf, end_to_end_dry )
 	sere_model_destroy( &model );
 }
 
+/* The collision thickness follows the triangle layer: Σ l / Σ l⁰ over the T springs, 1 exactly
+ * at rest (equal sums), the pass using the rest thickness times it, and fixed when turned off.
+ * The scale is recomputed here from the model in the same order, so the comparison is exact. */
+Test( leaf, collision_thickness_shrinks_with_the_triangle_layer )
+{
+	for ( int scale = 0; scale < 2; ++scale )
+	{
+		sere_model model;
+		small_leaf( &model, "maple", 400 );
+		cr_assert_eq( sere_leaf_thickness_scale( &model ), 1.0f );
+		sere_leaf_sim* sim;
+		cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+		sere_leaf_params params = sere_leaf_params_default();
+		params.water_rate_t = -0.5;
+		params.water_rate_v = -0.5;
+		params.shrink.sigma_surf = 1.0;
+		params.pbd.max_iterations = 20;
+		params.scale_thickness = scale;
+		sere_leaf_stats stats;
+		for ( int frame = 0; frame < 60; ++frame )
+		{
+			cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK, "frame %d", frame );
+		}
+		double rest = 0.0, rest0 = 0.0;
+		for ( int32_t k = 0; k < model.t_springs; ++k )
+		{
+			rest += model.s.rest[k];
+			rest0 += model.s.rest0[k];
+		}
+		float shrink = (float) ( rest / rest0 );
+		cr_assert_eq( sere_leaf_thickness_scale( &model ), shrink );
+		cr_assert_lt( shrink, 0.98f, "the T layer should have shrunk: %g", shrink );
+		float expected = scale ? params.collide.thickness * shrink : params.collide.thickness;
+		cr_assert_eq( stats.collision_thickness, expected, "scale %d: %g, expected %g", scale,
+					  stats.collision_thickness, expected );
+		sere_leaf_destroy( sim );
+		sere_model_destroy( &model );
+	}
+}
+
 Test( leaf, desiccated_layer_stops )
 {
 	sere_model model;
