@@ -1,16 +1,19 @@
 // Self-collision (Sec. 5.3, Eq. 14): BVH refit and build, the per-vertex proximity query, the
 // push-out response and the Voronoi restore, on the Table 1 maple (bench/fixture.h: 4680
-// triangle-layer vertices, 8517 triangles, the leaf about 1 across, collision thickness 0.005)
-// flat; dried (the maple after 400 frames of Algorithm 1 with the maple-green preset: shrunk,
-// curled and crumpled as the simulation leaves it); waved by a smooth random displacement field
-// that also compresses it in-plane (a stress case: many contacts no normal push can resolve);
-// and U-folded onto itself; beside the
-// brute-force twin and Embree 3 doing the same vertex–triangle proximity search with
-// rtcPointQuery.
+// triangle-layer vertices, 8517 triangles, the leaf about 1 across) flat; dried (the maple after
+// 400 frames of Algorithm 1 with the maple-green preset: shrunk, curled and crumpled as the
+// simulation leaves it); waved by a smooth random displacement field that also compresses it
+// in-plane (a stress case: many contacts no normal push can resolve); and U-folded onto itself;
+// beside the brute-force twin and Embree 3 doing the same vertex–triangle proximity search with
+// rtcPointQuery. Every scene uses the thickness `sere run` uses on it: the preset's collision
+// thickness (0.004) times the triangle layer's shrinkage (sere_leaf_thickness_scale, 1 but for
+// the dried leaf).
 
 #include "bvh.h"
 #include "collide.h"
 #include "fixture.h"
+#include "leaf.h"
+#include "params.h"
 #include "ref/collide_ref.h"
 
 #include <benchmark/benchmark.h>
@@ -30,7 +33,6 @@
 namespace
 {
 
-constexpr float kThickness = 0.005f;
 constexpr double kPi = 3.14159265358979323846;
 
 enum Shape
@@ -72,6 +74,7 @@ constexpr int kDriedFrames = 400;
 struct Scene
 {
 	const sere_model* model;
+	float thickness;
 	int32_t n;
 	int32_t f;
 	std::vector<int32_t> tri;
@@ -84,6 +87,7 @@ struct Scene
 	explicit Scene( Shape shape )
 		: model( shape == kDried ? sere_bench_dried_model( SERE_BENCH_MAPLE, kDriedFrames )
 								 : sere_bench_model( SERE_BENCH_MAPLE ) ),
+		  thickness( (float) sere_sim_params_default().collision_thickness * sere_leaf_thickness_scale( model ) ),
 		  n( model->triangle_particles ), f( model->triangle_count ), tri( model->tri, model->tri + 3 * (size_t) f ),
 		  x( n + f ), y( n + f ), z( n + f ), vx( n + f ), vy( n + f ), vz( n + f ), inv_m( n ), h( f )
 	{
@@ -126,14 +130,14 @@ struct Scene
 				}
 				x.data[k] = (float) ( u[k] + d[0] );
 				y.data[k] = (float) ( v[k] + d[1] );
-				z.data[k] = (float) ( d[2] + 0.3 * kThickness * ( unit( &state ) - 0.5 ) );
+				z.data[k] = (float) ( d[2] + 0.3 * thickness * ( unit( &state ) - 0.5 ) );
 			}
 		}
 		else if ( shape == kFolded )
 		{
 			// U-fold: two halves facing each other at 0.8 × thickness, joined by a half circle
 			double lo = *std::min_element( u.begin(), u.end() ), hi = *std::max_element( u.begin(), u.end() );
-			double gap = 0.8 * kThickness, r = 0.5 * gap, a = 0.5 * ( hi - lo - kPi * r );
+			double gap = 0.8 * thickness, r = 0.5 * gap, a = 0.5 * ( hi - lo - kPi * r );
 			for ( int32_t k = 0; k < n; ++k )
 			{
 				double s = u[k] - lo;
@@ -214,7 +218,8 @@ struct Scene
 
 	sere_collide_state state()
 	{
-		return sere_collide_state{ x.data, y.data, z.data, vx.data, vy.data, vz.data, inv_m.data };
+		return sere_collide_state{ x.data,	y.data,		z.data,	 vx.data, vy.data,
+								   vz.data, inv_m.data, nullptr, nullptr, nullptr };
 	}
 };
 
@@ -231,10 +236,10 @@ Scene& scene( Shape shape )
 	return *s;
 }
 
-sere_collide_params params()
+sere_collide_params params( const Scene& s )
 {
 	sere_collide_params p = sere_collide_params_default();
-	p.thickness = kThickness;
+	p.thickness = s.thickness;
 	return p;
 }
 
@@ -275,7 +280,7 @@ void BM_collide_detect( benchmark::State& state, Shape shape )
 	int32_t contacts = 0;
 	for ( auto _ : state )
 	{
-		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, kThickness, &contacts );
+		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
 		benchmark::ClobberMemory();
 	}
 	rate( state, "queries/s", s.n );
@@ -289,9 +294,9 @@ void BM_collide_respond( benchmark::State& state, Shape shape )
 	Scene& s = scene( shape );
 	omp_set_num_threads( (int) state.range( 0 ) );
 	int32_t contacts = 0;
-	sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, kThickness, &contacts );
+	sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
 	sere_collide_state st = s.state();
-	sere_collide_params p = params();
+	sere_collide_params p = params( s );
 	for ( auto _ : state )
 	{
 		state.PauseTiming();
@@ -311,7 +316,7 @@ void BM_collide_frame( benchmark::State& state, Shape shape )
 	Scene& s = scene( shape );
 	omp_set_num_threads( (int) state.range( 0 ) );
 	sere_collide_state st = s.state();
-	sere_collide_params p = params();
+	sere_collide_params p = params( s );
 	p.rounds = (int32_t) state.range( 1 );
 	sere_collide_stats stats = {};
 	for ( auto _ : state )
@@ -352,7 +357,7 @@ void BM_collide_search( benchmark::State& state, Shape shape )
 	for ( auto _ : state )
 	{
 		sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
-		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, kThickness, &contacts );
+		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
 		benchmark::ClobberMemory();
 	}
 	rate( state, "queries/s", s.n );
@@ -366,7 +371,7 @@ void BM_collide_ref_pairs( benchmark::State& state, Shape shape )
 	int64_t pairs = 0;
 	for ( auto _ : state )
 	{
-		pairs = sere_collide_ref_pairs( s.x.data, s.y.data, s.z.data, s.n, s.tri.data(), s.f, kThickness, a.data(),
+		pairs = sere_collide_ref_pairs( s.x.data, s.y.data, s.z.data, s.n, s.tri.data(), s.f, s.thickness, a.data(),
 										b.data(), (int64_t) a.size() );
 		benchmark::DoNotOptimize( pairs );
 	}
@@ -453,13 +458,13 @@ void BM_embree_search( benchmark::State& state, Shape shape )
 			mine.clear();
 			RTCPointQueryContext context;
 			rtcInitPointQueryContext( &context );
-			EmbreeQuery q = { &s, 0, { 0, 0, 0 }, kThickness * kThickness, &mine };
+			EmbreeQuery q = { &s, 0, { 0, 0, 0 }, s.thickness * s.thickness, &mine };
 #pragma omp for schedule( dynamic, 64 )
 			for ( int32_t k = 0; k < s.n; ++k )
 			{
 				q.vertex = k;
 				q.p[0] = s.x.data[k], q.p[1] = s.y.data[k], q.p[2] = s.z.data[k];
-				RTCPointQuery query = { q.p[0], q.p[1], q.p[2], 0.0f, kThickness };
+				RTCPointQuery query = { q.p[0], q.p[1], q.p[2], 0.0f, s.thickness };
 				rtcPointQuery( rtc, &query, &context, embree_visit, &q );
 			}
 		}
