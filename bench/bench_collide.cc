@@ -309,6 +309,28 @@ void BM_collide_respond( benchmark::State& state, Shape shape )
 	state.counters["contacts"] = contacts;
 }
 
+// What the goal times: refit (rebuild when degraded), detect and respond
+// (sere_collide_resolve, one round), without the Voronoi restore.
+void BM_collide_pass( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	sere_collide_state st = s.state();
+	sere_collide_params p = params( s );
+	sere_collide_stats stats = {};
+	for ( auto _ : state )
+	{
+		state.PauseTiming();
+		s.reset();
+		state.ResumeTiming();
+		sere_collide_resolve( s.collide, s.bvh, &st, &p, &stats );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "vertices/s", s.n );
+	state.counters["contacts"] = stats.contacts;
+	state.counters["unresolved"] = stats.unresolved;
+}
+
 // The paper's Collisions column: refit (rebuild when degraded), detect and respond for
 // params().rounds rounds, then the Voronoi restore of Eq. 14. rounds = range(1).
 void BM_collide_frame( benchmark::State& state, Shape shape )
@@ -495,6 +517,8 @@ BENCHMARK_CAPTURE( BM_collide_respond, dried, kDried )->Arg( 1 )->Arg( 2 )->UseR
 BENCHMARK_CAPTURE( BM_collide_respond, waved, kWaved )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK_CAPTURE( BM_collide_respond, folded, kFolded )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK_CAPTURE( BM_collide_frame, flat, kFlat )->Args( { 1, 1 } )->Args( { 2, 1 } )->Args( { 2, 2 } )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_pass, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK_CAPTURE( BM_collide_pass, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK_CAPTURE( BM_collide_frame, dried, kDried )
 	->Args( { 1, 1 } )
 	->Args( { 2, 1 } )
