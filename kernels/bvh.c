@@ -921,9 +921,9 @@ void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, ser
 		{
 			int k = __builtin_ctz( mask );
 			mask &= mask - 1;
-			/* a child inside the union can still miss every lane: on a crumpled sheet the eight
-			 * cubes are spread out, and skipping such subtrees here saved 9% of the maple's
-			 * dried detection (14% of the flat one) */
+			/* a child inside the union can still miss every lane (the union of eight cubes along
+			 * a curve of vertices is mostly empty space): skipping such subtrees here saved 14%
+			 * of the flat maple's detection and 9% of the dried one's */
 			int32_t c = node->child[k];
 			uint32_t hits = group_mask( &lanes, node->min_x[k], node->min_y[k], node->min_z[k], node->max_x[k],
 										node->max_y[k], node->max_z[k] );

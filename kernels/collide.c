@@ -66,7 +66,8 @@ struct sere_collide
 	int32_t touched_count;
 
 	/* Per contact, structure of arrays for the response. Fixed at detection: the vertex, the
-	 * triangle's corners, the side and the barycentric weights (u, v, w). Per response: 1 / W.
+	 * triangle's corners, the side (or taken from the start-of-step positions when the response
+	 * gets them) and the barycentric weights (u, v, w). Per response: 1 / W.
 	 * Per iteration: corr[4k ..] = (λ n̂, 1) when contact k pushes, else zero: one 16-byte read
 	 * per gather entry gives the correction and the count. */
 	int32_t *contact_vertex, *contact_a, *contact_b, *contact_c;
@@ -1213,8 +1214,8 @@ static bool state_valid( const sere_collide_state* s )
 }
 
 /* The side of contact k's triangle its vertex was on at the start of the step: the sign of
- * (p₀ − q₀) · n₀ at the detection weights, or the detection side when that is not positive nor
- * negative (the vertex in the plane, a degenerate triangle, or NaN, which respond refuses). */
+ * (p₀ − q₀) · n₀ at the detection weights, or the detection side when that is neither positive
+ * nor negative (the vertex in the plane, a degenerate triangle, or NaN, which respond refuses). */
 static inline float history_side( const sere_collide* c, const sere_collide_state* s, int32_t k )
 {
 	int32_t member[4] = { c->contact_vertex[k], c->contact_a[k], c->contact_b[k], c->contact_c[k] };
@@ -1280,10 +1281,6 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp for schedule( static )
 		for ( int32_t k = 0; k < contacts; ++k )
 		{
-			if ( state->x0 != NULL )
-			{
-				collide->contact_side[k] = collide->contacts[k].side = history_side( collide, state, k );
-			}
 			float u = collide->bary_u[k], v = collide->bary_v[k], w = collide->bary_w[k];
 			float weight = inv_m[collide->contact_vertex[k]] + inv_m[collide->contact_a[k]] * u * u +
 						   inv_m[collide->contact_b[k]] * v * v + inv_m[collide->contact_c[k]] * w * w;
@@ -1293,6 +1290,14 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	if ( bad )
 	{
 		return SERE_ERR_NONFINITE;
+	}
+	if ( state->x0 != NULL )
+	{
+#pragma omp parallel for schedule( static ) if ( parallel )
+		for ( int32_t k = 0; k < contacts; ++k )
+		{
+			collide->contact_side[k] = collide->contacts[k].side = history_side( collide, state, k );
+		}
 	}
 	float h = params->thickness, h2 = h * h;
 	float tolerance = SERE_COLLIDE_TOLERANCE * h;

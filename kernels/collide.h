@@ -106,8 +106,8 @@ const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t*
  * isolated ones by ω − 1. Iterations stop once every contact is within
  * SERE_COLLIDE_TOLERANCE. Velocities change by the total Δx / dt, as the paper's PBD does
  * (Sec. 5.2). Degenerate triangles give no push. *unresolved (may be NULL) gets the contacts
- * still short by more than the tolerance. SERE_ERR_NONFINITE (positions untouched) for NaN or
- * infinity in a contact vertex's velocity, inverse mass or start-of-step position;
+ * still short by more than the tolerance. SERE_ERR_NONFINITE (positions and contacts untouched)
+ * for NaN or infinity in a contact vertex's velocity, inverse mass or start-of-step position;
  * SERE_ERR_ARGUMENT when x0, y0, z0 are neither all given nor all NULL. */
 sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
 								  const sere_collide_params* params, int32_t* unresolved );

@@ -749,6 +749,14 @@ Test( collide, identical_with_one_two_and_three_threads )
 		cr_assert_eq( c1, c3 );
 		cr_assert_eq( memcmp( one, two, bytes ), 0, "shape %d, history %d: 1 and 2 threads differ", k, history );
 		cr_assert_eq( memcmp( one, three, bytes ), 0, "shape %d, history %d: 1 and 3 threads differ", k, history );
+		if ( history )
+		{
+			/* the start-of-step sides disagree with some detection sides, so the push differs */
+			int32_t c0;
+			float* plain = collide_run_pass( 1, shapes[k], false, &c0 );
+			cr_assert_neq( memcmp( one, plain, bytes ), 0, "shape %d: start-of-step sides changed nothing", k );
+			free( plain );
+		}
 		free( one );
 		free( two );
 		free( three );
@@ -803,8 +811,24 @@ Test( collide, nonfinite_inputs_are_refused )
 	start[0] = NAN;
 	sere_collide_state history = state;
 	history.x0 = s.x, history.y0 = s.y, history.z0 = start;
+	const sere_contact* listed = sere_collide_contacts( c, &count );
+	float* sides = malloc( sizeof( float ) * (size_t) count );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		sides[k] = listed[k].side;
+	}
+	/* the start of the step mirrored: every side it gives is the opposite of detection's */
+	for ( int32_t i = 1; i < n; ++i )
+	{
+		start[i] = -s.z[i];
+	}
 	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		cr_assert_eq( listed[k].side, sides[k], "contact %d: side rewritten on error", k );
+	}
+	free( sides );
 	history.y0 = NULL;
 	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
 	cr_assert_eq( sere_collide_resolve( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
