@@ -17,6 +17,7 @@ struct sere_leaf_sim
 	double* w0;
 	double water0;
 	int32_t contact_capacity;
+	float thickness_scale; /* sere_leaf_thickness_scale, updated whenever rest lengths change */
 	int desiccated;
 };
 
@@ -118,6 +119,7 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 		return status;
 	}
 	memcpy( sim->w0, model->p.w, sizeof( double ) * (size_t) model->p.count );
+	sim->thickness_scale = sere_leaf_thickness_scale( model );
 	for ( int32_t i = 0; i < model->p.count; ++i )
 	{
 		sim->water0 += model->p.w[i];
@@ -249,6 +251,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		{
 			return status;
 		}
+		sim->thickness_scale = sere_leaf_thickness_scale( model );
 	}
 	/* Lighter particles move more: PBD weights by the current inverse mass. */
 #pragma omp parallel for simd schedule( static )
@@ -294,9 +297,12 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		}
 	}
 	/* the start of the frame, before sere_pbd_finish moves it: where each contact's vertex was */
-	memcpy( sim->x0, p->x, sizeof( float ) * (size_t) n );
-	memcpy( sim->y0, p->y, sizeof( float ) * (size_t) n );
-	memcpy( sim->z0, p->z, sizeof( float ) * (size_t) n );
+	if ( params->collisions )
+	{
+		memcpy( sim->x0, p->x, sizeof( float ) * (size_t) n );
+		memcpy( sim->y0, p->y, sizeof( float ) * (size_t) n );
+		memcpy( sim->z0, p->z, sizeof( float ) * (size_t) n );
+	}
 	sere_pbd_finish( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, params->dt );
 	/* Shrinkage turns into velocity through Δv = Δx/Δt; without damping that momentum
 	 * accumulates and a drying leaf drifts away. */
@@ -318,7 +324,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		collide.dt = params->dt;
 		if ( params->scale_thickness )
 		{
-			collide.thickness *= sere_leaf_thickness_scale( model );
+			collide.thickness *= sim->thickness_scale;
 		}
 		sere_collide_stats collide_stats;
 		status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
@@ -396,6 +402,7 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
 			  dz = p->z[s->b[k]] - p->z[s->a[k]];
 		s->rest0[k] = s->rest[k] = sqrtf( dx * dx + dy * dy + dz * dz );
 	}
+	sim->thickness_scale = sere_leaf_thickness_scale( model );
 	status = sere_pbd_set_rest( sim->pbd, s->rest );
 	if ( status == SERE_OK )
 	{
