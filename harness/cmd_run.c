@@ -28,7 +28,8 @@ static void run_help( void )
 		"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
 		"  frames/frame_NNNNN.ply  triangle layer with water, tau and relative water per vertex (Blender, MeshLab)\n"
 		"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
-		"  stats.csv               one row per frame: water per layer, area, strain, iterations, contacts, ms\n"
+		"  stats.csv               one row per frame: water per layer, area, strain, iterations, contacts\n"
+		"                          (found, unresolved), collision thickness, ms\n"
 		"  summary.json            counts, parameters and the Table 1 breakdown (mean ms per frame)\n"
 		"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
 		"  curves.png              relative water content and leaf area over time\n\n"
@@ -564,8 +565,8 @@ int sere_cmd_run( int argc, char** argv )
 			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
 			sum_total / frames_done, params.strain_tolerance, (int) params.max_iterations, cap_hits, stalls,
 			max_pbd_iterations );
-		sere_params_print( &params, summary, "    \"" );
-		fprintf( summary, "    \"end\": 0\n  }\n}\n" );
+		sere_params_print_json( &params, summary, "    " );
+		fprintf( summary, "  }\n}\n" );
 		sere_atomic_commit( &summary_file );
 	}
 	printf( "%s: %lld frames, %d particles, %d springs, %d threads\n", name, done, model.p.count, model.s.count,

@@ -91,7 +91,7 @@ static const key_info keys[] = {
 	KEY( max_iterations, 1.0, 1e5, 1, "PBD iteration cap" ),
 	KEY( pbd_stall, 0.0, 0.999, 0,
 		 "0 = the paper's PBD stop; s > 0: also stop when 10 sweeps lower max |C/l| by less than the fraction s" ),
-	KEY( collision_thickness, 0.0, 1.0, 0, "self-collision proximity distance at rest" ),
+	KEY( collision_thickness, 0.0, 1.0, 0, "self-collision proximity distance (at rest when collision_scaling = 1)" ),
 	KEY( collision_scaling, 0.0, 1.0, 1,
 		 "collision thickness shrinks with the triangle layer (sum of T rest lengths / at rest) (1) or stays fixed "
 		 "(0)" ),
@@ -288,13 +288,23 @@ int sere_params_apply( sere_sim_params* params, const char* preset, const char* 
 	return 0;
 }
 
-void sere_params_print( const sere_sim_params* params, FILE* f, const char* prefix )
+void sere_params_print_json( const sere_sim_params* params, FILE* f, const char* indent )
 {
-	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )
+	size_t count = sizeof( keys ) / sizeof( keys[0] );
+	for ( size_t i = 0; i < count; ++i )
 	{
 		double value;
 		memcpy( &value, (const char*) params + keys[i].offset, sizeof( double ) );
-		fprintf( f, "%s%s = %.17g\n", prefix, keys[i].name, value );
+		const char* end = i + 1 < count ? ",\n" : "\n";
+		/* JSON has no infinity: the ground's −inf ("no plane") is written as null */
+		if ( isfinite( value ) )
+		{
+			fprintf( f, "%s\"%s\": %.17g%s", indent, keys[i].name, value, end );
+		}
+		else
+		{
+			fprintf( f, "%s\"%s\": null%s", indent, keys[i].name, end );
+		}
 	}
 }
 

@@ -28,7 +28,7 @@ typedef struct sere_sim_params
 	double strain_tolerance;	/* λ_C: projection stops when max |C/l| < λ_C */
 	double max_iterations;		/* PBD iteration cap */
 	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
-	double collision_thickness; /* vertex–triangle proximity distance, leaf units */
+	double collision_thickness; /* vertex–triangle proximity distance, leaf units (at rest when scaled) */
 	double collision_scaling;	/* the thickness shrinks with the triangle layer (1) or stays fixed (0) */
 	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	double restore_conserving;	/* Eq. 14 as written (0) or momentum-conserving (1) */
@@ -54,7 +54,7 @@ int sere_params_apply( sere_sim_params* params, const char* preset, const char* 
 					   size_t err_size );
 
 /* Writes every key = value, one per line, for summaries and --help. */
-void sere_params_print( const sere_sim_params* params, FILE* f, const char* prefix );
+void sere_params_print_json( const sere_sim_params* params, FILE* f, const char* indent );
 /* Every key with its description, default and range, for --help. */
 void sere_params_describe( FILE* f );
 

@@ -113,6 +113,35 @@ Test( cli, interrupted_run_leaves_complete_outputs )
 	cr_expect_not_null( strstr( text, "\"interrupted\": true" ) );
 	cr_expect( used > 2 && text[used - 2] == '}', "summary is not closed: ...%s",
 			   text + ( used > 40 ? used - 40 : 0 ) );
+	/* the parameters are JSON members: "key": number (or null for the ground's −inf), commas
+	 * between them and none after the last */
+	const char* line = strstr( text, "\"parameters\": {\n" );
+	cr_assert_not_null( line, "no parameters block" );
+	line = strchr( line, '\n' ) + 1;
+	int members = 0;
+	while ( strncmp( line, "  }", 3 ) != 0 )
+	{
+		char key[64];
+		int at = 0;
+		cr_assert_eq( sscanf( line, "    \"%63[A-Za-z0-9_]\": %n", key, &at ), 1, "not a member: %.60s", line );
+		const char* value = line + at;
+		char* end = (char*) value;
+		if ( strncmp( value, "null", 4 ) == 0 )
+		{
+			end += 4;
+		}
+		else
+		{
+			strtod( value, &end );
+		}
+		cr_assert( end > value, "%s: not a number: %.30s", key, value );
+		const char* next = strchr( line, '\n' ) + 1;
+		bool last = strncmp( next, "  }", 3 ) == 0;
+		cr_assert( *end == ( last ? '\n' : ',' ), "%s: %s comma", key, last ? "trailing" : "missing" );
+		members += 1;
+		line = next;
+	}
+	cr_expect_gt( members, 30, "only %d parameters", members );
 	const char* expected[] = { "stats.csv", "drying.png", "curves.png", "leaf.pvd" };
 	for ( size_t k = 0; k < sizeof( expected ) / sizeof( expected[0] ); ++k )
 	{
