@@ -1291,14 +1291,6 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	{
 		return SERE_ERR_NONFINITE;
 	}
-	if ( state->x0 != NULL )
-	{
-#pragma omp parallel for schedule( static ) if ( parallel )
-		for ( int32_t k = 0; k < contacts; ++k )
-		{
-			collide->contact_side[k] = collide->contacts[k].side = history_side( collide, state, k );
-		}
-	}
 	float h = params->thickness, h2 = h * h;
 	float tolerance = SERE_COLLIDE_TOLERANCE * h;
 	float inv_dt = 1.0f / params->dt;
@@ -1312,6 +1304,15 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	{
 		int tid = omp_get_thread_num(), team = omp_get_num_threads();
 		int32_t mine_begin = touched_split( collide, tid, team ), mine_end = touched_split( collide, tid + 1, team );
+		/* the sides, only now that every input is known to be finite (an error leaves them) */
+		if ( state->x0 != NULL )
+		{
+#pragma omp for schedule( static )
+			for ( int32_t k = 0; k < contacts; ++k )
+			{
+				collide->contact_side[k] = collide->contacts[k].side = history_side( collide, state, k );
+			}
+		}
 		for ( int32_t it = 0; it <= params->iterations; ++it )
 		{
 			int32_t mine = 0;
