@@ -311,15 +311,16 @@ void BM_collide_respond( benchmark::State& state, Shape shape )
 	state.counters["contacts"] = contacts;
 }
 
-// Refit (rebuild when degraded), detect and respond (sere_collide_resolve, one round) without
-// the Voronoi restore: the part of a frame the collision goal counts (at 2 threads, within 1/20
-// of the paper's Collisions column for the maple, 24.28 ms).
-void BM_collide_pass( benchmark::State& state, Shape shape )
+// rounds rounds of refit (rebuild when degraded), detect and respond (sere_collide_resolve),
+// then, when restore is set, the Voronoi restore of Eq. 14; the scene is reset between
+// iterations outside the timed region.
+void collide_loop( benchmark::State& state, Shape shape, int32_t rounds, bool restore )
 {
 	Scene& s = scene( shape );
 	omp_set_num_threads( (int) state.range( 0 ) );
 	sere_collide_state st = s.state();
 	sere_collide_params p = params( s );
+	p.rounds = rounds;
 	sere_collide_stats stats = {};
 	for ( auto _ : state )
 	{
@@ -327,37 +328,30 @@ void BM_collide_pass( benchmark::State& state, Shape shape )
 		s.reset();
 		state.ResumeTiming();
 		sere_collide_resolve( s.collide, s.bvh, &st, &p, &stats );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "vertices/s", s.n );
-	state.counters["contacts"] = stats.contacts;
-	state.counters["unresolved"] = stats.unresolved;
-}
-
-// The paper's Collisions column: refit (rebuild when degraded), detect and respond for
-// params().rounds rounds, then the Voronoi restore of Eq. 14. rounds = range(1).
-void BM_collide_frame( benchmark::State& state, Shape shape )
-{
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
-	sere_collide_state st = s.state();
-	sere_collide_params p = params( s );
-	p.rounds = (int32_t) state.range( 1 );
-	sere_collide_stats stats = {};
-	for ( auto _ : state )
-	{
-		state.PauseTiming();
-		s.reset();
-		state.ResumeTiming();
-		sere_collide_resolve( s.collide, s.bvh, &st, &p, &stats );
-		sere_collide_restore_voronoi( s.x.data, s.y.data, s.z.data, s.vx.data, s.vy.data, s.vz.data, s.tri.data(), s.f,
-									  s.n, s.h.data );
+		if ( restore )
+		{
+			sere_collide_restore_voronoi( s.x.data, s.y.data, s.z.data, s.vx.data, s.vy.data, s.vz.data, s.tri.data(),
+										  s.f, s.n, s.h.data );
+		}
 		benchmark::ClobberMemory();
 	}
 	rate( state, "vertices/s", s.n );
 	state.counters["contacts"] = stats.contacts;
 	state.counters["unresolved"] = stats.unresolved;
 	state.counters["iterations"] = stats.iterations;
+}
+
+// One round without the Voronoi restore: the part of a frame the collision goal counts (at 2
+// threads, within 1/20 of the paper's Collisions column for the maple, 24.28 ms).
+void BM_collide_pass( benchmark::State& state, Shape shape )
+{
+	collide_loop( state, shape, 1, false );
+}
+
+// The paper's Collisions column: the pass with range(1) rounds, then Eq. 14.
+void BM_collide_frame( benchmark::State& state, Shape shape )
+{
+	collide_loop( state, shape, (int32_t) state.range( 1 ), true );
 }
 
 void BM_collide_restore_voronoi( benchmark::State& state )
