@@ -881,6 +881,17 @@ static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SE
 
 #endif
 
+/* Bit k set when child k of the node is a triangle (a negative child index). */
+static inline uint32_t leaf_mask( const sere_bvh_node* node )
+{
+	uint32_t mask = 0;
+	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+	{
+		mask |= (uint32_t) ( node->child[k] < 0 ) << k;
+	}
+	return mask;
+}
+
 void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
 						   void* context )
 {
@@ -916,29 +927,36 @@ void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, ser
 	while ( size > 0 )
 	{
 		const sere_bvh_node* node = bvh->nodes + stack[--size];
+		/* Each child inside the union is tested against the eight lanes: a child inside the union
+		 * can still miss every lane (the union of eight cubes along a curve of vertices is mostly
+		 * empty space), and skipping such subtrees saved 14% of the flat maple's detection and 9%
+		 * of the dried one's. Which children any lane hits is gathered as bits first and only then
+		 * acted on: half the children inside the union miss every lane, and a branch on each one
+		 * mispredicted as often as not (without it the dried maple's detection took 7% longer on
+		 * one thread). Pushes come first, but nothing is visited before this node's leaves, so
+		 * the visits keep the tree's order. */
 		uint32_t mask = overlap_mask( node, &q );
+		uint32_t hits[SERE_BVH_WIDTH];
+		uint32_t live = 0;
 		while ( mask != 0 )
 		{
 			int k = __builtin_ctz( mask );
 			mask &= mask - 1;
-			/* a child inside the union can still miss every lane (the union of eight cubes along
-			 * a curve of vertices is mostly empty space): skipping such subtrees here saved 14%
-			 * of the flat maple's detection and 9% of the dried one's */
-			int32_t c = node->child[k];
-			uint32_t hits = group_mask( &lanes, node->min_x[k], node->min_y[k], node->min_z[k], node->max_x[k],
-										node->max_y[k], node->max_z[k] );
-			if ( hits == 0 )
-			{
-				continue;
-			}
-			if ( c >= 0 )
-			{
-				stack[size++] = c;
-			}
-			else
-			{
-				visit( context, ~c, hits );
-			}
+			hits[k] = group_mask( &lanes, node->min_x[k], node->min_y[k], node->min_z[k], node->max_x[k],
+								  node->max_y[k], node->max_z[k] );
+			live |= (uint32_t) ( hits[k] != 0 ) << k;
+		}
+		uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
+		while ( inner != 0 )
+		{
+			stack[size++] = node->child[__builtin_ctz( inner )];
+			inner &= inner - 1;
+		}
+		while ( leaves != 0 )
+		{
+			int k = __builtin_ctz( leaves );
+			leaves &= leaves - 1;
+			visit( context, ~node->child[k], hits[k] );
 		}
 	}
 }
