@@ -88,10 +88,11 @@ struct sere_collide
 	 * velocity update. */
 	float* acc;
 
-	/* The mesh's edges as sorted neighbour lists: vertex i's neighbours are
-	 * neighbor[neighbor_offset[i] .. neighbor_offset[i + 1]). */
-	int32_t* neighbor_offset; /* vertex_count + 1 */
-	int32_t* neighbor;
+	/* Per query group g (vertices 8g .. 8g + 7): the lane marks it sets, as the vertices
+	 * mark_vertex[mark_offset[g] .. mark_offset[g + 1]) (each once) and their bytes mark_bits. */
+	int32_t* mark_offset; /* group count + 1 */
+	int32_t* mark_vertex;
+	uint8_t* mark_bits;
 
 	/* Per thread of the detection, vertex_count bytes apart (zero between groups): bit k of
 	 * vertex j is set while group lane k's vertex is j or has j as a neighbour, so a triangle's
@@ -347,9 +348,9 @@ static void collide_free( sere_collide* c )
 	{
 		sere_free( *slot[i] );
 	}
-	void* arrays[] = { c->block_thread, c->block_start,		c->block_found, c->block_work, c->work_prefix,
-					   c->entry_offset, c->entry_cursor,	c->run_total,	c->touched,	   c->position,
-					   c->acc,			c->neighbor_offset, c->neighbor,	c->far_count,  c->lane_mark };
+	void* arrays[] = { c->block_thread, c->block_start, c->block_found, c->block_work, c->work_prefix, c->entry_offset,
+					   c->entry_cursor, c->run_total,	c->touched,		c->position,   c->acc,		   c->far_count,
+					   c->lane_mark,	c->mark_offset, c->mark_vertex, c->mark_bits };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -386,16 +387,10 @@ static sere_status alloc_contacts( sere_collide* c, int32_t capacity )
 
 /* Builds the sorted neighbour lists of the mesh's edges (each edge appears in two triangles at
  * most, so a vertex has at most 2 × its triangle count neighbours before duplicates go). */
-static bool build_neighbors( sere_collide* c, const int32_t* tri, int32_t triangles )
+static void build_neighbors( sere_collide* c, const int32_t* tri, int32_t triangles, int32_t* offset,
+							 int32_t* neighbor )
 {
 	int32_t n = c->vertex_count;
-	c->neighbor_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) n + 1 ) );
-	c->neighbor = sere_alloc( sizeof( int32_t ) * ( 6 * (size_t) triangles + 1 ) );
-	if ( c->neighbor_offset == NULL || c->neighbor == NULL )
-	{
-		return false;
-	}
-	int32_t* offset = c->neighbor_offset;
 	memset( offset, 0, sizeof( int32_t ) * ( (size_t) n + 1 ) );
 	for ( int32_t t = 0; t < triangles; ++t )
 	{
@@ -420,8 +415,8 @@ static bool build_neighbors( sere_collide* c, const int32_t* tri, int32_t triang
 		for ( int r = 0; r < 3; ++r )
 		{
 			int32_t a = v[r];
-			c->neighbor[cursor[a]++] = v[( r + 1 ) % 3];
-			c->neighbor[cursor[a]++] = v[( r + 2 ) % 3];
+			neighbor[cursor[a]++] = v[( r + 1 ) % 3];
+			neighbor[cursor[a]++] = v[( r + 2 ) % 3];
 		}
 	}
 	int32_t write = 0;
@@ -432,23 +427,76 @@ static bool build_neighbors( sere_collide* c, const int32_t* tri, int32_t triang
 		/* insertion sort: lists are a dozen entries long */
 		for ( int32_t k = begin + 1; k < end; ++k )
 		{
-			int32_t value = c->neighbor[k], j = k;
-			while ( j > begin && c->neighbor[j - 1] > value )
+			int32_t value = neighbor[k], j = k;
+			while ( j > begin && neighbor[j - 1] > value )
 			{
-				c->neighbor[j] = c->neighbor[j - 1];
+				neighbor[j] = neighbor[j - 1];
 				--j;
 			}
-			c->neighbor[j] = value;
+			neighbor[j] = value;
 		}
 		for ( int32_t k = begin; k < end; ++k )
 		{
-			if ( write == offset[i] || c->neighbor[write - 1] != c->neighbor[k] )
+			if ( write == offset[i] || neighbor[write - 1] != neighbor[k] )
 			{
-				c->neighbor[write++] = c->neighbor[k];
+				neighbor[write++] = neighbor[k];
 			}
 		}
 	}
 	offset[n] = write;
+}
+
+/* Adds lane k's bit to vertex j's scratch byte, listing j at its first bit; returns the list's length. */
+static int32_t list_mark( sere_collide* c, uint8_t* scratch, int32_t j, int32_t k, int32_t used )
+{
+	if ( scratch[j] == 0 )
+	{
+		c->mark_vertex[used++] = j;
+	}
+	scratch[j] = (uint8_t) ( scratch[j] | ( 1u << k ) );
+	return used;
+}
+
+/* The lane marks of every query group, from the neighbour lists: bit k of a vertex's byte when
+ * lane k's vertex is it or a neighbour of it. Listed once per group, merged, the marks cost one
+ * plain store per vertex to set and one to clear; set from the neighbour lists at every query, a
+ * vertex shared by several lanes took a read-modify-write per lane, each waiting on the last. */
+static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const int32_t* neighbor )
+{
+	int32_t n = c->vertex_count;
+	int32_t groups = ( n + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
+	c->mark_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) groups + 1 ) );
+	size_t most = (size_t) n + (size_t) neighbor_offset[n] + 1;
+	c->mark_vertex = sere_alloc( sizeof( int32_t ) * most );
+	c->mark_bits = sere_alloc( most );
+	if ( c->mark_offset == NULL || c->mark_vertex == NULL || c->mark_bits == NULL )
+	{
+		return false;
+	}
+	/* thread 0's lane marks, zero, as scratch: zero again on return */
+	uint8_t* scratch = c->lane_mark;
+	int32_t used = 0;
+	for ( int32_t g = 0; g < groups; ++g )
+	{
+		int32_t first = g * SERE_BVH_WIDTH, begin = used;
+		int32_t count = n - first < SERE_BVH_WIDTH ? n - first : SERE_BVH_WIDTH;
+		c->mark_offset[g] = begin;
+		for ( int32_t k = 0; k < count; ++k )
+		{
+			int32_t i = first + k;
+			used = list_mark( c, scratch, i, k, used );
+			for ( int32_t e = neighbor_offset[i]; e < neighbor_offset[i + 1]; ++e )
+			{
+				used = list_mark( c, scratch, neighbor[e], k, used );
+			}
+		}
+		for ( int32_t e = begin; e < used; ++e )
+		{
+			c->mark_bits[e] = scratch[c->mark_vertex[e]];
+			scratch[c->mark_vertex[e]] = 0;
+		}
+	}
+	c->mark_offset[groups] = used;
 	return true;
 }
 
@@ -494,7 +542,17 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	bool ok = c->block_thread && c->block_start && c->block_found && c->block_work && c->work_prefix &&
 			  c->entry_offset && c->entry_cursor && c->run_total && c->touched && c->position && c->acc &&
 			  c->far_count && c->lane_mark;
-	ok = ok && build_neighbors( c, sere_bvh_triangles( bvh, &triangles ), triangles );
+	/* the mesh's edges as sorted neighbour lists, needed only to build the mark lists */
+	int32_t* neighbor_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
+	int32_t* neighbor = sere_alloc( sizeof( int32_t ) * ( 6 * (size_t) triangles + 1 ) );
+	ok = ok && neighbor_offset && neighbor;
+	if ( ok )
+	{
+		build_neighbors( c, sere_bvh_triangles( bvh, &triangles ), triangles, neighbor_offset, neighbor );
+		ok = build_marks( c, neighbor_offset, neighbor );
+	}
+	sere_free( neighbor_offset );
+	sere_free( neighbor );
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
 		collide_free( c );
@@ -550,7 +608,8 @@ typedef struct detect_context
 {
 	const float *x, *y, *z;
 	const int32_t* tri;
-	const int32_t *neighbor_offset, *neighbor;
+	const int32_t *mark_offset, *mark_vertex; /* sere_collide's group mark lists */
+	const uint8_t* mark_bits;
 	uint8_t* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
 	int32_t first; /* the vertex of lane 0 */
 	float h2;
@@ -639,20 +698,17 @@ static void closest_lanes( float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES],
 
 _Static_assert( SERE_BVH_WIDTH <= 8, "a group's lane marks are one byte per vertex" );
 
-/* Sets (value = 1) or clears (value = 0) group lane k's bit on its vertex and the vertex's mesh
- * neighbours: a triangle with one of them as a corner is not a contact candidate for the lane. */
-static void mark_lanes( detect_context* c, int32_t count, int value )
+/* Sets (set) or clears the lane marks of the group whose lane 0 is vertex c->first: bit k of a
+ * vertex's byte while group lane k's vertex is it or has it as a neighbour, so a triangle with one
+ * of them as a corner is not a contact candidate for the lane. */
+_Static_assert( DETECT_BLOCK % SERE_BVH_WIDTH == 0, "query groups start at multiples of the width" );
+
+static void mark_lanes( detect_context* c, bool set )
 {
-	for ( int32_t k = 0; k < count; ++k )
+	int32_t g = c->first / SERE_BVH_WIDTH;
+	for ( int32_t e = c->mark_offset[g]; e < c->mark_offset[g + 1]; ++e )
 	{
-		int32_t i = c->first + k;
-		uint8_t bit = (uint8_t) ( value << k );
-		c->mark[i] = value ? (uint8_t) ( c->mark[i] | bit ) : 0;
-		for ( int32_t e = c->neighbor_offset[i]; e < c->neighbor_offset[i + 1]; ++e )
-		{
-			int32_t j = c->neighbor[e];
-			c->mark[j] = value ? (uint8_t) ( c->mark[j] | bit ) : 0;
-		}
+		c->mark[c->mark_vertex[e]] = set ? c->mark_bits[e] : 0;
 	}
 }
 
@@ -918,8 +974,9 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			.y = y,
 			.z = z,
 			.tri = tri,
-			.neighbor_offset = collide->neighbor_offset,
-			.neighbor = collide->neighbor,
+			.mark_offset = collide->mark_offset,
+			.mark_vertex = collide->mark_vertex,
+			.mark_bits = collide->mark_bits,
 			.mark = collide->lane_mark + (size_t) tid * (size_t) sere_pad( n ),
 			.h2 = h2,
 			.buffer = thread_buffer( collide, tid ),
@@ -947,9 +1004,9 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 					group.lo_x[k] = p[0] - r, group.lo_y[k] = p[1] - r, group.lo_z[k] = p[2] - r;
 					group.hi_x[k] = p[0] + r, group.hi_y[k] = p[1] + r, group.hi_z[k] = p[2] + r;
 				}
-				mark_lanes( &c, group.count, 1 );
+				mark_lanes( &c, true );
 				sere_bvh_query_group( bvh, &group, detect_visit, &c );
-				mark_lanes( &c, group.count, 0 );
+				mark_lanes( &c, false );
 			}
 			detect_flush( &c );
 			collide->block_thread[block] = tid;
