@@ -881,7 +881,8 @@ static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SE
 
 #endif
 
-/* Bit k set when child k of the node is a triangle (a negative child index). */
+/* Bit k set when child k of the node is negative: a triangle, or SERE_BVH_EMPTY, whose empty
+ * box no query overlaps. */
 static inline uint32_t leaf_mask( const sere_bvh_node* node )
 {
 	uint32_t mask = 0;
@@ -933,8 +934,8 @@ void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, ser
 		 * of the dried one's. Which children any lane hits is gathered as bits first and only then
 		 * acted on: half the children inside the union miss every lane, and a branch on each one
 		 * mispredicted as often as not (without it the dried maple's detection took 7% longer on
-		 * one thread). Pushes come first, but nothing is visited before this node's leaves, so
-		 * the visits keep the tree's order. */
+		 * one thread). The children pushed here are popped only after this node's leaves are
+		 * visited, so the visits come in the same order as when each child was handled in turn. */
 		uint32_t mask = overlap_mask( node, &q );
 		uint32_t hits[SERE_BVH_WIDTH];
 		uint32_t live = 0;

@@ -466,6 +466,8 @@ static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const 
 	int32_t n = c->vertex_count;
 	int32_t groups = ( n + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
 	c->mark_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) groups + 1 ) );
+	/* a group lists each of its vertices and their neighbours once at most: over all groups,
+	 * n vertices and neighbor_offset[n] neighbour entries */
 	size_t most = (size_t) n + (size_t) neighbor_offset[n] + 1;
 	c->mark_vertex = sere_alloc( sizeof( int32_t ) * most );
 	c->mark_bits = sere_alloc( most );
@@ -698,11 +700,11 @@ static void closest_lanes( float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES],
 
 _Static_assert( SERE_BVH_WIDTH <= 8, "a group's lane marks are one byte per vertex" );
 
+_Static_assert( DETECT_BLOCK % SERE_BVH_WIDTH == 0, "query groups start at multiples of the width" );
+
 /* Sets (set) or clears the lane marks of the group whose lane 0 is vertex c->first: bit k of a
  * vertex's byte while group lane k's vertex is it or has it as a neighbour, so a triangle with one
  * of them as a corner is not a contact candidate for the lane. */
-_Static_assert( DETECT_BLOCK % SERE_BVH_WIDTH == 0, "query groups start at multiples of the width" );
-
 static void mark_lanes( detect_context* c, bool set )
 {
 	int32_t g = c->first / SERE_BVH_WIDTH;
