@@ -54,6 +54,18 @@ static double vertex_z( const sere_render_mesh* mesh, int32_t i )
 	return mesh->z != NULL ? mesh->z[i] : 0.0;
 }
 
+/* Point i of the mesh's vertices followed by the extra points (3 doubles each). */
+static void point_at( const sere_render_mesh* mesh, const double* extra, int32_t i, double p[3] )
+{
+	if ( i < mesh->vertex_count )
+	{
+		p[0] = mesh->x[i], p[1] = mesh->y[i], p[2] = vertex_z( mesh, i );
+		return;
+	}
+	const double* e = extra + 3 * (size_t) ( i - mesh->vertex_count );
+	p[0] = e[0], p[1] = e[1], p[2] = e[2];
+}
+
 static int check_mesh( const sere_render_mesh* mesh, char* err, size_t err_size )
 {
 	if ( mesh == NULL || mesh->vertex_count < 0 || mesh->triangle_count < 0 ||
@@ -90,17 +102,57 @@ static int check_view( const sere_render_view* view, char* err, size_t err_size 
 	return 0;
 }
 
-int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere_render_view* view, char* err,
-						  size_t err_size )
+/* The ground plane of a scene resolved against the mesh: its height and its quad. */
+typedef struct ground_plane
+{
+	double z;
+	double box[4];
+} ground_plane;
+
+static ground_plane resolve_ground( const sere_render_mesh* mesh, const sere_render_scene* scene )
+{
+	ground_plane g = { scene->ground_z,
+					   { scene->ground_box[0], scene->ground_box[1], scene->ground_box[2], scene->ground_box[3] } };
+	double lo[3] = { 0.0, 0.0, 0.0 }, hi[3] = { 0.0, 0.0, 0.0 };
+	for ( int32_t i = 0; i < mesh->vertex_count; ++i )
+	{
+		double p[3] = { mesh->x[i], mesh->y[i], vertex_z( mesh, i ) };
+		for ( int c = 0; c < 3; ++c )
+		{
+			lo[c] = ( i == 0 || p[c] < lo[c] ) ? p[c] : lo[c];
+			hi[c] = ( i == 0 || p[c] > hi[c] ) ? p[c] : hi[c];
+		}
+	}
+	if ( !isfinite( g.z ) )
+	{
+		g.z = lo[2];
+	}
+	int usable = isfinite( g.box[0] ) && isfinite( g.box[1] ) && isfinite( g.box[2] ) && isfinite( g.box[3] );
+	if ( !usable || !( g.box[0] < g.box[2] ) || !( g.box[1] < g.box[3] ) )
+	{
+		double side = fmax( hi[0] - lo[0], hi[1] - lo[1] );
+		double grow = side > 0.0 ? 0.2 * side : 0.5;
+		g.box[0] = lo[0] - grow, g.box[1] = lo[1] - grow;
+		g.box[2] = hi[0] + grow, g.box[3] = hi[1] + grow;
+	}
+	return g;
+}
+
+/* Fits the mesh's vertices and `extra` more points (3 doubles each); with on_screen the
+ * center is the middle of their projection rather than of their box. */
+static int fit_points( const sere_render_mesh* mesh, const double* extra, int extra_count, int on_screen, double w,
+					   double h, sere_render_view* view, char* err, size_t err_size )
 {
 	if ( check_view( view, err, err_size ) != 0 || check_mesh( mesh, err, err_size ) != 0 )
 	{
 		return -1;
 	}
+	int32_t total = mesh->vertex_count + extra_count;
 	double lo[3] = { 0.0, 0.0, 0.0 }, hi[3] = { 0.0, 0.0, 0.0 };
-	for ( int32_t i = 0; i < mesh->vertex_count; ++i )
+	for ( int32_t i = 0; i < total; ++i )
 	{
-		double p[3] = { mesh->x[i], mesh->y[i], vertex_z( mesh, i ) };
+		double p[3];
+		point_at( mesh, extra, i, p );
 		for ( int c = 0; c < 3; ++c )
 		{
 			lo[c] = ( i == 0 || p[c] < lo[c] ) ? p[c] : lo[c];
@@ -114,11 +166,30 @@ int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere
 	/* The tight projected half-extents about the box center, so the fitted mesh touches the
 	 * margin on at least one side rather than the looser projected box. */
 	frame f = view_frame( view );
-	double half_x = 0.0, half_y = 0.0;
-	for ( int32_t i = 0; i < mesh->vertex_count; ++i )
+	if ( on_screen )
 	{
-		double x = mesh->x[i] - view->center[0], y = mesh->y[i] - view->center[1],
-			   z = vertex_z( mesh, i ) - view->center[2];
+		/* Moved across the screen to the middle of the projected extents, so an oblique scene
+		 * does not leave its region's top or bottom empty. */
+		double lo_x = 0.0, hi_x = 0.0, lo_y = 0.0, hi_y = 0.0;
+		for ( int32_t i = 0; i < total; ++i )
+		{
+			double p[3];
+			point_at( mesh, extra, i, p );
+			double x = p[0] - view->center[0], y = p[1] - view->center[1], z = p[2] - view->center[2];
+			double sx = dot3( f.right, x, y, z ), sy = dot3( f.up, x, y, z );
+			lo_x = fmin( lo_x, sx ), hi_x = fmax( hi_x, sx ), lo_y = fmin( lo_y, sy ), hi_y = fmax( hi_y, sy );
+		}
+		for ( int c = 0; c < 3; ++c )
+		{
+			view->center[c] += 0.5 * ( lo_x + hi_x ) * f.right[c] + 0.5 * ( lo_y + hi_y ) * f.up[c];
+		}
+	}
+	double half_x = 0.0, half_y = 0.0;
+	for ( int32_t i = 0; i < total; ++i )
+	{
+		double p[3];
+		point_at( mesh, extra, i, p );
+		double x = p[0] - view->center[0], y = p[1] - view->center[1], z = p[2] - view->center[2];
 		half_x = fmax( half_x, fabs( dot3( f.right, x, y, z ) ) );
 		half_y = fmax( half_y, fabs( dot3( f.up, x, y, z ) ) );
 	}
@@ -128,6 +199,40 @@ int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere
 	scale = half_y > 0.0 ? fmin( scale, room_y / half_y ) : scale;
 	view->scale = isfinite( scale ) ? scale : 1.0;
 	return 0;
+}
+
+int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere_render_view* view, char* err,
+						  size_t err_size )
+{
+	return fit_points( mesh, NULL, 0, 0, w, h, view, err, err_size );
+}
+
+static void ground_corners( const ground_plane* g, double corners[12] )
+{
+	const int pick[4][2] = { { 0, 1 }, { 2, 1 }, { 2, 3 }, { 0, 3 } };
+	for ( int k = 0; k < 4; ++k )
+	{
+		corners[3 * k + 0] = g->box[pick[k][0]];
+		corners[3 * k + 1] = g->box[pick[k][1]];
+		corners[3 * k + 2] = g->z;
+	}
+}
+
+int sere_render_fit_scene( const sere_render_mesh* mesh, const sere_render_scene* scene, double w, double h,
+						   sere_render_view* view, char* err, size_t err_size )
+{
+	if ( scene == NULL || !scene->ground )
+	{
+		return fit_points( mesh, NULL, 0, 0, w, h, view, err, err_size );
+	}
+	if ( check_mesh( mesh, err, err_size ) != 0 )
+	{
+		return -1;
+	}
+	ground_plane g = resolve_ground( mesh, scene );
+	double corners[12];
+	ground_corners( &g, corners );
+	return fit_points( mesh, corners, 4, 1, w, h, view, err, err_size );
 }
 
 void sere_render_project( const sere_render_view* view, double x0, double y0, double w, double h, double x, double y,
@@ -186,18 +291,101 @@ static int cairo_failed( cairo_t* cr, char* err, size_t err_size )
 	return 0;
 }
 
+void sere_render_lower_tint( const float rgb[3], float out[3] )
+{
+	const float pale[3] = { 0.88f, 0.88f, 0.82f };
+	for ( int c = 0; c < 3; ++c )
+	{
+		out[c] = 0.5f * rgb[c] + 0.5f * pale[c];
+	}
+}
+
+/* The ground quad and the mesh's vertical shadow on it, in screen space (screen holds the
+ * mesh's own projection, 3 doubles per vertex; the shadow is projected here). */
+static void draw_ground( cairo_t* cr, const sere_render_mesh* mesh, const sere_render_scene* scene,
+						 const sere_render_view* view, const frame* f, double cx, double cy )
+{
+	ground_plane g = resolve_ground( mesh, scene );
+	double corners[12];
+	ground_corners( &g, corners );
+	for ( int k = 0; k < 4; ++k )
+	{
+		double x = corners[3 * k] - view->center[0], y = corners[3 * k + 1] - view->center[1],
+			   z = corners[3 * k + 2] - view->center[2];
+		double sx = cx + view->scale * dot3( f->right, x, y, z ), sy = cy - view->scale * dot3( f->up, x, y, z );
+		if ( k == 0 )
+		{
+			cairo_move_to( cr, sx, sy );
+		}
+		else
+		{
+			cairo_line_to( cr, sx, sy );
+		}
+	}
+	cairo_close_path( cr );
+	cairo_set_source_rgb( cr, 0.87, 0.87, 0.86 );
+	cairo_fill_preserve( cr );
+	cairo_set_source_rgb( cr, 0.62, 0.62, 0.61 );
+	cairo_set_line_width( cr, 1.2 );
+	cairo_stroke_preserve( cr );
+	if ( scene->no_shadow )
+	{
+		cairo_new_path( cr );
+		return;
+	}
+	cairo_save( cr );
+	cairo_clip( cr );
+	/* Every projected triangle turned the same way round on screen, so the nonzero winding
+	 * rule fills their union once: where the leaf folds over itself the shadow is not darker,
+	 * and there are no seams between neighbours. */
+	for ( int32_t t = 0; t < mesh->triangle_count; ++t )
+	{
+		const int32_t* c = mesh->triangles + 3 * t;
+		double p[3][2];
+		for ( int q = 0; q < 3; ++q )
+		{
+			double x = mesh->x[c[q]] - view->center[0], y = mesh->y[c[q]] - view->center[1], z = g.z - view->center[2];
+			p[q][0] = cx + view->scale * dot3( f->right, x, y, z );
+			p[q][1] = cy - view->scale * dot3( f->up, x, y, z );
+		}
+		double area = ( p[1][0] - p[0][0] ) * ( p[2][1] - p[0][1] ) - ( p[1][1] - p[0][1] ) * ( p[2][0] - p[0][0] );
+		if ( area == 0.0 )
+		{
+			continue;
+		}
+		int second = area > 0.0 ? 1 : 2, third = area > 0.0 ? 2 : 1;
+		cairo_move_to( cr, p[0][0], p[0][1] );
+		cairo_line_to( cr, p[second][0], p[second][1] );
+		cairo_line_to( cr, p[third][0], p[third][1] );
+		cairo_close_path( cr );
+	}
+	cairo_set_fill_rule( cr, CAIRO_FILL_RULE_WINDING );
+	cairo_set_source_rgba( cr, 0.12, 0.12, 0.14, 0.45 );
+	cairo_fill( cr );
+	cairo_restore( cr );
+}
+
 int sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
 						   sere_render_view* view, const sere_render_style* style, char* err, size_t err_size )
 {
+	return sere_render_mesh_draw_scene( cr, x0, y0, w, h, mesh, view, style, NULL, err, err_size );
+}
+
+int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
+								 sere_render_view* view, const sere_render_style* style, const sere_render_scene* scene,
+								 char* err, size_t err_size )
+{
 	const sere_render_style plain = { 0 };
+	const sere_render_scene bare = { 0 };
 	style = style != NULL ? style : &plain;
+	scene = scene != NULL ? scene : &bare;
 	if ( check_view( view, err, err_size ) != 0 )
 	{
 		return -1;
 	}
 	if ( view->scale <= 0.0 || !isfinite( view->scale ) )
 	{
-		if ( sere_render_fit_view( mesh, w, h, view, err, err_size ) != 0 )
+		if ( sere_render_fit_scene( mesh, scene, w, h, view, err, err_size ) != 0 )
 		{
 			return -1;
 		}
@@ -263,26 +451,38 @@ int sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h
 	cairo_clip( cr );
 	cairo_set_antialias( cr, CAIRO_ANTIALIAS_DEFAULT );
 	cairo_set_line_join( cr, CAIRO_LINE_JOIN_ROUND );
+	if ( scene->ground )
+	{
+		draw_ground( cr, mesh, scene, view, &f, cx, cy );
+	}
 	for ( size_t k = 0; k < t_count; ++k )
 	{
 		const int32_t* c = mesh->triangles + 3 * order[k].triangle;
+		double ax = mesh->x[c[1]] - mesh->x[c[0]], ay = mesh->y[c[1]] - mesh->y[c[0]],
+			   az = vertex_z( mesh, c[1] ) - vertex_z( mesh, c[0] );
+		double bx = mesh->x[c[2]] - mesh->x[c[0]], by = mesh->y[c[2]] - mesh->y[c[0]],
+			   bz = vertex_z( mesh, c[2] ) - vertex_z( mesh, c[0] );
+		double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
 		double shade = 1.0;
 		if ( !style->unlit )
 		{
-			double ax = mesh->x[c[1]] - mesh->x[c[0]], ay = mesh->y[c[1]] - mesh->y[c[0]],
-				   az = vertex_z( mesh, c[1] ) - vertex_z( mesh, c[0] );
-			double bx = mesh->x[c[2]] - mesh->x[c[0]], by = mesh->y[c[2]] - mesh->y[c[0]],
-				   bz = vertex_z( mesh, c[2] ) - vertex_z( mesh, c[0] );
-			double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
 			double norm = sqrt( nx * nx + ny * ny + nz * nz );
 			/* Two-sided: a leaf is a thin sheet lit from whichever side faces the light. */
 			double lambert = norm > 0.0 ? fabs( dot3( light, nx, ny, nz ) ) / norm : 0.0;
 			shade = ambient + ( 1.0 - ambient ) * lambert;
 		}
+		/* The lower face shows when the normal points away from the camera. */
+		int lower = scene->lower_tint && dot3( f.toward, nx, ny, nz ) < 0.0;
 		double rgb[3] = { 0.0, 0.0, 0.0 }, corner[3];
 		for ( int q = 0; q < 3; ++q )
 		{
 			vertex_color( mesh, c[q], corner );
+			if ( lower )
+			{
+				float given[3] = { (float) corner[0], (float) corner[1], (float) corner[2] }, tinted[3];
+				sere_render_lower_tint( given, tinted );
+				corner[0] = tinted[0], corner[1] = tinted[1], corner[2] = tinted[2];
+			}
 			for ( int j = 0; j < 3; ++j )
 			{
 				rgb[j] += corner[j] * shade / 3.0;

@@ -80,6 +80,49 @@ int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere
 int sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
 						   sere_render_view* view, const sere_render_style* style, char* err, size_t err_size );
 
+/* A leaf seen in 3D: the ground it rests on with its shadow, and its two faces told apart.
+ * Kept apart from sere_render_style so the callers that list that struct's fields in order
+ * stay valid. All zero: nothing extra (sere_render_mesh_draw's picture).
+ *
+ * Faces: a triangle (a, b, c) shows its upper face when its normal (b - a) x (c - a) points
+ * towards the camera, else its lower face; for a leaf whose triangles run counter-clockwise
+ * seen from +z at rest, the upper face is the side of +z. With lower_tint the upper face keeps
+ * the per-vertex colors and the lower face is drawn in sere_render_lower_tint of them (paler
+ * and greyer, like the underside of a real leaf); both are Lambert shaded alike.
+ *
+ * Ground: a light gray quad in the plane z = ground_z under the mesh, its outline a shade
+ * darker, and on it the mesh's shadow: every triangle projected vertically onto the plane,
+ * the union filled once in a translucent dark gray (overlaps do not darken twice) and clipped
+ * to the quad. Both are drawn before the mesh, whatever the camera (from below, the mesh is
+ * still drawn over them). */
+typedef struct sere_render_scene
+{
+	int lower_tint;
+	int ground; /* draw the ground quad (and the shadow unless no_shadow) */
+	int no_shadow;
+	double ground_z;	  /* not finite: the mesh's lowest z, so it rests on the ground */
+	double ground_box[4]; /* x_min, y_min, x_max, y_max of the quad; empty (min >= max): the
+						   * mesh's xy footprint grown on every side by a fifth of its larger side */
+} sere_render_scene;
+
+/* The lower-face tint of rgb: halfway to a pale warm gray (0.88, 0.88, 0.82), so a fresh green
+ * (0.30, 0.55, 0.18) becomes (0.59, 0.72, 0.50) and a dry brown turns beige. */
+void sere_render_lower_tint( const float rgb[3], float out[3] );
+
+/* sere_render_fit_view for the mesh and, when scene asks for a ground, the four corners of its
+ * quad, so the whole scene fits the region; with a ground the center is then moved to the
+ * middle of the scene's projection (an oblique scene fills its region evenly). scene may be
+ * NULL (exactly sere_render_fit_view). */
+int sere_render_fit_scene( const sere_render_mesh* mesh, const sere_render_scene* scene, double w, double h,
+						   sere_render_view* view, char* err, size_t err_size );
+
+/* sere_render_mesh_draw with a scene (may be NULL: the same picture as sere_render_mesh_draw);
+ * an unfitted view is fitted with sere_render_fit_scene. Deterministic: the same input gives
+ * the same pixels. */
+int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
+								 sere_render_view* view, const sere_render_style* style, const sere_render_scene* scene,
+								 char* err, size_t err_size );
+
 /* Screen position of a model point under view in the region (x0, y0, w, h) (view fitted). */
 void sere_render_project( const sere_render_view* view, double x0, double y0, double w, double h, double x, double y,
 						  double z, double* sx, double* sy );
