@@ -22,6 +22,8 @@ extern "C"
 /* The oblique camera of the pictures, in degrees (sere_render_view's conventions). */
 #define SERE_LEAFPICS_AZIMUTH	( -35.0 )
 #define SERE_LEAFPICS_ELEVATION 30.0
+#define SERE_LEAFPICS_PANEL_WIDTH 340
+#define SERE_LEAFPICS_PANEL_HEIGHT 280
 
 /* One frame of a run: vertex positions (z may be NULL: a flat leaf at z = 0), the relative
  * water content per vertex (rwc may be NULL: the whole leaf colored by relative_water), the
@@ -44,7 +46,8 @@ typedef struct sere_leafpics_frame
  * ground_z is the plane the leaf rests on (the run's ground); not finite (-INFINITY: the run
  * has none) puts the ground at each frame's lowest point, under the leaf's lowest vertex.
  * title may be NULL. frame_count is 1..16; tri holds 3 tri_count vertex indices valid for
- * every frame. */
+ * every frame. Panels are SERE_LEAFPICS_PANEL_WIDTH x SERE_LEAFPICS_PANEL_HEIGHT; the sheet is
+ * max(760, 34 + 352 frame_count) pixels wide and 694 high (662 without a title). */
 int sere_leafpics_sheet( const char* path, const char* title, int frame_count, const sere_leafpics_frame* frames,
 						 const int32_t* tri, int32_t tri_count, float ground_z, char* err, size_t err_size );
 

@@ -1,4 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
+#include "leafpics.h"
 #include "render.h"
 
 #include <cairo.h>
@@ -520,5 +521,330 @@ Test( render, plane_picture_shows_veins_in_red )
 	const float bad[4] = { 0.0f, INFINITY, 0.0f, 0.0f };
 	plane.scalar = bad;
 	cr_assert_eq( sere_render_plane_png( path, 300, 240, &plane, err, sizeof( err ) ), -1 );
+	scratch_remove( &s );
+}
+
+/* --- 3D scenes: ground, shadow, the two faces, and the drying-leaf sheets ------------------- */
+
+/* The pixel of a canvas, read in place. */
+static void canvas_rgb( const sere_render_canvas* canvas, double x, double y, int rgb[3] )
+{
+	cairo_surface_flush( canvas->surface );
+	picture p = { canvas->surface, canvas->width, canvas->height };
+	picture_rgb( &p, (int) floor( x ), (int) floor( y ), rgb );
+}
+
+static int brightness( const int rgb[3] )
+{
+	return rgb[0] + rgb[1] + rgb[2];
+}
+
+static int saturation( const int rgb[3] )
+{
+	int hi = rgb[0] > rgb[1] ? rgb[0] : rgb[1], lo = rgb[0] < rgb[1] ? rgb[0] : rgb[1];
+	hi = rgb[2] > hi ? rgb[2] : hi, lo = rgb[2] < lo ? rgb[2] : lo;
+	return hi - lo;
+}
+
+Test( render, scene_null_draws_the_same_pixels_as_mesh_draw )
+{
+	char err[256] = { 0 };
+	const float z[4] = { 0.0f, 0.1f, 0.5f, 0.2f };
+	sere_render_mesh mesh = square_mesh( z, 0.30f, 0.55f, 0.18f );
+	sere_render_canvas a, b;
+	cr_assert_eq( sere_render_canvas_create( &a, 70, 50, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_render_canvas_create( &b, 70, 50, err, sizeof( err ) ), 0, "%s", err );
+	sere_render_view va = { .azimuth = -35.0, .elevation = 30.0, .margin = 4.0 }, vb = va;
+	cr_assert_eq( sere_render_mesh_draw( a.cr, 0, 0, 70, 50, &mesh, &va, NULL, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_render_mesh_draw_scene( b.cr, 0, 0, 70, 50, &mesh, &vb, NULL, NULL, err, sizeof( err ) ), 0,
+				  "%s", err );
+	cr_assert_eq( va.scale, vb.scale );
+	cairo_surface_flush( a.surface );
+	cairo_surface_flush( b.surface );
+	size_t bytes = (size_t) cairo_image_surface_get_stride( a.surface ) * 50;
+	cr_assert_eq( memcmp( cairo_image_surface_get_data( a.surface ), cairo_image_surface_get_data( b.surface ), bytes ),
+				  0, "a NULL scene changed the picture" );
+	sere_render_canvas_destroy( &a );
+	sere_render_canvas_destroy( &b );
+}
+
+/* A unit square floating at height `lift` (twice, stacked, with `stack`) over a ground at
+ * z = 0 that spans [-2, 3]^2, seen from the -y side 45 degrees up: the square sits high on
+ * the screen and its vertical shadow low, apart. */
+static void shadow_scene( sere_render_canvas* canvas, sere_render_view* view, int stack )
+{
+	static const float x[8] = { 0, 1, 1, 0, 0, 1, 1, 0 }, y[8] = { 0, 0, 1, 1, 0, 0, 1, 1 };
+	static const float z[8] = { 1, 1, 1, 1, 1.3f, 1.3f, 1.3f, 1.3f };
+	static const int32_t tri[12] = { 0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6 }; /* the second one upside down */
+	sere_render_mesh mesh = { .x = x,
+							  .y = y,
+							  .z = z,
+							  .vertex_count = 8,
+							  .triangles = tri,
+							  .triangle_count = stack ? 4 : 2,
+							  .color = { 0.30f, 0.55f, 0.18f } };
+	sere_render_scene scene = { .lower_tint = 1, .ground = 1, .ground_z = 0.0, .ground_box = { -2, -2, 3, 3 } };
+	char err[256] = { 0 };
+	cr_assert_eq( sere_render_canvas_create( canvas, 200, 200, err, sizeof( err ) ), 0, "%s", err );
+	*view = ( sere_render_view ){ .azimuth = 0.0, .elevation = 45.0, .margin = 4.0 };
+	cr_assert_eq(
+		sere_render_mesh_draw_scene( canvas->cr, 0, 0, 200, 200, &mesh, view, NULL, &scene, err, sizeof( err ) ), 0,
+		"%s", err );
+}
+
+Test( render, ground_is_darker_in_the_shadow_than_far_from_the_leaf )
+{
+	sere_render_canvas canvas;
+	sere_render_view view;
+	shadow_scene( &canvas, &view, 0 );
+	double sx, sy, fx, fy, lx, ly, ox, oy;
+	sere_render_project( &view, 0, 0, 200, 200, 0.5, 0.5, 0.0, &sx, &sy );	/* under the leaf */
+	sere_render_project( &view, 0, 0, 200, 200, 2.5, -1.5, 0.0, &fx, &fy ); /* far on the ground */
+	sere_render_project( &view, 0, 0, 200, 200, 0.5, 0.5, 1.0, &lx, &ly );	/* the leaf itself */
+	ox = oy = 1.0;															/* the region's margin, off the ground */
+	int shadow[3], far[3], leaf[3], off[3];
+	canvas_rgb( &canvas, sx, sy, shadow );
+	canvas_rgb( &canvas, fx, fy, far );
+	canvas_rgb( &canvas, lx, ly, leaf );
+	canvas_rgb( &canvas, ox, oy, off );
+	/* The ground is a light gray, neither white nor dark. */
+	cr_assert( brightness( far ) > 3 * 180 && brightness( far ) < 3 * 245, "ground (%d, %d, %d)", far[0], far[1],
+			   far[2] );
+	cr_assert_eq( brightness( off ), 3 * 255, "background (%d, %d, %d) is not white", off[0], off[1], off[2] );
+	cr_assert_lt( brightness( shadow ) + 3 * 60, brightness( far ), "shadow (%d, %d, %d) vs ground (%d, %d, %d)",
+				  shadow[0], shadow[1], shadow[2], far[0], far[1], far[2] );
+	/* The shadow is a gray, the leaf drawn over the ground is green. */
+	cr_assert_lt( saturation( shadow ), 12 );
+	cr_assert_gt( leaf[1], leaf[0] + 20, "leaf (%d, %d, %d) is not green", leaf[0], leaf[1], leaf[2] );
+	sere_render_canvas_destroy( &canvas );
+
+	/* A second layer over the first, turned the other way round: the shadow is one union, no
+	 * darker where the two overlap (and no hole where their windings would cancel). */
+	shadow_scene( &canvas, &view, 1 );
+	int doubled[3];
+	canvas_rgb( &canvas, sx, sy, doubled );
+	for ( int c = 0; c < 3; ++c )
+	{
+		cr_assert_leq( abs( doubled[c] - shadow[c] ), 1, "channel %d: %d with two layers, %d with one", c, doubled[c],
+					   shadow[c] );
+	}
+	sere_render_canvas_destroy( &canvas );
+}
+
+/* A pixel inside the unit square drawn unlit in color rgb, seen straight down
+ * (elevation 90) or straight up (-90), its triangles counter-clockwise seen from +z or not. */
+static void face_pixel( int flipped, double elevation, const sere_render_scene* scene, int rgb[3] )
+{
+	static const int32_t up[6] = { 0, 1, 2, 0, 2, 3 }, down[6] = { 0, 2, 1, 0, 3, 2 };
+	sere_render_mesh mesh = square_mesh( NULL, 0.30f, 0.55f, 0.18f );
+	mesh.triangles = flipped ? down : up;
+	sere_render_canvas canvas;
+	char err[256] = { 0 };
+	cr_assert_eq( sere_render_canvas_create( &canvas, 40, 40, err, sizeof( err ) ), 0, "%s", err );
+	sere_render_view view = { .azimuth = 0.0, .elevation = elevation, .margin = 4.0 };
+	sere_render_style unlit = { .unlit = 1 };
+	cr_assert_eq(
+		sere_render_mesh_draw_scene( canvas.cr, 0, 0, 40, 40, &mesh, &view, &unlit, scene, err, sizeof( err ) ), 0,
+		"%s", err );
+	canvas_rgb( &canvas, 12, 20, rgb ); /* inside, away from either diagonal */
+	sere_render_canvas_destroy( &canvas );
+}
+
+Test( render, lower_face_is_paler_than_upper_face )
+{
+	const sere_render_scene two_faces = { .lower_tint = 1 };
+	const float green[3] = { 0.30f, 0.55f, 0.18f };
+	float pale[3];
+	sere_render_lower_tint( green, pale );
+	int upper[3], flipped[3], below[3], flipped_below[3], plain[3];
+	face_pixel( 0, 90.0, &two_faces, upper );
+	face_pixel( 1, 90.0, &two_faces, flipped );
+	face_pixel( 0, -90.0, &two_faces, below );
+	face_pixel( 1, -90.0, &two_faces, flipped_below );
+	face_pixel( 1, 90.0, NULL, plain );
+	for ( int c = 0; c < 3; ++c )
+	{
+		/* Upper face: the colors as given; lower face (a flipped mesh from above, or the
+		 * mesh seen from below): the documented tint. */
+		cr_assert_leq( abs( upper[c] - (int) lroundf( 255.0f * green[c] ) ), 1, "upper channel %d: %d", c, upper[c] );
+		cr_assert_leq( abs( flipped[c] - (int) lroundf( 255.0f * pale[c] ) ), 1, "flipped channel %d: %d", c,
+					   flipped[c] );
+		cr_assert_eq( below[c], flipped[c], "seen from below, channel %d: %d vs %d", c, below[c], flipped[c] );
+		cr_assert_eq( flipped_below[c], upper[c], "flipped, from below, channel %d", c );
+		/* Without a scene, both faces keep the colors (the old pictures). */
+		cr_assert_eq( plain[c], upper[c] );
+	}
+	cr_assert_gt( brightness( flipped ), brightness( upper ) + 3 * 40, "lower face not lighter" );
+	cr_assert_lt( 10 * saturation( flipped ), 7 * saturation( upper ), "lower face not greyer (%d vs %d)",
+				  saturation( flipped ), saturation( upper ) );
+}
+
+/* A leaf-like disk of `rings` x `spokes` (plus the centre) whose rim is bent up by curl,
+ * triangles counter-clockwise seen from +z; water drops towards the rim as the leaf dries. */
+#define DISK_RINGS	   6
+#define DISK_SPOKES	   24
+#define DISK_VERTICES  ( 1 + DISK_RINGS * DISK_SPOKES )
+#define DISK_TRIANGLES ( DISK_SPOKES * ( 2 * DISK_RINGS - 1 ) )
+
+typedef struct disk
+{
+	float x[DISK_VERTICES], y[DISK_VERTICES], z[DISK_VERTICES], rwc[DISK_VERTICES];
+} disk;
+
+static int32_t disk_triangles[3 * DISK_TRIANGLES];
+
+static void disk_make( disk* d, double curl, double shrink, double water )
+{
+	d->x[0] = d->y[0] = d->z[0] = 0.0f;
+	d->rwc[0] = (float) water;
+	for ( int r = 1; r <= DISK_RINGS; ++r )
+	{
+		for ( int a = 0; a < DISK_SPOKES; ++a )
+		{
+			int i = 1 + ( r - 1 ) * DISK_SPOKES + a;
+			double t = 2.0 * 3.14159265358979323846 * a / DISK_SPOKES, u = (double) r / DISK_RINGS;
+			d->x[i] = (float) ( shrink * u * cos( t ) );
+			d->y[i] = (float) ( shrink * 1.4 * u * sin( t ) );
+			d->z[i] = (float) ( curl * u * u );
+			d->rwc[i] = (float) fmax( 0.0, water - ( 1.0 - water ) * 0.5 * u );
+		}
+	}
+	int k = 0;
+	for ( int a = 0; a < DISK_SPOKES; ++a )
+	{
+		disk_triangles[k++] = 0, disk_triangles[k++] = 1 + a, disk_triangles[k++] = 1 + ( a + 1 ) % DISK_SPOKES;
+	}
+	for ( int r = 1; r < DISK_RINGS; ++r )
+	{
+		for ( int a = 0; a < DISK_SPOKES; ++a )
+		{
+			int32_t i0 = 1 + ( r - 1 ) * DISK_SPOKES + a, i1 = 1 + ( r - 1 ) * DISK_SPOKES + ( a + 1 ) % DISK_SPOKES;
+			disk_triangles[k++] = i0, disk_triangles[k++] = i0 + DISK_SPOKES, disk_triangles[k++] = i1 + DISK_SPOKES;
+			disk_triangles[k++] = i0, disk_triangles[k++] = i1 + DISK_SPOKES, disk_triangles[k++] = i1;
+		}
+	}
+}
+
+static void disk_frames( disk d[3], sere_leafpics_frame frames[3] )
+{
+	disk_make( d + 0, 0.0, 1.0, 1.0 );
+	disk_make( d + 1, 0.5, 0.9, 0.6 );
+	disk_make( d + 2, 1.2, 0.8, 0.15 );
+	const int number[3] = { 0, 400, 1600 };
+	for ( int k = 0; k < 3; ++k )
+	{
+		frames[k] = ( sere_leafpics_frame ){ d[k].x, d[k].y, d[k].z, d[k].rwc, DISK_VERTICES, number[k], d[k].rwc[0] };
+	}
+}
+
+static long file_bytes( const char* path, unsigned char** data )
+{
+	FILE* f = fopen( path, "rb" );
+	cr_assert_not_null( f, "%s", path );
+	fseek( f, 0, SEEK_END );
+	long size = ftell( f );
+	fseek( f, 0, SEEK_SET );
+	*data = malloc( (size_t) size );
+	cr_assert_eq( fread( *data, 1, (size_t) size, f ), (size_t) size );
+	fclose( f );
+	return size;
+}
+
+Test( render, leafpics_sheet_is_a_png_of_the_documented_size_and_deterministic )
+{
+	scratch s;
+	scratch_make( &s );
+	char path[512], again[512], err[256] = { 0 };
+	scratch_path( &s, "leaf.png", path, sizeof( path ) );
+	scratch_path( &s, "again.png", again, sizeof( again ) );
+	disk d[3];
+	sere_leafpics_frame frames[3];
+	disk_frames( d, frames );
+	cr_assert_eq(
+		sere_leafpics_sheet( path, "drying", 3, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
+		0, "%s", err );
+	cr_assert_eq( sere_leafpics_sheet( again, "drying", 3, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err,
+									   sizeof( err ) ),
+				  0, "%s", err );
+	cr_assert_eq( scratch_tmp_count( &s ), 0 );
+	picture p = picture_load( path );
+	cr_assert_eq( p.width, 34 + 3 * ( SERE_LEAFPICS_PANEL_WIDTH + 12 ) );
+	cr_assert_eq( p.height, 694 );
+	/* Leaf colors in both rows of every column: the fresh column green, the dry one brown. */
+	int green[3] = { 0, 0, 0 }, brown[3] = { 0, 0, 0 };
+	for ( int k = 0; k < 3; ++k )
+	{
+		for ( int row = 0; row < 2; ++row )
+		{
+			int x0 = 34 + k * ( SERE_LEAFPICS_PANEL_WIDTH + 12 ),
+				y0 = 44 + 26 + row * ( SERE_LEAFPICS_PANEL_HEIGHT + 12 );
+			for ( int y = y0; y < y0 + SERE_LEAFPICS_PANEL_HEIGHT; y += 2 )
+			{
+				for ( int x = x0; x < x0 + SERE_LEAFPICS_PANEL_WIDTH; x += 2 )
+				{
+					int rgb[3];
+					picture_rgb( &p, x, y, rgb );
+					green[k] += row == 0 && rgb[1] > rgb[0] + 25 && rgb[1] > rgb[2] + 25;
+					brown[k] += row == 1 && rgb[0] > rgb[1] + 15 && rgb[1] > rgb[2] + 15;
+				}
+			}
+		}
+	}
+	cr_assert_gt( green[0], 500, "fresh leaf not green (%d)", green[0] );
+	cr_assert_gt( brown[2], 300, "dry leaf not brown (%d)", brown[2] );
+	cr_assert_lt( brown[0], 20 );
+	cairo_surface_destroy( p.surface );
+	unsigned char *a, *b;
+	long na = file_bytes( path, &a ), nb = file_bytes( again, &b );
+	cr_assert( na == nb && memcmp( a, b, (size_t) na ) == 0, "the same input gave different PNG bytes" );
+	free( a );
+	free( b );
+
+	scratch_path( &s, "view.png", path, sizeof( path ) );
+	cr_assert_eq(
+		sere_leafpics_view( path, NULL, frames + 2, disk_triangles, DISK_TRIANGLES, 0.0f, 300, err, sizeof( err ) ), 0,
+		"%s", err );
+	p = picture_load( path );
+	cr_assert_eq( p.width, 300 );
+	cr_assert_eq( p.height, 300 );
+	cairo_surface_destroy( p.surface );
+	scratch_remove( &s );
+}
+
+Test( render, leafpics_errors_name_the_file )
+{
+	char err[256] = { 0 };
+	disk d[3];
+	sere_leafpics_frame frames[3];
+	disk_frames( d, frames );
+	const char* bad = "/nonexistent-sere-dir/leaf.png";
+	cr_assert_eq(
+		sere_leafpics_sheet( bad, NULL, 3, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
+		-1 );
+	cr_assert_not_null( strstr( err, bad ), "%s", err );
+	cr_assert_null( strchr( err, '\n' ) );
+	err[0] = '\0';
+	cr_assert_eq(
+		sere_leafpics_view( bad, NULL, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, 0, err, sizeof( err ) ), -1 );
+	cr_assert_not_null( strstr( err, bad ), "%s", err );
+
+	scratch s;
+	scratch_make( &s );
+	char path[512];
+	scratch_path( &s, "broken.png", path, sizeof( path ) );
+	int32_t wrong[3] = { 0, 1, DISK_VERTICES };
+	err[0] = '\0';
+	cr_assert_eq( sere_leafpics_sheet( path, NULL, 3, frames, wrong, 1, -INFINITY, err, sizeof( err ) ), -1 );
+	cr_assert_eq( strncmp( err, path, strlen( path ) ), 0, "%s", err );
+	cr_assert_eq( access( path, F_OK ), -1 );
+	d[1].z[5] = NAN;
+	cr_assert_eq(
+		sere_leafpics_sheet( path, NULL, 3, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
+		-1 );
+	cr_assert_not_null( strstr( err, "frame 400" ), "%s", err );
+	cr_assert_eq(
+		sere_leafpics_sheet( path, NULL, 0, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
+		-1 );
+	cr_assert_eq( scratch_tmp_count( &s ), 0 );
 	scratch_remove( &s );
 }
