@@ -195,7 +195,8 @@ int sere_leafpics_sheet( const char* path, const char* title, int frame_count, c
 		};
 	}
 
-	const int pw = SERE_LEAFPICS_PANEL_WIDTH, ph = SERE_LEAFPICS_PANEL_HEIGHT, pad = 12, left = 34, header = 26, legend_height = 40;
+	const int pw = SERE_LEAFPICS_PANEL_WIDTH, ph = SERE_LEAFPICS_PANEL_HEIGHT, pad = 12, left = 34, header = 26,
+			  legend_height = 40;
 	int has_title = title != NULL && title[0] != '\0';
 	int top = has_title ? 44 : pad;
 	int canvas_w = left + frame_count * ( pw + pad );

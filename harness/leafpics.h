@@ -20,9 +20,9 @@ extern "C"
 #endif
 
 /* The oblique camera of the pictures, in degrees (sere_render_view's conventions). */
-#define SERE_LEAFPICS_AZIMUTH	( -35.0 )
-#define SERE_LEAFPICS_ELEVATION 30.0
-#define SERE_LEAFPICS_PANEL_WIDTH 340
+#define SERE_LEAFPICS_AZIMUTH	   ( -35.0 )
+#define SERE_LEAFPICS_ELEVATION	   30.0
+#define SERE_LEAFPICS_PANEL_WIDTH  340
 #define SERE_LEAFPICS_PANEL_HEIGHT 280
 
 /* One frame of a run: vertex positions (z may be NULL: a flat leaf at z = 0), the relative
