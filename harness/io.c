@@ -29,16 +29,37 @@ int sere_atomic_commit( sere_atomic_file* file )
 {
 	if ( file->f == NULL )
 	{
+		errno = EBADF;
 		return -1;
 	}
-	int failed = ferror( file->f ) != 0;
-	failed |= fflush( file->f ) != 0;
-	failed |= fsync( fileno( file->f ) ) != 0;
-	failed |= fclose( file->f ) != 0;
+	/* The first failure's errno is the reason; a stream error set by an earlier write left its
+	 * errno in place unless something else failed since. */
+	int error = 0;
+	if ( ferror( file->f ) )
+	{
+		error = errno != 0 ? errno : EIO;
+	}
+	if ( fflush( file->f ) != 0 && error == 0 )
+	{
+		error = errno;
+	}
+	if ( fsync( fileno( file->f ) ) != 0 && error == 0 )
+	{
+		error = errno;
+	}
+	if ( fclose( file->f ) != 0 && error == 0 )
+	{
+		error = errno;
+	}
 	file->f = NULL;
-	if ( failed || rename( file->tmp_path, file->path ) != 0 )
+	if ( error == 0 && rename( file->tmp_path, file->path ) != 0 )
+	{
+		error = errno;
+	}
+	if ( error != 0 )
 	{
 		remove( file->tmp_path );
+		errno = error;
 		return -1;
 	}
 	return 0;
@@ -58,8 +79,14 @@ int sere_mkdirs( const char* dir )
 {
 	char path[4096];
 	size_t length = strlen( dir );
-	if ( length == 0 || length >= sizeof( path ) )
+	if ( length == 0 )
 	{
+		errno = ENOENT;
+		return -1;
+	}
+	if ( length >= sizeof( path ) )
+	{
+		errno = ENAMETOOLONG;
 		return -1;
 	}
 	memcpy( path, dir, length + 1 );
@@ -77,7 +104,124 @@ int sere_mkdirs( const char* dir )
 		}
 	}
 	struct stat info;
-	return ( stat( dir, &info ) == 0 && S_ISDIR( info.st_mode ) ) ? 0 : -1;
+	if ( stat( dir, &info ) != 0 )
+	{
+		return -1;
+	}
+	if ( !S_ISDIR( info.st_mode ) )
+	{
+		errno = ENOTDIR;
+		return -1;
+	}
+	return 0;
+}
+
+int sere_check_outputs( const char* dir, const char* const* names, int count, char* err, size_t err_size )
+{
+	for ( int k = 0; k < count; ++k )
+	{
+		char path[4200];
+		snprintf( path, sizeof( path ), "%s/%s", dir, names[k] );
+		struct stat info;
+		if ( stat( path, &info ) == 0 && S_ISDIR( info.st_mode ) )
+		{
+			snprintf( err, err_size, "%s is a directory, not a file", path );
+			return -1;
+		}
+	}
+	return 0;
+}
+
+/* Length of the UTF-8 character at s (1 to 4), or 0 when s does not start a valid one. */
+static int utf8_length( const unsigned char* s )
+{
+	unsigned char c = s[0];
+	int length = c < 0x80				  ? 1
+				 : c >= 0xC2 && c <= 0xDF ? 2
+				 : c >= 0xE0 && c <= 0xEF ? 3
+				 : c >= 0xF0 && c <= 0xF4 ? 4
+										  : 0;
+	if ( length > 1 )
+	{
+		/* the second byte's range excludes overlong forms, surrogates and code points past U+10FFFF */
+		unsigned char lo = c == 0xE0 ? 0xA0 : c == 0xF0 ? 0x90 : 0x80;
+		unsigned char hi = c == 0xED ? 0x9F : c == 0xF4 ? 0x8F : 0xBF;
+		if ( s[1] < lo || s[1] > hi )
+		{
+			return 0;
+		}
+		for ( int k = 2; k < length; ++k )
+		{
+			if ( s[k] < 0x80 || s[k] > 0xBF )
+			{
+				return 0;
+			}
+		}
+	}
+	return length;
+}
+
+long sere_utf8_invalid_at( const char* text )
+{
+	const unsigned char* s = (const unsigned char*) text;
+	for ( long at = 0; s[at] != '\0'; )
+	{
+		int length = utf8_length( s + at );
+		if ( length == 0 )
+		{
+			return at;
+		}
+		at += length;
+	}
+	return -1;
+}
+
+const char* sere_json_escape( char* out, size_t size, const char* text )
+{
+	if ( size == 0 )
+	{
+		return out;
+	}
+	size_t used = 0;
+	const unsigned char* s = (const unsigned char*) ( text != NULL ? text : "" );
+	while ( *s != '\0' )
+	{
+		char piece[8];
+		int consumed = 1;
+		int length = utf8_length( s );
+		if ( *s == '"' || *s == '\\' )
+		{
+			piece[0] = '\\', piece[1] = (char) *s, piece[2] = '\0';
+		}
+		else if ( *s == '\n' || *s == '\t' || *s == '\r' )
+		{
+			piece[0] = '\\', piece[1] = *s == '\n' ? 'n' : *s == '\t' ? 't' : 'r', piece[2] = '\0';
+		}
+		else if ( *s < 0x20 || *s == 0x7F )
+		{
+			snprintf( piece, sizeof( piece ), "\\u%04x", (unsigned) *s );
+		}
+		else if ( length == 0 )
+		{
+			snprintf( piece, sizeof( piece ), "\\ufffd" );
+		}
+		else
+		{
+			memcpy( piece, s, (size_t) length );
+			piece[length] = '\0';
+			consumed = length;
+		}
+		size_t piece_length = strlen( piece );
+		if ( used + piece_length + 1 > size )
+		{
+			break;
+		}
+		memcpy( out + used, piece, piece_length );
+		used += piece_length;
+		s += consumed;
+	}
+	out[used] = '\0';
+	return out;
 }
 
 int sere_write_ply( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
@@ -183,6 +327,50 @@ int sere_write_pvd( const char* path, const char* const* files, const double* ti
 	return sere_atomic_commit( &file );
 }
 
+int sere_pvd_append( sere_pvd_series* series, const char* path, const char* file, double time )
+{
+	if ( series->count == series->capacity )
+	{
+		int32_t capacity = series->capacity > 0 ? 2 * series->capacity : 64;
+		char** files = realloc( series->files, sizeof( char* ) * (size_t) capacity );
+		if ( files == NULL )
+		{
+			errno = ENOMEM;
+			return -1;
+		}
+		series->files = files;
+		double* times = realloc( series->times, sizeof( double ) * (size_t) capacity );
+		if ( times == NULL )
+		{
+			errno = ENOMEM;
+			return -1;
+		}
+		series->times = times;
+		series->capacity = capacity;
+	}
+	char* copy = strdup( file );
+	if ( copy == NULL )
+	{
+		errno = ENOMEM;
+		return -1;
+	}
+	series->files[series->count] = copy;
+	series->times[series->count] = time;
+	series->count += 1;
+	return sere_write_pvd( path, (const char* const*) series->files, series->times, series->count );
+}
+
+void sere_pvd_free( sere_pvd_series* series )
+{
+	for ( int32_t k = 0; k < series->count; ++k )
+	{
+		free( series->files[k] );
+	}
+	free( series->files );
+	free( series->times );
+	memset( series, 0, sizeof( *series ) );
+}
+
 double sere_now( void )
 {
 	struct timespec ts;
@@ -263,5 +451,15 @@ int sere_parse_real( const char* command, const char* option, const char* text, 
 		return -1;
 	}
 	*value = v;
+	return 0;
+}
+
+int sere_parse_dir( const char* command, const char* option, const char* text )
+{
+	if ( *text == '\0' )
+	{
+		fprintf( stderr, "sere %s: %s needs a directory name, not an empty string\n", command, option );
+		return -1;
+	}
 	return 0;
 }

@@ -15,13 +15,30 @@ typedef struct sere_atomic_file
 
 /* Opens the temporary file; NULL (with errno set) on failure. */
 FILE* sere_atomic_open( sere_atomic_file* file, const char* path );
-/* Flushes, closes and renames; 0 on success, -1 on any error (the temporary is removed). */
+/* Flushes, closes and renames; 0 on success, -1 on any error (the temporary is removed and errno
+ * holds the first error's reason, EIO when a write failed without one). */
 int sere_atomic_commit( sere_atomic_file* file );
 /* Closes and removes the temporary without touching path. */
 void sere_atomic_abort( sere_atomic_file* file );
 
-/* mkdir -p; 0 on success. */
+/* mkdir -p; 0 on success, else -1 with errno set (ENOENT for an empty name, ENOTDIR when a
+ * component exists but is not a directory). */
 int sere_mkdirs( const char* dir );
+
+/* Checks that none of dir/NAME for the count names exists as a directory, where a file is to be
+ * written (rename would fail only at the end of a long run). 0, or -1 with one line
+ * "DIR/NAME is a directory, not a file" in err. */
+int sere_check_outputs( const char* dir, const char* const* names, int count, char* err, size_t err_size );
+
+/* The contents of a JSON string (without the quotes) for text: '"', '\\' and control characters
+ * escaped, bytes that are not UTF-8 written as \ufffd; cut at a whole character to fit size
+ * (6 bytes per input byte, plus one, always suffice). Returns out. Every JSON writer of sere
+ * passes user-given text (leaf, state and preset names, paths) through it. */
+const char* sere_json_escape( char* out, size_t size, const char* text );
+
+/* The offset of the first byte of text that does not start a valid UTF-8 character, or -1 when
+ * all of it is UTF-8 (cairo draws only UTF-8; names go into titles). */
+long sere_utf8_invalid_at( const char* text );
 
 /* A named per-vertex float property for the mesh writers. */
 typedef struct sere_vertex_property
@@ -44,6 +61,19 @@ int sere_write_vtp( const char* path, const float* x, const float* y, const floa
 /* ParaView collection of files (relative names) at the given times; written atomically. */
 int sere_write_pvd( const char* path, const char* const* files, const double* times, int32_t count );
 
+/* A growing time series of files for a .pvd: no limit on its length but memory. */
+typedef struct sere_pvd_series
+{
+	char** files;
+	double* times;
+	int32_t count, capacity;
+} sere_pvd_series;
+
+/* Appends file (a name relative to the .pvd) at time and rewrites path atomically; 0 on
+ * success, -1 with errno set. */
+int sere_pvd_append( sere_pvd_series* series, const char* path, const char* file, double time );
+void sere_pvd_free( sere_pvd_series* series );
+
 /* A progress bar on stderr, drawn only when stderr is a terminal. */
 typedef struct sere_progress
 {
@@ -65,3 +95,6 @@ double sere_now( void );
  * one line "sere COMMAND: OPTION takes ..., not 'TEXT'" on stderr and -1. */
 int sere_parse_long( const char* command, const char* option, const char* text, long lo, long hi, long* value );
 int sere_parse_real( const char* command, const char* option, const char* text, double lo, double hi, double* value );
+/* An output directory option's value: 0 when text names a directory; for an empty text one line
+ * "sere COMMAND: OPTION needs a directory name, not an empty string" on stderr and -1. */
+int sere_parse_dir( const char* command, const char* option, const char* text );
