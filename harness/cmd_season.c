@@ -108,6 +108,23 @@ static int number( const char* text, double* value )
 	return *text != '\0' && *end == '\0' && errno == 0 && isfinite( *value );
 }
 
+/* The next line of f, of any length, into *text (getline's buffer); 1, or 0 at the end, or -1
+ * after printing "PATH:LINE: ..." for a NUL byte or "PATH: cannot read: ..." for an error. */
+static int next_line( FILE* f, const char* path, int line, char** text, size_t* capacity )
+{
+	errno = 0;
+	ssize_t got = getline( text, capacity, f );
+	if ( got < 0 )
+	{
+		return ferror( f ) ? fail_line( path, 0, "cannot read: %s", strerror( errno != 0 ? errno : EIO ) ) : 0;
+	}
+	if ( memchr( *text, '\0', (size_t) got ) != NULL )
+	{
+		return fail_line( path, line, "a NUL byte (this is not a text file)" );
+	}
+	return 1;
+}
+
 static int probability_list( char** words, double* out, const char* path, int line, const char* what )
 {
 	for ( int k = 0; k < 4; ++k )
@@ -129,11 +146,17 @@ static int read_chain( const char* path, chain_file* c )
 	{
 		return fail_line( path, 0, "cannot open: %s", strerror( errno ) );
 	}
-	char text[1024];
-	int line = 0, bad = 0;
-	while ( !bad && fgets( text, sizeof( text ), f ) != NULL )
+	char* text = NULL;
+	size_t capacity = 0;
+	int line = 0, bad = 0, more;
+	while ( !bad && ( more = next_line( f, path, line + 1, &text, &capacity ) ) != 0 )
 	{
 		line += 1;
+		if ( more < 0 )
+		{
+			bad = -1;
+			break;
+		}
 		char* w[16];
 		int n = split_words( text, w, 15 );
 		if ( n == 0 )
@@ -238,6 +261,7 @@ static int read_chain( const char* path, chain_file* c )
 			bad = fail_line( path, line, "unknown keyword '%s' (corners, state, transition, initial)", w[0] );
 		}
 	}
+	free( text );
 	fclose( f );
 	if ( bad )
 	{
@@ -285,11 +309,17 @@ static int read_schedule( const char* path, schedule* s )
 	{
 		return fail_line( path, 0, "cannot open: %s", strerror( errno ) );
 	}
-	char text[1024];
-	int line = 0, bad = 0;
-	while ( !bad && fgets( text, sizeof( text ), f ) != NULL )
+	char* text = NULL;
+	size_t capacity = 0;
+	int line = 0, bad = 0, more;
+	while ( !bad && ( more = next_line( f, path, line + 1, &text, &capacity ) ) != 0 )
 	{
 		line += 1;
+		if ( more < 0 )
+		{
+			bad = -1;
+			break;
+		}
 		char* w[8];
 		int n = split_words( text, w, 5 );
 		if ( n == 0 )
@@ -332,6 +362,7 @@ static int read_schedule( const char* path, schedule* s )
 			s->count += 1;
 		}
 	}
+	free( text );
 	fclose( f );
 	if ( !bad && s->count < 2 )
 	{
@@ -481,7 +512,10 @@ static int parse_options( int argc, char** argv, options* o )
 		else if ( strcmp( a, "--mask" ) == 0 )
 			o->mask = v;
 		else if ( strcmp( a, "--out" ) == 0 )
+		{
 			o->out = v;
+			bad = sere_parse_dir( "season", a, v );
+		}
 		else if ( strcmp( a, "--days" ) == 0 )
 			bad = sere_parse_long( "season", a, v, 1, MAX_DAYS, &o->days );
 		else if ( strcmp( a, "--temperature" ) == 0 )
@@ -1156,8 +1190,10 @@ int sere_cmd_season( int argc, char** argv )
 	fprintf( f, "  \"max_abs_sampled_minus_exact\": %.3g,\n  \"final\": {", worst );
 	for ( int32_t s = 0; s < S; ++s )
 	{
-		fprintf( f, "%s\n    \"%s\": { \"exact\": %.6f, \"sampled\": %.6f }", s > 0 ? "," : "", chain.name[s],
-				 exact[(size_t) days * S + s], sampled[(size_t) days * S + s] );
+		char name_json[6 * NAME_SIZE];
+		fprintf( f, "%s\n    \"%s\": { \"exact\": %.6f, \"sampled\": %.6f }", s > 0 ? "," : "",
+				 sere_json_escape( name_json, sizeof( name_json ), chain.name[s] ), exact[(size_t) days * S + s],
+				 sampled[(size_t) days * S + s] );
 	}
 	fprintf( f, "\n  }\n}\n" );
 	if ( sere_atomic_commit( &json ) != 0 )

@@ -320,6 +320,12 @@ static sere_status read_name( reader* r, blocks* b, sere_leaf_file* leaf )
 	{
 		return fail( r, r->line, SERE_ERR_ARGUMENT, "name longer than %d characters", (int) sizeof( leaf->name ) - 1 );
 	}
+	long bad = sere_utf8_invalid_at( r->rest );
+	if ( bad >= 0 )
+	{
+		return fail( r, r->line, SERE_ERR_ARGUMENT, "name is not UTF-8 text (byte 0x%02X at character %ld)",
+					 (unsigned) (unsigned char) r->rest[bad], bad + 1 );
+	}
 	snprintf( leaf->name, sizeof( leaf->name ), "%s", r->rest );
 	b->name_line = r->line;
 	return SERE_OK;
@@ -598,6 +604,11 @@ sere_status sere_leaf_read( const char* path, sere_leaf_file* leaf, char* err, s
 		const char* dot = strrchr( start, '.' );
 		int length = dot != NULL && dot != start ? (int) ( dot - start ) : (int) strlen( start );
 		snprintf( leaf->name, sizeof( leaf->name ), "%.*s", length, start );
+		/* a file name need not be UTF-8; the name goes into picture titles, which must be */
+		for ( long bad; ( bad = sere_utf8_invalid_at( leaf->name ) ) >= 0; )
+		{
+			leaf->name[bad] = '?';
+		}
 	}
 	return SERE_OK;
 }

@@ -1,3 +1,4 @@
+#define _POSIX_C_SOURCE 200809L
 #include "params.h"
 
 #include <errno.h>
@@ -234,11 +235,21 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 		snprintf( err, err_size, "%s: %s", path, strerror( errno ) );
 		return -1;
 	}
-	char line[1024];
+	/* Lines of any length: a long comment stays a comment, and a line number is a line's. */
+	char* line = NULL;
+	size_t capacity = 0;
+	ssize_t got;
 	int number = 0;
-	while ( fgets( line, sizeof( line ), f ) != NULL )
+	while ( ( got = getline( &line, &capacity, f ) ) >= 0 )
 	{
 		++number;
+		if ( memchr( line, '\0', (size_t) got ) != NULL )
+		{
+			snprintf( err, err_size, "%s:%d: a NUL byte (this is not a text file)", path, number );
+			free( line );
+			fclose( f );
+			return -1;
+		}
 		char* hash = strchr( line, '#' );
 		if ( hash != NULL )
 		{
@@ -263,11 +274,20 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 		if ( sere_params_set( params, start, message, sizeof( message ) ) != 0 )
 		{
 			snprintf( err, err_size, "%s:%d: %s", path, number, message );
+			free( line );
 			fclose( f );
 			return -1;
 		}
 	}
+	int failed = ferror( f );
+	int error = errno;
+	free( line );
 	fclose( f );
+	if ( failed )
+	{
+		snprintf( err, err_size, "%s: cannot read: %s", path, strerror( error ) );
+		return -1;
+	}
 	return 0;
 }
 
