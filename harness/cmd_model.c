@@ -1,5 +1,6 @@
 #include "build.h"
 #include "commands.h"
+#include "io.h"
 #include "model.h"
 #include "params.h"
 #include "pbd.h"
@@ -17,7 +18,9 @@ static void model_help( void )
 			"  --particles P --springs S  build exactly P particles and S springs (N = P + 2 - (S + 12)/6\n"
 			"                             triangle-layer points, B = 3N - P - 2 of them on the outline)\n"
 			"  --points N                 N triangle-layer points, B chosen so outline and interior spacing match\n"
-			"                             (default 3000)\n"
+			"                             (default 3000); a leaf needs enough for its outline and a point on\n"
+			"                             vein (about 80 to 400 for data/leaves); fewer fail, naming a count\n"
+			"                             that works\n"
 			"  --seed K                   interior sampling seed (default 1)\n"
 			"  --preset P                 take h_vein, h_surf, D, masses from a preset (data/presets)\n"
 			"  --set key=value            override one parameter (sere run --help lists them)\n"
@@ -153,16 +156,18 @@ int sere_cmd_model( int argc, char** argv )
 	const sere_coloring* coloring = sere_pbd_coloring( pbd );
 	if ( json )
 	{
+		char name_json[6 * sizeof( name )];
 		printf(
 			"{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"triangles\": %d, \"triangle_particles\": %d, "
 			"\"voronoi_particles\": %d, \"t_springs\": %d, \"v_springs\": %d, \"l_springs\": %d, \"vein_springs\": %d, "
 			"\"boundary_vertices\": %d, \"vein_points\": %d, \"interior_points\": %d, \"min_angle_deg\": %.4f, "
 			"\"min_angle_free_deg\": %.4f, \"max_aspect\": %.4f, \"spacing\": %.6g, \"area\": %.6g, \"perimeter\": "
 			"%.6g}\n",
-			name, model.p.count, model.s.count, model.triangle_count, model.triangle_particles, model.triangle_count,
-			model.t_springs, model.v_springs, model.l_springs, model.vein_springs, model.boundary_count,
-			report.vein_points, report.interior_points, report.quality.min_angle_deg, report.quality.min_angle_free_deg,
-			report.quality.max_aspect, report.spacing, report.area, report.perimeter );
+			sere_json_escape( name_json, sizeof( name_json ), name ), model.p.count, model.s.count,
+			model.triangle_count, model.triangle_particles, model.triangle_count, model.t_springs, model.v_springs,
+			model.l_springs, model.vein_springs, model.boundary_count, report.vein_points, report.interior_points,
+			report.quality.min_angle_deg, report.quality.min_angle_free_deg, report.quality.max_aspect, report.spacing,
+			report.area, report.perimeter );
 	}
 	else
 	{

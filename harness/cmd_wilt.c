@@ -823,6 +823,7 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		else if ( strcmp( a, "--out" ) == 0 )
 		{
 			o->out = v;
+			bad = sere_parse_dir( "wilt", a, v );
 		}
 		else if ( strcmp( a, "--format" ) == 0 )
 		{
@@ -1187,18 +1188,21 @@ int sere_cmd_wilt( int argc, char** argv )
 	double per_frame = 1e3 * simulate / (double) o.frames;
 	if ( o.json )
 	{
+		char name_json[6 * sizeof( r.file.name )], out_json[6 * 4096];
+		sere_json_escape( name_json, sizeof( name_json ), name );
+		sere_json_escape( out_json, sizeof( out_json ), o.out );
 		printf( "{\"leaf\": \"%s\", \"leaves\": %d, \"blade_vertices\": %d, \"blade_triangles\": %d, "
 				"\"leaf_vertices\": %d, \"leaf_triangles\": %d, \"joints_per_leaf\": %d, \"veins_per_leaf\": %d, "
 				"\"vertices\": %d, \"triangles\": %d, \"frames\": %ld, \"speed\": %.6g, \"threads\": %d, \"setup_ms\": "
 				"%.3f, \"frame_ms\": %.3f, \"output_ms\": %.3f, \"droop_limited\": %d, \"angle_limited\": %d, "
 				"\"down_limited\": %d, \"pierce_shortened\": %d, \"pulled_back\": %d, \"reverted_frames\": %d, "
 				"\"deepest_joint_droop\": %.6g, \"self_intersections\": %lld, \"out\": %s%s%s}\n",
-				name, leaves, r.blade.vertex_count, r.blade.triangle_count, r.mesh.vertex_count, r.mesh.triangle_count,
-				r.skeleton.joint_count, r.skeleton.vein_count, plant->vertex_count, plant->triangle_count, o.frames,
-				speed, threads, 1e3 * setup, per_frame, 1e3 * output / (double) o.frames, total.pose.droop_limited,
-				total.pose.angle_limited, total.pose.down_limited, total.pierce.shortened, total.pierce.pulled_back,
-				total.pierce.reverted, deepest, (long long) intersections, o.out ? "\"" : "", o.out ? o.out : "null",
-				o.out ? "\"" : "" );
+				name_json, leaves, r.blade.vertex_count, r.blade.triangle_count, r.mesh.vertex_count,
+				r.mesh.triangle_count, r.skeleton.joint_count, r.skeleton.vein_count, plant->vertex_count,
+				plant->triangle_count, o.frames, speed, threads, 1e3 * setup, per_frame,
+				1e3 * output / (double) o.frames, total.pose.droop_limited, total.pose.angle_limited,
+				total.pose.down_limited, total.pierce.shortened, total.pierce.pulled_back, total.pierce.reverted,
+				deepest, (long long) intersections, o.out ? "\"" : "", o.out ? out_json : "null", o.out ? "\"" : "" );
 	}
 	else
 	{
