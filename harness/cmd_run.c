@@ -7,6 +7,7 @@
 #include "topo.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -113,14 +114,17 @@ typedef struct snapshot
 	char caption[96];
 } snapshot;
 
+/* Writes frame's PLY and VTP files and adds the VTP to leaf.pvd; 0, or -1 with "cannot write
+ * PATH: reason" in err. */
 static int write_frame( const char* out, int frame, double time, const sere_model* model, const float* rwc,
-						char names[][64], double* times, int* written )
+						sere_pvd_series* pvd, char* err, size_t err_size )
 {
 	const sere_particles* p = &model->p;
 	int32_t n = model->triangle_particles;
 	float* water = malloc( sizeof( float ) * (size_t) n );
 	if ( water == NULL )
 	{
+		snprintf( err, err_size, "frame %d: out of memory", frame );
 		return -1;
 	}
 	for ( int32_t i = 0; i < n; ++i )
@@ -131,23 +135,36 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 	char path[4096];
 	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
 	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 3 );
-	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.vtp", out, frame );
-	failed |= sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 3 );
+	if ( !failed )
+	{
+		snprintf( path, sizeof( path ), "%s/frames/frame_%05d.vtp", out, frame );
+		failed = sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 3 );
+		if ( failed )
+		{
+			/* no half frame: the PLY goes too, which on a full disk leaves room for the summary */
+			int error = errno;
+			char ply[4096];
+			snprintf( ply, sizeof( ply ), "%s/frames/frame_%05d.ply", out, frame );
+			remove( ply );
+			errno = error;
+		}
+	}
+	int error = errno;
 	free( water );
 	if ( failed )
 	{
+		snprintf( err, err_size, "cannot write %s: %s", path, strerror( error ) );
 		return -1;
 	}
-	snprintf( names[*written], 64, "frames/frame_%05d.vtp", frame );
-	times[*written] = time;
-	*written += 1;
-	const char* files[1024];
-	for ( int k = 0; k < *written; ++k )
-	{
-		files[k] = names[k];
-	}
+	char name[64];
+	snprintf( name, sizeof( name ), "frames/frame_%05d.vtp", frame );
 	snprintf( path, sizeof( path ), "%s/leaf.pvd", out );
-	return sere_write_pvd( path, files, times, *written );
+	if ( sere_pvd_append( pvd, path, name, time ) != 0 )
+	{
+		snprintf( err, err_size, "cannot write %s: %s", path, strerror( errno ) );
+		return -1;
+	}
+	return 0;
 }
 
 /* The contact sheet: every panel at frame 0's scale, centred on its own leaf so a drifting
@@ -255,6 +272,8 @@ int sere_cmd_run( int argc, char** argv )
 		else if ( strcmp( a, "--out" ) == 0 )
 		{
 			out = argv[++i];
+			if ( sere_parse_dir( "run", a, out ) != 0 )
+				return 2;
 		}
 		else if ( strcmp( a, "--set" ) == 0 )
 		{
@@ -344,7 +363,14 @@ int sere_cmd_run( int argc, char** argv )
 	snprintf( frames_dir, sizeof( frames_dir ), "%s/frames", out );
 	if ( sere_mkdirs( frames_dir ) != 0 )
 	{
-		fprintf( stderr, "sere run: cannot create %s\n", frames_dir );
+		fprintf( stderr, "sere run: cannot create %s: %s\n", frames_dir, strerror( errno ) );
+		sere_model_destroy( &model );
+		return 1;
+	}
+	static const char* const outputs[] = { "stats.csv", "summary.json", "leaf.pvd", "drying.png", "curves.png" };
+	if ( sere_check_outputs( out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere run: %s\n", err );
 		sere_model_destroy( &model );
 		return 1;
 	}
@@ -385,9 +411,8 @@ int sere_cmd_run( int argc, char** argv )
 	double* curve_t = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
 	double* curve_rwc = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
 	double* curve_area = malloc( sizeof( double ) * (size_t) ( frames + 1 ) );
-	char( *names )[64] = malloc( 64 * 1024 );
-	double* pvd_times = malloc( sizeof( double ) * 1024 );
-	if ( !rwc || !curve_t || !curve_rwc || !curve_area || !names || !pvd_times )
+	sere_pvd_series pvd = { 0 }; /* the mesh frames written, for leaf.pvd */
+	if ( !rwc || !curve_t || !curve_rwc || !curve_area )
 	{
 		fprintf( stderr, "sere run: out of memory\n" );
 		return 1;
@@ -398,7 +423,7 @@ int sere_cmd_run( int argc, char** argv )
 	FILE* csv = sere_atomic_open( &csv_file, csv_path );
 	if ( csv == NULL )
 	{
-		fprintf( stderr, "sere run: cannot write %s\n", csv_path );
+		fprintf( stderr, "sere run: cannot write %s: %s\n", csv_path, strerror( errno ) );
 		return 1;
 	}
 	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,cg_iterations_t,"
@@ -409,10 +434,14 @@ int sere_cmd_run( int argc, char** argv )
 
 	signal( SIGINT, on_signal );
 	signal( SIGTERM, on_signal );
+	signal( SIGXFSZ, SIG_IGN ); /* past a file-size limit a write fails (EFBIG) and is reported */
 	double area0 = leaf_area( &model );
 	sere_leaf_relative_water( sim, rwc );
-	int written = 0;
-	write_frame( out, 0, 0.0, &model, rwc, names, pvd_times, &written );
+	char failure[4400] = ""; /* the first output error; the run stops there */
+	if ( write_frame( out, 0, 0.0, &model, rwc, &pvd, failure, sizeof( failure ) ) != 0 )
+	{
+		fprintf( stderr, "sere run: %s\n", failure );
+	}
 	curve_t[0] = 0.0, curve_rwc[0] = 1.0, curve_area[0] = 1.0;
 	double sum_osmosis = 0, sum_dynamics = 0, sum_collisions = 0, sum_total = 0;
 	long long done = 0, cap_hits = 0, stalls = 0;
@@ -421,7 +450,7 @@ int sere_cmd_run( int argc, char** argv )
 	sere_progress progress;
 	sere_progress_begin( &progress, "drying", frames );
 	/* the first contact-sheet panel: the fresh leaf */
-	for ( long long frame = 0; frame <= frames && !interrupted; ++frame )
+	for ( long long frame = 0; frame <= frames && !interrupted && failure[0] == '\0'; ++frame )
 	{
 		if ( frame > 0 )
 		{
@@ -451,13 +480,19 @@ int sere_cmd_run( int argc, char** argv )
 					 stats.max_strain, stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations,
 					 stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts, stats.unresolved, stats.collision_thickness,
 					 stats.desiccated, stats.osmosis_ms, stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
+			if ( fflush( csv ) != 0 )
+			{
+				snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );
+				fprintf( stderr, "%ssere run: %s\n", progress.active ? "\n" : "", failure );
+				break;
+			}
 			sere_leaf_relative_water( sim, rwc );
 			if ( frame % every == 0 || frame == frames )
 			{
-				if ( written < 1024 &&
-					 write_frame( out, (int) frame, frame * params.dt, &model, rwc, names, pvd_times, &written ) != 0 )
+				if ( write_frame( out, (int) frame, frame * params.dt, &model, rwc, &pvd, failure,
+								  sizeof( failure ) ) != 0 )
 				{
-					fprintf( stderr, "\nsere run: cannot write frame %lld in %s\n", frame, out );
+					fprintf( stderr, "%ssere run: %s\n", progress.active ? "\n" : "", failure );
 					break;
 				}
 			}
@@ -502,17 +537,20 @@ int sere_cmd_run( int argc, char** argv )
 		sere_progress_update( &progress, frame );
 		if ( until_dry && stats.desiccated )
 		{
-			if ( frame % every != 0 && written < 1024 )
+			if ( frame % every != 0 && write_frame( out, (int) frame, frame * params.dt, &model, rwc, &pvd, failure,
+													sizeof( failure ) ) != 0 )
 			{
-				write_frame( out, (int) frame, frame * params.dt, &model, rwc, names, pvd_times, &written );
+				fprintf( stderr, "%ssere run: %s\n", progress.active ? "\n" : "", failure );
 			}
 			break;
 		}
 	}
 	sere_progress_end( &progress );
-	if ( sere_atomic_commit( &csv_file ) != 0 )
+	int stopped = failure[0] != '\0'; /* an output error ended the loop */
+	if ( sere_atomic_commit( &csv_file ) != 0 && !stopped )
 	{
-		fprintf( stderr, "sere run: cannot write %s\n", csv_path );
+		snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );
+		fprintf( stderr, "sere run: %s\n", failure );
 	}
 
 	/* Pictures. */
@@ -538,9 +576,10 @@ int sere_cmd_run( int argc, char** argv )
 	sere_render_axes axes = { title, "time", "fraction of initial", 1, 0.0, 1.05 };
 	snprintf( picture, sizeof( picture ), "%s/curves.png", out );
 	picture_failed = picture_failed || sere_render_plot( picture, 800, 480, &axes, curves, 2, err, sizeof( err ) ) != 0;
-	if ( picture_failed )
+	if ( picture_failed && failure[0] == '\0' )
 	{
-		fprintf( stderr, "sere run: %s\n", err );
+		snprintf( failure, sizeof( failure ), "%s", err );
+		fprintf( stderr, "sere run: %s\n", failure );
 	}
 
 	/* Summary, Table 1 breakdown in mean ms per frame. */
@@ -548,26 +587,56 @@ int sere_cmd_run( int argc, char** argv )
 	snprintf( summary_path, sizeof( summary_path ), "%s/summary.json", out );
 	sere_atomic_file summary_file;
 	FILE* summary = sere_atomic_open( &summary_file, summary_path );
+	int summary_error = errno;
+	/* How far the run got: "complete", "interrupted" or "error: " and the first failure; frames
+	 * completed have all their outputs written. */
+	char status_text[4600], status_json[6 * sizeof( status_text )], name_json[6 * sizeof( name )];
+	char preset_json[6 * 4096];
+	if ( status != SERE_OK )
+	{
+		snprintf( status_text, sizeof( status_text ), "error: frame %lld: %s", done + 1, sere_status_text( status ) );
+	}
+	else
+	{
+		snprintf( status_text, sizeof( status_text ), "%s%s",
+				  failure[0] != '\0' ? "error: "
+				  : interrupted		 ? "interrupted"
+									 : "complete",
+				  failure );
+	}
+	long long completed = stopped && done > 0 ? done - 1 : done;
 	double frames_done = done > 0 ? (double) done : 1.0;
 	if ( summary != NULL )
 	{
 		fprintf(
 			summary,
-			"{\n  \"leaf\": \"%s\",\n  \"preset\": \"%s\",\n  \"frames\": %lld,\n  \"frames_requested\": %lld,\n"
+			"{\n  \"leaf\": \"%s\",\n  \"preset\": \"%s\",\n  \"status\": \"%s\",\n  \"frames\": %lld,\n"
+			"  \"frames_completed\": %lld,\n  \"frames_requested\": %lld,\n"
 			"  \"interrupted\": %s,\n  \"threads\": %d,\n  \"particles\": %d,\n  \"springs\": %d,\n"
 			"  \"triangles\": %d,\n  \"relative_water\": %.6g,\n  \"relative_area\": %.6g,\n"
 			"  \"osmosis_ms\": %.4f,\n  \"dynamics_ms\": %.4f,\n  \"collisions_ms\": %.4f,\n  \"total_ms\": %.4f,\n"
 			"  \"pbd_tolerance\": %g,\n  \"pbd_cap\": %d,\n  \"pbd_cap_hits\": %lld,\n  \"pbd_stalls\": %lld,\n"
 			"  \"pbd_max_iterations\": %d,\n"
 			"  \"parameters\": {\n",
-			name, preset ? preset : "default", done, frames, interrupted ? "true" : "false", bound, model.p.count,
-			model.s.count, model.triangle_count, done > 0 ? stats.relative_water : 1.0, curve_area[done > 0 ? done : 0],
-			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
-			sum_total / frames_done, params.strain_tolerance, (int) params.max_iterations, cap_hits, stalls,
-			max_pbd_iterations );
+			sere_json_escape( name_json, sizeof( name_json ), name ),
+			sere_json_escape( preset_json, sizeof( preset_json ), preset ? preset : "default" ),
+			sere_json_escape( status_json, sizeof( status_json ), status_text ), done, completed, frames,
+			interrupted ? "true" : "false", bound, model.p.count, model.s.count, model.triangle_count,
+			done > 0 ? stats.relative_water : 1.0, curve_area[done > 0 ? done : 0], sum_osmosis / frames_done,
+			sum_dynamics / frames_done, sum_collisions / frames_done, sum_total / frames_done, params.strain_tolerance,
+			(int) params.max_iterations, cap_hits, stalls, max_pbd_iterations );
 		sere_params_print_json( &params, summary, "    " );
 		fprintf( summary, "  }\n}\n" );
-		sere_atomic_commit( &summary_file );
+		if ( sere_atomic_commit( &summary_file ) != 0 && failure[0] == '\0' )
+		{
+			snprintf( failure, sizeof( failure ), "cannot write %s: %s", summary_path, strerror( errno ) );
+			fprintf( stderr, "sere run: %s\n", failure );
+		}
+	}
+	else if ( failure[0] == '\0' )
+	{
+		snprintf( failure, sizeof( failure ), "cannot write %s: %s", summary_path, strerror( summary_error ) );
+		fprintf( stderr, "sere run: %s\n", failure );
 	}
 	printf( "%s: %lld frames, %d particles, %d springs, %d threads\n", name, done, model.p.count, model.s.count,
 			bound );
@@ -590,8 +659,9 @@ int sere_cmd_run( int argc, char** argv )
 	{
 		free( shots[k].x ), free( shots[k].y ), free( shots[k].z ), free( shots[k].rwc );
 	}
-	free( rwc ), free( curve_t ), free( curve_rwc ), free( curve_area ), free( names ), free( pvd_times );
+	free( rwc ), free( curve_t ), free( curve_rwc ), free( curve_area );
+	sere_pvd_free( &pvd );
 	sere_leaf_destroy( sim );
 	sere_model_destroy( &model );
-	return status == SERE_OK ? ( interrupted ? 130 : 0 ) : 1;
+	return status == SERE_OK && failure[0] == '\0' ? ( interrupted ? 130 : 0 ) : 1;
 }
