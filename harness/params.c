@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #ifndef SERE_DATA_DIR
 #define SERE_DATA_DIR "/usr/local/share/sere"
@@ -30,12 +31,18 @@ sere_sim_params sere_sim_params_default( void )
 		.min_length_ratio = 0.2,
 		.stiffness = 1.0,
 		.strain_tolerance = 1e-3,
+		.compliance = 4e-6,
+		.vein_compliance = 0.1,
+		.voronoi_compliance = 1.0,
+		.link_compliance = 1.0,
+		.face_down = 0,
+		.friction_static = 0.8,
+		.friction_kinetic = 0.6,
 		.max_iterations = 200,
 		.pbd_stall = 0.0,
 		.collision_thickness = 0.004,
 		.collision_scaling = 1,
 		.restore_measured = 1,
-		.restore_conserving = 0,
 		.conservative = 0,
 		.soften = 0,
 		.crease = 0.0,
@@ -88,7 +95,17 @@ static const key_info keys[] = {
 	KEY( alpha, 0.1, 10.0, 0, "exponent of Eq. 12" ),
 	KEY( min_length_ratio, 0.0, 1.0, 0, "springs stop shrinking below this fraction of their rest length" ),
 	KEY( stiffness, 0.0, 1.0, 0, "PBD stiffness k (Sec. 5.2)" ),
-	KEY( strain_tolerance, 1e-9, 1.0, 0, "lambda_C: projection stops when max |C/l| is below it" ),
+	KEY( strain_tolerance, 1e-9, 1.0, 0,
+		 "the frame's stop: max |C + compliance/dt^2 lambda|/l (XPBD) or max |C/l| (lambda_C, compliance 0) below it" ),
+	KEY( compliance, 0.0, 1.0, 0,
+		 "XPBD compliance of the blade's springs (each frame an XPBD step); 0 = the paper's PBD (Table 1 rule)" ),
+	KEY( vein_compliance, 0.0, 1e3, 0, "compliance weight of vein springs relative to the blade (stiffer below 1)" ),
+	KEY( voronoi_compliance, 0.0, 1e6, 0, "compliance weight of the Voronoi layer's non-vein springs" ),
+	KEY( face_down, 0.0, 1.0, 1,
+		 "1: the leaf lies with its Voronoi side (+h) down (mirrored through z): the faster-drying layer on top" ),
+	KEY( link_compliance, 0.0, 1e3, 0, "compliance weight of the L (thickness) springs relative to the blade" ),
+	KEY( friction_static, 0.0, 10.0, 0, "static Coulomb friction of the ground contact" ),
+	KEY( friction_kinetic, 0.0, 10.0, 0, "kinetic Coulomb friction of the ground contact" ),
 	KEY( max_iterations, 1.0, 1e5, 1, "PBD iteration cap" ),
 	KEY( pbd_stall, 0.0, 0.999, 0,
 		 "0 = the paper's PBD stop; s > 0: also stop when 10 sweeps lower max |C/l| by less than the fraction s" ),
@@ -97,8 +114,6 @@ static const key_info keys[] = {
 		 "collision thickness shrinks with the triangle layer (sum of T rest lengths / at rest) (1) or stays fixed "
 		 "(0)" ),
 	KEY( restore_measured, 0.0, 1.0, 1, "Eq. 14 with the measured thickness (1) or the rest h (0)" ),
-	KEY( restore_conserving, 0.0, 1.0, 1,
-		 "Eq. 14 as written (0) or sharing it with the corners, keeping momentum (1)" ),
 	KEY( conservative, 0.0, 1.0, 1, "osmosis weights: 0 = paper (Eq. 8), 1 = conservative" ),
 	KEY( soften, 0.0, 1.0, 1, "scale PBD stiffness by relative water content (Sec. 7)" ),
 	KEY( crease, -0.5, 0.5, 0, "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
@@ -193,7 +208,22 @@ static int file_exists( const char* path )
 
 int sere_data_path( const char* relative, char* path, size_t path_size )
 {
-	const char* roots[] = { getenv( "SERE_DATA" ), "data", SERE_DATA_DIR };
+	/* SERE_DATA first; then PREFIX/share/sere beside the running binary PREFIX/bin/sere, found
+	 * from /proc/self/exe at run time so that an installed tree still works after it is moved;
+	 * then ./data (a source checkout); then the prefix compiled in. */
+	char exe[4096], beside[4096 + 32] = "";
+	ssize_t length = readlink( "/proc/self/exe", exe, sizeof( exe ) - 1 );
+	if ( length > 0 )
+	{
+		exe[length] = '\0';
+		char* slash = strrchr( exe, '/' );
+		if ( slash != NULL )
+		{
+			*slash = '\0';
+			snprintf( beside, sizeof( beside ), "%s/../share/sere", exe );
+		}
+	}
+	const char* roots[] = { getenv( "SERE_DATA" ), beside[0] != '\0' ? beside : NULL, "data", SERE_DATA_DIR };
 	for ( size_t i = 0; i < sizeof( roots ) / sizeof( roots[0] ); ++i )
 	{
 		if ( roots[i] == NULL )

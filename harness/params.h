@@ -22,20 +22,26 @@ typedef struct sere_sim_params
 	double water_rate_t; /* signed water rate of the T layer: Table 2's w_loss^T, −0.1 = losing 0.1 per unit time */
 	double water_rate_v; /* the same for the V layer */
 	double sigma_vein, sigma_surf;
-	double alpha;				/* exponent of Eq. 12 (Sec. 5.1: ≈ 1.3) */
-	double min_length_ratio;	/* springs stop shrinking below this fraction of l⁰ */
-	double stiffness;			/* PBD k ∈ [0, 1] */
-	double strain_tolerance;	/* λ_C: projection stops when max |C/l| < λ_C */
+	double alpha;			   /* exponent of Eq. 12 (Sec. 5.1: ≈ 1.3) */
+	double min_length_ratio;   /* springs stop shrinking below this fraction of l⁰ */
+	double stiffness;		   /* PBD k ∈ [0, 1] */
+	double strain_tolerance;   /* the stop: max |C + α̃λ|/l (XPBD) or max |C/l| < λ_C (the paper, compliance 0) */
+	double compliance;		   /* XPBD compliance α of the blade's springs; 0 = the paper's hard PBD */
+	double vein_compliance;	   /* compliance weight of vein springs (α_vein = α · this) */
+	double voronoi_compliance; /* compliance weight of the Voronoi layer's other springs */
+	double link_compliance;	   /* compliance weight of the L springs */
+	double friction_static;	   /* Coulomb coefficients of the ground contact */
+	double friction_kinetic;
 	double max_iterations;		/* PBD iteration cap */
 	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
 	double collision_thickness; /* vertex–triangle proximity distance, leaf units (at rest when scaled) */
 	double collision_scaling;	/* the thickness shrinks with the triangle layer (1) or stays fixed (0) */
 	double restore_measured;	/* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
-	double restore_conserving;	/* Eq. 14 as written (0) or momentum-conserving (1) */
 	double conservative;		/* osmosis: 0 = the paper's Eq. 8, 1 = conservative weights */
 	double soften;				/* Sec. 7: stiffness scaled by relative water content (1) or constant (0) */
 	double crease;				/* Sec. 3.1 initial shaping: Voronoi vein springs shortened by this fraction */
 	double curl;				/* ... and the other Voronoi springs lengthened by this fraction */
+	double face_down;			/* the leaf lies on the face its Voronoi layer is offset to (+n): mirrored through z */
 	double seed;
 } sere_sim_params;
 

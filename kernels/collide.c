@@ -1582,70 +1582,54 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	return SERE_OK;
 }
 
-sere_status sere_collide_restore_voronoi_conserving( float* x, float* y, float* z, float* vx, float* vy, float* vz,
-													 const float* inv_m, const int32_t* tri, int32_t triangle_count,
-													 int32_t voronoi_first, const float* h )
+sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, float* vx, float* vy, float* vz,
+												const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
+												const float* h, const uint8_t* moved, float dt )
 {
-	if ( inv_m == NULL || x == NULL || y == NULL || z == NULL || vx == NULL || vy == NULL || vz == NULL ||
-		 tri == NULL || h == NULL || triangle_count < 0 || voronoi_first < 0 )
+	if ( x == NULL || y == NULL || z == NULL || vx == NULL || vy == NULL || vz == NULL || tri == NULL || h == NULL ||
+		 moved == NULL || triangle_count < 0 || voronoi_first < 0 || !( dt > 0.0f ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	int32_t count = voronoi_first + triangle_count;
-	bool pinned = false;
-	double mass = 0.0;
-	for ( int32_t i = 0; i < count; ++i )
-	{
-		if ( !( inv_m[i] >= 0.0f ) || !isfinite( inv_m[i] ) )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
-		pinned = pinned || inv_m[i] == 0.0f;
-		mass += inv_m[i] > 0.0f ? 1.0 / inv_m[i] : 0.0;
-	}
+	int bad = 0, outside = 0;
+#pragma omp parallel for reduction( | : bad, outside ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;
-		if ( v[0] < 0 || v[0] >= voronoi_first || v[1] < 0 || v[1] >= voronoi_first || v[2] < 0 ||
-			 v[2] >= voronoi_first )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		outside |=
+			v[0] < 0 || v[0] >= voronoi_first || v[1] < 0 || v[1] >= voronoi_first || v[2] < 0 || v[2] >= voronoi_first;
+		bad |= !isfinite( h[t] );
 	}
-	/* The impulse Eq. 14 is about to apply: Σ m_V (target − x_V) and Σ m_V (v̄ − v_V), summed
-	 * in triangle order on this thread (the same for any thread count). A pinned particle holds
-	 * the leaf, which then takes the impulse itself: nothing to correct. */
-	double shift[3] = { 0.0, 0.0, 0.0 }, kick[3] = { 0.0, 0.0, 0.0 };
-	for ( int32_t t = 0; t < triangle_count && !pinned; ++t )
+	if ( outside )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	const float inv_dt = 1.0f / dt;
+#pragma omp parallel for schedule( static )
+	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;
+		if ( !( moved[v[0]] | moved[v[1]] | moved[v[2]] ) )
+		{
+			continue;
+		}
 		float a[3], b[3], c[3], n[3];
 		triangle_frame( x, y, z, v, a, b, c, n );
 		int32_t i = voronoi_first + t;
-		double m = 1.0 / inv_m[i];
-		const float* p[3] = { x, y, z };
-		const float* u[3] = { vx, vy, vz };
-		for ( int k = 0; k < 3; ++k )
-		{
-			shift[k] += m * ( ( a[k] + b[k] + c[k] ) / 3.0f + h[t] * n[k] - p[k][i] );
-			kick[k] += m * ( ( u[k][v[0]] + u[k][v[1]] + u[k][v[2]] ) / 3.0f - u[k][i] );
-		}
-	}
-	sere_status status = sere_collide_restore_voronoi( x, y, z, vx, vy, vz, tri, triangle_count, voronoi_first, h );
-	if ( status != SERE_OK || pinned || !( mass > 0.0 ) )
-	{
-		return status;
-	}
-	/* Take it back from everything at once: a uniform translation and velocity change keep
-	 * every relation Eq. 14 just set and return the centre of mass and the momentum to what
-	 * they were. */
-	const float dx = (float) ( shift[0] / mass ), dy = (float) ( shift[1] / mass ), dz = (float) ( shift[2] / mass );
-	const float ex = (float) ( kick[0] / mass ), ey = (float) ( kick[1] / mass ), ez = (float) ( kick[2] / mass );
-#pragma omp parallel for simd schedule( static )
-	for ( int32_t i = 0; i < count; ++i )
-	{
-		x[i] -= dx, y[i] -= dy, z[i] -= dz;
-		vx[i] -= ex, vy[i] -= ey, vz[i] -= ez;
+		/* Eq. 14 */
+		float tx = ( a[0] + b[0] + c[0] ) / 3.0f + h[t] * n[0];
+		float ty = ( a[1] + b[1] + c[1] ) / 3.0f + h[t] * n[1];
+		float tz = ( a[2] + b[2] + c[2] ) / 3.0f + h[t] * n[2];
+		/* Sec. 5.2: a position change Δx changes the velocity by Δx/Δt, as every other
+		 * correction of the frame does. */
+		vx[i] += ( tx - x[i] ) * inv_dt;
+		vy[i] += ( ty - y[i] ) * inv_dt;
+		vz[i] += ( tz - z[i] ) * inv_dt;
+		x[i] = tx, y[i] = ty, z[i] = tz;
 	}
 	return SERE_OK;
 }

@@ -135,18 +135,19 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 										  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
 										  const float* h );
 
-/* Eq. 14 without moving the centre of mass or creating momentum. Eq. 14 as written moves every
- * Voronoi particle onto centroid + h n and sets its velocity to the corners' mean: impulses from
- * nowhere that, on a curled leaf, add up to the same sign frame after frame (the 1000-point
- * maple-red climbs two leaf lengths against gravity). This applies Eq. 14 exactly, then
- * translates all voronoi_first + triangle_count particles and changes their velocities by the
- * same vectors so that the centre of mass and the total momentum are what they were before:
- * every relation Eq. 14 sets is kept, only the drift goes. With a pinned particle (inverse mass
- * 0) the leaf is held and nothing is taken back. Errors as sere_collide_restore_voronoi, plus
- * SERE_ERR_ARGUMENT for a negative or non-finite inverse mass. */
-sere_status sere_collide_restore_voronoi_conserving( float* x, float* y, float* z, float* vx, float* vy, float* vz,
-													 const float* inv_m, const int32_t* tri, int32_t triangle_count,
-													 int32_t voronoi_first, const float* h );
+/* Eq. 14 where the collision response acted (Sec. 5.3: "when a particle on the triangle layer
+ * passes through the Voronoi layer as a result of a displacement introduced to correct a
+ * self-collision, the positions and velocities of Voronoi particles are also modified"): only
+ * for triangles with a corner flagged in moved (per triangle-layer particle), x_t^V is set to
+ * the centroid + h_t n_t and its velocity changed by the displacement over dt. Triangles the
+ * response left alone keep the Voronoi particle the projection placed. Unlike Eq. 14 applied to
+ * every triangle with the corners' mean velocity, this injects no velocity where nothing
+ * collided: that version, on a curled leaf, lifted the whole leaf frame after frame. Errors as
+ * sere_collide_restore_voronoi (positions and velocities of the corners are not checked), plus
+ * SERE_ERR_ARGUMENT for a NULL moved or dt <= 0. */
+sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, float* vx, float* vy, float* vz,
+												const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
+												const float* h, const uint8_t* moved, float dt );
 
 /* Closest point on triangle abc to p by Ericson's walk over the Voronoi regions of the
  * vertices, edges and face: returns the squared distance and writes the barycentric weights of

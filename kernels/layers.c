@@ -650,3 +650,18 @@ void sere_model_triangle_normal( const sere_model* model, int32_t t, float norma
 	normal[1] = ny * inv;
 	normal[2] = nz * inv;
 }
+
+void sere_model_mirror_z( sere_model* model )
+{
+	sere_particles* p = &model->p;
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		p->z[i] = -p->z[i];
+		p->vz[i] = -p->vz[i];
+		p->pz[i] = -p->pz[i];
+	}
+	for ( int32_t t = 0; t < model->triangle_count; ++t )
+	{
+		model->h[t] = -model->h[t];
+	}
+}

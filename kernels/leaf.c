@@ -14,6 +14,13 @@ struct sere_leaf_sim
 	sere_collide* collide;
 	float* h_hat;
 	float *x0, *y0, *z0; /* triangle layer at the start of the frame: the contacts' sides */
+	float *xc, *yc, *zc; /* triangle layer before the collision pass: which corners it moved */
+	float* push;		 /* per particle: how far the ground pushed it up this frame (friction) */
+	float* weight;		 /* per spring: XPBD compliance weight by class */
+	uint8_t* moved;		 /* per triangle-layer particle: moved by the collision response */
+	float vein_weight, voronoi_weight, link_weight; /* the weights last given to the PBD workspace */
+	int weights_set;
+	float mean_rest; /* mean T rest length at rest: the length scale of the ground's slack */
 	double* w0;
 	double water0;
 	int32_t contact_capacity;
@@ -33,14 +40,19 @@ sere_leaf_params sere_leaf_params_default( void )
 		.osmosis = sere_osmosis_params_default(),
 		.shrink = { .sigma_vein = 0.5, .sigma_surf = 0.5, .alpha = 1.3, .m_min = 0.1, .min_length_ratio = 0.2 },
 		.pbd = sere_pbd_params_default(),
+		.vein_compliance = 0.1f,
+		.voronoi_compliance = 1.0f,
+		.link_compliance = 1.0f,
+		.friction_static = 0.8f,
+		.friction_kinetic = 0.6f,
 		.collide = sere_collide_params_default(),
 		.collisions = 1,
 		.scale_thickness = 1,
 		.restore_measured = 1,
 		.soften = 0,
 		.pbd_stall = 0.0f,
-		.restore_conserving = 0,
 	};
+	params.pbd.compliance = 4e-6f;
 	params.osmosis.tolerance = 1e-8;
 	return params;
 }
@@ -60,6 +72,12 @@ void sere_leaf_destroy( sere_leaf_sim* sim )
 	sere_free( sim->x0 );
 	sere_free( sim->y0 );
 	sere_free( sim->z0 );
+	sere_free( sim->xc );
+	sere_free( sim->yc );
+	sere_free( sim->zc );
+	sere_free( sim->push );
+	sere_free( sim->weight );
+	sere_free( sim->moved );
 	sere_free( sim->w0 );
 	free( sim );
 }
@@ -108,8 +126,15 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	sim->x0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
 	sim->y0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
 	sim->z0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
-	if ( status == SERE_OK &&
-		 ( sim->h_hat == NULL || sim->w0 == NULL || sim->x0 == NULL || sim->y0 == NULL || sim->z0 == NULL ) )
+	sim->xc = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	sim->yc = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	sim->zc = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	sim->push = sere_alloc( sizeof( float ) * (size_t) model->p.capacity );
+	sim->weight = sere_alloc( sizeof( float ) * (size_t) sere_pad( s->count ) );
+	sim->moved = sere_alloc( (size_t) sere_pad( n ) );
+	if ( status == SERE_OK && ( sim->h_hat == NULL || sim->w0 == NULL || sim->x0 == NULL || sim->y0 == NULL ||
+								sim->z0 == NULL || sim->xc == NULL || sim->yc == NULL || sim->zc == NULL ||
+								sim->push == NULL || sim->weight == NULL || sim->moved == NULL ) )
 	{
 		status = SERE_ERR_MEMORY;
 	}
@@ -120,6 +145,12 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	}
 	memcpy( sim->w0, model->p.w, sizeof( double ) * (size_t) model->p.count );
 	sim->thickness_scale = sere_leaf_thickness_scale( model );
+	double rest_sum = 0.0;
+	for ( int32_t k = 0; k < model->t_springs; ++k )
+	{
+		rest_sum += model->s.rest0[k];
+	}
+	sim->mean_rest = model->t_springs > 0 ? (float) ( rest_sum / model->t_springs ) : 0.0f;
 	for ( int32_t i = 0; i < model->p.count; ++i )
 	{
 		sim->water0 += model->p.w[i];
@@ -158,15 +189,15 @@ float sere_leaf_thickness_scale( const sere_model* model )
 	return rest0 > 0.0 ? (float) ( rest / rest0 ) : 1.0f;
 }
 
-/* The projection of lines 17–22 with the optional stall rule (sere_leaf_params.pbd_stall): the
- * cap's sweeps run in chunks of SERE_LEAF_STALL_WINDOW, and the frame stops when a chunk ends
+/* The paper's projection (lines 17–22) with the optional stall rule (sere_leaf_params.pbd_stall):
+ * the cap's sweeps run in chunks of SERE_LEAF_STALL_WINDOW, and the frame stops when a chunk ends
  * with max |C/l| (of its last sweep) above (1 − stall) times the previous chunk's. Gauss–Seidel
  * state carries over between chunks, so without a stall the positions equal one call's. */
-static sere_status project( sere_pbd* pbd, sere_particles* p, const sere_pbd_params* params, float stall,
-							sere_pbd_report* report, int* stalled )
+static sere_status project_paper( sere_pbd* pbd, sere_particles* p, const sere_pbd_params* params, float stall,
+								  sere_pbd_report* report, int* stalled )
 {
 	*stalled = 0;
-	if ( stall <= 0.0f || params->compliance > 0.0f || params->linear_stiffness )
+	if ( stall <= 0.0f || params->linear_stiffness )
 	{
 		return sere_pbd_project( pbd, p->px, p->py, p->pz, p->inv_m, params, report );
 	}
@@ -199,10 +230,157 @@ static sere_status project( sere_pbd* pbd, sere_particles* p, const sere_pbd_par
 	return SERE_OK;
 }
 
+/* Puts particles below the ground onto it and adds how far each was pushed to push[]; returns
+ * the largest push of this call (a maximum, so the same for every thread count). */
+static float ground_contact( float* pz, float* push, int32_t count, float ground )
+{
+	float largest = 0.0f;
+#pragma omp parallel for simd schedule( static ) reduction( max : largest )
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		float depth = ground - pz[i];
+		depth = depth > 0.0f ? depth : 0.0f;
+		pz[i] += depth;
+		push[i] += depth;
+		largest = depth > largest ? depth : largest;
+	}
+	return largest;
+}
+
+/* Coulomb friction of the ground as a position correction (Macklin et al. 2014, Sec. 6.1): the
+ * ground's push d_n this frame bounds the tangential displacement it can hold. A particle whose
+ * displacement along the ground Δx_t is within μ_s d_n sticks (Δx_t removed); a larger one slides
+ * with Δx_t shortened by μ_k d_n. Returns the number of particles in contact. */
+static int32_t ground_friction( sere_particles* p, const float* push, int32_t count, float mu_static, float mu_kinetic )
+{
+	int32_t touching = 0;
+#pragma omp parallel for schedule( static ) reduction( + : touching )
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		if ( !( push[i] > 0.0f ) )
+		{
+			continue;
+		}
+		touching += 1;
+		float dx = p->px[i] - p->x[i], dy = p->py[i] - p->y[i];
+		float slide = sqrtf( dx * dx + dy * dy );
+		float keep = slide <= mu_static * push[i] ? 0.0f : 1.0f - mu_kinetic * push[i] / slide;
+		keep = keep > 0.0f ? keep : 0.0f;
+		p->px[i] = p->x[i] + keep * dx;
+		p->py[i] = p->y[i] + keep * dy;
+	}
+	return touching;
+}
+
+/* max |C/l| over every spring at the predicted positions. */
+static float largest_strain( const sere_model* model )
+{
+	const sere_springs* s = &model->s;
+	const sere_particles* p = &model->p;
+	float largest = 0.0f;
+#pragma omp parallel for schedule( static ) reduction( max : largest )
+	for ( int32_t k = 0; k < s->count; ++k )
+	{
+		int32_t a = s->a[k], b = s->b[k];
+		float dx = p->px[b] - p->px[a], dy = p->py[b] - p->py[a], dz = p->pz[b] - p->pz[a];
+		float strain = fabsf( sqrtf( ( dx * dx + dy * dy ) + dz * dz ) - s->rest[k] ) / s->rest[k];
+		largest = strain > largest ? strain : largest;
+	}
+	return largest;
+}
+
+/* Compliance weights by spring class: vein springs (T and V) and L springs relative to the
+ * blade's. Set again only when the parameters change. */
+static sere_status set_weights( sere_leaf_sim* sim, const sere_leaf_params* params )
+{
+	if ( sim->weights_set && sim->vein_weight == params->vein_compliance &&
+		 sim->voronoi_weight == params->voronoi_compliance && sim->link_weight == params->link_compliance )
+	{
+		return SERE_OK;
+	}
+	const sere_springs* s = &sim->model->s;
+	for ( int32_t k = 0; k < s->count; ++k )
+	{
+		int layer = s->kind[k] & SERE_SPRING_LAYER_MASK;
+		float weight = 1.0f;
+		if ( layer == SERE_SPRING_L )
+		{
+			weight = params->link_compliance;
+		}
+		else if ( s->kind[k] & SERE_SPRING_VEIN )
+		{
+			weight = params->vein_compliance;
+		}
+		else if ( layer == SERE_SPRING_V )
+		{
+			weight = params->voronoi_compliance;
+		}
+		sim->weight[k] = weight;
+	}
+	sere_status status = sere_pbd_set_compliance_weights( sim->pbd, sim->weight );
+	sim->weights_set = status == SERE_OK;
+	sim->vein_weight = params->vein_compliance;
+	sim->voronoi_weight = params->voronoi_compliance;
+	sim->link_weight = params->link_compliance;
+	return status;
+}
+
+/* Lines 17–22 as one XPBD step: project, meet the ground, and go on with the same multipliers
+ * (warm) while the ground had to push more than the slack; converged when the residual and the
+ * ground are both met before the cap. The paper's mode projects once (with its stall rule). */
+static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, const sere_pbd_params* pbd,
+							sere_leaf_stats* stats )
+{
+	sere_particles* p = &sim->model->p;
+	const int ground = isfinite( params->ground );
+	const float slack = pbd->tolerance * sim->mean_rest * sim->thickness_scale;
+	sere_pbd_report report = { 0, 0.0f, 0 };
+	if ( pbd->compliance == 0.0f )
+	{
+		sere_status status = project_paper( sim->pbd, p, pbd, params->pbd_stall, &report, &stats->pbd_stalled );
+		if ( ground )
+		{
+			ground_contact( p->pz, sim->push, p->count, params->ground );
+		}
+		stats->pbd_iterations = report.iterations;
+		stats->residual = report.max_strain;
+		stats->pbd_hit_cap = report.hit_cap;
+		stats->pbd_converged = !report.hit_cap && !stats->pbd_stalled;
+		return status;
+	}
+	sere_pbd_params step = *pbd;
+	int32_t left = pbd->max_iterations;
+	step.warm = 0;
+	while ( left > 0 )
+	{
+		step.max_iterations = left;
+		sere_status status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
+		left -= report.iterations;
+		stats->pbd_iterations += report.iterations;
+		float pushed = ground ? ground_contact( p->pz, sim->push, p->count, params->ground ) : 0.0f;
+		if ( !report.hit_cap && pushed <= slack )
+		{
+			stats->pbd_converged = 1;
+			break;
+		}
+		step.warm = 1;
+	}
+	stats->residual = report.max_strain;
+	stats->pbd_hit_cap = !stats->pbd_converged;
+	return SERE_OK;
+}
+
 sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
 {
 	memset( stats, 0, sizeof( *stats ) );
-	if ( sim == NULL || params == NULL || !( params->dt > 0.0f ) )
+	if ( sim == NULL || params == NULL || !( params->dt > 0.0f ) || !( params->pbd.compliance >= 0.0f ) ||
+		 !( params->vein_compliance >= 0.0f ) || !( params->voronoi_compliance >= 0.0f ) ||
+		 !( params->link_compliance >= 0.0f ) || !( params->friction_static >= 0.0f ) ||
+		 !( params->friction_kinetic >= 0.0f ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -253,23 +431,27 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		}
 		sim->thickness_scale = sere_leaf_thickness_scale( model );
 	}
+	status = set_weights( sim, params );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
 	/* Lighter particles move more: PBD weights by the current inverse mass. */
 #pragma omp parallel for simd schedule( static )
 	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		p->inv_m[i] = (float) ( 1.0 / p->m[i] );
+		sim->push[i] = 0.0f;
 	}
-	/* Lines 10–13: gravity and prediction. */
+	/* Lines 10–13: gravity and prediction. The step's inertia anchor must not lie under the
+	 * ground: the ground holds the prediction up before the projection starts. */
 	sere_pbd_predict( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, p->inv_m, params->gravity,
 					  params->dt );
-	double t2 = omp_get_wtime();
-	/* Lines 14–16: ĥ stored before projection and collisions. */
-	status = sere_collide_measure_h( p->px, p->py, p->pz, model->tri, f, n, sim->h_hat );
-	if ( status != SERE_OK )
+	if ( isfinite( params->ground ) )
 	{
-		return status;
+		ground_contact( p->pz, sim->push, p->count, params->ground );
 	}
-	double t3 = omp_get_wtime();
+
 	/* Lines 17–22: projection of the T, V and L constraints, one colored Gauss–Seidel. */
 	sere_pbd_params pbd = params->pbd;
 	pbd.dt = params->dt;
@@ -278,24 +460,16 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		double rwc = ( layer_water( p->w, 0, p->count ) ) / sim->water0;
 		pbd.stiffness = (float) ( params->pbd.stiffness * ( 0.25 + 0.75 * fmin( 1.0, rwc ) ) );
 	}
-	sere_pbd_report pbd_report;
-	status = project( sim->pbd, p, &pbd, params->pbd_stall, &pbd_report, &stats->pbd_stalled );
+	status = project( sim, params, &pbd, stats );
 	if ( status != SERE_OK )
 	{
 		return status;
 	}
-	stats->pbd_iterations = pbd_report.iterations;
-	stats->max_strain = pbd_report.max_strain;
-	stats->pbd_hit_cap = pbd_report.hit_cap;
 	if ( isfinite( params->ground ) )
 	{
-		const float ground = params->ground;
-#pragma omp parallel for simd schedule( static )
-		for ( int32_t i = 0; i < p->count; ++i )
-		{
-			p->pz[i] = p->pz[i] < ground ? ground : p->pz[i];
-		}
+		stats->grounded = ground_friction( p, sim->push, n, params->friction_static, params->friction_kinetic );
 	}
+	stats->max_strain = largest_strain( model );
 	/* the start of the frame, before sere_pbd_finish moves it: where each contact's vertex was */
 	if ( params->collisions )
 	{
@@ -304,8 +478,6 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		memcpy( sim->z0, p->z, sizeof( float ) * (size_t) n );
 	}
 	sere_pbd_finish( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, params->dt );
-	/* Shrinkage turns into velocity through Δv = Δx/Δt; without damping that momentum
-	 * accumulates and a drying leaf drifts away. */
 	const float keep = 1.0f - params->damping;
 #pragma omp parallel for simd schedule( static )
 	for ( int32_t i = 0; i < p->count; ++i )
@@ -314,11 +486,20 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		p->vy[i] *= keep;
 		p->vz[i] *= keep;
 	}
-	double t4 = omp_get_wtime();
+	double t2 = omp_get_wtime();
 
-	/* Line 23: self-collision of the triangle layer; lines 24–27: Voronoi restore (Eq. 14). */
+	/* Line 23: self-collision of the triangle layer; lines 24–27: the Voronoi particles of the
+	 * triangles it moved back on their normals (Eq. 14), with ĥ stored just before (Sec. 5.3). */
 	if ( params->collisions )
 	{
+		status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
+		memcpy( sim->xc, p->x, sizeof( float ) * (size_t) n );
+		memcpy( sim->yc, p->y, sizeof( float ) * (size_t) n );
+		memcpy( sim->zc, p->z, sizeof( float ) * (size_t) n );
 		sere_collide_state state = { p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m, sim->x0, sim->y0, sim->z0 };
 		sere_collide_params collide = params->collide;
 		collide.dt = params->dt;
@@ -346,26 +527,29 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		stats->contacts = collide_stats.contacts;
 		stats->unresolved = collide_stats.unresolved;
 		stats->collision_thickness = collide.thickness;
+#pragma omp parallel for simd schedule( static )
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			sim->moved[i] = ( p->x[i] != sim->xc[i] ) | ( p->y[i] != sim->yc[i] ) | ( p->z[i] != sim->zc[i] );
+		}
+		status = sere_collide_restore_voronoi_moved( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n,
+													 params->restore_measured ? sim->h_hat : model->h, sim->moved,
+													 params->dt );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
 	}
-	const float* h = params->restore_measured ? sim->h_hat : model->h;
-	status = params->restore_conserving
-				 ? sere_collide_restore_voronoi_conserving( p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m, model->tri,
-															f, n, h )
-				 : sere_collide_restore_voronoi( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n, h );
-	if ( status != SERE_OK )
-	{
-		return status;
-	}
-	double t5 = omp_get_wtime();
+	double t3 = omp_get_wtime();
 
 	stats->water_t = layer_water( p->w, 0, n );
 	stats->water_v = layer_water( p->w, n, f );
 	stats->relative_water = sim->water0 > 0.0 ? ( stats->water_t + stats->water_v ) / sim->water0 : 0.0;
 	stats->desiccated = sim->desiccated;
 	stats->osmosis_ms = 1e3 * ( t1 - t0 );
-	stats->dynamics_ms = 1e3 * ( ( t2 - t1 ) + ( t4 - t3 ) );
-	stats->collisions_ms = 1e3 * ( ( t3 - t2 ) + ( t5 - t4 ) );
-	stats->total_ms = 1e3 * ( t5 - t0 );
+	stats->dynamics_ms = 1e3 * ( t2 - t1 );
+	stats->collisions_ms = 1e3 * ( t3 - t2 );
+	stats->total_ms = 1e3 * ( t3 - t0 );
 	return SERE_OK;
 }
 

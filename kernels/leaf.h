@@ -28,7 +28,16 @@ typedef struct sere_leaf_params
 	double water_rate_v; /* signed (Table 2 w_loss^V) */
 	sere_osmosis_params osmosis; /* λ, mode and CG settings; its water_rate and dt are set per layer */
 	sere_shrink_params shrink;
+	/* pbd.compliance > 0 (the default): every frame is one XPBD step (Macklin et al. 2016), the
+	 * minimum of inertia + elastic energy with compliance α per spring, which exists even when
+	 * the shrunk layers admit no shape meeting every rest length; the frame stops when the
+	 * residual max |C + α̃λ|/l is below pbd.tolerance. pbd.compliance = 0: the paper's PBD, which
+	 * stops at max |C/l| < λ_C or the cap (Sec. 5.2, for comparing with Table 1). */
 	sere_pbd_params pbd;
+	float vein_compliance;	  /* compliance weight of vein springs, T and V (α_vein = α · this): veins are stiffer */
+	float voronoi_compliance; /* compliance weight of the Voronoi layer's other springs */
+	float link_compliance;	  /* compliance weight of the L springs (thickness) */
+	float friction_static, friction_kinetic; /* Coulomb coefficients of the ground contact */
 	sere_collide_params collide;
 	int collisions; /* run the self-collision pass */
 	/* 1: collide.thickness is the thickness at rest and shrinks with the triangle layer, times
@@ -36,15 +45,11 @@ typedef struct sere_leaf_params
 	 * springs (Sec. 5.1). 0: the thickness stays fixed. */
 	int scale_thickness;
 	int restore_measured; /* Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
-	/* Eq. 14 as written (0) or sharing each correction with the triangle's corners so that no
-	 * momentum is created (1, sere_collide_restore_voronoi_conserving) */
-	int restore_conserving;
-	int soften; /* Sec. 7: stiffness scaled by relative water content */
-	/* 0 (the paper): project until max |C/l| < λ_C or the cap. s > 0: also stop when a window of
-	 * SERE_LEAF_STALL_WINDOW sweeps lowered max |C/l| by less than the fraction s. Once the
-	 * shrunk layers disagree (their rest lengths admit no flat or bent shape that meets them all)
-	 * the residual has a floor above λ_C, and sweeps past the stall only creep toward it. Needs
-	 * compliance 0 and linear_stiffness 0 (it projects in chunks of the window). */
+	int soften;			  /* Sec. 7: stiffness scaled by relative water content */
+	/* Paper mode only (pbd.compliance = 0). 0: project until max |C/l| < λ_C or the cap. s > 0:
+	 * also stop when a window of SERE_LEAF_STALL_WINDOW sweeps lowered max |C/l| by less than
+	 * the fraction s: once the shrunk layers disagree the hard constraints have no solution and
+	 * the residual has a floor above λ_C. */
 	float pbd_stall;
 } sere_leaf_params;
 
@@ -56,7 +61,10 @@ typedef struct sere_leaf_stats
 	double relative_water;	 /* total water / initial total water */
 	int32_t cg_iterations_t, cg_iterations_v;
 	int32_t pbd_iterations;
-	float max_strain; /* max |C/l| after projection */
+	float max_strain;  /* max |C/l| after projection */
+	float residual;	   /* the stop measure after projection: max |C + α̃λ|/l (XPBD), max |C/l| (paper) */
+	int pbd_converged; /* the residual reached pbd.tolerance (and the ground was met) before the cap */
+	int32_t grounded;  /* triangle-layer particles touching the ground after the frame */
 	int pbd_hit_cap;
 	int pbd_stalled; /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
 	int32_t contacts;

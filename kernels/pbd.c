@@ -97,6 +97,7 @@ struct sere_pbd
 	int32_t* source;		   /* per lane: the caller's constraint index, −1 for padding */
 	float* rest;			   /* per lane; padding lanes keep 1 */
 	float* lambda;			   /* per lane, XPBD multipliers */
+	float* weight;			   /* per lane, XPBD compliance weight (α_j = α · weight_j); padding keeps 1 */
 	float* factor;			   /* per lane, Jacobi: the f of the block below */
 	int32_t* slot;			   /* particle → slot (its place in breadth-first order) */
 	int32_t* particle;		   /* slot → particle, for slots < particle_count */
@@ -124,6 +125,7 @@ sere_pbd_params sere_pbd_params_default( void )
 		.dt = 0.002f,
 		.relaxation = 1.5f,
 		.linear_stiffness = 0,
+		.warm = 0,
 	};
 	return params;
 }
@@ -141,6 +143,7 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->source );
 	sere_free( pbd->rest );
 	sere_free( pbd->lambda );
+	sere_free( pbd->weight );
 	sere_free( pbd->factor );
 	sere_free( pbd->slot );
 	sere_free( pbd->particle );
@@ -372,12 +375,13 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 	pbd->source = sere_alloc( sizeof( int32_t ) * lanes );
 	pbd->rest = sere_alloc( sizeof( float ) * lanes );
 	pbd->lambda = sere_alloc( sizeof( float ) * lanes );
+	pbd->weight = sere_alloc( sizeof( float ) * lanes );
 	pbd->factor = sere_alloc( sizeof( float ) * lanes );
 	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
 	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
 	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->factor || !pbd->packed[0] ||
-		 !pbd->packed[1] )
+	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->weight || !pbd->factor ||
+		 !pbd->packed[0] || !pbd->packed[1] )
 	{
 		free( band_of_slot ), free( keys ), free( fill );
 		return SERE_ERR_MEMORY;
@@ -410,6 +414,10 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 			pbd->source[q] = -1;
 			pbd->rest[q] = 1.0f;
 		}
+	}
+	for ( int32_t q = 0; q < pbd->lanes; ++q )
+	{
+		pbd->weight[q] = 1.0f;
 	}
 	for ( int32_t item = 0; item < pbd->items; ++item )
 	{
@@ -550,6 +558,29 @@ sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest )
 	return bad ? SERE_ERR_GEOMETRY : SERE_OK;
 }
 
+sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight )
+{
+	if ( pbd == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( weight != NULL )
+	{
+		for ( int32_t k = 0; k < pbd->constraint_count; ++k )
+		{
+			if ( !( weight[k] >= 0.0f && weight[k] <= FLT_MAX ) )
+			{
+				return SERE_ERR_ARGUMENT;
+			}
+		}
+	}
+	for ( int32_t q = 0; q < pbd->lanes; ++q )
+	{
+		pbd->weight[q] = weight != NULL && pbd->source[q] >= 0 ? weight[pbd->source[q]] : 1.0f;
+	}
+	return SERE_OK;
+}
+
 void sere_pbd_predict( int32_t count, const float* x, const float* y, const float* z, float* vx, float* vy, float* vz,
 					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt )
 {
@@ -600,6 +631,7 @@ typedef struct block_context
 	const int32_t* ib;
 	const float* rest;
 	float* lambda;
+	const float* weight;
 	float* factor;
 	float k, alpha, one;
 } block_context;
@@ -712,7 +744,7 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 	__m512 lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
-		alpha = _mm512_set1_ps( ctx->alpha );
+		alpha = _mm512_mul_ps( _mm512_set1_ps( ctx->alpha ), _mm512_load_ps( ctx->weight + q ) );
 		lambda = _mm512_load_ps( ctx->lambda + q );
 		residual = _mm512_add_ps( c, _mm512_mul_ps( alpha, lambda ) );
 	}
@@ -856,7 +888,7 @@ FORCE_INLINE half_state measure_half( const block_context* ctx, int32_t q, block
 	__m256 lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
-		alpha = _mm256_set1_ps( ctx->alpha );
+		alpha = _mm256_mul_ps( _mm256_set1_ps( ctx->alpha ), _mm256_load_ps( ctx->weight + q ) );
 		lambda = _mm256_load_ps( ctx->lambda + q );
 		residual = _mm256_add_ps( c, _mm256_mul_ps( alpha, lambda ) );
 	}
@@ -1005,7 +1037,8 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mod
 		acc->nonfinite |= !( len <= FLT_MAX );
 		float wsum = pa[3] + pb[3];
 		float lambda = xpbd ? ctx->lambda[q] : 0.0f;
-		float residual = xpbd ? c + ctx->alpha * lambda : c;
+		float alpha = xpbd ? ctx->alpha * ctx->weight[q] : 0.0f;
+		float residual = xpbd ? c + alpha * lambda : c;
 		float strain = fabsf( residual ) / rest;
 		acc->worst = strain > acc->worst ? strain : acc->worst;
 		if ( mode == MODE_MEASURE )
@@ -1015,8 +1048,8 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mod
 		float f;
 		if ( xpbd )
 		{
-			float denominator = wsum + ctx->alpha;
-			float dlambda = denominator > 0.0f ? ( ( 0.0f - c ) - ctx->alpha * lambda ) / denominator : 0.0f;
+			float denominator = wsum + alpha;
+			float dlambda = denominator > 0.0f ? ( ( 0.0f - c ) - alpha * lambda ) / denominator : 0.0f;
 			ctx->lambda[q] = lambda + dlambda;
 			f = ( 0.0f - dlambda ) / len;
 		}
@@ -1369,7 +1402,7 @@ typedef struct solve_setup
 	solver kind;
 	float k, alpha, omega, tolerance;
 	int32_t max_iterations;
-	int xpbd;
+	int xpbd, warm;
 } solve_setup;
 
 typedef struct solve_result
@@ -1466,6 +1499,7 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 			.ib = pbd->ib,
 			.rest = pbd->rest,
 			.lambda = pbd->lambda,
+			.weight = pbd->weight,
 			.factor = pbd->factor,
 			.k = setup->k,
 			.alpha = setup->alpha,
@@ -1474,7 +1508,7 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 		int parity = 0, front = 0;
 		float worst = 0.0f;
 		int32_t flags = pack( pbd, px, py, pz, inv_m, t, threads );
-		if ( setup->xpbd )
+		if ( setup->xpbd && !setup->warm )
 		{
 			int32_t first, last;
 			share( pbd->lanes, t, threads, &first, &last );
@@ -1540,6 +1574,7 @@ static solve_setup setup_of( const sere_pbd_params* params, solver kind )
 		.tolerance = params->tolerance,
 		.max_iterations = params->max_iterations,
 		.xpbd = params->compliance > 0.0f,
+		.warm = params->warm,
 	};
 	return setup;
 }

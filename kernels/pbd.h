@@ -25,6 +25,11 @@ typedef struct sere_pbd_params
 	 * so that the cap's worth of sweeps removes the fraction k of the error whatever the cap.
 	 * Zero (the default, the paper's mode): k is applied as given in every sweep. */
 	int linear_stiffness;
+	/* XPBD only. Zero (the default): the multipliers start at zero, one call = one time step.
+	 * Nonzero: they continue from the previous call, so that a step interrupted to resolve
+	 * contacts (a ground plane, say) goes on solving the same problem; the inertia anchor of
+	 * the step stays where the first call of the step started. */
+	int warm;
 } sere_pbd_params;
 
 /* k = 1, λ_C = 1e-3, 200 sweeps, no compliance, dt = 0.002 (Table 2), ω = 1.5. */
@@ -65,6 +70,13 @@ sere_pbd_info sere_pbd_get_info( const sere_pbd* pbd );
  * set of lengths is given. */
 sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest );
 
+/* Per-constraint compliance weights for XPBD: constraint j gets α_j = compliance · weight[j]
+ * (indexed like the constraints given to create), so that classes of constraints can be
+ * stiffer or softer than others (a vein stiffer than the blade) with one global scale. NULL
+ * restores weight 1 everywhere (the default). SERE_ERR_ARGUMENT for a negative or non-finite
+ * weight, which leaves the previous weights in place. */
+sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight );
+
 /* v += g dt and p = x + v dt for particles [0, count) with inv_m > 0; pinned ones (inv_m = 0)
  * get v = 0 and keep p = x. */
 void sere_pbd_predict( int32_t count, const float* x, const float* y, const float* z, float* vx, float* vy, float* vz,
@@ -76,8 +88,9 @@ void sere_pbd_predict( int32_t count, const float* x, const float* y, const floa
  * Each constraint moves its ends along the constraint gradient by Δp_a = −w_a s ∇C,
  * Δp_b = +w_b s ∇C with s = k C/(w_a + w_b) (w = inverse mass; a constraint between two pinned
  * particles is skipped). With compliance α > 0 it is XPBD instead (Macklin et al. 2016): with
- * α̃ = α/dt² and a multiplier λ per constraint, reset at every call (one call = one step),
- * Δλ = (−C − α̃λ)/(w_a + w_b + α̃) and s = −Δλ; k is not used, and the residual tested against
+ * α̃ = α/dt² and a multiplier λ per constraint, reset at every call unless params->warm (one call = one step),
+ * Δλ = (−C − α̃λ)/(w_a + w_b + α̃) and s = −Δλ (α̃ per constraint with
+ * sere_pbd_set_compliance_weights); k is not used, and the residual tested against
  * λ_C is |C + α̃λ|/l, which is |C/l| when α = 0.
  *
  * Schedule: particles are kept inside the workspace as (x, y, z, w) records in breadth-first
