@@ -1,4 +1,5 @@
 /* sere — the command-line driver. Every subcommand lives in its own cmd_*.c. */
+#include "base.h"
 #include "commands.h"
 
 #include <stdio.h>
@@ -30,7 +31,33 @@ static void usage( FILE* f )
 	{
 		fprintf( f, "  %-9s %s\n", commands[i].name, commands[i].summary );
 	}
-	fprintf( f, "\n'sere COMMAND --help' describes a command's options.\n" );
+	fprintf( f, "\n'sere COMMAND --help' describes a command's options; 'sere --version' prints the version,\n"
+				"the commit it was built from and the SIMD path compiled in.\n"
+				"\nenvironment:\n"
+				"  SERE_DATA   directory searched first for presets, leaves, seasons, masks and skeletons\n"
+				"              (given by name, e.g. --preset maple-red); then PREFIX/share/sere beside this\n"
+				"              binary (PREFIX/bin/sere, found at run time, so an installed tree can be moved),\n"
+				"              then ./data\n" );
+}
+
+/* The commit is known when the Makefile built from a git checkout. */
+#ifndef SERE_GIT_COMMIT
+#define SERE_GIT_COMMIT "unknown"
+#endif
+
+/* The compiler of the command (the library's own flags decide its SIMD path). */
+#if defined( __clang__ )
+#define SERE_COMPILER __VERSION__
+#elif defined( __GNUC__ )
+#define SERE_COMPILER "gcc " __VERSION__
+#else
+#define SERE_COMPILER "unknown"
+#endif
+
+static void version( FILE* f )
+{
+	fprintf( f, "sere %s\ncommit: %s\nsimd: %s\ncompiler: %s\n", sere_version(), SERE_GIT_COMMIT, sere_simd_path(),
+			 SERE_COMPILER );
 }
 
 int main( int argc, char** argv )
@@ -40,6 +67,11 @@ int main( int argc, char** argv )
 	{
 		usage( argc < 2 ? stderr : stdout );
 		return argc < 2 ? 2 : 0;
+	}
+	if ( strcmp( argv[1], "--version" ) == 0 || strcmp( argv[1], "-V" ) == 0 || strcmp( argv[1], "version" ) == 0 )
+	{
+		version( stdout );
+		return 0;
 	}
 	for ( size_t i = 0; i < sizeof( commands ) / sizeof( commands[0] ); ++i )
 	{

@@ -3,6 +3,29 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The Makefile passes the VERSION file's contents; there is no second copy to fall out of step. */
+#ifndef SERE_VERSION
+#error "SERE_VERSION is not defined: build libsere with its Makefile (it passes -DSERE_VERSION from VERSION)"
+#endif
+
+const char* sere_version( void )
+{
+	return SERE_VERSION;
+}
+
+const char* sere_simd_path( void )
+{
+#if defined( __AVX512F__ )
+	return "AVX-512";
+#elif defined( __AVX2__ )
+	return "AVX2";
+#elif defined( __AVX__ )
+	return "AVX";
+#else
+	return "scalar";
+#endif
+}
+
 const char* sere_status_text( sere_status status )
 {
 	switch ( status )

@@ -28,6 +28,15 @@ typedef enum sere_status
 	SERE_STATUS_COUNT
 } sere_status;
 
+/* The library's version, "MAJOR.MINOR.PATCH" (the VERSION file it was built from); a program
+ * linked against the shared library gets the version of the libsere.so it runs with. */
+const char* sere_version( void );
+
+/* The SIMD path the kernels were compiled for: "AVX-512" (__AVX512F__), "AVX2", "AVX" (the
+ * 256-bit paths) or "scalar" (the portable fallback). Set by the compiler flags (ARCH=), not
+ * by the machine the library runs on. */
+const char* sere_simd_path( void );
+
 /* A short English sentence for a status, never NULL. */
 const char* sere_status_text( sere_status status );
 

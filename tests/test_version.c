@@ -1,0 +1,86 @@
+/* The version a user can trust: sere_version() is the VERSION file the library was built from,
+ * sere_simd_path() names the path the compiler flags chose, and `sere --version` prints both
+ * (with the commit) and exits 0. Run from the repository root, as make test does. */
+#define _DEFAULT_SOURCE
+#include "base.h"
+#include "fixture.h"
+
+#include <criterion/criterion.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+/* The first line of VERSION, without its newline. */
+static void read_version_file( char* version, size_t size )
+{
+	FILE* f = fopen( "VERSION", "r" );
+	cr_assert_not_null( f, "VERSION not found: run the tests from the repository root" );
+	cr_assert_not_null( fgets( version, (int) size, f ) );
+	fclose( f );
+	version[strcspn( version, "\r\n" )] = '\0';
+}
+
+Test( version, library_reports_the_version_file )
+{
+	char expected[64];
+	read_version_file( expected, sizeof( expected ) );
+	const char* version = sere_version();
+	cr_assert_not_null( version );
+	cr_expect_str_eq( version, expected );
+	/* MAJOR.MINOR.PATCH, each a whole number */
+	int major = -1, minor = -1, patch = -1, used = 0;
+	cr_expect_eq( sscanf( version, "%d.%d.%d%n", &major, &minor, &patch, &used ), 3, "'%s'", version );
+	cr_expect_eq( (size_t) used, strlen( version ), "'%s' has a tail", version );
+	cr_expect( major >= 0 && minor >= 0 && patch >= 0 );
+}
+
+Test( version, simd_path_matches_the_compiler_flags )
+{
+	const char* path = sere_simd_path();
+	cr_assert_not_null( path );
+#if defined( __AVX512F__ )
+	const char* expected = "AVX-512";
+#elif defined( __AVX2__ )
+	const char* expected = "AVX2";
+#elif defined( __AVX__ )
+	const char* expected = "AVX";
+#else
+	const char* expected = "scalar";
+#endif
+	/* the tests are compiled with the library's ARCH, so they must agree */
+	cr_expect_str_eq( path, expected );
+}
+
+Test( version, command_prints_version_commit_and_simd_path )
+{
+	char command[1024], out[4096];
+	snprintf( command, sizeof( command ), "%s --version", sere_test_bin() );
+	FILE* pipe = popen( command, "r" );
+	cr_assert_not_null( pipe );
+	size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
+	out[used] = '\0';
+	int status = pclose( pipe );
+	cr_assert( WIFEXITED( status ) && WEXITSTATUS( status ) == 0, "%s exited with %d", command, status );
+
+	char version[64], line[128];
+	read_version_file( version, sizeof( version ) );
+	snprintf( line, sizeof( line ), "sere %s\n", version );
+	cr_expect_eq( strncmp( out, line, strlen( line ) ), 0, "first line should be '%s', output: %s", version, out );
+	cr_expect_not_null( strstr( out, "\ncommit: " ), "%s", out );
+	snprintf( line, sizeof( line ), "\nsimd: %s\n", sere_simd_path() );
+	cr_expect_not_null( strstr( out, line ), "expected '%s' in: %s", sere_simd_path(), out );
+}
+
+Test( version, help_documents_version_and_sere_data )
+{
+	char command[1024], out[8192];
+	snprintf( command, sizeof( command ), "%s --help", sere_test_bin() );
+	FILE* pipe = popen( command, "r" );
+	cr_assert_not_null( pipe );
+	size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
+	out[used] = '\0';
+	cr_assert_eq( pclose( pipe ), 0 );
+	cr_expect_not_null( strstr( out, "--version" ), "%s", out );
+	cr_expect_not_null( strstr( out, "SERE_DATA" ), "%s", out );
+}
