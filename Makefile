@@ -1,4 +1,5 @@
-# sere — make | make run | make test | make bench | make deps | make install
+# sere — make | make run | make test | make bench | make deps | make install | make uninstall
+#        make examples-check
 #
 # Every target that needs system libraries first runs scripts/deps.sh, which installs the
 # missing Debian packages (only those) with apt-get.
@@ -90,7 +91,8 @@ SERE    := $(BUILD)/sere
 TESTS   := $(BUILD)/sere-tests
 BENCHX  := $(BUILD)/sere-bench
 
-.PHONY: all run test test-fast test-asan bench deps install format format-check clean
+.PHONY: all run test test-fast test-asan bench deps install uninstall examples-check header-check format \
+	format-check clean
 .DEFAULT_GOAL := all
 
 all: $(LIB_A) $(LIB_SO) $(SERE)
@@ -171,22 +173,96 @@ $(TESTS): $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A)
 $(BENCHX): $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A)
 	$(CXX) -fopenmp $(LDSAN) -o $@ $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A) -lbenchmark -lpthread -lembree3 $(LIBS_HARNESS)
 
+# Installed layout (all relative to PREFIX, so the tree can be moved as a whole: sere finds
+# ../share/sere beside its own binary, sere.pc and the CMake package locate themselves):
+#   bin/sere, lib/libsere.{a,so.VERSION} with the symlinks libsere.so.MAJOR and libsere.so,
+#   lib/pkgconfig/sere.pc, lib/cmake/sere/sereConfig{,Version}.cmake,
+#   include/sere/*.h (the public headers), include/sere/ref/*.h (the reference twins),
+#   share/sere/{presets,leaves,seasons,masks,skeletons}.
+# Every directory install creates is listed in share/sere/installed-dirs, so that uninstall
+# removes exactly what install put there: the files below, then those directories if empty.
+DEST          := $(DESTDIR)$(PREFIX)
+PUBLIC_H      := $(sort $(wildcard kernels/*.h))
+REF_H         := $(sort $(wildcard kernels/ref/*.h))
+DATA_SUBDIRS  := presets leaves seasons masks skeletons
+DATA_FILES    := $(sort $(shell cd data && find $(DATA_SUBDIRS) -type f 2>/dev/null))
+DATA_DIRS     := $(sort $(shell cd data && find $(DATA_SUBDIRS) -type d 2>/dev/null))
+INSTALL_DIRS  := bin lib lib/pkgconfig lib/cmake lib/cmake/sere include include/sere include/sere/ref share \
+	share/sere $(addprefix share/sere/,$(DATA_DIRS))
+INSTALL_FILES := bin/sere lib/libsere.a lib/libsere.so.$(VERSION) lib/$(SONAME) lib/libsere.so \
+	lib/pkgconfig/sere.pc lib/cmake/sere/sereConfig.cmake lib/cmake/sere/sereConfigVersion.cmake \
+	$(addprefix include/sere/,$(notdir $(PUBLIC_H))) $(addprefix include/sere/ref/,$(notdir $(REF_H))) \
+	$(addprefix share/sere/,$(DATA_FILES)) share/sere/installed-dirs
+SUBST         := sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@VERSION_MAJOR@|$(VERSION_MAJOR)|g'
+
 install: all
-	install -d $(DESTDIR)$(PREFIX)/include/sere $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/bin
-	install -m 644 kernels/*.h $(DESTDIR)$(PREFIX)/include/sere/
-	install -m 644 $(LIB_A) $(LIB_SO_REAL) $(DESTDIR)$(PREFIX)/lib/
-	ln -sf libsere.so.$(VERSION) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
-	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libsere.so
-	install -m 755 $(SERE) $(DESTDIR)$(PREFIX)/bin/
-	sed -e 's|@PREFIX@|$(PREFIX)|g' scripts/sere.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/sere.pc
-	install -d $(DESTDIR)$(PREFIX)/share/sere
-	cp -r data/presets data/leaves data/seasons data/masks $(wildcard data/skeletons) $(DESTDIR)$(PREFIX)/share/sere/
+	@[ -n "$(PREFIX)" ] || { echo "install: PREFIX is empty" >&2; exit 1; }
+	@created=""; for d in "" $(INSTALL_DIRS); do \
+		if [ ! -d "$(DEST)/$$d" ]; then install -d "$(DEST)/$$d" && created="$$created$${d:-.}\n"; fi; \
+	done; printf "$$created" >> "$(DEST)/share/sere/installed-dirs"
+	install -m 755 $(SERE) $(DEST)/bin/
+	install -m 644 $(LIB_A) $(DEST)/lib/
+	install -m 755 $(LIB_SO_REAL) $(DEST)/lib/
+	ln -sf libsere.so.$(VERSION) $(DEST)/lib/$(SONAME)
+	ln -sf $(SONAME) $(DEST)/lib/libsere.so
+	$(SUBST) scripts/sere.pc.in > $(DEST)/lib/pkgconfig/sere.pc
+	$(SUBST) cmake/sereConfig.cmake.in > $(DEST)/lib/cmake/sere/sereConfig.cmake
+	$(SUBST) cmake/sereConfigVersion.cmake.in > $(DEST)/lib/cmake/sere/sereConfigVersion.cmake
+	install -m 644 $(PUBLIC_H) $(DEST)/include/sere/
+	install -m 644 $(REF_H) $(DEST)/include/sere/ref/
+	@for f in $(DATA_FILES); do echo "install -m 644 data/$$f $(DEST)/share/sere/$$f"; \
+		install -m 644 "data/$$f" "$(DEST)/share/sere/$$f" || exit 1; done
+
+uninstall:
+	@[ -n "$(PREFIX)" ] || { echo "uninstall: PREFIX is empty" >&2; exit 1; }
+	@dirs=""; [ -f "$(DEST)/share/sere/installed-dirs" ] && dirs=$$(cat "$(DEST)/share/sere/installed-dirs"); \
+	for f in $(INSTALL_FILES); do \
+		if [ -e "$(DEST)/$$f" ] || [ -L "$(DEST)/$$f" ]; then echo "rm $(DEST)/$$f"; rm -f "$(DEST)/$$f"; fi; \
+	done; \
+	for d in $$(printf '%s\n' $$dirs | sort -r); do \
+		[ "$$d" = . ] && d=""; rmdir "$(DEST)/$$d" 2>/dev/null && echo "rmdir $(DEST)/$$d"; \
+	done; true
+
+# The headers as a user gets them: each compiles alone as C17 and as C++17 with every warning
+# an error, and sere.h includes every public header.
+header-check:
+	@for h in $(filter-out kernels/sere.h,$(PUBLIC_H)); do \
+		grep -q "^#include \"$$(basename $$h)\"" kernels/sere.h || { echo "kernels/sere.h does not include $$(basename $$h)" >&2; exit 1; }; \
+	done
+	@mkdir -p $(BUILD)/header-check
+	@for h in $(PUBLIC_H) $(REF_H); do \
+		echo "#include \"$(CURDIR)/$$h\"" > $(BUILD)/header-check/h.c; \
+		$(CC) -std=c17 $(WARN) -fsyntax-only -Ikernels $(BUILD)/header-check/h.c || { echo "$$h does not compile alone (C)" >&2; exit 1; }; \
+		cp $(BUILD)/header-check/h.c $(BUILD)/header-check/h.cc; \
+		$(CXX) -std=c++17 $(WARN) -fsyntax-only -Ikernels $(BUILD)/header-check/h.cc || { echo "$$h does not compile alone (C++)" >&2; exit 1; }; \
+	done
+	@echo "header-check: $(words $(PUBLIC_H) $(REF_H)) headers compile alone (C17, C++17); sere.h includes every public one"
+
+# Installs into a scratch prefix, then builds and runs examples/ against it twice: through
+# pkg-config (examples/Makefile) and through CMake's find_package(sere) (examples/CMakeLists.txt).
+# Each example checks its own result and exits non-zero on failure.
+EXCHECK := $(abspath $(BUILD))/examples-check
+examples-check: header-check
+	@bash scripts/deps.sh cmake
+	rm -rf $(EXCHECK)
+	@$(MAKE) --no-print-directory install PREFIX=$(EXCHECK)/prefix
+	PKG_CONFIG_PATH=$(EXCHECK)/prefix/lib/pkgconfig $(MAKE) --no-print-directory -C examples CC=$(CC) \
+		OUT=$(EXCHECK)/pkgconfig check
+	cmake -S examples -B $(EXCHECK)/cmake -DCMAKE_PREFIX_PATH=$(EXCHECK)/prefix -DCMAKE_C_COMPILER=$(CC) \
+		-DCMAKE_BUILD_TYPE=Release
+	cmake --build $(EXCHECK)/cmake
+	cd $(EXCHECK)/cmake && ctest --output-on-failure
+	@$(MAKE) --no-print-directory uninstall PREFIX=$(EXCHECK)/prefix >/dev/null
+	@[ ! -e $(EXCHECK)/prefix ] || { echo "uninstall left:" >&2; find $(EXCHECK)/prefix >&2; exit 1; }
+	@echo "examples-check: the three examples pass through pkg-config and CMake; uninstall removed every file"
 
 format:
-	clang-format -i $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC)
+	clang-format -i $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC) \
+		$(wildcard examples/*.c)
 
 format-check:
-	clang-format --dry-run -Werror $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC)
+	clang-format --dry-run -Werror $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC) \
+		$(wildcard examples/*.c)
 
 clean:
 	rm -rf build

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian packages sere needs, only those missing. Needs root (or sudo).
+# Arguments name extra packages a target needs: `make deps CC=clang` adds clang and libomp-dev
+# (Debian's clang does not pull in LLVM's OpenMP runtime, which its -fopenmp links), and
+# `make examples-check` adds cmake.
 set -euo pipefail
 need=(gcc g++ make pkg-config libgomp1 libhwloc-dev libbenchmark-dev libcriterion-dev
-      libeigen3-dev libembree-dev libpng-dev libcairo2-dev)
+      libeigen3-dev libembree-dev libpng-dev libcairo2-dev "$@")
 missing=()
 for p in "${need[@]}"; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
