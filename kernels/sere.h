@@ -13,6 +13,7 @@
 #include "lsystem.h"
 #include "markov.h"
 #include "massspring.h"
+#include "measure.h"
 #include "meshopt.h"
 #include "model.h"
 #include "osmosis.h"
