@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "io.h"
 #include "leaf.h"
+#include "leafpics.h"
 #include "render.h"
 #include "topo.h"
 
@@ -81,12 +82,17 @@ sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 	p.pbd.stiffness = (float) s->stiffness;
 	p.pbd.tolerance = (float) s->strain_tolerance;
 	p.pbd.max_iterations = (int32_t) s->max_iterations;
+	p.pbd.compliance = (float) s->compliance;
+	p.vein_compliance = (float) s->vein_compliance;
+	p.voronoi_compliance = (float) s->voronoi_compliance;
+	p.link_compliance = (float) s->link_compliance;
+	p.friction_static = (float) s->friction_static;
+	p.friction_kinetic = (float) s->friction_kinetic;
 	p.pbd_stall = (float) s->pbd_stall;
 	p.collide.thickness = (float) s->collision_thickness;
 	p.collisions = s->collision_thickness > 0.0;
 	p.scale_thickness = s->collision_scaling != 0.0;
 	p.restore_measured = s->restore_measured != 0.0;
-	p.restore_conserving = s->restore_conserving != 0.0;
 	p.soften = s->soften != 0.0;
 	return p;
 }
@@ -111,6 +117,7 @@ typedef struct snapshot
 {
 	float *x, *y, *z, *rwc;
 	long long frame;
+	double relative_water;
 	char caption[96];
 } snapshot;
 
@@ -367,7 +374,8 @@ int sere_cmd_run( int argc, char** argv )
 		sere_model_destroy( &model );
 		return 1;
 	}
-	static const char* const outputs[] = { "stats.csv", "summary.json", "leaf.pvd", "drying.png", "curves.png" };
+	static const char* const outputs[] = { "stats.csv",	 "summary.json", "leaf.pvd",  "drying.png",
+										   "curves.png", "drying3d.png", "leaf3d.png" };
 	if ( sere_check_outputs( out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
@@ -375,6 +383,10 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	remove_old_frames( frames_dir );
+	if ( params.face_down != 0.0 )
+	{
+		sere_model_mirror_z( &model );
+	}
 	sere_leaf_sim* sim = NULL;
 	sere_status status = sere_leaf_create( &model, &sim );
 	if ( status != SERE_OK )
@@ -426,7 +438,8 @@ int sere_cmd_run( int argc, char** argv )
 		fprintf( stderr, "sere run: cannot write %s: %s\n", csv_path, strerror( errno ) );
 		return 1;
 	}
-	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,cg_iterations_t,"
+	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,residual,converged,"
+				  "grounded,cg_iterations_t,"
 				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,unresolved,thickness,desiccated,"
 				  "osmosis_ms,dynamics_ms,"
 				  "collisions_ms,"
@@ -475,11 +488,14 @@ int sere_cmd_run( int argc, char** argv )
 			curve_t[frame] = frame * params.dt;
 			curve_rwc[frame] = stats.relative_water;
 			curve_area[frame] = area / area0;
-			fprintf( csv, "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
-					 frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
-					 stats.max_strain, stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations,
-					 stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts, stats.unresolved, stats.collision_thickness,
-					 stats.desiccated, stats.osmosis_ms, stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
+			fprintf(
+				csv,
+				"%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
+				frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
+				stats.max_strain, stats.residual, stats.pbd_converged, stats.grounded, stats.cg_iterations_t,
+				stats.cg_iterations_v, stats.pbd_iterations, stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts,
+				stats.unresolved, stats.collision_thickness, stats.desiccated, stats.osmosis_ms, stats.dynamics_ms,
+				stats.collisions_ms, stats.total_ms );
 			if ( fflush( csv ) != 0 )
 			{
 				snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );
@@ -526,6 +542,7 @@ int sere_cmd_run( int argc, char** argv )
 				}
 				snapshot* s = shots + shot_count++;
 				s->frame = frame;
+				s->relative_water = stats.relative_water;
 				size_t bytes = sizeof( float ) * (size_t) n;
 				s->x = malloc( bytes ), s->y = malloc( bytes ), s->z = malloc( bytes ), s->rwc = malloc( bytes );
 				memcpy( s->x, model.p.x, bytes ), memcpy( s->y, model.p.y, bytes ), memcpy( s->z, model.p.z, bytes );
@@ -576,6 +593,37 @@ int sere_cmd_run( int argc, char** argv )
 	sere_render_axes axes = { title, "time", "fraction of initial", 1, 0.0, 1.05 };
 	snprintf( picture, sizeof( picture ), "%s/curves.png", out );
 	picture_failed = picture_failed || sere_render_plot( picture, 800, 480, &axes, curves, 2, err, sizeof( err ) ) != 0;
+	/* The shape in 3D (Fig. 17 (a)-(b)): fresh, middle and dry from an oblique camera with the
+	 * ground and the shadow, above the top view; then the dry leaf alone, larger. */
+	if ( shot_count > 0 )
+	{
+		const int picks[3] = { 0, shot_count / 2, shot_count - 1 };
+		sere_leafpics_frame views[3];
+		int view_count = 0;
+		for ( int k = 0; k < 3; ++k )
+		{
+			if ( k > 0 && picks[k] == picks[k - 1] )
+			{
+				continue;
+			}
+			const snapshot* shot = shots + picks[k];
+			views[view_count++] = ( sere_leafpics_frame ){
+				shot->x, shot->y, shot->z, shot->rwc, n, (int) shot->frame, shot->frame > 0 ? shot->relative_water : 1.0
+			};
+		}
+		snprintf( title, sizeof( title ), "%s, preset %s: fresh, middle and dry in 3D (oblique) and from above", name,
+				  preset ? preset : "default" );
+		snprintf( picture, sizeof( picture ), "%s/drying3d.png", out );
+		picture_failed =
+			picture_failed || sere_leafpics_sheet( picture, title, view_count, views, model.tri, model.triangle_count,
+												   (float) params.ground, err, sizeof( err ) ) != 0;
+		snprintf( title, sizeof( title ), "%s, preset %s, frame %d", name, preset ? preset : "default",
+				  views[view_count - 1].frame );
+		snprintf( picture, sizeof( picture ), "%s/leaf3d.png", out );
+		picture_failed = picture_failed ||
+						 sere_leafpics_view( picture, title, views + view_count - 1, model.tri, model.triangle_count,
+											 (float) params.ground, 900, err, sizeof( err ) ) != 0;
+	}
 	if ( picture_failed && failure[0] == '\0' )
 	{
 		snprintf( failure, sizeof( failure ), "%s", err );
