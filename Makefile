@@ -133,12 +133,12 @@ $(BUILD)/obj/harness/%.o: harness/%.c
 $(BUILD)/obj/kernels/base.o: CFLAGS_ALL += -DSERE_VERSION='"$(VERSION)"'
 $(BUILD)/obj/kernels/base.o: VERSION
 
-# The commit reaches main.c (sere --version); the stamp changes only when the commit does, so
-# main.o is rebuilt then and only then.
+# The commit reaches main.c (sere --version) and machine.c (the machine facts of every result);
+# the stamp changes only when the commit does, so both are rebuilt then and only then.
 COMMIT_STAMP := $(BUILD)/gen/commit
 $(shell mkdir -p $(BUILD)/gen && { [ "$$(cat $(COMMIT_STAMP) 2>/dev/null)" = "$(GIT_COMMIT)" ] || echo "$(GIT_COMMIT)" > $(COMMIT_STAMP); })
-$(MAIN_OBJ): HARNESS_CFLAGS += -DSERE_GIT_COMMIT='"$(GIT_COMMIT)"'
-$(MAIN_OBJ): $(COMMIT_STAMP)
+$(MAIN_OBJ) $(BUILD)/obj/harness/machine.o: HARNESS_CFLAGS += -DSERE_GIT_COMMIT='"$(GIT_COMMIT)"'
+$(MAIN_OBJ) $(BUILD)/obj/harness/machine.o: $(COMMIT_STAMP)
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
