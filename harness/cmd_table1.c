@@ -1,6 +1,7 @@
 #include "build.h"
 #include "commands.h"
 #include "leaf.h"
+#include "machine.h"
 #include "topo.h"
 
 #include <stdio.h>
@@ -40,7 +41,9 @@ int sere_cmd_table1( int argc, char** argv )
 				"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
 				"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
 				"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
-				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n" );
+				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
+				"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
+				"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
 			return 0;
 		}
 		else if ( strcmp( argv[i], "--json" ) == 0 )
@@ -83,12 +86,20 @@ int sere_cmd_table1( int argc, char** argv )
 	int bound = sere_topo_bind( (int) threads, NULL );
 	if ( json )
 	{
-		printf( "[" );
+		printf( "{\n" );
+		sere_machine_json( stdout, "  ", bound );
+		printf( ",\n  \"leaves\": [" );
 	}
 	else
 	{
-		printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames)\n\n",
+		printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames)\n",
 				bound, frames );
+		sere_machine machine;
+		char binding[1024];
+		sere_machine_read( &machine, bound );
+		sere_machine_binding_text( &machine, binding, sizeof( binding ) );
+		printf( "ours: %s, %s, threads %s%s, sere %s (commit %s), %s\n\n", machine.cpu, machine.simd,
+				machine.bound ? "on cores " : "", binding, machine.version, machine.commit, machine.compiler );
 		printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %s\n", "leaf", "particles", "springs",
 				"osmotic flow", "dynamics", "collisions", "total", "ratio", "PBD cap hits" );
 	}
@@ -136,10 +147,12 @@ int sere_cmd_table1( int argc, char** argv )
 				"%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
 				"\"collisions_ms\": %.4f, \"total_ms\": %.4f, \"paper_osmosis_ms\": %.2f, \"paper_dynamics_ms\": %.2f, "
 				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
-				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"frames\": %lld, \"threads\": %d}",
+				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, \"frames\": "
+				"%lld, "
+				"\"threads\": %d}",
 				k ? ", " : "", row->leaf, model.p.count, model.s.count, osmosis, dynamics, collisions, total,
 				row->osmosis, row->dynamics, row->collisions, row->total, params.strain_tolerance,
-				(int) params.max_iterations, cap_hits, params.pbd_stall, stalls, frames, bound );
+				(int) params.max_iterations, cap_hits, params.pbd_stall, stalls, params.compliance, frames, bound );
 		}
 		else
 		{
@@ -158,14 +171,14 @@ int sere_cmd_table1( int argc, char** argv )
 	}
 	if ( json )
 	{
-		printf( "]\n" );
+		printf( "]\n}\n" );
 	}
 	else
 	{
-		sere_sim_params defaults = sere_sim_params_default();
-		printf( "\neach cell: ours / paper. PBD stops when max |C/l| < %g or after %g sweeps (presets); a frame that\n"
-				"stops at the cap counts as a cap hit.",
-				defaults.strain_tolerance, defaults.max_iterations );
+		printf( "\neach cell: ours / paper. A frame's projection stops when its residual is below the preset's\n"
+				"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
+				"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
+				"paper's Table 1)." );
 		if ( set_count > 0 )
 		{
 			printf( " Overrides:" );
