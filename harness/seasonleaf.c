@@ -232,7 +232,9 @@ static sere_status read_pgm( const char* path, float** gray, int32_t* width, int
 		ungetc( c, f );
 		ok = fscanf( f, "%ld", &header[k] ) == 1;
 	}
-	if ( !ok || fgetc( f ) == EOF )
+	/* one whitespace byte ends the header; anything else is not the P5 layout */
+	int separator = ok ? fgetc( f ) : EOF;
+	if ( !ok || ( separator != ' ' && separator != '\t' && separator != '\n' && separator != '\r' ) )
 	{
 		fclose( f );
 		return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: not a binary PGM (P5) image", path );
@@ -265,6 +267,12 @@ static sere_status read_pgm( const char* path, float** gray, int32_t* width, int
 	for ( size_t i = 0; i < n; ++i )
 	{
 		unsigned value = bytes == 2 ? ( (unsigned) raw[2 * i] << 8 ) | raw[2 * i + 1] : raw[i];
+		if ( value > (unsigned long) header[2] )
+		{
+			free( raw ), free( g );
+			return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: pixel (%zu, %zu) is %u, above the maxval %ld", path,
+						  i % (size_t) w, i / (size_t) w, value, header[2] );
+		}
 		g[i] = (float) ( (double) value / (double) header[2] );
 	}
 	free( raw );
