@@ -320,6 +320,17 @@ static int skeleton_load( const char* name, skeleton_file* s, char* err, size_t 
 					  curve_names[k] );
 			status = -1;
 		}
+		else if ( s->curve[k].count < 2 )
+		{
+			/* build_leaf measures the leaf from the midvein's first and last points */
+			snprintf( err, err_size, "%s:%d: the '%s' block has %d point%s; the %s needs at least 2", s->path,
+					  s->curve_line[k],
+					  k == 0   ? "left"
+					  : k == 1 ? "right"
+							   : "midvein",
+					  s->curve[k].count, s->curve[k].count == 1 ? "" : "s", curve_names[k] );
+			status = -1;
+		}
 	}
 	if ( status != 0 )
 	{
