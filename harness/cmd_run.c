@@ -6,6 +6,7 @@
 #include "leafpics.h"
 #include "render.h"
 #include "topo.h"
+#include "watch.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -85,6 +86,7 @@ sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 	p.pbd.compliance = (float) s->compliance;
 	p.vein_compliance = (float) s->vein_compliance;
 	p.voronoi_compliance = (float) s->voronoi_compliance;
+	p.local_stop = s->local_stop != 0.0;
 	p.link_compliance = (float) s->link_compliance;
 	p.friction_static = (float) s->friction_static;
 	p.friction_kinetic = (float) s->friction_kinetic;
@@ -234,6 +236,42 @@ static void remove_old_frames( const char* frames_dir )
 		}
 	}
 	closedir( dir );
+}
+
+/* A JSON number, or null for NaN and infinities (JSON has neither). */
+static void json_number( FILE* f, double value )
+{
+	if ( isfinite( value ) )
+	{
+		fprintf( f, "%.6g", value );
+	}
+	else
+	{
+		fprintf( f, "null" );
+	}
+}
+
+/* The shape measures of kernels/measure.h as a JSON object member. */
+static void print_shape( FILE* f, const char* key, const sere_shape* shape, double length )
+{
+	const char* names[] = { "area",		   "extent",	  "extent_per_fresh_length",
+							"min_z",	   "max_z",		  "ground_gap",
+							"crease_vein", "crease_surf", "margin_lift",
+							"roll_tip",	   "roll_base",	  "normal_x",
+							"normal_y",	   "normal_z" };
+	const double values[] = { shape->area,			 shape->extent,		   shape->extent / length,
+							  shape->min_z,			 shape->max_z,		   shape->ground_gap,
+							  shape->crease_vein,	 shape->crease_surf,   shape->margin_lift,
+							  shape->roll_tip,		 shape->roll_base,	   shape->mean_normal[0],
+							  shape->mean_normal[1], shape->mean_normal[2] };
+	fprintf( f, "  \"%s\": {", key );
+	for ( size_t k = 0; k < sizeof( values ) / sizeof( values[0] ); ++k )
+	{
+		fprintf( f, "%s\"%s\": ", k > 0 ? ", " : "", names[k] );
+		json_number( f, values[k] );
+	}
+	fprintf( f, ", \"wrinkle_sign_changes\": %lld, \"flip\": %s},\n", (long long) shape->wrinkle_sign_changes,
+			 shape->flip ? "true" : "false" );
 }
 
 int sere_cmd_run( int argc, char** argv )
@@ -387,6 +425,7 @@ int sere_cmd_run( int argc, char** argv )
 	{
 		sere_model_mirror_z( &model );
 	}
+	sere_model_rest_on( &model, (float) params.ground );
 	sere_leaf_sim* sim = NULL;
 	sere_status status = sere_leaf_create( &model, &sim );
 	if ( status != SERE_OK )
@@ -396,6 +435,27 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	sere_leaf_params leaf = sere_run_leaf_params( &params );
+	/* the fresh shape, and a watch on crossings, drift, the ground and turning over */
+	sere_shape shape_fresh, shape_dry;
+	sere_shape_input shape_input = sere_leaf_shape_input( &model, params.ground );
+	sere_watch* watch = NULL;
+	status = sere_shape_measure( &shape_input, &shape_fresh );
+	if ( status == SERE_OK )
+	{
+		status = sere_watch_create( &model, params.ground, &watch );
+	}
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "sere run: cannot measure the fresh leaf: %s\n", sere_status_text( status ) );
+		sere_leaf_destroy( sim );
+		sere_model_destroy( &model );
+		return 1;
+	}
+	shape_dry = shape_fresh;
+	sere_watch_frame watched = { 0, 0.0, 0.0, NAN, 1.0, 0.0 };
+	long long converged = 0, crossing_frames = 0;
+	int64_t crossings_max = 0;
+	double drift_max = 0.0, mass_drift_max = 0.0, gap_max = -INFINITY, tilt_max = 0.0;
 	if ( params.crease != 0.0 || params.curl != 0.0 )
 	{
 		/* Sec. 3.1: creases along the veins and a curled blade before drying starts. */
@@ -439,7 +499,7 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,residual,converged,"
-				  "grounded,cg_iterations_t,"
+				  "grounded,crossings,drift,mass_drift,ground_gap,normal_z,tilt,cg_iterations_t,"
 				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,unresolved,thickness,desiccated,"
 				  "osmosis_ms,dynamics_ms,"
 				  "collisions_ms,"
@@ -484,18 +544,33 @@ int sere_cmd_run( int argc, char** argv )
 			cap_hits += stats.pbd_hit_cap;
 			stalls += stats.pbd_stalled;
 			max_pbd_iterations = stats.pbd_iterations > max_pbd_iterations ? stats.pbd_iterations : max_pbd_iterations;
+			status = sere_watch_step( watch, &model, &watched );
+			if ( status != SERE_OK )
+			{
+				fprintf( stderr, "\nsere run: frame %lld: cannot measure: %s\n", frame, sere_status_text( status ) );
+				break;
+			}
+			converged += stats.pbd_converged;
+			crossing_frames += watched.crossings > 0;
+			crossings_max = watched.crossings > crossings_max ? watched.crossings : crossings_max;
+			drift_max = fmax( drift_max, watched.drift );
+			mass_drift_max = fmax( mass_drift_max, watched.mass_drift );
+			gap_max = fmax( gap_max, watched.ground_gap );
+			tilt_max = fmax( tilt_max, watched.tilt_degrees );
 			double area = leaf_area( &model );
 			curve_t[frame] = frame * params.dt;
 			curve_rwc[frame] = stats.relative_water;
 			curve_area[frame] = area / area0;
 			fprintf(
 				csv,
-				"%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
+				"%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%d,%d,%d,%d,%d,%d,%d,"
+				"%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
 				frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
-				stats.max_strain, stats.residual, stats.pbd_converged, stats.grounded, stats.cg_iterations_t,
-				stats.cg_iterations_v, stats.pbd_iterations, stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts,
-				stats.unresolved, stats.collision_thickness, stats.desiccated, stats.osmosis_ms, stats.dynamics_ms,
-				stats.collisions_ms, stats.total_ms );
+				stats.max_strain, stats.residual, stats.pbd_converged, stats.grounded, (long long) watched.crossings,
+				watched.drift, watched.mass_drift, watched.ground_gap, watched.normal_z, watched.tilt_degrees,
+				stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations, stats.pbd_hit_cap,
+				stats.pbd_stalled, stats.contacts, stats.unresolved, stats.collision_thickness, stats.desiccated,
+				stats.osmosis_ms, stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
 			if ( fflush( csv ) != 0 )
 			{
 				snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );
@@ -568,6 +643,15 @@ int sere_cmd_run( int argc, char** argv )
 	{
 		snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );
 		fprintf( stderr, "sere run: %s\n", failure );
+	}
+
+	if ( done > 0 )
+	{
+		shape_input = sere_leaf_shape_input( &model, params.ground );
+		if ( sere_shape_measure( &shape_input, &shape_dry ) != SERE_OK )
+		{
+			shape_dry = shape_fresh;
+		}
 	}
 
 	/* Pictures. */
@@ -664,8 +748,7 @@ int sere_cmd_run( int argc, char** argv )
 			"  \"triangles\": %d,\n  \"relative_water\": %.6g,\n  \"relative_area\": %.6g,\n"
 			"  \"osmosis_ms\": %.4f,\n  \"dynamics_ms\": %.4f,\n  \"collisions_ms\": %.4f,\n  \"total_ms\": %.4f,\n"
 			"  \"pbd_tolerance\": %g,\n  \"pbd_cap\": %d,\n  \"pbd_cap_hits\": %lld,\n  \"pbd_stalls\": %lld,\n"
-			"  \"pbd_max_iterations\": %d,\n"
-			"  \"parameters\": {\n",
+			"  \"pbd_max_iterations\": %d,\n",
 			sere_json_escape( name_json, sizeof( name_json ), name ),
 			sere_json_escape( preset_json, sizeof( preset_json ), preset ? preset : "default" ),
 			sere_json_escape( status_json, sizeof( status_json ), status_text ), done, completed, frames,
@@ -673,6 +756,18 @@ int sere_cmd_run( int argc, char** argv )
 			done > 0 ? stats.relative_water : 1.0, curve_area[done > 0 ? done : 0], sum_osmosis / frames_done,
 			sum_dynamics / frames_done, sum_collisions / frames_done, sum_total / frames_done, params.strain_tolerance,
 			(int) params.max_iterations, cap_hits, stalls, max_pbd_iterations );
+		/* the frame rule and what a user looks for, over the whole run (DESIGN.md, measures) */
+		fprintf( summary,
+				 "  \"pbd_rule\": \"%s\",\n  \"converged_frames\": %lld,\n  \"crossings_max\": %lld,\n"
+				 "  \"crossing_frames\": %lld,\n  \"drift_max\": %.6g,\n  \"mass_drift_max\": %.6g,\n"
+				 "  \"tilt_max_degrees\": %.4g,\n  \"ground_gap_max\": ",
+				 params.compliance > 0.0 ? "xpbd residual" : "paper (max |C/l| < lambda_C or the cap)", converged,
+				 (long long) crossings_max, crossing_frames, drift_max, mass_drift_max, tilt_max );
+		json_number( summary, gap_max );
+		fprintf( summary, ",\n  \"fresh_length\": %.6g,\n", sere_watch_length( watch ) );
+		print_shape( summary, "shape_fresh", &shape_fresh, sere_watch_length( watch ) );
+		print_shape( summary, "shape_dry", &shape_dry, sere_watch_length( watch ) );
+		fprintf( summary, "  \"parameters\": {\n" );
 		sere_params_print_json( &params, summary, "    " );
 		fprintf( summary, "  }\n}\n" );
 		if ( sere_atomic_commit( &summary_file ) != 0 && failure[0] == '\0' )
@@ -693,22 +788,27 @@ int sere_cmd_run( int argc, char** argv )
 	printf( "  ms per frame: osmotic flow %.3f, dynamics %.3f, collisions %.3f, total %.3f\n",
 			sum_osmosis / frames_done, sum_dynamics / frames_done, sum_collisions / frames_done,
 			sum_total / frames_done );
-	printf( "  PBD: lambda_C %g, cap %d, cap reached in %lld of %lld frames", params.strain_tolerance,
-			(int) params.max_iterations, cap_hits, done );
+	printf( "  frames: %s stop %g, converged in %lld of %lld (cap %d)",
+			params.compliance > 0.0 ? "XPBD residual" : "paper |C/l|", params.strain_tolerance, converged, done,
+			(int) params.max_iterations );
 	if ( params.pbd_stall > 0.0 )
 	{
 		printf( ", stalled (pbd_stall %g) in %lld", params.pbd_stall, stalls );
 	}
-	printf( "\n" );
-	printf( "  pictures: %s/drying.png and %s/curves.png\n  frames:   %s/frames (PLY, VTP; open %s/leaf.pvd in "
+	printf( "\n  shape: extent %.2f of fresh length, edge-triangle crossings %lld at most (in %lld frames), "
+			"drift %.3f L\n",
+			shape_dry.extent / sere_watch_length( watch ), (long long) crossings_max, crossing_frames, drift_max );
+	printf( "  pictures: %s/drying3d.png (3D) and %s/drying.png, %s/curves.png\n  frames:   %s/frames (PLY, VTP; open "
+			"%s/leaf.pvd in "
 			"ParaView)\n  stats:    %s/stats.csv, %s/summary.json\n",
-			out, out, out, out, out, out );
+			out, out, out, out, out, out, out );
 	for ( int k = 0; k < shot_count; ++k )
 	{
 		free( shots[k].x ), free( shots[k].y ), free( shots[k].z ), free( shots[k].rwc );
 	}
 	free( rwc ), free( curve_t ), free( curve_rwc ), free( curve_area );
 	sere_pvd_free( &pvd );
+	sere_watch_destroy( watch );
 	sere_leaf_destroy( sim );
 	sere_model_destroy( &model );
 	return status == SERE_OK && failure[0] == '\0' ? ( interrupted ? 130 : 0 ) : 1;

@@ -36,6 +36,7 @@ sere_sim_params sere_sim_params_default( void )
 		.voronoi_compliance = 1.0,
 		.link_compliance = 1.0,
 		.face_down = 0,
+		.local_stop = 0,
 		.friction_static = 0.8,
 		.friction_kinetic = 0.6,
 		.max_iterations = 200,
@@ -101,6 +102,9 @@ static const key_info keys[] = {
 		 "XPBD compliance of the blade's springs (each frame an XPBD step); 0 = the paper's PBD (Table 1 rule)" ),
 	KEY( vein_compliance, 0.0, 1e3, 0, "compliance weight of vein springs relative to the blade (stiffer below 1)" ),
 	KEY( voronoi_compliance, 0.0, 1e6, 0, "compliance weight of the Voronoi layer's non-vein springs" ),
+	KEY( local_stop, 0.0, 1.0, 1,
+		 "Sec. 6 stop where a layer runs dry: a particle whose neighbour in the other layer is dry keeps its water "
+		 "(1)" ),
 	KEY( face_down, 0.0, 1.0, 1,
 		 "1: the leaf lies with its Voronoi side (+h) down (mirrored through z): the faster-drying layer on top" ),
 	KEY( link_compliance, 0.0, 1e3, 0, "compliance weight of the L (thickness) springs relative to the blade" ),

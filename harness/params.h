@@ -41,6 +41,7 @@ typedef struct sere_sim_params
 	double soften;				/* Sec. 7: stiffness scaled by relative water content (1) or constant (0) */
 	double crease;				/* Sec. 3.1 initial shaping: Voronoi vein springs shortened by this fraction */
 	double curl;				/* ... and the other Voronoi springs lengthened by this fraction */
+	double local_stop;			/* Sec. 6 stop where a layer runs dry (1) or only for the whole leaf (0) */
 	double face_down;			/* the leaf lies on the face its Voronoi layer is offset to (+n): mirrored through z */
 	double seed;
 } sere_sim_params;

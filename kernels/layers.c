@@ -654,14 +654,41 @@ void sere_model_triangle_normal( const sere_model* model, int32_t t, float norma
 void sere_model_mirror_z( sere_model* model )
 {
 	sere_particles* p = &model->p;
+	float low = INFINITY, high = -INFINITY;
 	for ( int32_t i = 0; i < p->count; ++i )
 	{
-		p->z[i] = -p->z[i];
+		low = p->z[i] < low ? p->z[i] : low;
+		high = p->z[i] > high ? p->z[i] : high;
+	}
+	/* z -> low + high - z: turned over in place, the lowest point still at low */
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		p->z[i] = ( low + high ) - p->z[i];
+		p->pz[i] = ( low + high ) - p->pz[i];
 		p->vz[i] = -p->vz[i];
-		p->pz[i] = -p->pz[i];
 	}
 	for ( int32_t t = 0; t < model->triangle_count; ++t )
 	{
 		model->h[t] = -model->h[t];
+	}
+}
+
+void sere_model_rest_on( sere_model* model, float ground )
+{
+	sere_particles* p = &model->p;
+	if ( !isfinite( ground ) || p->count == 0 )
+	{
+		return;
+	}
+	float low = INFINITY;
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		low = p->z[i] < low ? p->z[i] : low;
+	}
+	const float shift = ground - low;
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		p->z[i] += shift;
+		p->pz[i] += shift;
 	}
 }

@@ -114,11 +114,16 @@ void sere_model_destroy( sere_model* model );
  * gives them (non-integer, B < 3, or more than N − 0 boundary points). */
 sere_status sere_counts_solve( int64_t particles, int64_t springs, int32_t* n, int32_t* b );
 
-/* Mirrors the model through the plane z = 0: every particle's z and velocity z negated, every
- * thickness h negated, triangles unchanged (still counter-clockwise seen from +z). The Voronoi
- * layer then lies on the other side of the triangle layer: the same leaf turned over, for a
- * leaf that lies on the face its Voronoi layer is offset to. */
+/* Mirrors the model through the horizontal plane halfway between its lowest and highest
+ * particle (so the lowest point stays as low as it was): every z reflected, velocity z negated,
+ * every thickness h negated, triangles unchanged (still counter-clockwise seen from +z). The
+ * Voronoi layer then lies on the other side of the triangle layer: the same leaf turned over,
+ * for a leaf that lies on the face its Voronoi layer is offset to. */
 void sere_model_mirror_z( sere_model* model );
+
+/* Moves the model along z so that its lowest particle sits at height ground: a leaf laid on the
+ * ground. Nothing happens for a ground that is not finite. */
+void sere_model_rest_on( sere_model* model, float ground );
 
 /* The unit normal of triangle t from current positions (zero vector for a degenerate one). */
 void sere_model_triangle_normal( const sere_model* model, int32_t t, float normal[3] );

@@ -22,6 +22,8 @@ struct sere_leaf_sim
 	int weights_set;
 	float mean_rest; /* mean T rest length at rest: the length scale of the ground's slack */
 	double* w0;
+	double* w_frame; /* water at the start of the frame (the local Sec. 6 stop keeps it) */
+	uint8_t* frozen; /* per particle: stopped by the local Sec. 6 stop, for good */
 	double water0;
 	int32_t contact_capacity;
 	float thickness_scale; /* sere_leaf_thickness_scale, updated whenever rest lengths change */
@@ -51,6 +53,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.restore_measured = 1,
 		.soften = 0,
 		.pbd_stall = 0.0f,
+		.local_stop = 0,
 	};
 	params.pbd.compliance = 4e-6f;
 	params.osmosis.tolerance = 1e-8;
@@ -79,6 +82,8 @@ void sere_leaf_destroy( sere_leaf_sim* sim )
 	sere_free( sim->weight );
 	sere_free( sim->moved );
 	sere_free( sim->w0 );
+	sere_free( sim->w_frame );
+	sere_free( sim->frozen );
 	free( sim );
 }
 
@@ -123,6 +128,8 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	}
 	sim->h_hat = sere_alloc( sizeof( float ) * (size_t) sere_pad( f ) );
 	sim->w0 = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
+	sim->w_frame = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
+	sim->frozen = sere_alloc( (size_t) model->p.capacity );
 	sim->x0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
 	sim->y0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
 	sim->z0 = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
@@ -132,9 +139,10 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	sim->push = sere_alloc( sizeof( float ) * (size_t) model->p.capacity );
 	sim->weight = sere_alloc( sizeof( float ) * (size_t) sere_pad( s->count ) );
 	sim->moved = sere_alloc( (size_t) sere_pad( n ) );
-	if ( status == SERE_OK && ( sim->h_hat == NULL || sim->w0 == NULL || sim->x0 == NULL || sim->y0 == NULL ||
-								sim->z0 == NULL || sim->xc == NULL || sim->yc == NULL || sim->zc == NULL ||
-								sim->push == NULL || sim->weight == NULL || sim->moved == NULL ) )
+	if ( status == SERE_OK &&
+		 ( sim->h_hat == NULL || sim->w0 == NULL || sim->w_frame == NULL || sim->frozen == NULL || sim->x0 == NULL ||
+		   sim->y0 == NULL || sim->z0 == NULL || sim->xc == NULL || sim->yc == NULL || sim->zc == NULL ||
+		   sim->push == NULL || sim->weight == NULL || sim->moved == NULL ) )
 	{
 		status = SERE_ERR_MEMORY;
 	}
@@ -144,6 +152,7 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 		return status;
 	}
 	memcpy( sim->w0, model->p.w, sizeof( double ) * (size_t) model->p.count );
+	memset( sim->frozen, 0, (size_t) model->p.capacity );
 	sim->thickness_scale = sere_leaf_thickness_scale( model );
 	double rest_sum = 0.0;
 	for ( int32_t k = 0; k < model->t_springs; ++k )
@@ -165,6 +174,61 @@ void sere_leaf_relative_water( const sere_leaf_sim* sim, float* out )
 	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		out[i] = sim->w0[i] > 0.0 ? (float) ( p->w[i] / sim->w0[i] ) : 0.0f;
+	}
+}
+
+sere_shape_input sere_leaf_shape_input( const sere_model* model, double ground )
+{
+	sere_shape_input in = sere_shape_input_default();
+	in.x = model->p.x, in.y = model->p.y, in.z = model->p.z;
+	in.u = model->u, in.v = model->v;
+	in.vertex_count = model->triangle_particles;
+	in.tri = model->tri;
+	in.triangle_count = model->triangle_count;
+	/* the T springs come first and are exactly the triangle edges; SERE_SPRING_VEIN is the only
+	 * bit a T spring sets */
+	in.edge_a = model->s.a, in.edge_b = model->s.b;
+	in.edge_vein = model->s.kind;
+	in.edge_count = model->t_springs;
+	in.boundary = model->boundary;
+	in.ground = ground;
+	return in;
+}
+
+/* Sec. 6 where it happens: the paper stops flow and shrinkage in both layers once one layer is
+ * desiccated, so that the other does not catch up and flatten the leaf again. Applied to the
+ * whole leaf at once, that stop comes only when the last particle of a layer runs dry, long
+ * after both layers have dried alike almost everywhere (water is lost at the same rate per
+ * particle, so light particles of both layers run dry early). Applied locally, a triangle whose
+ * Voronoi particle has run dry stops its corners, and a corner that has run dry stops the
+ * Voronoi particles of its triangles: each stopped particle keeps, from then on, the water and
+ * mass it had at the start of the frame, and its springs keep their rest lengths (Eq. 12 sees no
+ * change of mass). The layer that dries first keeps the curvature it made. */
+static void local_stop( sere_leaf_sim* sim )
+{
+	sere_model* model = sim->model;
+	sere_particles* p = &model->p;
+	const int32_t n = model->triangle_particles;
+	for ( int32_t t = 0; t < model->triangle_count; ++t )
+	{
+		const int32_t* v = model->tri + 3 * t;
+		const int32_t voronoi = n + t;
+		if ( p->w[voronoi] <= 0.0 )
+		{
+			sim->frozen[v[0]] = sim->frozen[v[1]] = sim->frozen[v[2]] = 1;
+		}
+		if ( p->w[v[0]] <= 0.0 || p->w[v[1]] <= 0.0 || p->w[v[2]] <= 0.0 )
+		{
+			sim->frozen[voronoi] = 1;
+		}
+	}
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		if ( sim->frozen[i] && p->w[i] > 0.0 )
+		{
+			p->w[i] = sim->w_frame[i];
+			p->m[i] = p->M[i] + p->w[i]; /* Eq. 10 */
+		}
 	}
 }
 
@@ -393,6 +457,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	/* Lines 2–6: osmotic flow on each layer, then the masses (Eq. 10, inside the kernel). */
 	if ( !sim->desiccated )
 	{
+		memcpy( sim->w_frame, p->w, sizeof( double ) * (size_t) p->count );
 		sere_osmosis_params layer = params->osmosis;
 		layer.dt = params->dt;
 		sere_osmosis_report report;
@@ -409,6 +474,10 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
 		{
 			return status;
+		}
+		if ( params->local_stop )
+		{
+			local_stop( sim );
 		}
 		/* Sec. 6: when either layer is completely desiccated, flow and shrinkage stop so the
 		 * leaf does not return to its flat shape. */

@@ -6,6 +6,7 @@
 
 #include "collide.h"
 #include "layers.h"
+#include "measure.h"
 #include "osmosis.h"
 #include "pbd.h"
 #include "shrink.h"
@@ -51,6 +52,10 @@ typedef struct sere_leaf_params
 	 * the fraction s: once the shrunk layers disagree the hard constraints have no solution and
 	 * the residual has a floor above λ_C. */
 	float pbd_stall;
+	/* 1: Sec. 6's stop applied where a layer runs dry (a particle whose neighbour in the other
+	 * layer has run dry keeps its water and mass); 0: only for the whole leaf, when a whole layer
+	 * has run dry. */
+	int local_stop;
 } sere_leaf_params;
 
 sere_leaf_params sere_leaf_params_default( void );
@@ -94,6 +99,11 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
  * the thickness, vertices touch the triangles a few rings away in their own sheet. Summed in
  * spring order, so the same bits for every thread count. */
 float sere_leaf_thickness_scale( const sere_model* model );
+
+/* The triangle layer of model as the input of sere_shape_measure (kernels/measure.h): current
+ * positions, plane coordinates u, v, triangles, the T springs as edges with their vein bit, the
+ * outline flags, and the ground (-INFINITY for none). */
+sere_shape_input sere_leaf_shape_input( const sere_model* model, double ground );
 
 /* Per-particle relative water content w / w⁰ (0 where w⁰ = 0), for colors and outputs. */
 void sere_leaf_relative_water( const sere_leaf_sim* sim, float* out );

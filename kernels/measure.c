@@ -1070,7 +1070,7 @@ static void shape_measure_all( const sere_shape_input* in, const int32_t* edge_t
 		out->mean_normal[k] = area > 0.0 ? normal[k] / area : 0.0;
 	}
 	out->flip = out->mean_normal[2] < 0.0;
-	out->extent = sqrt( diameter2( in ) );
+	out->extent = in->skip_extent ? NAN : sqrt( diameter2( in ) );
 
 	double min_z = INFINITY, max_z = -INFINITY;
 	for ( int32_t i = 0; i < in->vertex_count; ++i )

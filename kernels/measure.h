@@ -83,6 +83,7 @@ typedef struct sere_shape_input
 	double band;			  /* half-width δ of the roll cross-sections, as a fraction of the fresh v range */
 	const int32_t* midvein;	  /* optional polyline of vertex indices from base to tip, or NULL */
 	int32_t midvein_count;
+	bool skip_extent; /* true: leave extent NaN (the exact diameter is O(N²); per-frame measures skip it) */
 } sere_shape_input;
 
 /* Everything zero or NULL except ground = -INFINITY, wrinkle_threshold = 0.05 rad (about 3°, so
