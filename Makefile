@@ -268,3 +268,52 @@ clean:
 	rm -rf build
 
 -include $(KERNEL_OBJ:.o=.d) $(HARNESS_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(BENCH_OBJ:.o=.d) $(MAIN_OBJ:.o=.d)
+
+# ---- fuzz: libFuzzer targets for the readers (fuzz/README.md) ------------------------------------
+# `make fuzz FUZZ_SECONDS=N` builds, with clang, one libFuzzer target per reader in build/fuzz
+# (the library and harness instrumented too, -fsanitize=fuzzer,address,undefined) and runs each
+# for N seconds on seeds copied from data/ and tests/data/bad/; it prints every target's
+# executions and coverage and exits non-zero on any finding. `make fuzz-build` only builds.
+FUZZ_SECONDS ?= 30
+FUZZ_CC      ?= clang
+FUZZ_BUILD   ?= build/fuzz
+FUZZ_SAN     := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
+FUZZ_CFLAGS  := -std=c17 -O1 -g $(ARCH) -ffp-contract=off -fno-trapping-math -fno-math-errno -fopenmp $(DEPFLAGS) \
+	-Wall -Wextra -Wpedantic -Werror -Wno-pass-failed $(FUZZ_SAN) $(INCLUDES) $(CAIRO_CFLAGS) \
+	-DSERE_DATA_DIR='"$(PREFIX)/share/sere"'
+FUZZ_NAMES   := $(sort $(basename $(notdir $(wildcard fuzz/fuzz_*.c))))
+FUZZ_BINS    := $(addprefix $(FUZZ_BUILD)/,$(FUZZ_NAMES))
+FUZZ_LIB_OBJ := $(KERNEL_SRC:%.c=$(FUZZ_BUILD)/obj/%.o) $(HARNESS_SRC:%.c=$(FUZZ_BUILD)/obj/%.o)
+FUZZ_LIB     := $(FUZZ_BUILD)/libsere-fuzz.a
+FUZZ_SHIM    := $(FUZZ_BUILD)/obj/fuzz/seasonleaf_shim.o
+
+.PHONY: fuzz fuzz-build
+fuzz-build:
+	@bash scripts/deps.sh clang libomp-dev
+	@$(MAKE) --no-print-directory $(FUZZ_BINS)
+
+fuzz: fuzz-build
+	bash fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_BINS)
+
+# The library and harness with coverage instrumentation for the fuzzer (fuzzer-no-link); the
+# targets pull from the archive only what they use.
+$(FUZZ_BUILD)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
+
+$(FUZZ_BUILD)/obj/kernels/base.o: FUZZ_CFLAGS += -DSERE_VERSION='"$(VERSION)"'
+
+$(FUZZ_LIB): $(FUZZ_LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+# fuzz_chain and fuzz_png also reach two static readers of harness/seasonleaf.c through the shim.
+$(FUZZ_BUILD)/fuzz_chain $(FUZZ_BUILD)/fuzz_png: $(FUZZ_SHIM)
+# fuzz_png recomputes chunk CRCs with zlib's crc32.
+$(FUZZ_BUILD)/fuzz_png: FUZZ_LIBS := -lz
+
+$(FUZZ_BUILD)/fuzz_%: $(FUZZ_BUILD)/obj/fuzz/fuzz_%.o $(FUZZ_LIB)
+	$(FUZZ_CC) -fsanitize=fuzzer $(FUZZ_SAN) -fopenmp -o $@ $< $(filter $(FUZZ_SHIM),$^) $(FUZZ_LIB) $(LIBS_HARNESS) $(FUZZ_LIBS)
+
+-include $(FUZZ_LIB_OBJ:.o=.d) $(FUZZ_BUILD)/obj/fuzz/*.d
+.SECONDARY: $(FUZZ_NAMES:%=$(FUZZ_BUILD)/obj/fuzz/%.o)
