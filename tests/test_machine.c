@@ -432,9 +432,16 @@ Test( machine, unbound_before_binding )
 				hwloc_get_nbobjs_by_type( topology, HWLOC_OBJ_CORE ) > 1;
 	hwloc_bitmap_free( set );
 	hwloc_topology_destroy( topology );
+	/* the OpenMP runtime binds its threads itself when told to */
+	const char* runtime_binding[] = { "OMP_PROC_BIND", "OMP_PLACES", "GOMP_CPU_AFFINITY" };
+	for ( size_t k = 0; k < sizeof( runtime_binding ) / sizeof( runtime_binding[0] ); ++k )
+	{
+		const char* value = getenv( runtime_binding[k] );
+		whole = whole && ( value == NULL || value[0] == '\0' || strcmp( value, "false" ) == 0 );
+	}
 	if ( !whole )
 	{
-		cr_log_warn( "this process is already restricted to part of the machine (or it has one core); skipped" );
+		cr_log_warn( "this process or its OpenMP runtime binds threads already (or it has one core); skipped" );
 		return;
 	}
 	sere_machine machine;
