@@ -4,6 +4,7 @@
 #include "io.h"
 #include "leaf.h"
 #include "leafpics.h"
+#include "machine.h"
 #include "render.h"
 #include "topo.h"
 #include "watch.h"
@@ -767,7 +768,8 @@ int sere_cmd_run( int argc, char** argv )
 		fprintf( summary, ",\n  \"fresh_length\": %.6g,\n", sere_watch_length( watch ) );
 		print_shape( summary, "shape_fresh", &shape_fresh, sere_watch_length( watch ) );
 		print_shape( summary, "shape_dry", &shape_dry, sere_watch_length( watch ) );
-		fprintf( summary, "  \"parameters\": {\n" );
+		sere_machine_json( summary, "  ", bound );
+		fprintf( summary, ",\n  \"parameters\": {\n" );
 		sere_params_print_json( &params, summary, "    " );
 		fprintf( summary, "  }\n}\n" );
 		if ( sere_atomic_commit( &summary_file ) != 0 && failure[0] == '\0' )
