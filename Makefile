@@ -52,7 +52,7 @@ WARN      += $(CLANG_QUIET)
 endif
 DEPFLAGS  := -MMD -MP
 # -ffp-contract=off: no silent FMA contraction, so 1 and 2 threads (and the reference twins)
-# round identically; determinism is a contract (DESIGN.md). -fno-trapping-math: we never unmask
+# round identically; determinism is a contract (docs/DESIGN.md). -fno-trapping-math: we never unmask
 # floating-point exceptions, so the vectorizer may compute both sides of a select (a division
 # included) instead of branching; -fno-math-errno: nothing reads errno after sqrt, so sqrt
 # needs no branch to a library call for negative input. Neither changes a result (no

@@ -757,7 +757,7 @@ int sere_cmd_run( int argc, char** argv )
 			done > 0 ? stats.relative_water : 1.0, curve_area[done > 0 ? done : 0], sum_osmosis / frames_done,
 			sum_dynamics / frames_done, sum_collisions / frames_done, sum_total / frames_done, params.strain_tolerance,
 			(int) params.max_iterations, cap_hits, stalls, max_pbd_iterations );
-		/* the frame rule and what a user looks for, over the whole run (DESIGN.md, measures) */
+		/* the frame rule and what a user looks for, over the whole run (docs/DESIGN.md, measures) */
 		fprintf( summary,
 				 "  \"pbd_rule\": \"%s\",\n  \"converged_frames\": %lld,\n  \"crossings_max\": %lld,\n"
 				 "  \"crossing_frames\": %lld,\n  \"drift_max\": %.6g,\n  \"mass_drift_max\": %.6g,\n"

@@ -128,7 +128,7 @@ sere_status sere_collide_measure_h( const float* x, const float* y, const float*
 /* Eq. 14: x_t^V = (x_a + x_b + x_c) / 3 + h_t n_t and v_t^V = (v_a + v_b + v_c) / 3, with h the
  * ĥ of sere_collide_measure_h or the rest thickness (the two modes of Sec. 5.3), for Voronoi
  * particle voronoi_first + t. Every corner must lie below voronoi_first (the triangle layer comes
- * first, DESIGN.md), else SERE_ERR_ARGUMENT. A degenerate triangle puts its particle at the
+ * first, docs/DESIGN.md), else SERE_ERR_ARGUMENT. A degenerate triangle puts its particle at the
  * centroid. SERE_ERR_NONFINITE (nothing written) for NaN or infinity in the triangle layer's
  * positions or velocities or in h. */
 sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,

@@ -102,7 +102,7 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	const int32_t n = model->triangle_particles, f = model->triangle_count;
 	const sere_springs* s = &model->s;
 	/* T layer: particles [0, N) over the T springs; V layer: [N, N+F) over the V springs. L
-	 * springs carry no water (DESIGN.md). */
+	 * springs carry no water (docs/DESIGN.md). */
 	sere_status status = sere_osmosis_create( 0, n, s->a, s->b, model->t_springs, &sim->osmosis_t );
 	if ( status == SERE_OK )
 	{

@@ -12,7 +12,7 @@ extern "C"
 typedef enum sere_osmosis_mode
 {
 	/* Eq. 8–9 as written: each row weighted by the paper's 2/E_i. Made symmetric by w = M c and
-	 * a row scale of E_i/2 (DESIGN.md): (E_i M_i/2) c_i + Δt Σ_j K_ij (c_i − c_j) = (E_i/2) rhs_i. */
+	 * a row scale of E_i/2 (docs/DESIGN.md): (E_i M_i/2) c_i + Δt Σ_j K_ij (c_i − c_j) = (E_i/2) rhs_i. */
 	SERE_OSMOSIS_PAPER = 0,
 	/* The symmetric weight 4/(E_i + E_j) instead of 2/E_i: M_i c_i + Δt Σ_j 4/(E_i+E_j) K_ij (c_i − c_j)
 	 * = rhs_i. Summing the rows, Σ M_i c_i = Σ w_i = Σ rhs_i: flow moves water without creating

@@ -1,4 +1,4 @@
-/* The drying physics as a user looks at it (DESIGN.md, "Checking the physics"): every preset
+/* The drying physics as a user looks at it (docs/DESIGN.md, "Checking the physics"): every preset
  * dried to the end on its own leaf at a small size, frame by frame converged, without
  * crossings, drift or flying, shrunk as real leaves shrink. */
 #include "build.h"

@@ -6,7 +6,7 @@
 
 Test( layers, counts_solve_table1 )
 {
-	/* Table 1's three leaves: DESIGN.md gives their N and B. */
+	/* Table 1's three leaves: docs/DESIGN.md gives their N and B. */
 	const int64_t cases[3][4] = { { 13197, 51102, 4680, 841 },
 								  { 15069, 59550, 5144, 361 },
 								  { 12750, 50436, 4344, 280 } };

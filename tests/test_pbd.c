@@ -183,7 +183,7 @@ static void double_layer( test_mesh* m, int32_t nx, int32_t ny, float spacing, f
 			add_spring( m, v00, t0 + 1, 2 ), add_spring( m, v11, t0 + 1, 2 ), add_spring( m, v01, t0 + 1, 2 );
 		}
 	}
-	/* DESIGN.md: springs = 12N − 6B − 12 for N triangle vertices, B of them on the outline. */
+	/* docs/DESIGN.md: springs = 12N − 6B − 12 for N triangle vertices, B of them on the outline. */
 	cr_assert_eq( m->count, 12 * nt - 6 * 2 * ( nx + ny ) - 12 );
 }
 
