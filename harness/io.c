@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -462,4 +463,16 @@ int sere_parse_dir( const char* command, const char* option, const char* text )
 		return -1;
 	}
 	return 0;
+}
+
+int sere_fail( char* err, size_t err_size, const char* format, ... )
+{
+	if ( err != NULL && err_size > 0 )
+	{
+		va_list args;
+		va_start( args, format );
+		vsnprintf( err, err_size, format, args );
+		va_end( args );
+	}
+	return -1;
 }

@@ -36,6 +36,10 @@ int sere_check_outputs( const char* dir, const char* const* names, int count, ch
  * passes user-given text (leaf, state and preset names, paths) through it. */
 const char* sere_json_escape( char* out, size_t size, const char* text );
 
+/* Formats one line into err (when err is not NULL and err_size > 0) and returns -1: the error
+ * return of every harness function that reports through (err, err_size). */
+int sere_fail( char* err, size_t err_size, const char* format, ... ) __attribute__( ( format( printf, 3, 4 ) ) );
+
 /* The offset of the first byte of text that does not start a valid UTF-8 character, or -1 when
  * all of it is UTF-8 (cairo draws only UTF-8; names go into titles). */
 long sere_utf8_invalid_at( const char* text );

@@ -1,25 +1,14 @@
 #define _POSIX_C_SOURCE 200809L
 #include "leafpics.h"
 
+#include "io.h"
+
 #include "render.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int fail( char* err, size_t err_size, const char* format, ... )
-{
-	if ( err != NULL && err_size > 0 )
-	{
-		va_list args;
-		va_start( args, format );
-		vsnprintf( err, err_size, format, args );
-		va_end( args );
-	}
-	return -1;
-}
 
 /* A render error ("render: ...") restated as "<path>: frame N: ...". */
 static int fail_render( char* err, size_t err_size, const char* path, int frame )
@@ -30,7 +19,7 @@ static int fail_render( char* err, size_t err_size, const char* path, int frame 
 		snprintf( inner, sizeof( inner ), "%s", err );
 	}
 	const char* reason = strncmp( inner, "render: ", 8 ) == 0 ? inner + 8 : inner;
-	return fail( err, err_size, "%s: frame %d: %s", path, frame, reason );
+	return sere_fail( err, err_size, "%s: frame %d: %s", path, frame, reason );
 }
 
 /* The xy footprint of a frame; -1 with a message when a coordinate is not finite. */
@@ -42,8 +31,8 @@ static int footprint( const char* path, const sere_leafpics_frame* f, double lo[
 		double p[3] = { f->x[i], f->y[i], f->z != NULL ? f->z[i] : 0.0 };
 		if ( !isfinite( p[0] ) || !isfinite( p[1] ) || !isfinite( p[2] ) )
 		{
-			return fail( err, err_size, "%s: frame %d: vertex %d has a non-finite coordinate", path, f->frame,
-						 (int) i );
+			return sere_fail( err, err_size, "%s: frame %d: vertex %d has a non-finite coordinate", path, f->frame,
+							  (int) i );
 		}
 		for ( int c = 0; c < 2; ++c )
 		{
@@ -59,22 +48,22 @@ static int check_input( const char* path, int frame_count, const sere_leafpics_f
 {
 	if ( path == NULL || path[0] == '\0' )
 	{
-		return fail( err, err_size, "leafpics: no output path" );
+		return sere_fail( err, err_size, "leafpics: no output path" );
 	}
 	if ( frames == NULL || frame_count < 1 || frame_count > 16 )
 	{
-		return fail( err, err_size, "%s: %d frames, expected 1..16", path, frame_count );
+		return sere_fail( err, err_size, "%s: %d frames, expected 1..16", path, frame_count );
 	}
 	if ( tri_count < 0 || ( tri_count > 0 && tri == NULL ) )
 	{
-		return fail( err, err_size, "%s: triangle list missing or negative count %d", path, (int) tri_count );
+		return sere_fail( err, err_size, "%s: triangle list missing or negative count %d", path, (int) tri_count );
 	}
 	for ( int k = 0; k < frame_count; ++k )
 	{
 		const sere_leafpics_frame* f = frames + k;
 		if ( f->vertex_count < 1 || f->x == NULL || f->y == NULL )
 		{
-			return fail( err, err_size, "%s: frame %d has no vertices", path, f->frame );
+			return sere_fail( err, err_size, "%s: frame %d has no vertices", path, f->frame );
 		}
 	}
 	return 0;
@@ -205,7 +194,7 @@ int sere_leafpics_sheet( const char* path, const char* title, int frame_count, c
 	float* rgb = malloc( sizeof( float ) * 3 * (size_t) most );
 	if ( rgb == NULL )
 	{
-		return fail( err, err_size, "%s: out of memory for %d vertices", path, (int) most );
+		return sere_fail( err, err_size, "%s: out of memory for %d vertices", path, (int) most );
 	}
 
 	/* Each row's views: fitted frame by frame (centre on that frame's scene), then all drawn
@@ -293,12 +282,12 @@ int sere_leafpics_view( const char* path, const char* title, const sere_leafpics
 	size = size > 0 ? size : 900;
 	if ( size < 64 || size > 8192 )
 	{
-		return fail( err, err_size, "%s: picture size %d outside 64..8192", path, size );
+		return sere_fail( err, err_size, "%s: picture size %d outside 64..8192", path, size );
 	}
 	float* rgb = malloc( sizeof( float ) * 3 * (size_t) frame->vertex_count );
 	if ( rgb == NULL )
 	{
-		return fail( err, err_size, "%s: out of memory for %d vertices", path, (int) frame->vertex_count );
+		return sere_fail( err, err_size, "%s: out of memory for %d vertices", path, (int) frame->vertex_count );
 	}
 	sere_render_scene scene = {
 		.lower_tint = 1,

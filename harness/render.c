@@ -5,24 +5,11 @@
 
 #include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define SERE_RENDER_FONT "DejaVu Sans"
-
-static int fail( char* err, size_t err_size, const char* format, ... )
-{
-	if ( err != NULL && err_size > 0 )
-	{
-		va_list args;
-		va_start( args, format );
-		vsnprintf( err, err_size, format, args );
-		va_end( args );
-	}
-	return -1;
-}
 
 /* Camera frame of a view: screen right, screen up and the direction toward the viewer, in
  * model coordinates. Azimuth turns the camera about +z, elevation tilts it up to look down. */
@@ -72,21 +59,21 @@ static int check_mesh( const sere_render_mesh* mesh, char* err, size_t err_size 
 		 ( mesh->vertex_count > 0 && ( mesh->x == NULL || mesh->y == NULL ) ) ||
 		 ( mesh->triangle_count > 0 && mesh->triangles == NULL ) )
 	{
-		return fail( err, err_size, "render: mesh arrays missing or negative counts" );
+		return sere_fail( err, err_size, "render: mesh arrays missing or negative counts" );
 	}
 	for ( int32_t i = 0; i < mesh->vertex_count; ++i )
 	{
 		if ( !isfinite( mesh->x[i] ) || !isfinite( mesh->y[i] ) || !isfinite( vertex_z( mesh, i ) ) )
 		{
-			return fail( err, err_size, "render: vertex %d has a non-finite coordinate", (int) i );
+			return sere_fail( err, err_size, "render: vertex %d has a non-finite coordinate", (int) i );
 		}
 	}
 	for ( int32_t k = 0; k < 3 * mesh->triangle_count; ++k )
 	{
 		if ( mesh->triangles[k] < 0 || mesh->triangles[k] >= mesh->vertex_count )
 		{
-			return fail( err, err_size, "render: triangle %d uses vertex %d of %d", (int) ( k / 3 ),
-						 (int) mesh->triangles[k], (int) mesh->vertex_count );
+			return sere_fail( err, err_size, "render: triangle %d uses vertex %d of %d", (int) ( k / 3 ),
+							  (int) mesh->triangles[k], (int) mesh->vertex_count );
 		}
 	}
 	return 0;
@@ -97,7 +84,7 @@ static int check_view( const sere_render_view* view, char* err, size_t err_size 
 	if ( !isfinite( view->azimuth ) || !isfinite( view->elevation ) || !isfinite( view->center[0] ) ||
 		 !isfinite( view->center[1] ) || !isfinite( view->center[2] ) || !isfinite( view->margin ) )
 	{
-		return fail( err, err_size, "render: view angles, center and margin must be finite" );
+		return sere_fail( err, err_size, "render: view angles, center and margin must be finite" );
 	}
 	return 0;
 }
@@ -286,7 +273,7 @@ static int cairo_failed( cairo_t* cr, char* err, size_t err_size )
 	cairo_status_t status = cairo_status( cr );
 	if ( status != CAIRO_STATUS_SUCCESS )
 	{
-		return fail( err, err_size, "render: cairo: %s", cairo_status_to_string( status ) );
+		return sere_fail( err, err_size, "render: cairo: %s", cairo_status_to_string( status ) );
 	}
 	return 0;
 }
@@ -401,8 +388,8 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 		{
 			if ( lines->pairs[k] < 0 || lines->pairs[k] >= mesh->vertex_count )
 			{
-				return fail( err, err_size, "render: line %d of set %d uses vertex %d of %d", (int) ( k / 2 ), (int) s,
-							 (int) lines->pairs[k], (int) mesh->vertex_count );
+				return sere_fail( err, err_size, "render: line %d of set %d uses vertex %d of %d", (int) ( k / 2 ),
+								  (int) s, (int) lines->pairs[k], (int) mesh->vertex_count );
 			}
 		}
 	}
@@ -414,7 +401,7 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 	{
 		free( screen );
 		free( order );
-		return fail( err, err_size, "render: out of memory for %d triangles", (int) mesh->triangle_count );
+		return sere_fail( err, err_size, "render: out of memory for %d triangles", (int) mesh->triangle_count );
 	}
 	frame f = view_frame( view );
 	double cx = x0 + 0.5 * w, cy = y0 + 0.5 * h;
@@ -717,7 +704,7 @@ int sere_render_canvas_create( sere_render_canvas* canvas, int width, int height
 	canvas->height = height;
 	if ( width <= 0 || height <= 0 || width > 32767 || height > 32767 )
 	{
-		return fail( err, err_size, "render: canvas size %dx%d outside 1..32767", width, height );
+		return sere_fail( err, err_size, "render: canvas size %dx%d outside 1..32767", width, height );
 	}
 	canvas->surface = cairo_image_surface_create( CAIRO_FORMAT_RGB24, width, height );
 	canvas->cr = cairo_create( canvas->surface );
@@ -740,25 +727,25 @@ int sere_render_canvas_write_png( const sere_render_canvas* canvas, const char* 
 {
 	if ( canvas->cr == NULL || cairo_failed( canvas->cr, err, err_size ) != 0 )
 	{
-		return canvas->cr == NULL ? fail( err, err_size, "%s: no canvas to write", path ) : -1;
+		return canvas->cr == NULL ? sere_fail( err, err_size, "%s: no canvas to write", path ) : -1;
 	}
 	cairo_surface_flush( canvas->surface );
 	sere_atomic_file file;
 	if ( sere_atomic_open( &file, path ) == NULL )
 	{
-		return fail( err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
+		return sere_fail( err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
 	}
 	cairo_status_t status = cairo_surface_write_to_png_stream( canvas->surface, write_to_file, file.f );
 	if ( status != CAIRO_STATUS_SUCCESS )
 	{
 		int saved = errno;
 		sere_atomic_abort( &file );
-		return fail( err, err_size, "%s: cannot write PNG: %s (%s)", path, cairo_status_to_string( status ),
-					 strerror( saved ) );
+		return sere_fail( err, err_size, "%s: cannot write PNG: %s (%s)", path, cairo_status_to_string( status ),
+						  strerror( saved ) );
 	}
 	if ( sere_atomic_commit( &file ) != 0 )
 	{
-		return fail( err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
+		return sere_fail( err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
 	}
 	return 0;
 }
@@ -781,7 +768,7 @@ int sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet,
 {
 	if ( sheet->count <= 0 || sheet->columns <= 0 || sheet->draw == NULL )
 	{
-		return fail( err, err_size, "%s: a contact sheet needs panels, columns and a draw function", path );
+		return sere_fail( err, err_size, "%s: a contact sheet needs panels, columns and a draw function", path );
 	}
 	const int pad = 12, caption_height = 26;
 	int pw = sheet->panel_width > 0 ? sheet->panel_width : 320;
@@ -794,8 +781,8 @@ int sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet,
 	sere_render_canvas canvas;
 	if ( width > 32767 || height > 32767 )
 	{
-		return fail( err, err_size, "%s: a sheet of %d panels of %dx%d exceeds 32767 pixels", path, sheet->count, pw,
-					 ph );
+		return sere_fail( err, err_size, "%s: a sheet of %d panels of %dx%d exceeds 32767 pixels", path, sheet->count,
+						  pw, ph );
 	}
 	if ( sere_render_canvas_create( &canvas, (int) width, (int) height, err, err_size ) != 0 )
 	{
@@ -979,13 +966,13 @@ int sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h
 	}
 	if ( !( lo[0] <= hi[0] ) )
 	{
-		return fail( err, err_size, "render: plot '%s' has no finite point", axes->title ? axes->title : "" );
+		return sere_fail( err, err_size, "render: plot '%s' has no finite point", axes->title ? axes->title : "" );
 	}
 	if ( axes->fixed_y )
 	{
 		if ( !( axes->y_min < axes->y_max ) || !isfinite( axes->y_min ) || !isfinite( axes->y_max ) )
 		{
-			return fail( err, err_size, "render: plot y range [%g, %g] is empty", axes->y_min, axes->y_max );
+			return sere_fail( err, err_size, "render: plot y range [%g, %g] is empty", axes->y_min, axes->y_max );
 		}
 		lo[1] = axes->y_min, hi[1] = axes->y_max;
 	}
@@ -1028,7 +1015,7 @@ int sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h
 	if ( a.width < 20.0 || a.height < 20.0 )
 	{
 		cairo_restore( cr );
-		return fail( err, err_size, "render: plot region %gx%g too small", w, h );
+		return sere_fail( err, err_size, "render: plot region %gx%g too small", w, h );
 	}
 
 	/* Grid lines on pixel centers so 1-pixel lines stay crisp. */
@@ -1158,7 +1145,7 @@ int sere_render_plane_png( const char* path, int width, int height, const sere_r
 		{
 			if ( !isfinite( plane->scalar[i] ) )
 			{
-				return fail( err, err_size, "%s: scalar at vertex %d is not finite", path, (int) i );
+				return sere_fail( err, err_size, "%s: scalar at vertex %d is not finite", path, (int) i );
 			}
 			lo = fmin( lo, plane->scalar[i] ), hi = fmax( hi, plane->scalar[i] );
 		}
@@ -1183,7 +1170,7 @@ int sere_render_plane_png( const char* path, int width, int height, const sere_r
 		if ( rgb == NULL )
 		{
 			sere_render_canvas_destroy( &canvas );
-			return fail( err, err_size, "%s: out of memory", path );
+			return sere_fail( err, err_size, "%s: out of memory", path );
 		}
 		sere_render_colormap_values( plane->scalar, plane->vertex_count, lo, hi, rgb );
 		mesh.rgb = rgb;

@@ -1,11 +1,12 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fixture.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <sys/wait.h>
 
-static double next_unit( uint64_t* state )
+double sere_test_unit( uint64_t* state )
 {
 	/* splitmix64: a fixed-seed generator so fixtures are identical run to run */
 	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
@@ -58,8 +59,8 @@ void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, doubl
 		{
 			int32_t k = index[j * ( nx + 1 ) + i];
 			int interior = i > 0 && i < nx && j > 0 && j < ny && !( vein_row && j == ny / 2 );
-			double jx = interior ? jitter * ( next_unit( &state ) - 0.5 ) * dx : 0.0;
-			double jy = interior ? jitter * ( next_unit( &state ) - 0.5 ) * dy : 0.0;
+			double jx = interior ? jitter * ( sere_test_unit( &state ) - 0.5 ) * dx : 0.0;
+			double jy = interior ? jitter * ( sere_test_unit( &state ) - 0.5 ) * dy : 0.0;
 			plane->x[k] = i * dx + jx;
 			plane->y[k] = j * dy + jy;
 		}
@@ -128,4 +129,38 @@ int sere_test_run( const char* args, char* err, size_t err_size )
 	err[used] = '\0';
 	int status = pclose( pipe );
 	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+}
+
+void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_t seed )
+{
+	const double pi = 3.14159265358979323846;
+	field->state = seed;
+	for ( int m = 0; m < 8; ++m )
+	{
+		double angle = 2.0 * pi * sere_test_unit( &field->state );
+		double k = 2.0 * pi * ( 2.0 + 3.0 * sere_test_unit( &field->state ) );
+		field->wave[m][0] = k * cos( angle ), field->wave[m][1] = k * sin( angle );
+		field->wave[m][2] = 2.0 * pi * sere_test_unit( &field->state );
+		for ( int a = 0; a < 3; ++a )
+		{
+			field->wave[m][3 + a] =
+				( a == 2 ? 0.25 : 0.125 ) * amplitude * ( 2.0 * sere_test_unit( &field->state ) - 1.0 );
+		}
+	}
+}
+
+void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float out[3] )
+{
+	double d[3] = { 0.0, 0.0, 0.0 };
+	for ( int m = 0; m < 8; ++m )
+	{
+		double phase = sin( field->wave[m][0] * u + field->wave[m][1] * v + field->wave[m][2] );
+		for ( int a = 0; a < 3; ++a )
+		{
+			d[a] += field->wave[m][3 + a] * phase;
+		}
+	}
+	out[0] = (float) ( u + d[0] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	out[1] = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	out[2] = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 }

@@ -23,6 +23,22 @@ void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, doubl
 						   int vein_row, uint64_t seed );
 void sere_test_plane_free( sere_test_plane* plane );
 
+/* splitmix64 in [0, 1): the fixed-seed generator of every fixture. */
+double sere_test_unit( uint64_t* state );
+
+/* Crumpled sheets: a smooth random displacement field (eight plane waves of wavelength 0.2 to
+ * 0.5 in all three axes) of the given amplitude, from a fixed seed. Large amplitudes fold a unit
+ * sheet through itself many times. */
+typedef struct sere_test_crumple
+{
+	double wave[8][6];
+	uint64_t state; /* draws the per-point noise after the waves */
+} sere_test_crumple;
+
+void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_t seed );
+/* The displaced point of rest position (u, v, 0), plus noise · (uniform − 0.5) per axis. */
+void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float out[3] );
+
 /* The sere binary under test: $SERE_BIN (make test sets it), else build/sere. */
 const char* sere_test_bin( void );
 

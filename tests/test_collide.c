@@ -61,15 +61,6 @@ static void collide_sheet_free( collide_sheet* s )
 	free( s->tri );
 }
 
-static double collide_unit( uint64_t* state )
-{
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	z ^= z >> 31;
-	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
-}
-
 static void collide_sheet_flat( collide_sheet* s )
 {
 	for ( int32_t i = 0; i < s->n; ++i )
@@ -108,33 +99,13 @@ static void collide_sheet_fold( collide_sheet* s, double gap )
  * amplitudes fold the sheet through itself. */
 static void collide_sheet_crumple( collide_sheet* s, double amplitude, double noise, uint64_t seed )
 {
-	uint64_t state = seed;
-	double wave[8][6];
-	for ( int m = 0; m < 8; ++m )
-	{
-		double angle = 2.0 * COLLIDE_PI * collide_unit( &state );
-		double k = 2.0 * COLLIDE_PI * ( 2.0 + 3.0 * collide_unit( &state ) );
-		wave[m][0] = k * cos( angle ), wave[m][1] = k * sin( angle );
-		wave[m][2] = 2.0 * COLLIDE_PI * collide_unit( &state );
-		for ( int a = 0; a < 3; ++a )
-		{
-			wave[m][3 + a] = ( a == 2 ? 0.25 : 0.125 ) * amplitude * ( 2.0 * collide_unit( &state ) - 1.0 );
-		}
-	}
+	sere_test_crumple field;
+	sere_test_crumple_make( &field, amplitude, seed );
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
-		double d[3] = { 0.0, 0.0, 0.0 };
-		for ( int m = 0; m < 8; ++m )
-		{
-			double phase = sin( wave[m][0] * s->u[i] + wave[m][1] * s->v[i] + wave[m][2] );
-			for ( int a = 0; a < 3; ++a )
-			{
-				d[a] += wave[m][3 + a] * phase;
-			}
-		}
-		s->x[i] = (float) ( s->u[i] + d[0] + noise * ( collide_unit( &state ) - 0.5 ) );
-		s->y[i] = (float) ( s->v[i] + d[1] + noise * ( collide_unit( &state ) - 0.5 ) );
-		s->z[i] = (float) ( d[2] + noise * ( collide_unit( &state ) - 0.5 ) );
+		float p[3];
+		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, p );
+		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
 	}
 }
 
@@ -212,15 +183,15 @@ Test( collide, closest_point_matches_double_reference )
 		float a[3], b[3], c[3], p[3];
 		for ( int i = 0; i < 3; ++i )
 		{
-			a[i] = (float) ( 2.0 * collide_unit( &state ) - 1.0 );
-			b[i] = (float) ( 2.0 * collide_unit( &state ) - 1.0 );
-			c[i] = (float) ( 2.0 * collide_unit( &state ) - 1.0 );
-			p[i] = (float) ( 3.0 * collide_unit( &state ) - 1.5 );
+			a[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
+			b[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
+			c[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
+			p[i] = (float) ( 3.0 * sere_test_unit( &state ) - 1.5 );
 		}
 		if ( k % 10 == 1 )
 		{
 			/* slivers and fully degenerate triangles: c on the line ab, or all three equal */
-			double t = collide_unit( &state );
+			double t = sere_test_unit( &state );
 			for ( int i = 0; i < 3; ++i )
 			{
 				c[i] = (float) ( a[i] + t * ( b[i] - a[i] ) );
@@ -263,9 +234,9 @@ Test( collide, pairs_match_brute_force_on_random_deformations )
 		uint64_t state = seed;
 		for ( int32_t i = 0; i < s.n; ++i )
 		{
-			s.x[i] = (float) ( s.u[i] + 3.0 * s.cell * ( collide_unit( &state ) - 0.5 ) );
-			s.y[i] = (float) ( s.v[i] + 3.0 * s.cell * ( collide_unit( &state ) - 0.5 ) );
-			s.z[i] = (float) ( 3.0 * s.cell * ( collide_unit( &state ) - 0.5 ) );
+			s.x[i] = (float) ( s.u[i] + 3.0 * s.cell * ( sere_test_unit( &state ) - 0.5 ) );
+			s.y[i] = (float) ( s.v[i] + 3.0 * s.cell * ( sere_test_unit( &state ) - 0.5 ) );
+			s.z[i] = (float) ( 3.0 * s.cell * ( sere_test_unit( &state ) - 0.5 ) );
 		}
 		/* refit only: the tree was built on the flat sheet */
 		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
@@ -582,16 +553,19 @@ Test( collide, voronoi_restore_eq14 )
 	/* Voronoi particles scattered around their triangles, velocities random */
 	for ( int32_t i = 0; i < n + f; ++i )
 	{
-		s.vx[i] = (float) ( collide_unit( &state ) - 0.5 );
-		s.vy[i] = (float) ( collide_unit( &state ) - 0.5 );
-		s.vz[i] = (float) ( collide_unit( &state ) - 0.5 );
+		s.vx[i] = (float) ( sere_test_unit( &state ) - 0.5 );
+		s.vy[i] = (float) ( sere_test_unit( &state ) - 0.5 );
+		s.vz[i] = (float) ( sere_test_unit( &state ) - 0.5 );
 	}
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		const int32_t* v = s.tri + 3 * t;
-		s.x[n + t] = ( s.x[v[0]] + s.x[v[1]] + s.x[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
-		s.y[n + t] = ( s.y[v[0]] + s.y[v[1]] + s.y[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
-		s.z[n + t] = ( s.z[v[0]] + s.z[v[1]] + s.z[v[2]] ) / 3.0f + (float) ( 0.02 * ( collide_unit( &state ) - 0.5 ) );
+		s.x[n + t] =
+			( s.x[v[0]] + s.x[v[1]] + s.x[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
+		s.y[n + t] =
+			( s.y[v[0]] + s.y[v[1]] + s.y[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
+		s.z[n + t] =
+			( s.z[v[0]] + s.z[v[1]] + s.z[v[2]] ) / 3.0f + (float) ( 0.02 * ( sere_test_unit( &state ) - 0.5 ) );
 	}
 	float* h_hat = malloc( sizeof( float ) * (size_t) f );
 	double* h_ref = malloc( sizeof( double ) * (size_t) f );
@@ -979,17 +953,17 @@ static void conserving_sheet( collide_sheet* s, uint64_t seed )
 	{
 		const int32_t* v = s->tri + 3 * t;
 		s->x[n + t] =
-			( s->x[v[0]] + s->x[v[1]] + s->x[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
+			( s->x[v[0]] + s->x[v[1]] + s->x[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
 		s->y[n + t] =
-			( s->y[v[0]] + s->y[v[1]] + s->y[v[2]] ) / 3.0f + (float) ( 0.01 * ( collide_unit( &state ) - 0.5 ) );
-		s->z[n + t] = ( s->z[v[0]] + s->z[v[1]] + s->z[v[2]] ) / 3.0f + (float) ( 0.02 * collide_unit( &state ) );
+			( s->y[v[0]] + s->y[v[1]] + s->y[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
+		s->z[n + t] = ( s->z[v[0]] + s->z[v[1]] + s->z[v[2]] ) / 3.0f + (float) ( 0.02 * sere_test_unit( &state ) );
 	}
 	for ( int32_t i = 0; i < n + f; ++i )
 	{
-		s->vx[i] = (float) ( collide_unit( &state ) - 0.5 );
-		s->vy[i] = (float) ( collide_unit( &state ) - 0.5 );
-		s->vz[i] = (float) ( collide_unit( &state ) - 0.5 );
-		s->inv_m[i] = (float) ( 1.0 / ( 0.5 + 1.5 * collide_unit( &state ) ) );
+		s->vx[i] = (float) ( sere_test_unit( &state ) - 0.5 );
+		s->vy[i] = (float) ( sere_test_unit( &state ) - 0.5 );
+		s->vz[i] = (float) ( sere_test_unit( &state ) - 0.5 );
+		s->inv_m[i] = (float) ( 1.0 / ( 0.5 + 1.5 * sere_test_unit( &state ) ) );
 	}
 }
 

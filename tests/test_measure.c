@@ -116,47 +116,18 @@ static sere_shape_input measure_input( const measure_sheet* s )
 	return in;
 }
 
-static double measure_unit( uint64_t* state )
-{
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	z ^= z >> 31;
-	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
-}
-
 /* Crumpled: eight random plane waves (wavelength 0.2 to 0.5) displacing all three axes by up to
  * the amplitude, plus per-vertex noise. Amplitudes near 1 on a unit sheet fold it through
  * itself many times. */
 static void measure_crumple( measure_sheet* s, double amplitude, double noise, uint64_t seed )
 {
-	uint64_t state = seed;
-	double wave[8][6];
-	for ( int m = 0; m < 8; ++m )
-	{
-		double angle = 2.0 * MEASURE_PI * measure_unit( &state );
-		double k = 2.0 * MEASURE_PI * ( 2.0 + 3.0 * measure_unit( &state ) );
-		wave[m][0] = k * cos( angle ), wave[m][1] = k * sin( angle );
-		wave[m][2] = 2.0 * MEASURE_PI * measure_unit( &state );
-		for ( int a = 0; a < 3; ++a )
-		{
-			wave[m][3 + a] = ( a == 2 ? 0.25 : 0.125 ) * amplitude * ( 2.0 * measure_unit( &state ) - 1.0 );
-		}
-	}
+	sere_test_crumple field;
+	sere_test_crumple_make( &field, amplitude, seed );
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
-		double d[3] = { 0.0, 0.0, 0.0 };
-		for ( int m = 0; m < 8; ++m )
-		{
-			double phase = sin( wave[m][0] * s->u[i] + wave[m][1] * s->v[i] + wave[m][2] );
-			for ( int a = 0; a < 3; ++a )
-			{
-				d[a] += wave[m][3 + a] * phase;
-			}
-		}
-		s->x[i] = (float) ( s->u[i] + d[0] + noise * ( measure_unit( &state ) - 0.5 ) );
-		s->y[i] = (float) ( s->v[i] + d[1] + noise * ( measure_unit( &state ) - 0.5 ) );
-		s->z[i] = (float) ( d[2] + noise * ( measure_unit( &state ) - 0.5 ) );
+		float p[3];
+		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, p );
+		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
 	}
 }
 
