@@ -2,6 +2,7 @@
  * dried to the end on its own leaf at a small size, frame by frame converged, without
  * crossings, drift or flying, shrunk as real leaves shrink. */
 #include "build.h"
+#include "fixture.h"
 #include "leaf.h"
 #include "measure.h"
 #include "params.h"
@@ -13,8 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Drying all five presets to the end takes a minute optimized and ten under AddressSanitizer;
- * the sanitized suite runs the same code paths in the shorter tests above it. */
+/* Drying all five presets to the end, or relaxing six blades for 1200 frames, takes a minute
+ * optimized and ten under AddressSanitizer; the sanitized suite runs the same code paths in the
+ * shorter tests. */
 #if defined( __SANITIZE_ADDRESS__ )
 #define SERE_LONG_TEST_DISABLED 1
 #else
@@ -249,4 +251,104 @@ Test( drying, ground_friction )
 	cr_expect_lt( curling.contact_slide, 0.8 * frictionless.contact_slide, "friction: %g, without: %g",
 				  curling.contact_slide, frictionless.contact_slide );
 	dry_free( &curling ), dry_free( &frictionless );
+}
+
+/* Item 6, a law from outside the paper (Guo et al. 2025, Midveins regulate the shape formation
+ * of drying leaves): a lamina shrinking uniformly by the mismatch strain around a midvein that
+ * does not shrink curls, and the midvein's curvature grows linearly with the strain. A 1 x 0.4
+ * blade 0.03 thick with its midvein along the long axis. The midvein is a bundle: besides the
+ * paper's vein springs (the T springs along it, the V springs across it), the V springs joining
+ * two of its triangles and the L springs of those triangles are its own, so that it keeps its
+ * length through its thickness and resists bending along itself; none of the vein's springs
+ * shrink and they are 100 times stiffer than the blade's. Every other spring is shortened by
+ * eps; the default frame (no water, no gravity) relaxes the blade for 1200 frames. */
+static double midvein_curvature( double eps )
+{
+	sere_test_plane plane;
+	sere_test_plane_grid( &plane, 30, 12, 1.0, 0.4, 0.2, 1, 7 );
+	sere_layer_params layer = sere_layer_params_default();
+	layer.h_vein = 0.03, layer.h_surf = 0.03;
+	sere_model model;
+	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &layer, &model ), SERE_OK );
+	sere_test_plane_free( &plane );
+	const int32_t n = model.triangle_particles;
+	for ( int32_t k = model.t_springs; k < model.s.count; ++k )
+	{
+		int32_t a = model.s.a[k], b = model.s.b[k];
+		int layer_kind = model.s.kind[k] & SERE_SPRING_LAYER_MASK;
+		if ( ( layer_kind == SERE_SPRING_V && model.tri_vein[a - n] && model.tri_vein[b - n] ) ||
+			 ( layer_kind == SERE_SPRING_L && b >= n && model.tri_vein[b - n] ) )
+		{
+			model.s.kind[k] |= SERE_SPRING_VEIN;
+		}
+	}
+	for ( int32_t k = 0; k < model.s.count; ++k )
+	{
+		if ( !( model.s.kind[k] & SERE_SPRING_VEIN ) )
+		{
+			model.s.rest0[k] *= (float) ( 1.0 - eps );
+			model.s.rest[k] = model.s.rest0[k];
+		}
+	}
+	sere_leaf_sim* sim;
+	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+	sere_leaf_params params = sere_leaf_params_default();
+	params.water_rate_t = 0.0, params.water_rate_v = 0.0;
+	params.vein_compliance = 0.01f;
+	params.pbd.max_iterations = 2000; /* a stiff vein needs more sweeps to reach the residual */
+	for ( int frame = 0; frame < 1200; ++frame )
+	{
+		sere_leaf_stats stats;
+		cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK );
+		cr_assert( stats.pbd_converged, "eps %g frame %d did not converge", eps, frame );
+	}
+	/* the midvein's vertices from base to tip, ordered along the blade */
+	int32_t* vein = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t count = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( model.vein[i] )
+		{
+			int32_t j = count++;
+			while ( j > 0 && model.u[vein[j - 1]] > model.u[i] )
+			{
+				vein[j] = vein[j - 1], --j;
+			}
+			vein[j] = i;
+		}
+	}
+	cr_assert_geq( count, 20 );
+	sere_shape_input in = sere_leaf_shape_input( &model, -INFINITY );
+	in.midvein = vein, in.midvein_count = count;
+	sere_shape shape;
+	cr_assert_eq( sere_shape_measure( &in, &shape ), SERE_OK );
+	free( vein );
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+	return shape.midvein_curvature;
+}
+
+Test( drying, midvein_curvature_is_linear_in_the_mismatch, .disabled = SERE_LONG_TEST_DISABLED )
+{
+	const double strains[6] = { 0.01, 0.02, 0.04, 0.06, 0.08, 0.10 };
+	double kappa[6], mean_e = 0.0, mean_k = 0.0;
+	for ( int k = 0; k < 6; ++k )
+	{
+		kappa[k] = midvein_curvature( strains[k] );
+		mean_e += strains[k] / 6.0, mean_k += kappa[k] / 6.0;
+	}
+	double see = 0.0, sek = 0.0, skk = 0.0;
+	for ( int k = 0; k < 6; ++k )
+	{
+		see += ( strains[k] - mean_e ) * ( strains[k] - mean_e );
+		sek += ( strains[k] - mean_e ) * ( kappa[k] - mean_k );
+		skk += ( kappa[k] - mean_k ) * ( kappa[k] - mean_k );
+	}
+	double slope = sek / see, r2 = sek * sek / ( see * skk );
+	cr_log_info( "midvein curvature at 1, 2, 4, 6, 8, 10%%: %g %g %g %g %g %g; slope %g, R^2 %g", kappa[0], kappa[1],
+				 kappa[2], kappa[3], kappa[4], kappa[5], slope, r2 );
+	cr_expect_gt( slope, 0.0, "the midvein must curl more as the lamina shrinks more" );
+	/* the curl is real: at 10% the unit blade's midvein bends with a radius under its length */
+	cr_expect_gt( kappa[5], 1.0, "curvature %g at 10%%", kappa[5] );
+	cr_expect_geq( r2, 0.95, "curvature against strain: R^2 = %g", r2 );
 }
