@@ -536,7 +536,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 	if ( isfinite( params->ground ) )
 	{
-		stats->grounded = ground_friction( p, sim->push, n, params->friction_static, params->friction_kinetic );
+		stats->grounded = ground_friction( p, sim->push, p->count, params->friction_static, params->friction_kinetic );
 	}
 	stats->max_strain = largest_strain( model );
 	/* the start of the frame, before sere_pbd_finish moves it: where each contact's vertex was */

@@ -69,7 +69,7 @@ typedef struct sere_leaf_stats
 	float max_strain;  /* max |C/l| after projection */
 	float residual;	   /* the stop measure after projection: max |C + α̃λ|/l (XPBD), max |C/l| (paper) */
 	int pbd_converged; /* the residual reached pbd.tolerance (and the ground was met) before the cap */
-	int32_t grounded;  /* triangle-layer particles touching the ground after the frame */
+	int32_t grounded;  /* particles (either layer) touching the ground after the frame */
 	int pbd_hit_cap;
 	int pbd_stalled; /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
 	int32_t contacts;
