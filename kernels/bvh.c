@@ -1,4 +1,8 @@
+/* _GNU_SOURCE: sched_getaffinity for internal/team.h. */
+#define _GNU_SOURCE
+
 #include "bvh.h"
+#include "internal/team.h"
 
 #include <math.h>
 #include <string.h>
@@ -126,7 +130,7 @@ static float range_area( const sere_bvh* bvh, int32_t begin, int32_t end )
 static bool positions_finite( int32_t n, const float* x, const float* y, const float* z )
 {
 	int bad = 0;
-#pragma omp parallel for reduction( | : bad ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) reduction( | : bad ) schedule( static )
 	for ( int32_t v = 0; v < n; ++v )
 	{
 		bad |= !( isfinite( x[v] ) && isfinite( y[v] ) && isfinite( z[v] ) );
@@ -513,7 +517,7 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 	int32_t cut = bvh->cut_level;
 	int32_t n = bvh->vertex_count;
 	int bad = 0;
-#pragma omp parallel
+#pragma omp parallel num_threads( sere_team_default() )
 	{
 #pragma omp for reduction( | : bad ) schedule( static )
 		for ( int32_t v = 0; v < n; ++v )
@@ -565,7 +569,7 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		return SERE_ERR_NONFINITE;
 	}
 	int32_t n = bvh->triangle_count;
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t t = 0; t < n; ++t )
 	{
 		const int32_t* v = bvh->tri + 3 * (size_t) t;

@@ -1,4 +1,8 @@
+/* _GNU_SOURCE: sched_getaffinity for internal/team.h. */
+#define _GNU_SOURCE
+
 #include "cg.h"
+#include "internal/team.h"
 
 #include <math.h>
 #include <omp.h>
@@ -23,7 +27,7 @@ static inline double row_dot( const sere_csr* a, int32_t i, const double* x )
 
 void sere_csr_spmv( const sere_csr* a, const double* x, double* y )
 {
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t i = 0; i < a->rows; ++i )
 	{
 		y[i] = row_dot( a, i, x );
@@ -206,7 +210,7 @@ sere_status sere_sell_update( sere_sell* s, const sere_csr* a )
 		return SERE_ERR_ARGUMENT;
 	}
 	int mismatch = 0;
-#pragma omp parallel for schedule( static ) reduction( | : mismatch )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static ) reduction( | : mismatch )
 	for ( int32_t k = 0; k < a->nnz; ++k )
 	{
 		s->val[s->slot[k]] = a->val[k];
@@ -261,7 +265,7 @@ static inline int32_t chunk_lanes( const sere_sell* a, int32_t c )
 
 void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
 {
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t c = 0; c < a->chunks; ++c )
 	{
 		lanes_t sum;
@@ -409,7 +413,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 	 * gathers one vector, where the textbook form needs a third barrier before q = Ap or, to
 	 * avoid it, forms p = z + βp inside the product and gathers two. In exact arithmetic the
 	 * iterates are the textbook's. */
-#pragma omp parallel
+#pragma omp parallel num_threads( sere_team_default() )
 	{
 		/* Into positions; padding lanes get b = x = 0 and D⁻¹ = 0, so they stay 0 throughout
 		 * and add nothing to any sum. s = p = 0, so that the first step's p = u + 0·p is u. */

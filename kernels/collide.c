@@ -1,4 +1,8 @@
+/* _GNU_SOURCE: sched_getaffinity for internal/team.h. */
+#define _GNU_SOURCE
+
 #include "collide.h"
+#include "internal/team.h"
 
 #include <math.h>
 #include <omp.h>
@@ -959,7 +963,7 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	collide->contact_count = 0;
 	collide->touched_count = 0;
 	int32_t n = collide->vertex_count;
-	int32_t threads = omp_get_max_threads();
+	int32_t threads = sere_team_default();
 	threads = threads < collide->slots ? threads : collide->slots;
 	float h2 = thickness * thickness;
 	collide->work_prefix[0] = 0;
@@ -1321,7 +1325,7 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	bool parallel = contacts >= RESPOND_PARALLEL;
 	const float* inv_m = state->inv_m;
 	int bad = 0;
-#pragma omp parallel if ( parallel )
+#pragma omp parallel num_threads( sere_team_default() ) if ( parallel )
 	{
 #pragma omp for reduction( | : bad ) schedule( static ) nowait
 		for ( int32_t j = 0; j < touched; ++j )
@@ -1356,7 +1360,8 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	int32_t blocks = ( contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
 	int32_t remaining = 0, applied = 0;
 	int32_t* far = collide->far_count;
-	int threads = omp_get_max_threads() < collide->slots ? omp_get_max_threads() : collide->slots;
+	int threads = sere_team_default();
+	threads = threads < collide->slots ? threads : collide->slots;
 	/* Per-thread counts of contacts still short of the tolerance, summed by every thread after
 	 * a barrier: two barriers per iteration (this one and the gather's), no reduction clause. */
 #pragma omp parallel num_threads( threads ) if ( parallel )
@@ -1511,7 +1516,7 @@ sere_status sere_collide_measure_h( const float* x, const float* y, const float*
 		return SERE_ERR_ARGUMENT;
 	}
 	int bad = 0;
-#pragma omp parallel for reduction( | : bad ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) reduction( | : bad ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		float a[3], b[3], c[3], n[3], p[3];
@@ -1540,7 +1545,7 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	/* Two reductions in one region need two variables: with a shared one, the first loop's
 	 * combine could race with the second's. */
 	int bad = 0, bad_h = 0, outside = 0;
-#pragma omp parallel
+#pragma omp parallel num_threads( sere_team_default() )
 	{
 #pragma omp for reduction( | : bad ) schedule( static ) nowait
 		for ( int32_t i = 0; i < voronoi_first; ++i )
@@ -1564,7 +1569,7 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	{
 		return SERE_ERR_NONFINITE;
 	}
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;
@@ -1592,7 +1597,7 @@ sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, fl
 		return SERE_ERR_ARGUMENT;
 	}
 	int bad = 0, outside = 0;
-#pragma omp parallel for reduction( | : bad, outside ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) reduction( | : bad, outside ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;
@@ -1609,7 +1614,7 @@ sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, fl
 		return SERE_ERR_NONFINITE;
 	}
 	const float inv_dt = 1.0f / dt;
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;

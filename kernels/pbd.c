@@ -1,7 +1,9 @@
-/* nanosleep, for the barrier's back-off when a thread has lost its core. */
-#define _POSIX_C_SOURCE 200809L
+/* nanosleep, for the barrier's back-off when a thread has lost its core; sched_getaffinity
+ * for internal/team.h. */
+#define _GNU_SOURCE
 
 #include "pbd.h"
+#include "internal/team.h"
 
 #include <float.h>
 #include <math.h>
@@ -544,7 +546,7 @@ sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest )
 	const int32_t lanes = pbd->lanes;
 	const int32_t* source = pbd->source;
 	float* lane_rest = pbd->rest;
-#pragma omp parallel for schedule( static ) reduction( | : bad )
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static ) reduction( | : bad )
 	for ( int32_t q = 0; q < lanes; ++q )
 	{
 		if ( source[q] >= 0 )
@@ -585,7 +587,7 @@ void sere_pbd_predict( int32_t count, const float* x, const float* y, const floa
 					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt )
 {
 	const float gx = gravity[0] * dt, gy = gravity[1] * dt, gz = gravity[2] * dt;
-#pragma omp parallel for simd schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		float free_particle = inv_m[i] > 0.0f ? 1.0f : 0.0f;
@@ -602,7 +604,7 @@ void sere_pbd_finish( int32_t count, float* x, float* y, float* z, float* vx, fl
 					  const float* py, const float* pz, float dt )
 {
 	const float inv_dt = 1.0f / dt;
-#pragma omp parallel for simd schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		vx[i] = ( px[i] - x[i] ) * inv_dt;
@@ -1485,7 +1487,7 @@ static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup
 static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, const solve_setup* setup,
 						  sere_pbd_report* report )
 {
-	int requested = omp_get_max_threads();
+	int requested = sere_team_default();
 	requested = requested < 1 ? 1 : requested > MAX_THREADS ? MAX_THREADS : requested;
 	solve_result outcome = { 0, 0, 0.0f, 0 };
 	/* One parallel region per call; inside it every thread follows the same control flow,

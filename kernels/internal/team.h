@@ -1,0 +1,191 @@
+/* sere — private to the kernels (not installed, not part of the API): how many threads a
+ * parallel region should use when other processes keep some of this process's cores busy.
+ *
+ * Issue 19: with one of two cores taken by another process, a 2-thread kernel ran 6–20× slower
+ * than 1 thread. Every barrier waits for the thread that shares its core with the other
+ * process, and that thread runs only in its share of time slices (milliseconds), while a
+ * barrier comes every few tens of µs. Waiting passively (OMP_WAIT_POLICY=passive, or a nap
+ * after a bounded spin as pbd.c does) lets the scheduler move the late thread to the core the
+ * waiting one left, which brings 2 threads back near the 1-thread time (0.8–1.2× in the
+ * issue), but it is no speed-up: the process has one core, and pays wake-ups and migrations
+ * besides; and passive waiting costs a futex call per barrier on a quiet machine. So before
+ * each parallel region the kernels ask sere_team for a thread count: the caller's
+ * (omp_get_max_threads()), capped at the cores other processes leave free, as last measured.
+ * (An OMP_WAIT_POLICY default set by sere's own main would not reach users, who call the
+ * kernels from their own programs; libgomp reads it once, at start-up.)
+ *
+ * The measure: every SERE_TEAM_INTERVAL seconds (at most; only when a kernel is called), the
+ * busy time of the CPUs this process may run on (/proc/stat: user, system, irq, softirq and
+ * steal, and nice when this process is itself niced) minus this process's own CPU time, over
+ * the wall time since the previous sample, is the number of cores other processes used. A core
+ * counts as taken when they used SERE_TEAM_TAKEN of one or more: a process sharing a core
+ * with one of our threads gets half of it, so the threshold must sit below one half. Processes
+ * at a higher nice level than ours do not count (a nice-19 fuzzer yields its core to us within
+ * a wake-up). Results do not depend on the thread count (the kernels' determinism contract),
+ * so the count may change from one call to the next.
+ *
+ * The first decision comes SERE_TEAM_FIRST_INTERVAL after the first call; until then a region
+ * runs with the caller's count. Long calls re-ask between rounds (the CG solve does).
+ * The sample costs an open and read of /proc/stat (tens of µs) four times a second at most;
+ * a call otherwise pays one clock read and an atomic load. SERE_ADAPTIVE_THREADS=0 in the
+ * environment turns the cap off (every region then uses omp_get_max_threads()); so does a
+ * system without /proc/stat. State is per translation unit: each kernel file samples for
+ * itself. */
+#pragma once
+
+#ifndef _GNU_SOURCE
+#error "define _GNU_SOURCE before the first include (sched_getaffinity, CPU_ISSET)"
+#endif
+
+#include <fcntl.h>
+#include <omp.h>
+#include <sched.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#define SERE_TEAM_INTERVAL 0.25
+/* The first window after a process's first call: long enough for /proc/stat's 10 ms ticks to
+ * tell a busy core (±0.1 core per CPU), short enough for a one-solve process to notice. */
+#define SERE_TEAM_FIRST_INTERVAL 0.1
+#define SERE_TEAM_TAKEN			 0.3
+
+typedef struct sere_team_state
+{
+	atomic_flag sampling; /* held by the thread taking a sample */
+	atomic_int enabled;	  /* −1 not yet known, 0 off, 1 on */
+	atomic_int cores;	  /* cores left to us at the last sample; 0: no cap (none taken, or not yet known) */
+	double next;		  /* the fields below belong to the thread holding `sampling` */
+	double wall, own, busy;
+	int have;
+} sere_team_state;
+
+static sere_team_state sere_team_global = { ATOMIC_FLAG_INIT, -1, 0, 0.0, 0.0, 0.0, 0.0, 0 };
+
+/* Busy seconds of the CPUs in this thread's affinity mask, and how many of them there are;
+ * 0 when /proc/stat cannot be read or does not list them all. */
+static inline int sere_team_cpu_busy( double* busy )
+{
+	cpu_set_t mask;
+	CPU_ZERO( &mask );
+	if ( sched_getaffinity( 0, sizeof( mask ), &mask ) != 0 )
+	{
+		return 0;
+	}
+	int fd = open( "/proc/stat", O_RDONLY | O_CLOEXEC );
+	if ( fd < 0 )
+	{
+		return 0;
+	}
+	char text[16384];
+	ssize_t length = 0, got;
+	while ( length < (ssize_t) sizeof( text ) - 1 &&
+			( got = read( fd, text + length, sizeof( text ) - 1 - (size_t) length ) ) > 0 )
+	{
+		length += got;
+	}
+	close( fd );
+	text[length > 0 ? length : 0] = '\0';
+	const int niced = getpriority( PRIO_PROCESS, 0 ) > 0;
+	const long ticks = sysconf( _SC_CLK_TCK );
+	unsigned long long sum = 0;
+	int found = 0;
+	/* "cpu" (all CPUs), then "cpuN user nice system idle iowait irq softirq steal ..." */
+	for ( char* line = text; strncmp( line, "cpu", 3 ) == 0; )
+	{
+		if ( line[3] >= '0' && line[3] <= '9' )
+		{
+			char* at;
+			long cpu = strtol( line + 3, &at, 10 );
+			unsigned long long field[8] = { 0 };
+			for ( int k = 0; k < 8; ++k )
+			{
+				field[k] = strtoull( at, &at, 10 );
+			}
+			if ( cpu >= 0 && cpu < CPU_SETSIZE && CPU_ISSET( (int) cpu, &mask ) )
+			{
+				sum += field[0] + ( niced ? field[1] : 0 ) + field[2] + field[5] + field[6] + field[7];
+				found += 1;
+			}
+		}
+		char* end = strchr( line, '\n' );
+		if ( end == NULL )
+		{
+			break;
+		}
+		line = end + 1;
+	}
+	if ( found != CPU_COUNT( &mask ) || ticks <= 0 )
+	{
+		return 0;
+	}
+	*busy = (double) sum / (double) ticks;
+	return found;
+}
+
+static inline void sere_team_sample( sere_team_state* s, double now )
+{
+	double busy = 0.0;
+	int cpus = sere_team_cpu_busy( &busy );
+	struct timespec cpu_time;
+	if ( cpus == 0 || clock_gettime( CLOCK_PROCESS_CPUTIME_ID, &cpu_time ) != 0 )
+	{
+		atomic_store_explicit( &s->enabled, 0, memory_order_relaxed );
+		return;
+	}
+	double own = (double) cpu_time.tv_sec + 1e-9 * (double) cpu_time.tv_nsec;
+	if ( s->have && now > s->wall )
+	{
+		double others = ( ( busy - s->busy ) - ( own - s->own ) ) / ( now - s->wall );
+		int taken = others >= SERE_TEAM_TAKEN ? (int) ( others + 1.0 - SERE_TEAM_TAKEN ) : 0;
+		/* No cap while no core is taken: a caller that asks for more threads than CPUs (a
+		 * test of 3 threads on 2 cores) gets them. */
+		int cores = taken == 0 ? 0 : cpus - taken < 1 ? 1 : cpus - taken;
+		atomic_store_explicit( &s->cores, cores, memory_order_relaxed );
+	}
+	s->have = 1, s->wall = now, s->own = own, s->busy = busy;
+}
+
+/* The thread count for a parallel region that the caller would run with `wanted` threads. */
+static inline int sere_team( int wanted )
+{
+	sere_team_state* s = &sere_team_global;
+	if ( omp_in_parallel() )
+	{
+		return wanted;
+	}
+	int enabled = atomic_load_explicit( &s->enabled, memory_order_relaxed );
+	if ( enabled < 0 )
+	{
+		const char* setting = getenv( "SERE_ADAPTIVE_THREADS" );
+		enabled = !( setting != NULL && strcmp( setting, "0" ) == 0 );
+		atomic_store_explicit( &s->enabled, enabled, memory_order_relaxed );
+	}
+	if ( !enabled )
+	{
+		return wanted;
+	}
+	double now = omp_get_wtime();
+	if ( !atomic_flag_test_and_set_explicit( &s->sampling, memory_order_acquire ) )
+	{
+		/* Samples are taken whatever `wanted` is, so that the measure is fresh when a caller
+		 * asks for more threads. The first window is shorter, for a process's first calls. */
+		if ( now >= s->next )
+		{
+			s->next = now + ( s->have ? SERE_TEAM_INTERVAL : SERE_TEAM_FIRST_INTERVAL );
+			sere_team_sample( s, now );
+		}
+		atomic_flag_clear_explicit( &s->sampling, memory_order_release );
+	}
+	int cores = atomic_load_explicit( &s->cores, memory_order_relaxed );
+	return wanted > 1 && cores > 0 && cores < wanted ? cores : wanted;
+}
+
+/* sere_team( omp_get_max_threads() ): the default team of a kernel's parallel region. */
+static inline int sere_team_default( void )
+{
+	return sere_team( omp_get_max_threads() );
+}
