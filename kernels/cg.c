@@ -400,7 +400,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 	double relative = 0.0;
 	int bad_diagonal = 0, nonfinite = 0;
 
-	/* One parallel region for the whole solve: the systems are small (thousands of rows), so
+	/* Parallel regions that span many steps: the systems are small (thousands of rows), so
 	 * fork/join per kernel would cost more than the kernels. Every thread takes the same
 	 * decisions from the same block sums, so no broadcast is needed. Blocks are whole chunks
 	 * (σ divides SERE_CG_BLOCK), so a block's products are written and read by one thread.
@@ -412,7 +412,19 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 	 * barriers (the product needs every block's u; the step needs the sums), and the product
 	 * gathers one vector, where the textbook form needs a third barrier before q = Ap or, to
 	 * avoid it, forms p = z + βp inside the product and gathers two. In exact arithmetic the
-	 * iterates are the textbook's. */
+	 * iterates are the textbook's.
+	 *
+	 * The steps run in rounds of `chunk` iterations, each round its own parallel region, with
+	 * the thread count sere_team gives at its start: a long solve on a machine that other
+	 * processes start to load (or that was loaded when the solve began, before any measure)
+	 * goes on with the cores left to it after a round, instead of stalling at every barrier
+	 * for a thread that waits for its share of a busy core. A round is about 2²⁴ matrix
+	 * entries of products (tens of ms): a small system (the maple's osmosis) runs its whole
+	 * solve in one round, as before, and a 300 × 300 Poisson system in rounds of about 36 iterations,
+	 * a fork and join per 10 ms or more. Blocks and their sums do not depend on the thread
+	 * count, so neither do the iterates. */
+	int done = 0;
+	double b_norm = 0.0, rel = 0.0;
 #pragma omp parallel num_threads( sere_team_default() )
 	{
 		/* Into positions; padding lanes get b = x = 0 and D⁻¹ = 0, so they stay 0 throughout
@@ -435,32 +447,32 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 		for ( int32_t blk = 0; blk < blocks; ++blk )
 		{
 			block_product( a, blk, x, w );
-			double bb = 0.0, rr = 0.0;
+			double bb = 0.0, rr_block = 0.0;
 			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 			{
 				r[i] = b[i] - w[i];
 				u[i] = inv_diag[i] * r[i];
 				bb += b[i] * b[i];
-				rr += r[i] * r[i];
+				rr_block += r[i] * r[i];
 			}
-			partial[4 * blk] = rr;
+			partial[4 * blk] = rr_block;
 			partial[4 * blk + 3] = bb;
 		}
-		double b_norm = sqrt( block_sum( partial, blocks, 3 ) );
-		double rr = block_sum( partial, blocks, 0 );
-		int done = bad_diagonal || nonfinite || !isfinite( rr );
-		if ( !done && b_norm == 0.0 )
+		double my_b_norm = sqrt( block_sum( partial, blocks, 3 ) );
+		double my_rr = block_sum( partial, blocks, 0 );
+		int my_done = bad_diagonal || nonfinite || !isfinite( my_rr );
+		if ( !my_done && my_b_norm == 0.0 )
 		{
 #pragma omp for schedule( static )
 			for ( int32_t i = 0; i < np; ++i )
 			{
 				x[i] = 0.0;
 			}
-			done = 1;
+			my_done = 1;
 		}
-		double rel = b_norm > 0.0 ? sqrt( rr ) / b_norm : 0.0;
-		done = done || rel <= tolerance;
-		if ( !done && max_iterations > 0 )
+		double my_rel = my_b_norm > 0.0 ? sqrt( my_rr ) / my_b_norm : 0.0;
+		my_done = my_done || my_rel <= tolerance;
+		if ( !my_done && max_iterations > 0 )
 		{
 #pragma omp for schedule( static )
 			for ( int32_t blk = 0; blk < blocks; ++blk )
@@ -468,96 +480,125 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 				block_product_sums( a, blk, np, u, r, w, partial );
 			}
 		}
-		int32_t it = 0;
-		double alpha_prev = 0.0, gamma_prev = 0.0;
-		int local_status = SERE_OK;
-		while ( !done && it < max_iterations )
+		/* every thread holds the same values; the region's end publishes the master's */
+#pragma omp master
 		{
-			double delta = block_sum( partial, blocks, 1 );
-			double gamma = block_sum( partial, blocks, 2 );
-			double beta = it == 0 ? 0.0 : gamma / gamma_prev;
-			double pap = it == 0 ? delta : delta - beta * gamma / alpha_prev; /* pᵀAp */
-			if ( !isfinite( pap ) || !isfinite( gamma ) )
+			done = my_done;
+			b_norm = my_b_norm;
+			rel = my_rel;
+		}
+	}
+	const int64_t chunk_entries = a->chunk_ptr[a->chunks] > 0 ? a->chunk_ptr[a->chunks] : 1;
+	const int32_t chunk = (int32_t) ( ( 1 << 24 ) / chunk_entries > 16 ? ( 1 << 24 ) / chunk_entries : 16 );
+	int32_t it = 0;
+	double alpha_prev = 0.0, gamma_prev = 0.0;
+	int local_status = SERE_OK;
+	while ( !done && it < max_iterations )
+	{
+#pragma omp parallel num_threads( sere_team_default() )
+		{
+			int32_t my_it = it;
+			double my_alpha_prev = alpha_prev, my_gamma_prev = gamma_prev, my_rel = rel;
+			int my_status = SERE_OK, my_done = 0;
+			const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
+			while ( my_it < round_end )
 			{
-				local_status = SERE_ERR_NONFINITE;
-				break;
-			}
-			if ( !( pap > 0.0 ) )
-			{
-				local_status = SERE_ERR_NOT_SPD;
-				break;
-			}
-			double alpha = gamma / pap;
-			/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
-#pragma omp for schedule( static )
-			for ( int32_t blk = 0; blk < blocks; ++blk )
-			{
-				double rr_block = 0.0;
-#pragma omp simd reduction( + : rr_block )
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				double delta = block_sum( partial, blocks, 1 );
+				double gamma = block_sum( partial, blocks, 2 );
+				double beta = my_it == 0 ? 0.0 : gamma / my_gamma_prev;
+				double pap = my_it == 0 ? delta : delta - beta * gamma / my_alpha_prev; /* pᵀAp */
+				if ( !isfinite( pap ) || !isfinite( gamma ) )
 				{
-					p[i] = u[i] + beta * p[i];
-					s[i] = w[i] + beta * s[i];
-					x[i] += alpha * p[i];
-					r[i] -= alpha * s[i];
-					u[i] = inv_diag[i] * r[i];
-					rr_block += r[i] * r[i];
+					my_status = SERE_ERR_NONFINITE;
+					my_done = 1;
+					break;
 				}
-				partial[4 * blk] = rr_block;
-			}
-			/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
-			 * step rewrites it only after every thread has passed the product's barrier, so
-			 * after reading it here. */
-			rr = block_sum( partial, blocks, 0 );
-			it += 1;
-			rel = sqrt( rr ) / b_norm;
-			if ( !isfinite( rel ) )
-			{
-				local_status = SERE_ERR_NONFINITE;
-				break;
-			}
-			if ( rel <= tolerance || it == max_iterations )
-			{
-				break;
-			}
+				if ( !( pap > 0.0 ) )
+				{
+					my_status = SERE_ERR_NOT_SPD;
+					my_done = 1;
+					break;
+				}
+				double alpha = gamma / pap;
+				/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
 #pragma omp for schedule( static )
-			for ( int32_t blk = 0; blk < blocks; ++blk )
-			{
-				block_product_sums( a, blk, np, u, r, w, partial );
-			}
-			alpha_prev = alpha;
-			gamma_prev = gamma;
-		}
-		/* Out of positions: the last iterate, whatever stopped the solve. */
+				for ( int32_t blk = 0; blk < blocks; ++blk )
+				{
+					double rr_block = 0.0;
+#pragma omp simd reduction( + : rr_block )
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						p[i] = u[i] + beta * p[i];
+						s[i] = w[i] + beta * s[i];
+						x[i] += alpha * p[i];
+						r[i] -= alpha * s[i];
+						u[i] = inv_diag[i] * r[i];
+						rr_block += r[i] * r[i];
+					}
+					partial[4 * blk] = rr_block;
+				}
+				/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
+				 * step rewrites it only after every thread has passed the product's barrier, so
+				 * after reading it here. */
+				double my_rr = block_sum( partial, blocks, 0 );
+				my_it += 1;
+				my_rel = sqrt( my_rr ) / b_norm;
+				if ( !isfinite( my_rel ) )
+				{
+					my_status = SERE_ERR_NONFINITE;
+					my_done = 1;
+					break;
+				}
+				if ( my_rel <= tolerance || my_it == max_iterations )
+				{
+					my_done = 1;
+					break;
+				}
 #pragma omp for schedule( static )
-		for ( int32_t at = 0; at < np; ++at )
-		{
-			if ( a->row[at] >= 0 )
+				for ( int32_t blk = 0; blk < blocks; ++blk )
+				{
+					block_product_sums( a, blk, np, u, r, w, partial );
+				}
+				my_alpha_prev = alpha;
+				my_gamma_prev = gamma;
+			}
+#pragma omp master
 			{
-				x_in[a->row[at]] = x[at];
+				it = my_it;
+				alpha_prev = my_alpha_prev;
+				gamma_prev = my_gamma_prev;
+				rel = my_rel;
+				local_status = my_status;
+				done = my_done;
 			}
 		}
-#pragma omp single
+	}
+	/* Out of positions: the last iterate, whatever stopped the solve. */
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+	for ( int32_t at = 0; at < np; ++at )
+	{
+		if ( a->row[at] >= 0 )
 		{
-			iterations = it;
-			relative = rel;
-			if ( bad_diagonal )
-			{
-				status = SERE_ERR_NOT_SPD;
-			}
-			else if ( nonfinite )
-			{
-				status = SERE_ERR_NONFINITE;
-			}
-			else if ( local_status != SERE_OK )
-			{
-				status = (sere_status) local_status;
-			}
-			else if ( rel > tolerance )
-			{
-				status = SERE_ERR_NO_CONVERGE;
-			}
+			x_in[a->row[at]] = x[at];
 		}
+	}
+	iterations = it;
+	relative = rel;
+	if ( bad_diagonal )
+	{
+		status = SERE_ERR_NOT_SPD;
+	}
+	else if ( nonfinite )
+	{
+		status = SERE_ERR_NONFINITE;
+	}
+	else if ( local_status != SERE_OK )
+	{
+		status = (sere_status) local_status;
+	}
+	else if ( rel > tolerance )
+	{
+		status = SERE_ERR_NO_CONVERGE;
 	}
 	result->iterations = iterations;
 	result->residual = relative;
