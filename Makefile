@@ -115,7 +115,7 @@ test-fast: $(TESTS) $(SERE)
 
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 build/asan/sere-tests build/asan/sere
-	ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
+	ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
 
 bench: deps
 	@$(MAKE) --no-print-directory $(BENCHX)
