@@ -49,7 +49,8 @@ static void run_help( void )
 		"  --frames N        frames to simulate (default 400)\n"
 		"  --out DIR         output directory (default out/run)\n"
 		"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
-		"  --points N        triangle-layer points (default 1500); or --particles P --springs S exactly\n"
+		"  --points N        triangle-layer points (default 1500; a leaf needs enough for its outline and veins,\n"
+		"                    the error names a count that builds); or --particles P --springs S exactly\n"
 		"  --threads T       OpenMP threads, bound to cores with hwloc (default: one per core)\n"
 		"  --set key=value   override a parameter; keys:\n" );
 	sere_params_describe( stdout );
