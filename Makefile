@@ -110,10 +110,11 @@ test: deps
 	@$(MAKE) --no-print-directory test-fast
 	@$(MAKE) --no-print-directory test-asan
 
+# TEST_FILTER=PATTERN runs only the tests it matches (Criterion's --filter, extended globs).
 # SERE_ADAPTIVE_THREADS=0: the kernels use the threads they are given even when other processes
 # hold cores, so that the tests comparing 1, 2 and 3 threads really run them.
 test-fast: $(TESTS) $(SERE)
-	SERE_ADAPTIVE_THREADS=0 SERE_BIN=$(SERE) $(TESTS) --jobs 1
+	SERE_ADAPTIVE_THREADS=0 SERE_BIN=$(SERE) $(TESTS) --jobs 1 $(if $(TEST_FILTER),--filter '$(TEST_FILTER)')
 
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 build/asan/sere-tests build/asan/sere
