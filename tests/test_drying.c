@@ -10,6 +10,7 @@
 
 #include <criterion/criterion.h>
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -251,6 +252,29 @@ Test( drying, ground_friction )
 	cr_expect_lt( curling.contact_slide, 0.8 * frictionless.contact_slide, "friction: %g, without: %g",
 				  curling.contact_slide, frictionless.contact_slide );
 	dry_free( &curling ), dry_free( &frictionless );
+}
+
+/* The determinism contract on the whole frame with every new piece in it: ground contact and
+ * friction, the face-down mirror, the local Sec. 6 stop, crossings and the restore (maple-red),
+ * the same bits for 1, 2 and 3 threads. */
+Test( drying, same_bits_for_any_thread_count )
+{
+	dry_run runs[3];
+	for ( int t = 0; t < 3; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		dry( "maple-red", "maple", 300, 60, NULL, 0, runs + t );
+	}
+	omp_set_num_threads( 2 );
+	for ( int t = 1; t < 3; ++t )
+	{
+		cr_expect_eq( memcmp( runs[0].x, runs[t].x, sizeof( float ) * 3 * (size_t) runs[0].vertices ), 0,
+					  "1 and %d threads differ", t + 1 );
+	}
+	for ( int t = 0; t < 3; ++t )
+	{
+		dry_free( runs + t );
+	}
 }
 
 /* Item 6, a law from outside the paper (Guo et al. 2025, Midveins regulate the shape formation
