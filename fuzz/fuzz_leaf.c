@@ -10,7 +10,13 @@
 
 #include <string.h>
 
-static char round_trip[64];
+static char round_trip[64], round_trip_dir[64];
+
+static void remove_round_trip( void )
+{
+	unlink( round_trip );
+	rmdir( round_trip_dir );
+}
 
 int LLVMFuzzerInitialize( int* argc, char*** argv )
 {
@@ -22,7 +28,9 @@ int LLVMFuzzerInitialize( int* argc, char*** argv )
 		perror( "mkdtemp" );
 		abort();
 	}
+	snprintf( round_trip_dir, sizeof( round_trip_dir ), "%s", dir );
 	snprintf( round_trip, sizeof( round_trip ), "%s/again.leaf", dir );
+	atexit( remove_round_trip );
 	return 0;
 }
 
