@@ -365,5 +365,8 @@ Test( season_cli, bad_input_one_clear_line )
 	BAD( "--schedule tests/data/bad/backwards.schedule", "backwards.schedule:3: day 5: days are whole numbers" );
 	BAD( "--schedule tests/data/bad/humidity.schedule", "humidity.schedule:2: humidity 70 is outside [0, 1]" );
 	BAD( "--mask tests/data/bad/small_mask.pgm", "the mask is 4 x 4 pixels" );
+	/* found by fuzz_png: a sample above the maxval, a header not ended by one whitespace byte */
+	BAD( "--mask tests/data/bad/above_maxval.pgm", "above the maxval 100" );
+	BAD( "--mask tests/data/bad/pgm_separator.pgm", "not a binary PGM" );
 #undef BAD
 }

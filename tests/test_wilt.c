@@ -227,6 +227,8 @@ Test( wilt_cli, bad_skeleton_files_name_line_and_problem )
 	expect_bad_skeleton( "left\n0 zero\n", ":2: a point is two finite numbers", NULL );
 	expect_bad_skeleton( "0 0\n", ":1: point outside a left", NULL );
 	expect_bad_skeleton( "left\n0 0\n10 0\nright\n0 0\n10 0\n", "no 'midvein' block", NULL );
+	/* an empty midvein block (tests/data/bad/empty_midvein.skel, replayed by fuzz_skeleton) */
+	expect_bad_skeleton( "left\n0 0\n10 0\nright\n0 0\n10 0\nmidvein\n", ":7: the 'midvein' block has 0 points", NULL );
 	expect_bad_skeleton( "left 3\n", ":1: 'left' takes no value", NULL );
 	expect_bad_skeleton( GOOD_CURVES "vein -1 20\n", "'vein' takes PARENT SEGMENTS BEND_DEGREES", NULL );
 	/* Problems the kernels find, traced back to the line. */
