@@ -294,21 +294,39 @@ static sere_status project_paper( sere_pbd* pbd, sere_particles* p, const sere_p
 	return SERE_OK;
 }
 
+/* The bits of a non-negative float order as the float does: a maximum taken over them is the
+ * float maximum, as an integer reduction, which every OpenMP runtime combines exactly (clang's
+ * libomp gave a different float max for 1 and 2 threads over the same values). */
+static uint32_t order_bits( float value )
+{
+	uint32_t bits;
+	memcpy( &bits, &value, sizeof( bits ) );
+	return bits;
+}
+
+static float bits_value( uint32_t bits )
+{
+	float value;
+	memcpy( &value, &bits, sizeof( value ) );
+	return value;
+}
+
 /* Puts particles below the ground onto it and adds how far each was pushed to push[]; returns
- * the largest push of this call (a maximum, so the same for every thread count). */
+ * the largest push of this call (the same for every thread count). */
 static float ground_contact( float* pz, float* push, int32_t count, float ground )
 {
-	float largest = 0.0f;
-#pragma omp parallel for simd schedule( static ) reduction( max : largest )
+	uint32_t largest = 0;
+#pragma omp parallel for schedule( static ) reduction( max : largest )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		float depth = ground - pz[i];
 		depth = depth > 0.0f ? depth : 0.0f;
 		pz[i] += depth;
 		push[i] += depth;
-		largest = depth > largest ? depth : largest;
+		uint32_t bits = order_bits( depth );
+		largest = bits > largest ? bits : largest;
 	}
-	return largest;
+	return bits_value( largest );
 }
 
 /* Coulomb friction of the ground as a position correction (Macklin et al. 2014, Sec. 6.1): the
@@ -336,21 +354,23 @@ static int32_t ground_friction( sere_particles* p, const float* push, int32_t co
 	return touching;
 }
 
-/* max |C/l| over every spring at the predicted positions. */
+/* max |C/l| over every spring at the predicted positions (an integer maximum of the bits, as in
+ * ground_contact; a NaN strain orders above every number). */
 static float largest_strain( const sere_model* model )
 {
 	const sere_springs* s = &model->s;
 	const sere_particles* p = &model->p;
-	float largest = 0.0f;
+	uint32_t largest = 0;
 #pragma omp parallel for schedule( static ) reduction( max : largest )
 	for ( int32_t k = 0; k < s->count; ++k )
 	{
 		int32_t a = s->a[k], b = s->b[k];
 		float dx = p->px[b] - p->px[a], dy = p->py[b] - p->py[a], dz = p->pz[b] - p->pz[a];
 		float strain = fabsf( sqrtf( ( dx * dx + dy * dy ) + dz * dz ) - s->rest[k] ) / s->rest[k];
-		largest = strain > largest ? strain : largest;
+		uint32_t bits = order_bits( strain );
+		largest = bits > largest ? bits : largest;
 	}
-	return largest;
+	return bits_value( largest );
 }
 
 /* Compliance weights by spring class: vein springs (T and V) and L springs relative to the
