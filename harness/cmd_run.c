@@ -30,7 +30,7 @@ static void run_help( void )
 	printf(
 		"usage: sere run LEAF --preset P --frames N --out DIR [options]\n\n"
 		"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
-		"  frames/frame_NNNNN.ply  triangle layer with water, tau and relative water per vertex (Blender, MeshLab)\n"
+		"  frames/frame_NNNNN.ply  triangle layer with water, tau, relative water and vein (1 on a vein) per vertex (Blender, MeshLab)\n"
 		"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
 		"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual and\n"
 		"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
@@ -139,24 +139,27 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 {
 	const sere_particles* p = &model->p;
 	int32_t n = model->triangle_particles;
-	float* water = malloc( sizeof( float ) * (size_t) n );
+	float* water = malloc( 2 * sizeof( float ) * (size_t) n );
 	if ( water == NULL )
 	{
 		snprintf( err, err_size, "frame %d: out of memory", frame );
 		return -1;
 	}
+	float* vein = water + n;
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		water[i] = (float) p->w[i];
+		vein[i] = model->vein[i] ? 1.0f : 0.0f;
 	}
-	sere_vertex_property properties[3] = { { "water", water }, { "tau", p->tau }, { "relative_water", rwc } };
+	sere_vertex_property properties[4] = {
+		{ "water", water }, { "tau", p->tau }, { "relative_water", rwc }, { "vein", vein } };
 	char path[4096];
 	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
-	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 3 );
+	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
 	if ( !failed )
 	{
 		snprintf( path, sizeof( path ), "%s/frames/frame_%05d.vtp", out, frame );
-		failed = sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 3 );
+		failed = sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 4 );
 		if ( failed )
 		{
 			/* no half frame: the PLY goes too, which on a full disk leaves room for the summary */
