@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "io.h"
 #include "leaf.h"
+#include "leafload.h"
 #include "leafpics.h"
 #include "machine.h"
 #include "render.h"
@@ -27,32 +28,33 @@ static void on_signal( int signal_number )
 
 static void run_help( void )
 {
-	printf(
-		"usage: sere run LEAF --preset P --frames N --out DIR [options]\n\n"
-		"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
-		"  frames/frame_NNNNN.ply  triangle layer with water, tau, relative water and vein (1 on a vein) per vertex (Blender, MeshLab)\n"
-		"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
-		"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual and\n"
-		"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
-		"                          drift of the area centroid and of the centre of mass (fresh lengths),\n"
-		"                          ground gap, mean normal z and tilt, iterations, contacts (found,\n"
-		"                          unresolved), collision thickness, ms\n"
-		"  summary.json            counts, parameters, the Table 1 breakdown (mean ms per frame), the frame\n"
-		"                          rule, the run's worst crossings/drift/tilt/gap, the fresh and dry shape\n"
-		"                          measures, the machine\n"
-		"  drying3d.png            fresh, middle and dry leaf in 3D (oblique, ground, shadow) over the top view\n"
-		"  leaf3d.png              the last frame in 3D, larger\n"
-		"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
-		"  curves.png              relative water content and leaf area over time\n\n"
-		"options:\n"
-		"  --preset P        maple-green, maple-red, plane-tree, wisteria, grass, or a preset file\n"
-		"  --frames N        frames to simulate (default 400)\n"
-		"  --out DIR         output directory (default out/run)\n"
-		"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
-		"  --points N        triangle-layer points (default 1500; a leaf needs enough for its outline and veins,\n"
-		"                    the error names a count that builds); or --particles P --springs S exactly\n"
-		"  --threads T       OpenMP threads, bound to cores with hwloc (default: one per core)\n"
-		"  --set key=value   override a parameter; keys:\n" );
+	printf( "usage: sere run LEAF --preset P --frames N --out DIR [options]\n\n"
+			"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
+			"  frames/frame_NNNNN.ply  triangle layer with water, tau, relative water and vein (1 on a vein)\n"
+			"                          per vertex (Blender, MeshLab)\n"
+			"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
+			"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual and\n"
+			"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
+			"                          drift of the area centroid and of the centre of mass (fresh lengths),\n"
+			"                          ground gap, mean normal z and tilt, cross-section roll near the tip\n"
+			"                          and the base, iterations, contacts (found,\n"
+			"                          unresolved), collision thickness, ms\n"
+			"  summary.json            counts, parameters, the Table 1 breakdown (mean ms per frame), the frame\n"
+			"                          rule, the run's worst crossings/drift/tilt/gap, the fresh and dry shape\n"
+			"                          measures, the machine\n"
+			"  drying3d.png            fresh, middle and dry leaf in 3D (oblique, ground, shadow) over the top view\n"
+			"  leaf3d.png              the last frame in 3D, larger\n"
+			"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
+			"  curves.png              relative water content and leaf area over time\n\n"
+			"options:\n"
+			"  --preset P        maple-green, maple-red, plane-tree, wisteria, grass, or a preset file\n"
+			"  --frames N        frames to simulate (default 400)\n"
+			"  --out DIR         output directory (default out/run)\n"
+			"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
+			"  --points N        triangle-layer points (default 1500; a leaf needs enough for its outline and veins,\n"
+			"                    the error names a count that builds); or --particles P --springs S exactly\n"
+			"  --threads T       OpenMP threads, bound to cores with hwloc (default: one per core)\n"
+			"  --set key=value   override a parameter; keys:\n" );
 	sere_params_describe( stdout );
 	printf( "Interrupting (Ctrl-C) stops after the current frame and still writes the summary and pictures.\n" );
 }
@@ -152,7 +154,8 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 		vein[i] = model->vein[i] ? 1.0f : 0.0f;
 	}
 	sere_vertex_property properties[4] = {
-		{ "water", water }, { "tau", p->tau }, { "relative_water", rwc }, { "vein", vein } };
+		{ "water", water }, { "tau", p->tau }, { "relative_water", rwc }, { "vein", vein }
+	};
 	char path[4096];
 	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
 	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
@@ -266,15 +269,19 @@ static void json_number( FILE* f, double value )
 /* The shape measures of kernels/measure.h as a JSON object member. */
 static void print_shape( FILE* f, const char* key, const sere_shape* shape, double length )
 {
-	const char* names[] = { "area",		   "extent",	  "extent_per_fresh_length",
-							"min_z",	   "max_z",		  "ground_gap",
-							"crease_vein", "crease_surf", "margin_lift",
-							"roll_tip",	   "roll_base",	  "normal_x",
-							"normal_y",	   "normal_z" };
-	const double values[] = { shape->area,			 shape->extent,		   shape->extent / length,
-							  shape->min_z,			 shape->max_z,		   shape->ground_gap,
-							  shape->crease_vein,	 shape->crease_surf,   shape->margin_lift,
-							  shape->roll_tip,		 shape->roll_base,	   shape->mean_normal[0],
+	const char* names[] = { "area",			 "extent",		   "extent_per_fresh_length",
+							"min_z",		 "max_z",		   "ground_gap",
+							"crease_vein",	 "crease_surf",	   "margin_lift",
+							"roll_tip",		 "roll_base",	   "curl_tip",
+							"curl_base",	 "crease_main",	   "crease_blade",
+							"vein_roll_tip", "vein_roll_base", "normal_x",
+							"normal_y",		 "normal_z" };
+	const double values[] = { shape->area,			 shape->extent,			shape->extent / length,
+							  shape->min_z,			 shape->max_z,			shape->ground_gap,
+							  shape->crease_vein,	 shape->crease_surf,	shape->margin_lift,
+							  shape->roll_tip,		 shape->roll_base,		shape->curl_tip,
+							  shape->curl_base,		 shape->crease_main,	shape->crease_blade,
+							  shape->vein_roll_tip,	 shape->vein_roll_base, shape->mean_normal[0],
 							  shape->mean_normal[1], shape->mean_normal[2] };
 	fprintf( f, "  \"%s\": {", key );
 	for ( size_t k = 0; k < sizeof( values ) / sizeof( values[0] ); ++k )
@@ -450,6 +457,11 @@ int sere_cmd_run( int argc, char** argv )
 	/* the fresh shape, and a watch on crossings, drift, the ground and turning over */
 	sere_shape shape_fresh, shape_dry;
 	sere_shape_input shape_input = sere_leaf_shape_input( &model, params.ground );
+	/* the leaf's veins in its own plane (the model's fresh u, v), for the measures along and
+	 * across its main veins; the build above has already read the same file */
+	sere_leaf veins;
+	bool have_veins = sere_leaf_load( path, &veins, err, sizeof( err ) ) == 0;
+	shape_input.veins = have_veins ? &veins.file.shape : NULL;
 	sere_watch* watch = NULL;
 	status = sere_shape_measure( &shape_input, &shape_fresh );
 	if ( status == SERE_OK )
@@ -459,14 +471,21 @@ int sere_cmd_run( int argc, char** argv )
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "sere run: cannot measure the fresh leaf: %s\n", sere_status_text( status ) );
+		if ( have_veins )
+		{
+			sere_leaf_free( &veins );
+		}
 		sere_leaf_destroy( sim );
 		sere_model_destroy( &model );
 		return 1;
 	}
 	shape_dry = shape_fresh;
-	sere_watch_frame watched = { 0, 0.0, 0.0, NAN, 1.0, 0.0 };
+	sere_watch_frame watched = { 0, 0.0, 0.0, NAN, 1.0, 0.0, NAN, NAN };
 	long long converged = 0, crossing_frames = 0;
 	int64_t crossings_max = 0;
+	/* the first frames whose tip and base sections have rolled by ROLL_ONSET: which end rolls first */
+	const double ROLL_ONSET = 0.5;
+	long long onset_tip = -1, onset_base = -1;
 	double drift_max = 0.0, mass_drift_max = 0.0, gap_max = -INFINITY, tilt_max = 0.0;
 	if ( params.crease != 0.0 || params.curl != 0.0 )
 	{
@@ -477,6 +496,11 @@ int sere_cmd_run( int argc, char** argv )
 		if ( status != SERE_OK )
 		{
 			fprintf( stderr, "sere run: initial shaping: %s\n", sere_status_text( status ) );
+			if ( have_veins )
+			{
+				sere_leaf_free( &veins );
+			}
+			sere_watch_destroy( watch );
 			sere_leaf_destroy( sim );
 			sere_model_destroy( &model );
 			return 1;
@@ -511,7 +535,7 @@ int sere_cmd_run( int argc, char** argv )
 		return 1;
 	}
 	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,residual,converged,"
-				  "grounded,crossings,drift,mass_drift,ground_gap,normal_z,tilt,cg_iterations_t,"
+				  "grounded,crossings,drift,mass_drift,ground_gap,normal_z,tilt,roll_tip,roll_base,cg_iterations_t,"
 				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,unresolved,thickness,desiccated,"
 				  "osmosis_ms,dynamics_ms,"
 				  "collisions_ms,"
@@ -569,20 +593,24 @@ int sere_cmd_run( int argc, char** argv )
 			mass_drift_max = fmax( mass_drift_max, watched.mass_drift );
 			gap_max = fmax( gap_max, watched.ground_gap );
 			tilt_max = fmax( tilt_max, watched.tilt_degrees );
+			onset_tip = onset_tip < 0 && fabs( watched.roll_tip ) >= ROLL_ONSET ? frame : onset_tip;
+			onset_base = onset_base < 0 && fabs( watched.roll_base ) >= ROLL_ONSET ? frame : onset_base;
 			double area = leaf_area( &model );
 			curve_t[frame] = frame * params.dt;
 			curve_rwc[frame] = stats.relative_water;
 			curve_area[frame] = area / area0;
-			fprintf(
-				csv,
-				"%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%d,%d,%d,%d,%d,%d,%d,"
-				"%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
-				frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
-				stats.max_strain, stats.residual, stats.pbd_converged, stats.grounded, (long long) watched.crossings,
-				watched.drift, watched.mass_drift, watched.ground_gap, watched.normal_z, watched.tilt_degrees,
-				stats.cg_iterations_t, stats.cg_iterations_v, stats.pbd_iterations, stats.pbd_hit_cap,
-				stats.pbd_stalled, stats.contacts, stats.unresolved, stats.collision_thickness, stats.desiccated,
-				stats.osmosis_ms, stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
+			fprintf( csv,
+					 "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%d,%d,"
+					 "%d,%d,%d,"
+					 "%d,%d,"
+					 "%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
+					 frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
+					 stats.max_strain, stats.residual, stats.pbd_converged, stats.grounded,
+					 (long long) watched.crossings, watched.drift, watched.mass_drift, watched.ground_gap,
+					 watched.normal_z, watched.tilt_degrees, watched.roll_tip, watched.roll_base, stats.cg_iterations_t,
+					 stats.cg_iterations_v, stats.pbd_iterations, stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts,
+					 stats.unresolved, stats.collision_thickness, stats.desiccated, stats.osmosis_ms, stats.dynamics_ms,
+					 stats.collisions_ms, stats.total_ms );
 			if ( fflush( csv ) != 0 )
 			{
 				snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );
@@ -660,6 +688,7 @@ int sere_cmd_run( int argc, char** argv )
 	if ( done > 0 )
 	{
 		shape_input = sere_leaf_shape_input( &model, params.ground );
+		shape_input.veins = have_veins ? &veins.file.shape : NULL;
 		if ( sere_shape_measure( &shape_input, &shape_dry ) != SERE_OK )
 		{
 			shape_dry = shape_fresh;
@@ -776,7 +805,11 @@ int sere_cmd_run( int argc, char** argv )
 				 params.compliance > 0.0 ? "xpbd residual" : "paper (max |C/l| < lambda_C or the cap)", converged,
 				 (long long) crossings_max, crossing_frames, drift_max, mass_drift_max, tilt_max );
 		json_number( summary, gap_max );
-		fprintf( summary, ",\n  \"fresh_length\": %.6g,\n", sere_watch_length( watch ) );
+		fprintf( summary, ",\n  \"roll_onset\": {\"threshold\": %g, \"tip_frame\": ", ROLL_ONSET );
+		json_number( summary, onset_tip >= 0 ? (double) onset_tip : NAN );
+		fprintf( summary, ", \"base_frame\": " );
+		json_number( summary, onset_base >= 0 ? (double) onset_base : NAN );
+		fprintf( summary, "},\n  \"fresh_length\": %.6g,\n", sere_watch_length( watch ) );
 		print_shape( summary, "shape_fresh", &shape_fresh, sere_watch_length( watch ) );
 		print_shape( summary, "shape_dry", &shape_dry, sere_watch_length( watch ) );
 		sere_machine_json( summary, "  ", bound );
@@ -822,6 +855,10 @@ int sere_cmd_run( int argc, char** argv )
 	free( rwc ), free( curve_t ), free( curve_rwc ), free( curve_area );
 	sere_pvd_free( &pvd );
 	sere_watch_destroy( watch );
+	if ( have_veins )
+	{
+		sere_leaf_free( &veins );
+	}
 	sere_leaf_destroy( sim );
 	sere_model_destroy( &model );
 	return status == SERE_OK && failure[0] == '\0' ? ( interrupted ? 130 : 0 ) : 1;

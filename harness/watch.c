@@ -127,6 +127,8 @@ sere_status sere_watch_step( sere_watch* watch, const sere_model* model, sere_wa
 	out->normal_z = shape.mean_normal[2] / ( n1 > 0.0 ? sqrt( n1 ) : 1.0 );
 	double cosine = n0 > 0.0 && n1 > 0.0 ? dot / sqrt( n0 * n1 ) : 1.0;
 	out->tilt_degrees = acos( fmax( -1.0, fmin( 1.0, cosine ) ) ) * 180.0 / 3.14159265358979323846;
+	out->roll_tip = shape.roll_tip;
+	out->roll_base = shape.roll_base;
 	remember( watch, model );
 	return SERE_OK;
 }

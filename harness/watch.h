@@ -21,6 +21,8 @@ typedef struct sere_watch_frame
 	double ground_gap;	 /* lowest particle (either layer) above the ground (NaN without ground) */
 	double normal_z;	 /* z of the area-weighted mean unit normal: 1 flat face up, < 0 turned over */
 	double tilt_degrees; /* angle between the mean normal and the fresh one */
+	double roll_tip;	 /* sere_shape::roll_tip and roll_base of this frame (rad) */
+	double roll_base;
 } sere_watch_frame;
 
 typedef struct sere_watch sere_watch;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "base.h"
+#include "shape.h"
 
 #include <stdbool.h>
 
@@ -81,13 +82,18 @@ typedef struct sere_shape_input
 	double ground;			  /* height of the supporting plane z = ground, or -INFINITY for none */
 	double wrinkle_threshold; /* |dihedral| above which an edge counts for wrinkle_sign_changes */
 	double band;			  /* half-width δ of the roll cross-sections, as a fraction of the fresh v range */
-	const int32_t* midvein;	  /* optional polyline of vertex indices from base to tip, or NULL */
+	/* Optional: the leaf's veins in the fresh plane (the u, v coordinates), for the measures
+	 * along and across the main veins (crease_main ... vein_roll_base); NULL leaves them NaN. */
+	const sere_leaf_shape* veins;
+	int32_t main_order;		/* veins of this order or lower are the main veins (1 the midvein) */
+	const int32_t* midvein; /* optional polyline of vertex indices from base to tip, or NULL */
 	int32_t midvein_count;
 	bool skip_extent; /* true: leave extent NaN (the exact diameter is O(N²); per-frame measures skip it) */
 } sere_shape_input;
 
 /* Everything zero or NULL except ground = -INFINITY, wrinkle_threshold = 0.05 rad (about 3°, so
- * that rounding and the slight bending of a nearly flat blade do not count) and band = 0.05. */
+ * that rounding and the slight bending of a nearly flat blade do not count), band = 0.03 and
+ * main_order = 2 (the midvein and the veins branching from it: a maple's lobes). */
 sere_shape_input sere_shape_input_default( void );
 
 typedef struct sere_shape
@@ -116,9 +122,27 @@ typedef struct sere_shape
 	 * margin curls up towards the upper face, < 0 when it curls down. NaN with fewer than three
 	 * interior or no boundary vertices (length). */
 	double margin_lift;
-	/* Cross-section rolling at the fresh-v fractions 0.85 and 0.25 (sere_shape_roll):
-	 * 0 straight, towards 1 rolled up; NaN when the band holds fewer than two vertices. */
+	/* Cross-section rolling at the fresh-v fractions 0.85 and 0.25 (sere_shape_roll): the angle
+	 * the normal turns through across the section, positive when the margins curl towards the
+	 * upper face (rad: 0 flat, π a half tube, 2π a closed tube); NaN for a band too small to say. */
 	double roll_tip, roll_base;
+	/* Curling along the length: the angle between the current directions of the fresh axis (+v,
+	 * base to tip) in the bands at fractions 0.55 and 0.93 (the tip half) and 0.07 and 0.45 (the
+	 * base half), each direction the band's fresh-area weighted image of +v (rad, 0 straight, π
+	 * turned back on itself; NaN for an empty band). A narrow tip relieves its mismatch by curling
+	 * like a scroll rather than rolling its cross-section. */
+	double curl_tip, curl_base;
+	/* With veins given (NaN otherwise). A vein in the double layer is a rib two triangles wide
+	 * whose Voronoi particles sit deeper than the blade's, so a crease along it bends the edges at
+	 * and beside the rib rather than the vein edge itself:
+	 * crease_main is the mean |dihedral| over interior edges whose fresh midpoint lies within one
+	 * spacing (the mean fresh edge length) of a main vein, crease_blade the same over edges two
+	 * spacings or more from every main vein (rad). */
+	double crease_main, crease_blade;
+	/* Each triangle belongs to its nearest main vein (its lobe on a lobed leaf); the sections
+	 * across each main vein at 70–95% and at 20–45% of its length roll as roll_tip does, and these
+	 * are the means of |roll| over the main veins whose section holds six triangles or more (rad). */
+	double vein_roll_tip, vein_roll_base;
 	/* 1 / radius of the least-squares circle through the current midvein points (best plane,
 	 * then an algebraic circle fit in it); 0 for a straight midvein, and 0 without a midvein or
 	 * with fewer than three points (1/length). */
@@ -137,17 +161,17 @@ sere_status sere_shape_measure( const sere_shape_input* in, sere_shape* out );
  * (edge_count entries; 0 on edges with fewer than two triangles). Errors as sere_shape_measure. */
 sere_status sere_shape_dihedrals( const sere_shape_input* in, double* dihedral );
 
-/* Rolling of the cross-section at fresh v = v_min + v_fraction (v_max − v_min): the vertices
- * whose fresh v lies within ±band (v_max − v_min) of it, sorted by fresh u. With chord the current
- * distance between the first and the last and arc the sum of current distances between
- * consecutive ones, roll = 1 − (chord / arc) / (chord₀ / arc₀), where chord₀ / arc₀ is the same
- * ratio at the fresh positions (u, v, 0). Dividing by the rest ratio keeps the zigzag of a band
- * holding several jittered rows (arc₀ > chord₀ already at rest) from reading as rolling: a flat
- * or uniformly shrunk leaf gives 0; a single row of n equal segments bent into a circular arc of
- * angle φ gives 1 − sin(φ/2) / (n sin(φ/2n)) (→ 1 − 2/π for a half cylinder as n grows); a
- * rolled-up section tends to 1. Negative when
- * the section is straighter than at rest. NaN when the band holds fewer than two vertices or
- * they all coincide. */
+/* Rolling of the cross-section at fresh v = v_min + v_fraction (v_max − v_min): the triangles
+ * whose fresh centroid lies within ±band (v_max − v_min) of it. Each triangle's deformation
+ * gradient maps the fresh axis (+v) and lateral (+u) directions to current ones; the band's
+ * current axis and mean normal follow (fresh-area weighted), each triangle's normal angle θ
+ * about that axis is fitted by least squares as a line in its centroid's fresh u, and the slope
+ * times the band's fresh width (its corners' u range) is the roll: the angle the normal turns
+ * through from one margin to the other, positive when the margins curl towards the side the
+ * normals point to. A flat, shrunk, sheared or lengthwise-bent leaf gives 0; a sheet bent into a
+ * cylinder about the v axis gives its opening angle exactly (2π closed). Uneven shrinkage or a
+ * zigzag of rows does not count, unlike a chord-to-arc ratio. NaN when the band holds fewer than
+ * three triangles or they all have the same u. */
 sere_status sere_shape_roll( const sere_shape_input* in, double v_fraction, double* roll );
 
 #ifdef __cplusplus

@@ -116,6 +116,24 @@ static sere_shape_input measure_input( const measure_sheet* s )
 	return in;
 }
 
+/* A leaf shape holding one straight vein of order 1 from (x0, y0) to (x1, y1), for the measures
+ * along and across the main veins (only the veins are read). */
+typedef struct measure_vein
+{
+	double xy[4];
+	sere_vein vein;
+	sere_leaf_shape shape;
+} measure_vein;
+
+static void measure_vein_make( measure_vein* m, double x0, double y0, double x1, double y1 )
+{
+	memset( m, 0, sizeof( *m ) );
+	m->xy[0] = x0, m->xy[1] = y0, m->xy[2] = x1, m->xy[3] = y1;
+	m->vein = ( sere_vein ){ 0, 2, 1, -1 };
+	m->shape.vein_count = 1, m->shape.veins = &m->vein;
+	m->shape.vein_point_count = 2, m->shape.vein_xy = m->xy;
+}
+
 /* Crumpled: eight random plane waves (wavelength 0.2 to 0.5) displacing all three axes by up to
  * the amplitude, plus per-vertex noise. Amplitudes near 1 on a unit sheet fold it through
  * itself many times. */
@@ -379,9 +397,12 @@ Test( measure, flat_sheet )
 	cr_assert_eq( m.wrinkle_sign_changes, 0 );
 	/* the interior plane is z = 0 exactly and every boundary vertex lies in it */
 	cr_assert_float_eq( m.margin_lift, 0.0, 1e-12 );
-	/* positions equal the fresh ones: the ratio divided by itself, up to sqrt against hypot */
+	/* every normal is exactly +z: every angle is 0 and so is every slope */
 	cr_assert_float_eq( m.roll_tip, 0.0, 1e-12 );
 	cr_assert_float_eq( m.roll_base, 0.0, 1e-12 );
+	cr_assert_float_eq( m.curl_tip, 0.0, 1e-12 );
+	cr_assert_float_eq( m.curl_base, 0.0, 1e-12 );
+	cr_assert( isnan( m.crease_main ) && isnan( m.vein_roll_tip ), "no veins given" );
 	cr_assert_eq( m.midvein_curvature, 0.0, "no midvein given" );
 	in.ground = -0.25;
 	cr_assert_eq( sere_shape_measure( &in, &m ), SERE_OK );
@@ -410,18 +431,42 @@ Test( measure, rolled_cylinder )
 	{
 		midvein[j] = s.grid[j * ( nx + 1 ) + nx / 2];
 	}
+	measure_vein vein;
+	measure_vein_make( &vein, 0.5 * w, 0.0, 0.5 * w, h );
 	sere_shape_input in = measure_input( &s );
-	in.band = 0.01; /* rows are 0.05 of the v range apart: each band holds one row */
 	in.midvein = midvein, in.midvein_count = ny + 1;
+	in.veins = &vein.shape;
 	sere_shape m;
 	cr_assert_eq( sere_shape_measure( &in, &m ), SERE_OK );
-	/* Float positions (relative rounding 6e-8) move chord / arc by ~1e-7; 1e-5 leaves margin
-	 * while a one-row error (another band) or a continuous-arc formula (1 − sin 1 = 0.1585
-	 * against 0.1577 for 16 chords) would be off by 1e-3 or more. */
+	/* Column c of cells is a flat strip whose normal sits at the angle of its chord's middle, so
+	 * θ is a step function of the column's middle m_c; the two triangles of a cell have their
+	 * centroids at m_c ∓ δ, δ = w / (6 nx), which adds δ² to the variance of the lateral
+	 * coordinate: the fitted slope is (1/R) var(m) / (var(m) + δ²) = (1/R) 3(nx² − 1) / (3 nx² − 2),
+	 * and times the width w the roll is phi times that ratio (0.998695 for nx = 16). Float
+	 * positions tilt normals by ~1e-7 rad: 1e-5, while the continuous arc (phi itself) would be
+	 * off by 2.6e-3. Sections across the vein along the middle column see the same columns. */
+	double fit = 3.0 * ( nx * nx - 1.0 ) / ( 3.0 * nx * nx - 2.0 );
+	cr_assert_float_eq( m.roll_tip, phi * fit, 1e-5, "%.9g", m.roll_tip );
+	cr_assert_float_eq( m.roll_base, phi * fit, 1e-5, "%.9g", m.roll_base );
+	cr_assert_float_eq( m.vein_roll_tip, phi * fit, 1e-5, "%.9g", m.vein_roll_tip );
+	cr_assert_float_eq( m.vein_roll_base, phi * fit, 1e-5, "%.9g", m.vein_roll_base );
+	/* +v maps to +y everywhere: no curl along the length */
+	cr_assert_float_eq( m.curl_tip, 0.0, 1e-6 );
+	cr_assert_float_eq( m.curl_base, 0.0, 1e-6 );
+	/* rolled the other way (the margins towards the lower face): the same angle, negative */
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.z[i] = -s.z[i];
+	}
+	sere_shape down;
+	cr_assert_eq( sere_shape_measure( &in, &down ), SERE_OK );
+	cr_assert_float_eq( down.roll_tip, -phi * fit, 1e-5, "%.9g", down.roll_tip );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.z[i] = -s.z[i];
+	}
 	double ratio = sin( 0.5 * phi ) / ( nx * sin( 0.5 * phi / nx ) );
-	cr_assert_float_eq( m.roll_tip, 1.0 - ratio, 1e-5 );
-	cr_assert_float_eq( m.roll_base, 1.0 - ratio, 1e-5 );
-	/* the mean of nx unit normals spread evenly over phi: the same ratio along +z */
+	/* the mean of nx unit normals spread evenly over phi: this ratio along +z */
 	cr_assert_float_eq( m.mean_normal[2], ratio, 1e-6 );
 	cr_assert_float_eq( m.mean_normal[0], 0.0, 1e-6 );
 	cr_assert_not( m.flip );
@@ -495,12 +540,18 @@ Test( measure, curled_lengthwise )
 		 * fit is within 1e-6 relative; 1e-5 relative leaves margin. */
 		cr_assert_float_eq( m.midvein_curvature, 1.0 / radius, 1e-5 / radius, "turned %d: %g", turned,
 							m.midvein_curvature );
-		/* Rows keep a constant v, so the sections run straight along u; but the band (±0.1 in
-		 * v) holds vertices of several jittered rows, and the zigzag between them, up to
-		 * Δv = 0.2 along the curl, shortens by the chord of that arc, relatively
-		 * (Δv / R)² / 24 ≤ 7e-4: 1e-3. */
+		/* The curl turns the surface about the u axis only, so nothing turns across a section. A
+		 * jittered triangle inscribed in the cylinder tilts its normal about v by up to its
+		 * sagitta over its width, (Δv)² / 8R / Δu ≈ 1e-2, but those tilts do not grow from one
+		 * margin to the other, so the fitted turning stays near 0 (1e-4 measured): 1e-3. */
 		cr_assert_float_eq( m.roll_tip, 0.0, 1e-3, "%g", m.roll_tip );
 		cr_assert_float_eq( m.roll_base, 0.0, 1e-3, "%g", m.roll_base );
+		/* The axis turns by Δv / R between bands 0.38 h apart: 0.475 rad. Each band's direction is
+		 * the mean over triangles whose centroids lie within ±0.06 of its centre; their rows are
+		 * not symmetric about it, which moves its mean v by up to ~0.02 (a third of a cell plus
+		 * the jitter), 0.0125 rad at R = 1.6, per band: 0.03. */
+		cr_assert_float_eq( m.curl_tip, 0.38 * h / radius, 0.03, "%g", m.curl_tip );
+		cr_assert_float_eq( m.curl_base, 0.38 * h / radius, 0.03, "%g", m.curl_base );
 		cr_assert_eq( m.wrinkle_sign_changes, 0 );
 		/* Each row of cells (length dv = h / ny along the curl) becomes a flat strip across the
 		 * chord of its arc, shorter by sin(x) / x with x = dv / 2R; the jitter (±0.1 cell)
@@ -528,14 +579,43 @@ Test( measure, fold_along_vein )
 			s.y[i] = d > 0.0 ? (float) ( mid + d * cos( alpha ) ) : s.v[i];
 			s.z[i] = d > 0.0 ? (float) ( sense * d * sin( alpha ) ) : 0.0f;
 		}
+		measure_vein vein;
+		measure_vein_make( &vein, 0.0, mid, w, mid );
 		sere_shape_input in = measure_input( &s );
 		in.ground = 0.0;
+		in.veins = &vein.shape;
 		sere_shape m;
 		cr_assert_eq( sere_shape_measure( &in, &m ), SERE_OK );
 		/* Rounding of float positions over cells of 0.05 tilts a normal by ~1e-6 rad: 1e-5. */
 		cr_assert_eq( m.vein_edges, nx );
 		cr_assert_float_eq( m.crease_vein, alpha, 1e-5 );
 		cr_assert_float_eq( m.crease_surf, 0.0, 1e-5 );
+		/* Along the main vein: the interior edges whose fresh midpoint lies within one mean edge
+		 * length of the line v = mid (the vein spans the sheet, so that is |Δv|); the nx vein
+		 * edges carry alpha, the others none. Every edge two lengths away or more is flat. */
+		double spacing = 0.0;
+		for ( int32_t e = 0; e < s.edges; ++e )
+		{
+			spacing += hypot( s.u[s.edge_b[e]] - s.u[s.edge_a[e]], s.v[s.edge_b[e]] - s.v[s.edge_a[e]] );
+		}
+		spacing /= s.edges;
+		int32_t near = 0;
+		for ( int32_t e = 0; e < s.edges; ++e )
+		{
+			int sides = 0; /* triangles on the edge: 2 inside the sheet, 1 on its outline */
+			for ( int32_t t = 0; t < s.triangles; ++t )
+			{
+				for ( int k = 0; k < 3; ++k )
+				{
+					sides += measure_key( s.tri[3 * t + k], s.tri[3 * t + ( k + 1 ) % 3] ) ==
+							 measure_key( s.edge_a[e], s.edge_b[e] );
+				}
+			}
+			double dv = 0.5 * ( (double) s.v[s.edge_a[e]] + s.v[s.edge_b[e]] ) - mid;
+			near += sides == 2 && fabs( dv ) <= spacing;
+		}
+		cr_assert_float_eq( m.crease_main, alpha * nx / near, 1e-5, "%g over %d edges", m.crease_main, near );
+		cr_assert_float_eq( m.crease_blade, 0.0, 1e-5 );
 		cr_assert_eq( m.wrinkle_sign_changes, 0 );
 		cr_assert_float_eq( m.ground_gap, sense > 0 ? 0.0 : -mid * sin( alpha ), 1e-6 );
 		double* dihedral = malloc( sizeof( double ) * (size_t) s.edges );
@@ -720,6 +800,14 @@ Test( measure, shape_rejects_bad_input )
 	in.band = 0.0;
 	cr_assert_eq( sere_shape_measure( &in, &m ), SERE_ERR_ARGUMENT );
 	in.band = 0.05;
+	measure_vein vein;
+	measure_vein_make( &vein, 0.0, 0.5, 1.0, 0.5 );
+	in.veins = &vein.shape;
+	in.main_order = 0; /* no vein is of order 0 or lower: a mistake, not an empty choice */
+	cr_assert_eq( sere_shape_measure( &in, &m ), SERE_ERR_ARGUMENT );
+	in.main_order = 2;
+	cr_assert_eq( sere_shape_measure( &in, &m ), SERE_OK );
+	in.veins = NULL;
 	/* one triangle turned over: its edges run the same way as its neighbours' */
 	int32_t swap = s.tri[1];
 	s.tri[1] = s.tri[2], s.tri[2] = swap;
@@ -730,6 +818,7 @@ Test( measure, shape_rejects_bad_input )
 	s.y[3] = s.v[3];
 	cr_assert_eq( sere_shape_measure( &in, &m ), SERE_OK );
 	double roll;
+	in.band = 0.1; /* the rows of triangles nearest the middle have centroids 0.083 from it */
 	cr_assert_eq( sere_shape_roll( &in, 0.5, &roll ), SERE_OK );
 	cr_assert_float_eq( roll, 0.0, 1e-12 );
 	in.band = 1e-6; /* no row this close to the middle: nothing to measure */
