@@ -100,7 +100,10 @@ def pvd_line(path):
         name, time = dataset.get("file"), dataset.get("timestep")
         if name is None or time is None:
             raise ReaderError("a DataSet without file or timestep")
-        mesh = read(vtkXMLPolyDataReader, os.path.join(os.path.dirname(path), name))
+        try:
+            mesh = read(vtkXMLPolyDataReader, os.path.join(os.path.dirname(path), name))
+        except ReaderError as error:
+            raise ReaderError(f"dataset {name}: {error}")
         fields.append("%s@%s:%d:%d" % (name, time, mesh.GetNumberOfPoints(), mesh.GetNumberOfPolys()))
     return " ".join(fields)
 

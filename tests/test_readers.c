@@ -61,7 +61,7 @@ static void reader_line( const char* path, const char* kind, char* line, size_t 
 	int status = run_reader( path, line, line_size );
 	size_t length = strlen( kind );
 	cr_assert( status == 0 && strncmp( line, kind, length ) == 0 && line[length] == ' ',
-			   "%s: VTK could not read it (python3-vtk9, scripts/deps.sh): %s", path, line );
+			   "%s: VTK did not read it (tests/read_mesh.py, exit status %d): %s", path, status, line );
 	line[strcspn( line, "\n" )] = '\0';
 }
 
@@ -221,7 +221,8 @@ static void check_frame( const char* base, int points, int triangles, const expe
 	{
 		char expected[64];
 		snprintf( expected, sizeof( expected ), "float %s", k < 3 ? xyz[k] : arrays[k - 3].name );
-		cr_expect_str_eq( header.vertex_properties[k], expected, "%s: vertex property %d", ply_path, k );
+		cr_expect_str_eq( header.vertex_properties[k], expected, "%s: vertex property %d is '%s', expected '%s'",
+						  ply_path, k, header.vertex_properties[k], expected );
 	}
 	cr_expect( header.face_property_count == 1 &&
 				   strcmp( header.face_properties[0], "list uchar int vertex_indices" ) == 0,
@@ -309,7 +310,7 @@ static void check_series( const char* pvd_path, const char* frames_dir, const ch
 					  "%s: bad reader entry: %s", pvd_path, token );
 		cr_assert_lt( k, written_count, "%s lists %s past the frames written", pvd_path, name );
 		snprintf( expected, sizeof( expected ), "%s%s", prefix, written[k] );
-		cr_expect_str_eq( name, expected, "%s: dataset %d", pvd_path, k );
+		cr_expect_str_eq( name, expected, "%s: dataset %d is %s, expected %s", pvd_path, k, name, expected );
 		cr_expect_gt( time, previous, "%s: %s at time %g, not after %g", pvd_path, name, time, previous );
 		previous = time;
 		cr_expect( listed_points == points && listed_polys == triangles,
