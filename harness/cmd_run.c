@@ -27,32 +27,32 @@ static void on_signal( int signal_number )
 
 static void run_help( void )
 {
-	printf(
-		"usage: sere run LEAF --preset P --frames N --out DIR [options]\n\n"
-		"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
-		"  frames/frame_NNNNN.ply  triangle layer with water, tau, relative water and vein (1 on a vein) per vertex (Blender, MeshLab)\n"
-		"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
-		"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual and\n"
-		"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
-		"                          drift of the area centroid and of the centre of mass (fresh lengths),\n"
-		"                          ground gap, mean normal z and tilt, iterations, contacts (found,\n"
-		"                          unresolved), collision thickness, ms\n"
-		"  summary.json            counts, parameters, the Table 1 breakdown (mean ms per frame), the frame\n"
-		"                          rule, the run's worst crossings/drift/tilt/gap, the fresh and dry shape\n"
-		"                          measures, the machine\n"
-		"  drying3d.png            fresh, middle and dry leaf in 3D (oblique, ground, shadow) over the top view\n"
-		"  leaf3d.png              the last frame in 3D, larger\n"
-		"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
-		"  curves.png              relative water content and leaf area over time\n\n"
-		"options:\n"
-		"  --preset P        maple-green, maple-red, plane-tree, wisteria, grass, or a preset file\n"
-		"  --frames N        frames to simulate (default 400)\n"
-		"  --out DIR         output directory (default out/run)\n"
-		"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
-		"  --points N        triangle-layer points (default 1500; a leaf needs enough for its outline and veins,\n"
-		"                    the error names a count that builds); or --particles P --springs S exactly\n"
-		"  --threads T       OpenMP threads, bound to cores with hwloc (default: one per core)\n"
-		"  --set key=value   override a parameter; keys:\n" );
+	printf( "usage: sere run LEAF --preset P --frames N --out DIR [options]\n\n"
+			"Dries a leaf with Algorithm 1 and writes, in DIR:\n"
+			"  frames/frame_NNNNN.ply  triangle layer with water, tau, relative water and vein (1 on a vein) per "
+			"vertex (Blender, MeshLab)\n"
+			"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
+			"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual and\n"
+			"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
+			"                          drift of the area centroid and of the centre of mass (fresh lengths),\n"
+			"                          ground gap, mean normal z and tilt, iterations, contacts (found,\n"
+			"                          unresolved), collision thickness, ms\n"
+			"  summary.json            counts, parameters, the Table 1 breakdown (mean ms per frame), the frame\n"
+			"                          rule, the run's worst crossings/drift/tilt/gap, the fresh and dry shape\n"
+			"                          measures, the machine\n"
+			"  drying3d.png            fresh, middle and dry leaf in 3D (oblique, ground, shadow) over the top view\n"
+			"  leaf3d.png              the last frame in 3D, larger\n"
+			"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
+			"  curves.png              relative water content and leaf area over time\n\n"
+			"options:\n"
+			"  --preset P        maple-green, maple-red, plane-tree, wisteria, grass, or a preset file\n"
+			"  --frames N        frames to simulate (default 400)\n"
+			"  --out DIR         output directory (default out/run)\n"
+			"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
+			"  --points N        triangle-layer points (default 1500; a leaf needs enough for its outline and veins,\n"
+			"                    the error names a count that builds); or --particles P --springs S exactly\n"
+			"  --threads T       OpenMP threads, bound to cores with hwloc (default: one per core)\n"
+			"  --set key=value   override a parameter; keys:\n" );
 	sere_params_describe( stdout );
 	printf( "Interrupting (Ctrl-C) stops after the current frame and still writes the summary and pictures.\n" );
 }
@@ -152,7 +152,8 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 		vein[i] = model->vein[i] ? 1.0f : 0.0f;
 	}
 	sere_vertex_property properties[4] = {
-		{ "water", water }, { "tau", p->tau }, { "relative_water", rwc }, { "vein", vein } };
+		{ "water", water }, { "tau", p->tau }, { "relative_water", rwc }, { "vein", vein }
+	};
 	char path[4096];
 	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
 	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
