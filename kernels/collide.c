@@ -31,6 +31,20 @@
 /* Per-thread counters one cache line apart, so that two threads' writes never share a line. */
 #define FAR_STRIDE 16
 
+/* A vertex's lane marks: bit k (low byte) when query lane k's vertex is it or a neighbour of it,
+ * bit 8 + k (high byte) when lane k's vertex is it. */
+typedef uint16_t lane_bits;
+
+static inline uint32_t near_lanes( lane_bits m )
+{
+	return m & 0xffu;
+}
+
+static inline uint32_t self_lanes( lane_bits m )
+{
+	return (uint32_t) m >> 8;
+}
+
 struct sere_collide
 {
 	int32_t vertex_count;
@@ -117,15 +131,15 @@ struct sere_collide
 	float* acc;
 
 	/* Per query group g (vertices 8g .. 8g + 7): the lane marks it sets, as the vertices
-	 * mark_vertex[mark_offset[g] .. mark_offset[g + 1]) (each once) and their bytes mark_bits. */
+	 * mark_vertex[mark_offset[g] .. mark_offset[g + 1]) (each once) and their marks mark_bits. */
 	int32_t* mark_offset; /* group count + 1 */
 	int32_t* mark_vertex;
-	uint8_t* mark_bits;
+	lane_bits* mark_bits;
 
-	/* Per thread of the detection, vertex_count bytes apart (zero between groups): bit k of
-	 * vertex j is set while group lane k's vertex is j or has j as a neighbour, so a triangle's
-	 * excluded lanes are the OR of its corners' bytes. */
-	uint8_t* lane_mark;
+	/* Per thread of the detection, vertex_count marks apart (zero between groups): vertex j's
+	 * lane_bits while the group's lanes are queried, so the lanes a triangle is near are the OR
+	 * of its corners' marks. */
+	lane_bits* lane_mark;
 };
 
 sere_collide_params sere_collide_params_default( void )
@@ -553,21 +567,21 @@ static void build_neighbors( sere_collide* c, const int32_t* tri, int32_t triang
 	offset[n] = write;
 }
 
-/* Adds lane k's bit to vertex j's scratch byte, listing j at its first bit; returns the list's length. */
-static int32_t list_mark( sere_collide* c, uint8_t* scratch, int32_t j, int32_t k, int32_t used )
+/* Adds bits to vertex j's scratch marks, listing j at its first bit; returns the list's length. */
+static int32_t list_mark( sere_collide* c, lane_bits* scratch, int32_t j, uint32_t bits, int32_t used )
 {
 	if ( scratch[j] == 0 )
 	{
 		c->mark_vertex[used++] = j;
 	}
-	scratch[j] = (uint8_t) ( scratch[j] | ( 1u << k ) );
+	scratch[j] = (lane_bits) ( scratch[j] | bits );
 	return used;
 }
 
-/* The lane marks of every query group, from the neighbour lists: bit k of a vertex's byte when
- * lane k's vertex is it or a neighbour of it. Listed once per group, merged, the marks cost one
- * plain store per vertex to set and one to clear; set from the neighbour lists at every query, a
- * vertex shared by several lanes took a read-modify-write per lane, each waiting on the last. */
+/* The lane marks of every query group, from the neighbour lists (lane_bits). Listed once per
+ * group, merged, the marks cost one plain store per vertex to set and one to clear; set from the
+ * neighbour lists at every query, a vertex shared by several lanes took a read-modify-write per
+ * lane, each waiting on the last. */
 static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const int32_t* neighbor )
 {
 	int32_t n = c->vertex_count;
@@ -577,13 +591,13 @@ static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const 
 	 * n vertices and neighbor_offset[n] neighbour entries */
 	size_t most = (size_t) n + (size_t) neighbor_offset[n] + 1;
 	c->mark_vertex = sere_alloc( sizeof( int32_t ) * most );
-	c->mark_bits = sere_alloc( most );
+	c->mark_bits = sere_alloc( sizeof( lane_bits ) * most );
 	if ( c->mark_offset == NULL || c->mark_vertex == NULL || c->mark_bits == NULL )
 	{
 		return false;
 	}
 	/* thread 0's lane marks, zero, as scratch: zero again on return */
-	uint8_t* scratch = c->lane_mark;
+	lane_bits* scratch = c->lane_mark;
 	int32_t used = 0;
 	for ( int32_t g = 0; g < groups; ++g )
 	{
@@ -593,10 +607,11 @@ static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const 
 		for ( int32_t k = 0; k < count; ++k )
 		{
 			int32_t i = first + k;
-			used = list_mark( c, scratch, i, k, used );
+			uint32_t near = 1u << k;
+			used = list_mark( c, scratch, i, near | near << 8, used );
 			for ( int32_t e = neighbor_offset[i]; e < neighbor_offset[i + 1]; ++e )
 			{
-				used = list_mark( c, scratch, neighbor[e], k, used );
+				used = list_mark( c, scratch, neighbor[e], near, used );
 			}
 		}
 		for ( int32_t e = begin; e < used; ++e )
@@ -708,7 +723,7 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->position = sere_alloc( 4 * sizeof( float ) * vn );
 	c->acc = sere_alloc( 4 * sizeof( float ) * vn );
 	c->far_count = sere_alloc( sizeof( int32_t ) * FAR_STRIDE * (size_t) c->slots );
-	c->lane_mark = sere_alloc( vn * (size_t) c->slots );
+	c->lane_mark = sere_alloc( sizeof( lane_bits ) * vn * (size_t) c->slots );
 	bool ok = c->entry_offset && c->entry_cursor && c->run_total && c->touched && c->position && c->acc &&
 			  c->far_count && c->lane_mark;
 	/* the mesh's edges as sorted neighbour lists, needed only to list the edges and build the
@@ -806,9 +821,9 @@ typedef struct detect_context
 	const int32_t* tri;
 	const int32_t *edge_end, *lower_edge, *owned, *edge_triangle; /* sere_collide's edges */
 	const int32_t *mark_offset, *mark_vertex;					  /* sere_collide's group mark lists */
-	const uint8_t* mark_bits;
-	uint8_t* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
-	int32_t first; /* the vertex of lane 0 */
+	const lane_bits* mark_bits;
+	lane_bits* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
+	int32_t first;	 /* the vertex of lane 0 */
 	/* An edge group's table: its lanes' edges, side by side for vector tests: their boxes grown
 	 * by the lane's cull radius, their lower end's position and a unit vector across them (in the
 	 * plane of their first triangle; zero when that is degenerate), the lane's cull radius, their
@@ -825,6 +840,7 @@ typedef struct detect_context
 	float h2;
 	int32_t pair_item[PAIR_BUFFER];	  /* the group lane's vertex, or one of its edges */
 	int32_t pair_target[PAIR_BUFFER]; /* the triangle, or the other edge */
+	uint8_t pair_near[PAIR_BUFFER];	  /* the vertex is joined by a mesh edge to a corner */
 	int32_t pair_count;
 	sere_contact* buffer;
 	int32_t used;
@@ -909,13 +925,13 @@ static void closest_lanes( float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES],
 	}
 }
 
-_Static_assert( SERE_BVH_WIDTH <= 8, "a group's lane marks are one byte per vertex" );
+_Static_assert( SERE_BVH_WIDTH <= 8, "a group's lane marks are two bytes per vertex" );
 
 _Static_assert( DETECT_BLOCK % SERE_BVH_WIDTH == 0, "query groups start at multiples of the width" );
 
-/* Sets (set) or clears the lane marks of the group whose lane 0 is vertex c->first: bit k of a
- * vertex's byte while group lane k's vertex is it or has it as a neighbour, so a triangle with one
- * of them as a corner is not a contact candidate for the lane. */
+/* Sets (set) or clears the lane marks of the group whose lane 0 is vertex c->first (lane_bits):
+ * a triangle with a lane's vertex as a corner is not a contact candidate for the lane, one with a
+ * neighbour of it only with the closest point inside its face. */
 static void mark_lanes( detect_context* c, bool set )
 {
 	int32_t g = c->first / SERE_BVH_WIDTH;
@@ -975,7 +991,8 @@ static void detect_flush( detect_context* c )
 			float bl[3] = { b[0][l], b[1][l], b[2][l] }, cl[3] = { cc[0][l], cc[1][l], cc[2][l] };
 			float wl[3] = { w[0][l], w[1][l], w[2][l] }, ql[3] = { q[0][l], q[1][l], q[2][l] };
 			float dl = slow[l] ? closest_point( pl, al, bl, cl, wl, ql ) : d2[l];
-			if ( dl < c->h2 )
+			bool face = wl[0] > 0.0f && wl[1] > 0.0f && wl[2] > 0.0f;
+			if ( dl < c->h2 && ( face || !c->pair_near[start + l] ) )
 			{
 				detect_emit( c, c->pair_item[start + l], c->pair_target[start + l], pl, al, bl, cl, wl, ql, dl );
 			}
@@ -984,18 +1001,22 @@ static void detect_flush( detect_context* c )
 	c->pair_count = 0;
 }
 
-/* Buffers the pairs of one triangle with every group vertex whose cube overlaps its box, but
- * those excluded by the lane marks: the triangle's own corners and the vertices sharing an edge
- * with a corner. Such a vertex lies in the sheet right beside the triangle: where edges are
- * shorter than the thickness (fine outline and vein sampling, a shrunk blade) it is closer than
- * the thickness without any collision, and a push along the normal would only buckle the sheet.
- * Dropping them here, before the exact test, is what makes the search cheap on a shrunk leaf:
- * there they are 45% of the box hits, on the flat leaf all but a handful. */
+/* Buffers the pairs of one triangle with every group vertex whose cube overlaps its box but the
+ * triangle's own corners (the lane marks), flagging the vertices joined by a mesh edge to a
+ * corner: such a vertex lies in the sheet right beside the triangle, and where edges are shorter
+ * than the thickness (fine outline and vein sampling, a shrunk blade) it is closer than the
+ * thickness without any collision, its closest point on an edge or corner, and a push along the
+ * normal would only buckle the sheet. It is a contact only when its closest point lies inside
+ * the face, which takes a fold of the sheet past a right angle within one ring: the two
+ * triangles of an edge closing on each other like a book, which unchecked let the vertex pass
+ * through (on the maple at 800 points, at its base). */
 static void detect_visit( void* context, int32_t t, uint32_t lanes )
 {
 	detect_context* c = context;
 	const int32_t* v = c->tri + 3 * (size_t) t;
-	lanes &= ~(uint32_t) ( c->mark[v[0]] | c->mark[v[1]] | c->mark[v[2]] );
+	lane_bits m = (lane_bits) ( c->mark[v[0]] | c->mark[v[1]] | c->mark[v[2]] );
+	lanes &= ~self_lanes( m );
+	uint32_t near = near_lanes( m );
 
 	while ( lanes != 0 )
 	{
@@ -1003,8 +1024,10 @@ static void detect_visit( void* context, int32_t t, uint32_t lanes )
 		{
 			detect_flush( c );
 		}
+		int32_t k = __builtin_ctz( lanes );
 		c->pair_target[c->pair_count] = t;
-		c->pair_item[c->pair_count] = c->first + __builtin_ctz( lanes );
+		c->pair_item[c->pair_count] = c->first + k;
+		c->pair_near[c->pair_count] = (uint8_t) ( near >> k & 1u );
 		c->pair_count += 1;
 		lanes &= lanes - 1;
 	}

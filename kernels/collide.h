@@ -11,13 +11,15 @@ extern "C"
 {
 #endif
 
-/* A contact: vertex closer than the thickness to a triangle it is not a corner of nor joined by
- * an edge to a corner of (such a vertex sits in the sheet beside the triangle). The closest
- * point on the triangle is u a + v b + w c (barycentric, u + v + w = 1). side is +1 when the
- * vertex lies on the side the triangle's counter-clockwise normal n = (b − a) × (c − a) points to,
- * −1 otherwise, measured at detection as the sign of (p − closest) · n (+1 when zero); the
- * response pushes the vertex out on that side, or on the side it was on at the start of the
- * step when the state carries those positions (sere_collide_state.x0: side is then rewritten). */
+/* A contact: vertex closer than the thickness to a triangle it is not a corner of. A vertex
+ * joined by an edge to a corner sits in the sheet beside the triangle, as close as the mesh is
+ * fine, and counts only when its closest point lies inside the face (u, v, w all positive),
+ * which takes the sheet between them folded past a right angle. The closest point on the
+ * triangle is u a + v b + w c (barycentric, u + v + w = 1). side is +1 when the vertex lies on
+ * the side the triangle's counter-clockwise normal n = (b − a) × (c − a) points to, −1
+ * otherwise, measured at detection as the sign of (p − closest) · n (+1 when zero); the response
+ * pushes the vertex out on that side, or on the side it was on at the start of the step when the
+ * state carries those positions (sere_collide_state.x0: side is then rewritten). */
 typedef struct sere_contact
 {
 	int32_t vertex;
@@ -105,12 +107,13 @@ void sere_collide_destroy( sere_collide* collide );
  * SERE_ERR_CAPACITY). */
 sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity );
 
-/* Every (vertex, triangle) pair with the vertex neither a corner of the triangle nor joined by a
- * mesh edge to one, and their distance (sere_closest_point_triangle) below thickness; and every
- * pair of mesh edges sharing no vertex whose closest points (sere_closest_points_segments) lie
- * strictly inside both and are closer than thickness. The BVH must be refit to these positions.
- * Eight consecutive vertices query it together (sere_bvh_query_group), once for their contacts
- * with triangles and once for the edges they are the lower end of, so number the vertices in a
+/* Every (vertex, triangle) pair with the vertex not a corner of the triangle and their distance
+ * (sere_closest_point_triangle) below thickness, where a vertex joined by a mesh edge to a corner
+ * counts only with its closest point inside the face (see sere_contact); and every pair of mesh
+ * edges sharing no vertex whose closest points (sere_closest_points_segments) lie strictly inside
+ * both and are closer than thickness. The BVH must be refit to these positions. Eight
+ * consecutive vertices query it together (sere_bvh_query_group), once for their contacts with
+ * triangles and once for the edges they are the lower end of, so number the vertices in a
  * spatially coherent order (sere_model uses Morton order); blocks of vertices run in parallel and
  * each list keeps block order, then the tree's order within a group: it is the same for every
  * thread count. *contact_count gets the number of vertex–triangle contacts found

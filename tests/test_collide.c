@@ -696,6 +696,57 @@ Test( collide, edges_sharing_a_vertex_are_not_contacts )
 	sere_bvh_destroy( bvh );
 }
 
+/* A hinge: triangles (0, 1, 2) and (1, 3, 2) share edge (1, 2), so vertex 3 is joined by an
+ * edge to two corners of the first. Flat, with the second triangle thinner than the thickness,
+ * vertex 3 is within it of the first across the shared edge, closest there: no contact (pushing
+ * it would buckle the sheet). Folded shut like a book, vertex 3 lies over the first triangle's
+ * face, 0.4h above it: a contact, pushed to exactly h (W = 1 + 0.4² + 2 · 0.3², as in
+ * single_contact_shared_by_inverse_mass). Unchecked, the fold would carry the vertex through the
+ * face, as it did at the base of the maple at 800 points. */
+Test( collide, neighbour_over_a_folded_face_is_a_contact )
+{
+	const float h = 0.05f;
+	int32_t tri[6] = { 0, 1, 2, 1, 3, 2 };
+	float inv_m[4] = { 1.0f, 1.0f, 1.0f, 1.0f };
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.dt = 0.01f;
+	for ( int folded = 0; folded < 2; ++folded )
+	{
+		float x[4] = { 0.0f, 1.0f, 0.0f, folded ? 0.3f : 0.52f };
+		float y[4] = { 0.0f, 0.0f, 1.0f, folded ? 0.3f : 0.52f };
+		float z[4] = { 0.0f, 0.0f, 0.0f, folded ? 0.4f * h : 0.0f };
+		float vx[4] = { 0 }, vy[4] = { 0 }, vz[4] = { 0 };
+		float p[3] = { x[3], y[3], z[3] }, a[3] = { 0.0f, 0.0f, 0.0f }, b[3] = { 1.0f, 0.0f, 0.0f };
+		float cc[3] = { 0.0f, 1.0f, 0.0f }, w[3];
+		cr_assert_lt( sere_closest_point_triangle( p, a, b, cc, w ), h * h );
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( tri, 2, 4, x, y, z, &bvh ), SERE_OK );
+		sere_collide* c;
+		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
+		sere_collide_stats stats;
+		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		cr_assert_eq( stats.contacts, folded, "folded %d: %d contacts", folded, stats.contacts );
+		cr_assert_eq( stats.edge_contacts, 0 );
+		int64_t left =
+			sere_collide_ref_pairs( x, y, z, 4, tri, 2, h * ( 1.0f - SERE_COLLIDE_TOLERANCE ), NULL, NULL, 0 );
+		cr_assert_eq( left, 0, "folded %d: a pair is left closer than the thickness", folded );
+		if ( folded )
+		{
+			float gap = z[3] - ( 0.4f * z[0] + 0.3f * z[1] + 0.3f * z[2] );
+			cr_assert_float_eq( gap, h, 1e-7f, "gap %g", gap );
+			cr_assert_float_eq( z[3], 0.4f * h + 0.6f * h / ( 1.0f + 0.16f + 0.18f ), 1e-7f );
+		}
+		else
+		{
+			cr_assert( z[3] == 0.0f && vz[3] == 0.0f, "a flat neighbour was pushed" );
+		}
+		sere_collide_destroy( c );
+		sere_bvh_destroy( bvh );
+	}
+}
+
 /* Pairs of one kind closer than (1 − tolerance) × h by brute force. */
 static int64_t collide_violations_of( const collide_sheet* s, float h, float tolerance, bool edges )
 {

@@ -43,7 +43,8 @@ int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, 
 			float b[3] = { x[v[1]], y[v[1]], z[v[1]] };
 			float c[3] = { x[v[2]], y[v[2]], z[v[2]] };
 			float w[3];
-			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 && !near_corner( tri, triangle_count, i, v ) )
+			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 &&
+				 ( ( w[0] > 0.0f && w[1] > 0.0f && w[2] > 0.0f ) || !near_corner( tri, triangle_count, i, v ) ) )
 			{
 				if ( count < capacity )
 				{

@@ -10,9 +10,11 @@ extern "C"
 #endif
 
 /* Brute force over all vertex_count × triangle_count pairs: every (vertex, triangle) with the
- * vertex neither a corner of the triangle nor joined by an edge to one, and squared distance
- * (sere_closest_point_triangle, the same float test the BVH search applies) below thickness². Pairs come vertex-major,
- * triangles ascending; the first min(count, capacity) are written and the count is returned. */
+ * vertex not a corner of the triangle and squared distance (sere_closest_point_triangle, the same
+ * float test the BVH search applies) below thickness², where a vertex joined by an edge to a corner
+ * counts only when its closest point lies inside the face (all three weights positive). Pairs
+ * come vertex-major, triangles ascending; the first min(count, capacity) are written and the
+ * count is returned. */
 int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, int32_t vertex_count,
 								const int32_t* tri, int32_t triangle_count, float thickness, int32_t* vertex,
 								int32_t* triangle, int64_t capacity );
