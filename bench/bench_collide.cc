@@ -1,11 +1,12 @@
-// Self-collision (Sec. 5.3, Eq. 14): BVH refit and build, the per-vertex proximity query, the
-// push-out response and the Voronoi restore, on the Table 1 maple (bench/fixture.h: 4680
-// triangle-layer vertices, 8517 triangles, the leaf about 1 across) flat; dried (the maple after
+// Self-collision (Sec. 5.3, Eq. 14): BVH refit and build, the proximity queries (vertex–triangle
+// per vertex, edge–edge per vertex's edges), the push-out response and the Voronoi restore, on the
+// Table 1 maple (bench/fixture.h: 4680 triangle-layer vertices, 8517 triangles, the leaf about 1
+// across) flat; dried (the maple after
 // 400 frames of Algorithm 1 with the maple-green preset: shrunk, curled and crumpled as the
 // simulation leaves it); waved by a smooth random displacement field that also compresses it
 // in-plane (a stress case: many contacts no normal push can resolve); and U-folded onto itself;
-// beside the brute-force twin and Embree 3 doing the same vertex–triangle proximity search with
-// rtcPointQuery. Every scene uses the thickness `sere run` uses on it: the harness default
+// beside the brute-force twins (both kinds) and Embree 3 doing the same vertex–triangle proximity
+// search with rtcPointQuery. Every scene uses the thickness `sere run` uses on it: the harness default
 // (sere_sim_params_default; the maple-green preset keeps it) times the triangle layer's
 // shrinkage (sere_leaf_thickness_scale, 1 but for the dried leaf).
 
@@ -287,6 +288,9 @@ void BM_collide_detect( benchmark::State& state, Shape shape )
 	}
 	rate( state, "queries/s", s.n );
 	state.counters["contacts"] = contacts;
+	int32_t edges = 0;
+	sere_collide_edge_contacts( s.collide, &edges );
+	state.counters["edge_contacts"] = edges;
 }
 
 // Response alone on the contacts of one detection; the positions are reset between iterations
@@ -307,8 +311,11 @@ void BM_collide_respond( benchmark::State& state, Shape shape )
 		sere_collide_respond( s.collide, s.bvh, &st, &p, nullptr );
 		benchmark::ClobberMemory();
 	}
-	rate( state, "contacts/s", contacts );
+	int32_t edges = 0;
+	sere_collide_edge_contacts( s.collide, &edges );
+	rate( state, "contacts/s", contacts + edges );
 	state.counters["contacts"] = contacts;
+	state.counters["edge_contacts"] = edges;
 }
 
 // rounds rounds of refit (rebuild when degraded), detect and respond (sere_collide_resolve),
@@ -337,6 +344,7 @@ void collide_loop( benchmark::State& state, Shape shape, int32_t rounds, bool re
 	}
 	rate( state, "vertices/s", s.n );
 	state.counters["contacts"] = stats.contacts;
+	state.counters["edge_contacts"] = stats.edge_contacts;
 	state.counters["unresolved"] = stats.unresolved;
 	state.counters["iterations"] = stats.iterations;
 }
@@ -367,7 +375,8 @@ void BM_collide_restore_voronoi( benchmark::State& state )
 	rate( state, "triangles/s", s.f );
 }
 
-// The search alone, for the comparison with Embree: refit + per-vertex query + exact test.
+// The search alone, for the comparison with Embree: refit + per-vertex query + exact test (and
+// the edge–edge search, which Embree's does not do).
 void BM_collide_search( benchmark::State& state, Shape shape )
 {
 	Scene& s = scene( shape );
@@ -381,6 +390,9 @@ void BM_collide_search( benchmark::State& state, Shape shape )
 	}
 	rate( state, "queries/s", s.n );
 	state.counters["contacts"] = contacts;
+	int32_t edges = 0;
+	sere_collide_edge_contacts( s.collide, &edges );
+	state.counters["edge_contacts"] = edges;
 }
 
 void BM_collide_ref_pairs( benchmark::State& state, Shape shape )
@@ -396,6 +408,21 @@ void BM_collide_ref_pairs( benchmark::State& state, Shape shape )
 	}
 	rate( state, "pairs tested/s", (double) s.n * s.f );
 	state.counters["contacts"] = (double) pairs;
+}
+
+// The edge–edge twin: all pairs of the maple's 13 thousand edges.
+void BM_collide_ref_edge_pairs( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	std::vector<int32_t> ends( 4 << 20 );
+	int64_t pairs = 0;
+	for ( auto _ : state )
+	{
+		pairs = sere_collide_ref_edge_pairs( s.x.data, s.y.data, s.z.data, s.tri.data(), s.f, s.thickness, ends.data(),
+											 nullptr, (int64_t) ends.size() / 4 );
+		benchmark::DoNotOptimize( pairs );
+	}
+	state.counters["edge_contacts"] = (double) pairs;
 }
 
 // Embree 3 doing the same search: a triangle geometry refit on commit, then rtcPointQuery per
@@ -539,3 +566,4 @@ BENCHMARK_CAPTURE( BM_embree_search, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealT
 BENCHMARK_CAPTURE( BM_embree_search, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK_CAPTURE( BM_embree_search, waved, kWaved )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK_CAPTURE( BM_collide_ref_pairs, dried, kDried )->Unit( benchmark::kMillisecond );
+BENCHMARK_CAPTURE( BM_collide_ref_edge_pairs, dried, kDried )->Unit( benchmark::kMillisecond );

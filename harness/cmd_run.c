@@ -37,11 +37,11 @@ static void run_help( void )
 			"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
 			"                          drift of the area centroid and of the centre of mass (fresh lengths),\n"
 			"                          ground gap, mean normal z and tilt, cross-section roll near the tip\n"
-			"                          and the base, iterations, contacts (found,\n"
-			"                          unresolved), collision thickness, ms\n"
+			"                          and the base, iterations, contacts (vertex-triangle and edge-edge\n"
+			"                          found, unresolved), collision thickness, ms\n"
 			"  summary.json            counts, parameters, the Table 1 breakdown (mean ms per frame), the frame\n"
-			"                          rule, the run's worst crossings/drift/tilt/gap, the fresh and dry shape\n"
-			"                          measures, the machine\n"
+			"                          rule, the run's worst crossings/drift/tilt/gap, which end rolled first,\n"
+			"                          the fresh and dry shape measures, the machine\n"
 			"  drying3d.png            fresh, middle and dry leaf in 3D (oblique, ground, shadow) over the top view\n"
 			"  leaf3d.png              the last frame in 3D, larger\n"
 			"  drying.png              contact sheet of the drying sequence colored by relative water content\n"
@@ -536,7 +536,8 @@ int sere_cmd_run( int argc, char** argv )
 	}
 	fprintf( csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,residual,converged,"
 				  "grounded,crossings,drift,mass_drift,ground_gap,normal_z,tilt,roll_tip,roll_base,cg_iterations_t,"
-				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,unresolved,thickness,desiccated,"
+				  "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,edge_contacts,unresolved,thickness,"
+				  "desiccated,"
 				  "osmosis_ms,dynamics_ms,"
 				  "collisions_ms,"
 				  "total_ms\n" );
@@ -600,17 +601,15 @@ int sere_cmd_run( int argc, char** argv )
 			curve_rwc[frame] = stats.relative_water;
 			curve_area[frame] = area / area0;
 			fprintf( csv,
-					 "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%d,%d,"
-					 "%d,%d,%d,"
-					 "%d,%d,"
-					 "%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
+					 "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,"
+					 "%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
 					 frame, frame * params.dt, stats.water_t, stats.water_v, stats.relative_water, area, area / area0,
 					 stats.max_strain, stats.residual, stats.pbd_converged, stats.grounded,
 					 (long long) watched.crossings, watched.drift, watched.mass_drift, watched.ground_gap,
 					 watched.normal_z, watched.tilt_degrees, watched.roll_tip, watched.roll_base, stats.cg_iterations_t,
 					 stats.cg_iterations_v, stats.pbd_iterations, stats.pbd_hit_cap, stats.pbd_stalled, stats.contacts,
-					 stats.unresolved, stats.collision_thickness, stats.desiccated, stats.osmosis_ms, stats.dynamics_ms,
-					 stats.collisions_ms, stats.total_ms );
+					 stats.edge_contacts, stats.unresolved, stats.collision_thickness, stats.desiccated,
+					 stats.osmosis_ms, stats.dynamics_ms, stats.collisions_ms, stats.total_ms );
 			if ( fflush( csv ) != 0 )
 			{
 				snprintf( failure, sizeof( failure ), "cannot write %s: %s", csv_path, strerror( errno ) );

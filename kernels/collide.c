@@ -31,52 +31,90 @@
 /* Per-thread counters one cache line apart, so that two threads' writes never share a line. */
 #define FAR_STRIDE 16
 
+/* A vertex's lane marks: bit k (low byte) when query lane k's vertex is it or a neighbour of it,
+ * bit 8 + k (high byte) when lane k's vertex is it. */
+typedef uint16_t lane_bits;
+
+static inline uint32_t near_lanes( lane_bits m )
+{
+	return m & 0xffu;
+}
+
+static inline uint32_t self_lanes( lane_bits m )
+{
+	return (uint32_t) m >> 8;
+}
+
 struct sere_collide
 {
 	int32_t vertex_count;
 	int32_t triangle_count;
-	int32_t capacity;
-	int32_t slots; /* threads with their own detection buffer */
+	int32_t edge_count;
+	int32_t capacity; /* of each kind of contact */
+	int32_t slots;	  /* threads with their own detection buffer */
+	/* Detection blocks: vertex_blocks blocks of DETECT_BLOCK vertices querying for vertex–triangle
+	 * contacts, then as many for edge–edge contacts (lanes are the same vertices, each standing for
+	 * the edges it is the lower end of), block_count in all, cut into runs of about equal work
+	 * together. */
+	int32_t vertex_blocks;
 	int32_t block_count;
-	int32_t contact_count;
-	sere_contact* contacts; /* capacity, in block order */
+	int32_t contact_count;		/* vertex–triangle contacts listed */
+	int32_t edge_contact_count; /* edge–edge contacts listed */
+	int64_t edge_found;			/* edge–edge contacts the last detection found, listed or not */
+	sere_contact* contacts;		/* capacity, in block order */
+	sere_edge_contact* edge_contacts;
 	/* Detection buffers of threads 1 .. slots − 1, capacity apart. Thread 0 writes straight into
 	 * contacts: its run of blocks starts at the first, so its contacts are already in place and
 	 * only the other threads' are copied (none on one thread). */
 	sere_contact* thread_contacts;
+	/* Edge–edge detection buffers of threads 0 .. slots − 1, capacity apart: the edge blocks need
+	 * not start thread 0's run, and their contacts are few, so all are copied. */
+	sere_edge_contact* thread_edge_contacts;
 	int32_t* block_thread;
-	int32_t* block_start;
-	int64_t* block_found;
+	int32_t* block_start; /* in the buffer of the block's thread and kind */
+	int64_t* block_found; /* count, then the offset of the block's contacts (edge–edge ones after all others) */
 	/* Per block: the time its last detection took (ns), and the running sum of those
 	 * (block_count + 1) the runs are cut from. Timing decides only which thread runs a block,
 	 * never what the block finds or where its contacts go. */
 	int64_t* block_work;
 	int64_t* work_prefix;
 
-	/* Gather lists: for each vertex, the contacts it takes part in (as vertex or corner), in
-	 * contact order: entry e = entry_offset[i] .. names contact entries[e], whose correction
+	/* The mesh's edges, each once: ends (lower, higher) at edge_end[2e ..], ordered by the lower
+	 * end, then the higher; vertex a is the lower end of edges lower_edge[a] .. lower_edge[a + 1].
+	 * owned[3t + r] is the edge from corner r to corner r + 1 of triangle t when t is the first
+	 * triangle holding it, else −1: the search visits triangles, and visits each edge through
+	 * one of them only; edge_triangle[e] is that triangle. */
+	int32_t* edge_end;
+	int32_t* lower_edge;
+	int32_t* owned;
+	int32_t* edge_triangle;
+
+	/* Gather lists: for each vertex, the contacts it takes part in (as vertex, corner or edge end),
+	 * in contact order: entry e = entry_offset[i] .. names contact entries[e], whose correction
 	 * λ n̂ moves the vertex by entry_coef[e] λ n̂ / m (−u, −v, −w for corners a, b, c, +1 for
-	 * the vertex). The coefficient sits beside the index so a gather reads one list in order
-	 * and one correction per entry. */
+	 * the vertex; 1 − s, s, −(1 − t), −t for the edge ends a0, a1, b0, b1). The coefficient sits
+	 * beside the index so a gather reads one list in order and one correction per entry. */
 	int32_t* entry_offset; /* vertex_count + 1 */
 	/* Per thread, pad(vertex_count) apart: its contacts' entries per vertex, then where it
 	 * writes the next one (list_contacts). */
 	int32_t* entry_cursor;
 	/* Per thread, FAR_STRIDE apart: entries and touched vertices in its run of vertices. */
 	int32_t* run_total;
-	int32_t* entries;  /* 4 × capacity */
-	float* entry_coef; /* 4 × capacity */
+	int32_t* entries;  /* 4 × 2 × capacity */
+	float* entry_coef; /* 4 × 2 × capacity */
 	int32_t* touched;  /* vertices with at least one entry, ascending */
 	int32_t touched_count;
 
-	/* Per contact, structure of arrays for the response. Fixed at detection: the vertex, the
-	 * triangle's corners, the side (or taken from the start-of-step positions when the response
-	 * gets them) and the barycentric weights (u, v, w). Per response: 1 / W.
+	/* Per contact, structure of arrays for the response, 2 × capacity: the vertex–triangle
+	 * contacts, then the edge–edge ones from contact_count on. Fixed at detection: the members
+	 * (the vertex and the triangle's corners a, b, c; or the edge ends a0, a1, b0, b1), the side
+	 * (or taken from the start-of-step positions when the response gets them) and the weights
+	 * (barycentric u, v, w; or s, t). Per response: 1 / W.
 	 * Per iteration: corr[4k ..] = (λ n̂, 1) when contact k pushes, else zero: one 16-byte read
 	 * per gather entry gives the correction and the count. */
-	int32_t *contact_vertex, *contact_a, *contact_b, *contact_c;
+	int32_t* member[4];
+	float* weight[3];
 	float* contact_side;
-	float *bary_u, *bary_v, *bary_w;
 	float* inv_weight;
 	float* corr;
 
@@ -93,15 +131,15 @@ struct sere_collide
 	float* acc;
 
 	/* Per query group g (vertices 8g .. 8g + 7): the lane marks it sets, as the vertices
-	 * mark_vertex[mark_offset[g] .. mark_offset[g + 1]) (each once) and their bytes mark_bits. */
+	 * mark_vertex[mark_offset[g] .. mark_offset[g + 1]) (each once) and their marks mark_bits. */
 	int32_t* mark_offset; /* group count + 1 */
 	int32_t* mark_vertex;
-	uint8_t* mark_bits;
+	lane_bits* mark_bits;
 
-	/* Per thread of the detection, vertex_count bytes apart (zero between groups): bit k of
-	 * vertex j is set while group lane k's vertex is j or has j as a neighbour, so a triangle's
-	 * excluded lanes are the OR of its corners' bytes. */
-	uint8_t* lane_mark;
+	/* Per thread of the detection, vertex_count marks apart (zero between groups): vertex j's
+	 * lane_bits while the group's lanes are queried, so the lanes a triangle is near are the OR
+	 * of its corners' marks. */
+	lane_bits* lane_mark;
 };
 
 sere_collide_params sere_collide_params_default( void )
@@ -242,9 +280,77 @@ float sere_closest_point_triangle( const float p[3], const float a[3], const flo
 	return closest_point( p, a, b, c, weights, q );
 }
 
+static inline float clamp_unit( float s )
+{
+	return s < 0.0f ? 0.0f : ( s > 1.0f ? 1.0f : s );
+}
+
+/* Ericson, Real-Time Collision Detection 5.1.9: the closest points of the two lines, s clamped to
+ * the first segment, t then found for it and, when it leaves the second segment, clamped and s
+ * found again. Parallel lines (sin² of their angle at most 2⁻²⁰: a e − b² is then rounding of
+ * the products) and a first segment of zero length take s = 0; a second of zero length, t = 0.
+ * w gets (s, t), d the vector from the second closest point to the first; returns |d|².
+ * closest_segments_lanes repeats every operation. */
+static inline float closest_segments( const float p0[3], const float p1[3], const float q0[3], const float q1[3],
+									  float w[2], float d[3] )
+{
+	float d1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+	float d2[3] = { q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2] };
+	float r[3] = { p0[0] - q0[0], p0[1] - q0[1], p0[2] - q0[2] };
+	float a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2];
+	float e = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2];
+	float b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2];
+	float c = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2];
+	float f = d2[0] * r[0] + d2[1] * r[1] + d2[2] * r[2];
+	float denom = a * e - b * b;
+	float s = denom > 0x1p-20f * a * e ? clamp_unit( ( b * f - c * e ) / denom ) : 0.0f;
+	float t = ( b * s + f ) / e;
+	if ( !( e > 0.0f ) || t < 0.0f )
+	{
+		/* the second segment is a point, or the first's point is beyond its start */
+		t = 0.0f;
+		s = a > 0.0f ? clamp_unit( -c / a ) : 0.0f;
+	}
+	else if ( t > 1.0f )
+	{
+		t = 1.0f;
+		s = a > 0.0f ? clamp_unit( ( b - c ) / a ) : 0.0f;
+	}
+	for ( int k = 0; k < 3; ++k )
+	{
+		d[k] = r[k] + s * d1[k] - t * d2[k];
+	}
+	w[0] = s, w[1] = t;
+	return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+float sere_closest_points_segments( const float p0[3], const float p1[3], const float q0[3], const float q1[3],
+									float weights[2] )
+{
+	float d[3];
+	return closest_segments( p0, p1, q0, q1, weights, d );
+}
+
 static inline void load3( const float* x, const float* y, const float* z, int32_t i, float out[3] )
 {
 	out[0] = x[i], out[1] = y[i], out[2] = z[i];
+}
+
+/* The unit normal of triangle t and its three corners; zero normal when degenerate. */
+static inline void triangle_frame( const float* x, const float* y, const float* z, const int32_t* v, float a[3],
+								   float b[3], float c[3], float n[3] )
+{
+	load3( x, y, z, v[0], a );
+	load3( x, y, z, v[1], b );
+	load3( x, y, z, v[2], c );
+	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+	float ac[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+	n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+	n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+	n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+	float length = sqrtf( n[0] * n[0] + n[1] * n[1] + n[2] * n[2] );
+	float inv = length > 0.0f ? 1.0f / length : 0.0f;
+	n[0] *= inv, n[1] *= inv, n[2] *= inv;
 }
 
 /* Points gathered for vector tests, GATHER_LANES at a time. */
@@ -316,28 +422,37 @@ static sere_contact* thread_buffer( const sere_collide* c, int tid )
 	return tid == 0 ? c->contacts : c->thread_contacts + (size_t) ( tid - 1 ) * (size_t) c->capacity;
 }
 
-/* The arrays sized by the contact capacity, in one table for allocation and release. */
-#define CONTACT_ARRAYS 14
+/* Thread tid's edge–edge detection buffer (see thread_edge_contacts). */
+static sere_edge_contact* thread_edge_buffer( const sere_collide* c, int tid )
+{
+	return c->thread_edge_contacts + (size_t) tid * (size_t) c->capacity;
+}
+
+/* The arrays sized by the contact capacity, in one table for allocation and release: each holds
+ * size[i] bytes per unit of capacity (the per-contact arrays of the response hold both kinds). */
+#define CONTACT_ARRAYS 16
 
 static void contact_arrays( sere_collide* c, void*** slot, size_t* size )
 {
 	void** slots[CONTACT_ARRAYS] = {
-		(void**) &c->contacts,		 (void**) &c->thread_contacts,
-		(void**) &c->entries,		 (void**) &c->entry_coef,
-		(void**) &c->contact_vertex, (void**) &c->contact_a,
-		(void**) &c->contact_b,		 (void**) &c->contact_c,
-		(void**) &c->contact_side,	 (void**) &c->bary_u,
-		(void**) &c->bary_v,		 (void**) &c->bary_w,
-		(void**) &c->inv_weight,	 (void**) &c->corr,
+		(void**) &c->contacts,		(void**) &c->thread_contacts,
+		(void**) &c->edge_contacts, (void**) &c->thread_edge_contacts,
+		(void**) &c->entries,		(void**) &c->entry_coef,
+		(void**) &c->member[0],		(void**) &c->member[1],
+		(void**) &c->member[2],		(void**) &c->member[3],
+		(void**) &c->contact_side,	(void**) &c->weight[0],
+		(void**) &c->weight[1],		(void**) &c->weight[2],
+		(void**) &c->inv_weight,	(void**) &c->corr,
 	};
 	size_t sizes[CONTACT_ARRAYS] = {
-		sizeof( sere_contact ), sizeof( sere_contact ) * (size_t) ( c->slots > 1 ? c->slots - 1 : 1 ),
-		4 * sizeof( int32_t ),	4 * sizeof( float ),
-		sizeof( int32_t ),		sizeof( int32_t ),
-		sizeof( int32_t ),		sizeof( int32_t ),
-		sizeof( float ),		sizeof( float ),
-		sizeof( float ),		sizeof( float ),
-		sizeof( float ),		4 * sizeof( float ),
+		sizeof( sere_contact ),		 sizeof( sere_contact ) * (size_t) ( c->slots > 1 ? c->slots - 1 : 1 ),
+		sizeof( sere_edge_contact ), sizeof( sere_edge_contact ) * (size_t) c->slots,
+		2 * 4 * sizeof( int32_t ),	 2 * 4 * sizeof( float ),
+		2 * sizeof( int32_t ),		 2 * sizeof( int32_t ),
+		2 * sizeof( int32_t ),		 2 * sizeof( int32_t ),
+		2 * sizeof( float ),		 2 * sizeof( float ),
+		2 * sizeof( float ),		 2 * sizeof( float ),
+		2 * sizeof( float ),		 2 * 4 * sizeof( float ),
 	};
 	memcpy( slot, slots, sizeof( slots ) );
 	memcpy( size, sizes, sizeof( sizes ) );
@@ -352,9 +467,10 @@ static void collide_free( sere_collide* c )
 	{
 		sere_free( *slot[i] );
 	}
-	void* arrays[] = { c->block_thread, c->block_start, c->block_found, c->block_work, c->work_prefix, c->entry_offset,
-					   c->entry_cursor, c->run_total,	c->touched,		c->position,   c->acc,		   c->far_count,
-					   c->lane_mark,	c->mark_offset, c->mark_vertex, c->mark_bits };
+	void* arrays[] = { c->block_thread, c->block_start,	 c->block_found, c->block_work,	 c->work_prefix,
+					   c->entry_offset, c->entry_cursor, c->run_total,	 c->touched,	 c->position,
+					   c->acc,			c->far_count,	 c->lane_mark,	 c->mark_offset, c->mark_vertex,
+					   c->mark_bits,	c->edge_end,	 c->lower_edge,	 c->owned,		 c->edge_triangle };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -385,6 +501,7 @@ static sere_status alloc_contacts( sere_collide* c, int32_t capacity )
 	}
 	c->capacity = capacity;
 	c->contact_count = 0;
+	c->edge_contact_count = 0;
 	c->touched_count = 0;
 	return SERE_OK;
 }
@@ -450,21 +567,21 @@ static void build_neighbors( sere_collide* c, const int32_t* tri, int32_t triang
 	offset[n] = write;
 }
 
-/* Adds lane k's bit to vertex j's scratch byte, listing j at its first bit; returns the list's length. */
-static int32_t list_mark( sere_collide* c, uint8_t* scratch, int32_t j, int32_t k, int32_t used )
+/* Adds bits to vertex j's scratch marks, listing j at its first bit; returns the list's length. */
+static int32_t list_mark( sere_collide* c, lane_bits* scratch, int32_t j, uint32_t bits, int32_t used )
 {
 	if ( scratch[j] == 0 )
 	{
 		c->mark_vertex[used++] = j;
 	}
-	scratch[j] = (uint8_t) ( scratch[j] | ( 1u << k ) );
+	scratch[j] = (lane_bits) ( scratch[j] | bits );
 	return used;
 }
 
-/* The lane marks of every query group, from the neighbour lists: bit k of a vertex's byte when
- * lane k's vertex is it or a neighbour of it. Listed once per group, merged, the marks cost one
- * plain store per vertex to set and one to clear; set from the neighbour lists at every query, a
- * vertex shared by several lanes took a read-modify-write per lane, each waiting on the last. */
+/* The lane marks of every query group, from the neighbour lists (lane_bits). Listed once per
+ * group, merged, the marks cost one plain store per vertex to set and one to clear; set from the
+ * neighbour lists at every query, a vertex shared by several lanes took a read-modify-write per
+ * lane, each waiting on the last. */
 static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const int32_t* neighbor )
 {
 	int32_t n = c->vertex_count;
@@ -474,13 +591,13 @@ static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const 
 	 * n vertices and neighbor_offset[n] neighbour entries */
 	size_t most = (size_t) n + (size_t) neighbor_offset[n] + 1;
 	c->mark_vertex = sere_alloc( sizeof( int32_t ) * most );
-	c->mark_bits = sere_alloc( most );
+	c->mark_bits = sere_alloc( sizeof( lane_bits ) * most );
 	if ( c->mark_offset == NULL || c->mark_vertex == NULL || c->mark_bits == NULL )
 	{
 		return false;
 	}
 	/* thread 0's lane marks, zero, as scratch: zero again on return */
-	uint8_t* scratch = c->lane_mark;
+	lane_bits* scratch = c->lane_mark;
 	int32_t used = 0;
 	for ( int32_t g = 0; g < groups; ++g )
 	{
@@ -490,10 +607,11 @@ static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const 
 		for ( int32_t k = 0; k < count; ++k )
 		{
 			int32_t i = first + k;
-			used = list_mark( c, scratch, i, k, used );
+			uint32_t near = 1u << k;
+			used = list_mark( c, scratch, i, near | near << 8, used );
 			for ( int32_t e = neighbor_offset[i]; e < neighbor_offset[i + 1]; ++e )
 			{
-				used = list_mark( c, scratch, neighbor[e], k, used );
+				used = list_mark( c, scratch, neighbor[e], near, used );
 			}
 		}
 		for ( int32_t e = begin; e < used; ++e )
@@ -506,6 +624,73 @@ static bool build_marks( sere_collide* c, const int32_t* neighbor_offset, const 
 	return true;
 }
 
+/* The edge list and each triangle's owned edges (see sere_collide.edge_end) from the sorted
+ * neighbour lists: vertex a's neighbours above a are the edges it is the lower end of, in order.
+ * A triangle with a repeated corner owns no edge between the two (it has no length). */
+static bool build_edges( sere_collide* c, const int32_t* tri, const int32_t* neighbor_offset, const int32_t* neighbor )
+{
+	int32_t n = c->vertex_count, triangles = c->triangle_count;
+	int32_t* first = c->lower_edge = sere_alloc( sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	if ( first == NULL )
+	{
+		return false;
+	}
+	int32_t edges = 0;
+	for ( int32_t a = 0; a < n; ++a )
+	{
+		first[a] = edges;
+		for ( int32_t e = neighbor_offset[a]; e < neighbor_offset[a + 1]; ++e )
+		{
+			edges += neighbor[e] > a;
+		}
+	}
+	first[n] = edges;
+	c->edge_count = edges;
+	c->edge_end = sere_alloc( sizeof( int32_t ) * ( 2 * (size_t) edges + 1 ) );
+	c->owned = sere_alloc( sizeof( int32_t ) * ( 3 * (size_t) triangles + 1 ) );
+	c->edge_triangle = sere_alloc( sizeof( int32_t ) * ( (size_t) edges + 1 ) );
+	uint8_t* seen = sere_alloc( (size_t) edges + 1 );
+	bool ok = c->edge_end != NULL && c->owned != NULL && c->edge_triangle != NULL && seen != NULL;
+	for ( int32_t a = 0; ok && a < n; ++a )
+	{
+		int32_t e = first[a];
+		for ( int32_t k = neighbor_offset[a]; k < neighbor_offset[a + 1]; ++k )
+		{
+			if ( neighbor[k] > a )
+			{
+				c->edge_end[2 * e] = a, c->edge_end[2 * e + 1] = neighbor[k];
+				e += 1;
+			}
+		}
+	}
+	for ( int32_t t = 0; ok && t < triangles; ++t )
+	{
+		for ( int r = 0; r < 3; ++r )
+		{
+			int32_t i = tri[3 * t + r], j = tri[3 * t + ( r + 1 ) % 3];
+			int32_t a = i < j ? i : j, b = i < j ? j : i;
+			int32_t edge = -1;
+			/* the neighbours above a are sorted: find b among them */
+			for ( int32_t e = first[a]; a != b && e < first[a + 1] && edge < 0; ++e )
+			{
+				edge = c->edge_end[2 * e + 1] == b ? e : -1;
+			}
+			c->owned[3 * t + r] = edge >= 0 && !seen[edge] ? edge : -1;
+			if ( edge >= 0 && !seen[edge] )
+			{
+				seen[edge] = 1;
+				c->edge_triangle[edge] = t;
+			}
+		}
+	}
+	sere_free( seen );
+	return ok;
+}
+
+/* Contacts of each kind stay below this: the gather lists index 4 entries per contact of both
+ * kinds with int32_t. */
+#define CAPACITY_LIMIT ( 1 << 28 )
+
 sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out )
 {
 	if ( out == NULL )
@@ -513,15 +698,15 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 		return SERE_ERR_ARGUMENT;
 	}
 	*out = NULL;
-	if ( bvh == NULL || contact_capacity < 0 || contact_capacity >= ( 1 << 29 ) )
+	if ( bvh == NULL || contact_capacity < 0 || contact_capacity >= CAPACITY_LIMIT )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
 	int32_t n = sere_bvh_vertex_count( bvh );
 	int32_t triangles;
-	sere_bvh_triangles( bvh, &triangles );
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
 	int64_t capacity = contact_capacity > 0 ? contact_capacity : 8 * (int64_t) n;
-	capacity = capacity < ( 1 << 29 ) - 1 ? capacity : ( 1 << 29 ) - 1;
+	capacity = capacity < CAPACITY_LIMIT - 1 ? capacity : CAPACITY_LIMIT - 1;
 	sere_collide* c = sere_alloc( sizeof( sere_collide ) );
 	if ( c == NULL )
 	{
@@ -530,13 +715,7 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->vertex_count = n;
 	c->triangle_count = triangles;
 	c->slots = omp_get_max_threads();
-	c->block_count = ( n + DETECT_BLOCK - 1 ) / DETECT_BLOCK;
 	size_t vn = (size_t) sere_pad( n );
-	c->block_thread = sere_alloc( sizeof( int32_t ) * (size_t) c->block_count );
-	c->block_start = sere_alloc( sizeof( int32_t ) * (size_t) c->block_count );
-	c->block_found = sere_alloc( sizeof( int64_t ) * (size_t) c->block_count );
-	c->block_work = sere_alloc( sizeof( int64_t ) * (size_t) c->block_count );
-	c->work_prefix = sere_alloc( sizeof( int64_t ) * ( (size_t) c->block_count + 1 ) );
 	c->entry_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
 	c->entry_cursor = sere_alloc( sizeof( int32_t ) * vn * (size_t) c->slots );
 	c->run_total = sere_alloc( sizeof( int32_t ) * 2 * FAR_STRIDE * (size_t) c->slots );
@@ -544,21 +723,30 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->position = sere_alloc( 4 * sizeof( float ) * vn );
 	c->acc = sere_alloc( 4 * sizeof( float ) * vn );
 	c->far_count = sere_alloc( sizeof( int32_t ) * FAR_STRIDE * (size_t) c->slots );
-	c->lane_mark = sere_alloc( vn * (size_t) c->slots );
-	bool ok = c->block_thread && c->block_start && c->block_found && c->block_work && c->work_prefix &&
-			  c->entry_offset && c->entry_cursor && c->run_total && c->touched && c->position && c->acc &&
+	c->lane_mark = sere_alloc( sizeof( lane_bits ) * vn * (size_t) c->slots );
+	bool ok = c->entry_offset && c->entry_cursor && c->run_total && c->touched && c->position && c->acc &&
 			  c->far_count && c->lane_mark;
-	/* the mesh's edges as sorted neighbour lists, needed only to build the mark lists */
+	/* the mesh's edges as sorted neighbour lists, needed only to list the edges and build the
+	 * mark lists (thread 0's lane marks serve as scratch) */
 	int32_t* neighbor_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
 	int32_t* neighbor = sere_alloc( sizeof( int32_t ) * ( 6 * (size_t) triangles + 1 ) );
 	ok = ok && neighbor_offset && neighbor;
 	if ( ok )
 	{
-		build_neighbors( c, sere_bvh_triangles( bvh, &triangles ), triangles, neighbor_offset, neighbor );
-		ok = build_marks( c, neighbor_offset, neighbor );
+		build_neighbors( c, tri, triangles, neighbor_offset, neighbor );
+		ok = build_edges( c, tri, neighbor_offset, neighbor ) && build_marks( c, neighbor_offset, neighbor );
 	}
 	sere_free( neighbor_offset );
 	sere_free( neighbor );
+	c->vertex_blocks = ( n + DETECT_BLOCK - 1 ) / DETECT_BLOCK;
+	c->block_count = 2 * c->vertex_blocks;
+	size_t blocks = (size_t) c->block_count + 1;
+	c->block_thread = sere_alloc( sizeof( int32_t ) * blocks );
+	c->block_start = sere_alloc( sizeof( int32_t ) * blocks );
+	c->block_found = sere_alloc( sizeof( int64_t ) * blocks );
+	c->block_work = sere_alloc( sizeof( int64_t ) * blocks );
+	c->work_prefix = sere_alloc( sizeof( int64_t ) * blocks );
+	ok = ok && c->block_thread && c->block_start && c->block_found && c->block_work && c->work_prefix;
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
 		collide_free( c );
@@ -581,7 +769,7 @@ void sere_collide_destroy( sere_collide* collide )
 
 sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity )
 {
-	if ( collide == NULL || contact_capacity < 1 || contact_capacity >= ( 1 << 29 ) )
+	if ( collide == NULL || contact_capacity < 1 || contact_capacity >= CAPACITY_LIMIT )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -598,6 +786,12 @@ const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t*
 	return collide->contacts;
 }
 
+const sere_edge_contact* sere_collide_edge_contacts( const sere_collide* collide, int32_t* count )
+{
+	*count = collide->edge_contact_count;
+	return collide->edge_contacts;
+}
+
 /* Candidate pairs are tested CLOSEST_LANES at a time by one straight-line pass (closest_lanes). */
 #define CLOSEST_LANES 8
 
@@ -607,25 +801,54 @@ const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t*
  * would leave most of them idle. */
 #define PAIR_BUFFER 256
 
-/* One group of up to eight consecutive vertices querying the BVH together, the candidate pairs
- * of its block (tested when the buffer fills and at the block's end, so that only a block's
- * last batch runs part empty, not every group's), and the calling thread's contact buffer. */
+/* Edges of one lane of an edge group at most: a lane stands for the edges one vertex is the lower
+ * end of (3 on average), LANE_EDGES at a time; a vertex with more takes several lanes. The table
+ * of a group's edges is tested in vectors of 8. */
+#define LANE_EDGES	8
+#define GROUP_EDGES ( SERE_BVH_WIDTH * LANE_EDGES )
+
+/* Edges reached by an edge group's walk, buffered before their tests against the table: in one
+ * tight loop after the walk, their tests cost a third of what they did in the walk's callback. */
+#define CANDIDATES 256
+
+/* One group of up to eight consecutive vertices querying the BVH together, the
+ * candidate pairs of its block (tested when the buffer fills and at the block's end, so that
+ * only a block's last batch runs part empty, not every group's), and the calling thread's
+ * contact buffers. */
 typedef struct detect_context
 {
 	const float *x, *y, *z;
 	const int32_t* tri;
-	const int32_t *mark_offset, *mark_vertex; /* sere_collide's group mark lists */
-	const uint8_t* mark_bits;
-	uint8_t* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
-	int32_t first; /* the vertex of lane 0 */
+	const int32_t *edge_end, *lower_edge, *owned, *edge_triangle; /* sere_collide's edges */
+	const int32_t *mark_offset, *mark_vertex;					  /* sere_collide's group mark lists */
+	const lane_bits* mark_bits;
+	lane_bits* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
+	int32_t first;	 /* the vertex of lane 0 */
+	/* An edge group's table: its lanes' edges, side by side for vector tests: their boxes grown
+	 * by the lane's cull radius, their lower end's position and a unit vector across them (in the
+	 * plane of their first triangle; zero when that is degenerate), the lane's cull radius, their
+	 * ends and index. Lane k's rows start at table_lane[k]. */
+	int32_t table_count;
+	int32_t table_lane[SERE_BVH_WIDTH + 1];
+	float table_lo[3][GROUP_EDGES], table_hi[3][GROUP_EDGES];
+	float table_at[3][GROUP_EDGES], table_across[3][GROUP_EDGES], table_margin[GROUP_EDGES];
+	int32_t table_lower[GROUP_EDGES], table_upper[GROUP_EDGES], table_edge[GROUP_EDGES];
+	/* edges the group's walk reached, with the lanes whose box overlaps their triangle's */
+	int32_t candidate_edge[CANDIDATES];
+	uint8_t candidate_lanes[CANDIDATES];
+	int32_t candidate_count;
 	float h2;
-	int32_t pair_triangle[PAIR_BUFFER];
-	int32_t pair_vertex[PAIR_BUFFER];
+	int32_t pair_item[PAIR_BUFFER];	  /* the group lane's vertex, or one of its edges */
+	int32_t pair_target[PAIR_BUFFER]; /* the triangle, or the other edge */
+	uint8_t pair_near[PAIR_BUFFER];	  /* the vertex is joined by a mesh edge to a corner */
 	int32_t pair_count;
 	sere_contact* buffer;
 	int32_t used;
-	int32_t capacity;
 	int64_t found;
+	sere_edge_contact* edge_buffer;
+	int32_t edge_used;
+	int64_t edge_found;
+	int32_t capacity;
 } detect_context;
 
 /* closest_point for CLOSEST_LANES point–triangle pairs at once, as selects instead of branches:
@@ -702,13 +925,13 @@ static void closest_lanes( float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES],
 	}
 }
 
-_Static_assert( SERE_BVH_WIDTH <= 8, "a group's lane marks are one byte per vertex" );
+_Static_assert( SERE_BVH_WIDTH <= 8, "a group's lane marks are two bytes per vertex" );
 
 _Static_assert( DETECT_BLOCK % SERE_BVH_WIDTH == 0, "query groups start at multiples of the width" );
 
-/* Sets (set) or clears the lane marks of the group whose lane 0 is vertex c->first: bit k of a
- * vertex's byte while group lane k's vertex is it or has it as a neighbour, so a triangle with one
- * of them as a corner is not a contact candidate for the lane. */
+/* Sets (set) or clears the lane marks of the group whose lane 0 is vertex c->first (lane_bits):
+ * a triangle with a lane's vertex as a corner is not a contact candidate for the lane, one with a
+ * neighbour of it only with the closest point inside its face. */
 static void mark_lanes( detect_context* c, bool set )
 {
 	int32_t g = c->first / SERE_BVH_WIDTH;
@@ -747,8 +970,8 @@ static void detect_flush( detect_context* c )
 		{
 			/* lanes past the end repeat the last pair and are ignored */
 			int32_t k = start + ( l < count ? l : count - 1 );
-			int32_t vertex = c->pair_vertex[k];
-			const int32_t* v = c->tri + 3 * (size_t) c->pair_triangle[k];
+			int32_t vertex = c->pair_item[k];
+			const int32_t* v = c->tri + 3 * (size_t) c->pair_target[k];
 			p[0][l] = c->x[vertex], p[1][l] = c->y[vertex], p[2][l] = c->z[vertex];
 			a[0][l] = c->x[v[0]], a[1][l] = c->y[v[0]], a[2][l] = c->z[v[0]];
 			b[0][l] = c->x[v[1]], b[1][l] = c->y[v[1]], b[2][l] = c->z[v[1]];
@@ -768,27 +991,32 @@ static void detect_flush( detect_context* c )
 			float bl[3] = { b[0][l], b[1][l], b[2][l] }, cl[3] = { cc[0][l], cc[1][l], cc[2][l] };
 			float wl[3] = { w[0][l], w[1][l], w[2][l] }, ql[3] = { q[0][l], q[1][l], q[2][l] };
 			float dl = slow[l] ? closest_point( pl, al, bl, cl, wl, ql ) : d2[l];
-			if ( dl < c->h2 )
+			bool face = wl[0] > 0.0f && wl[1] > 0.0f && wl[2] > 0.0f;
+			if ( dl < c->h2 && ( face || !c->pair_near[start + l] ) )
 			{
-				detect_emit( c, c->pair_vertex[start + l], c->pair_triangle[start + l], pl, al, bl, cl, wl, ql, dl );
+				detect_emit( c, c->pair_item[start + l], c->pair_target[start + l], pl, al, bl, cl, wl, ql, dl );
 			}
 		}
 	}
 	c->pair_count = 0;
 }
 
-/* Buffers the pairs of one triangle with every group vertex whose cube overlaps its box, but
- * those excluded by the lane marks: the triangle's own corners and the vertices sharing an edge
- * with a corner. Such a vertex lies in the sheet right beside the triangle: where edges are
- * shorter than the thickness (fine outline and vein sampling, a shrunk blade) it is closer than
- * the thickness without any collision, and a push along the normal would only buckle the sheet.
- * Dropping them here, before the exact test, is what makes the search cheap on a shrunk leaf:
- * there they are 45% of the box hits, on the flat leaf all but a handful. */
+/* Buffers the pairs of one triangle with every group vertex whose cube overlaps its box but the
+ * triangle's own corners (the lane marks), flagging the vertices joined by a mesh edge to a
+ * corner: such a vertex lies in the sheet right beside the triangle, and where edges are shorter
+ * than the thickness (fine outline and vein sampling, a shrunk blade) it is closer than the
+ * thickness without any collision, its closest point on an edge or corner, and a push along the
+ * normal would only buckle the sheet. It is a contact only when its closest point lies inside
+ * the face, which takes a fold of the sheet past a right angle within one ring: the two
+ * triangles of an edge closing on each other like a book, which unchecked let the vertex pass
+ * through (on the maple at 800 points, at its base). */
 static void detect_visit( void* context, int32_t t, uint32_t lanes )
 {
 	detect_context* c = context;
 	const int32_t* v = c->tri + 3 * (size_t) t;
-	lanes &= ~(uint32_t) ( c->mark[v[0]] | c->mark[v[1]] | c->mark[v[2]] );
+	lane_bits m = (lane_bits) ( c->mark[v[0]] | c->mark[v[1]] | c->mark[v[2]] );
+	lanes &= ~self_lanes( m );
+	uint32_t near = near_lanes( m );
 
 	while ( lanes != 0 )
 	{
@@ -796,10 +1024,235 @@ static void detect_visit( void* context, int32_t t, uint32_t lanes )
 		{
 			detect_flush( c );
 		}
-		c->pair_triangle[c->pair_count] = t;
-		c->pair_vertex[c->pair_count] = c->first + __builtin_ctz( lanes );
+		int32_t k = __builtin_ctz( lanes );
+		c->pair_target[c->pair_count] = t;
+		c->pair_item[c->pair_count] = c->first + k;
+		c->pair_near[c->pair_count] = (uint8_t) ( near >> k & 1u );
 		c->pair_count += 1;
 		lanes &= lanes - 1;
+	}
+}
+
+/* closest_segments for CLOSEST_LANES segment pairs at once, as selects instead of branches: each
+ * lane's result is formed by the same operations as in closest_segments, so it gets the same
+ * bits (a zero-length or parallel lane computes quotients it then does not select). Rows are x,
+ * y, z; columns are lanes. */
+static void closest_segments_lanes( float p0[3][CLOSEST_LANES], float p1[3][CLOSEST_LANES], float q0[3][CLOSEST_LANES],
+									float q1[3][CLOSEST_LANES], float w[2][CLOSEST_LANES], float d2[CLOSEST_LANES] )
+{
+#pragma omp simd
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		float d1[3], dd[3], r[3];
+		for ( int k = 0; k < 3; ++k )
+		{
+			d1[k] = p1[k][l] - p0[k][l], dd[k] = q1[k][l] - q0[k][l], r[k] = p0[k][l] - q0[k][l];
+		}
+		float a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2];
+		float e = dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2];
+		float b = d1[0] * dd[0] + d1[1] * dd[1] + d1[2] * dd[2];
+		float c = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2];
+		float f = dd[0] * r[0] + dd[1] * r[1] + dd[2] * r[2];
+		float denom = a * e - b * b;
+		float s = denom > 0x1p-20f * a * e ? clamp_unit( ( b * f - c * e ) / denom ) : 0.0f;
+		float t = ( b * s + f ) / e;
+		int low = !( e > 0.0f ) | ( t < 0.0f ), high = !low & ( t > 1.0f );
+		float s_low = a > 0.0f ? clamp_unit( -c / a ) : 0.0f;
+		float s_high = a > 0.0f ? clamp_unit( ( b - c ) / a ) : 0.0f;
+		s = low ? s_low : ( high ? s_high : s );
+		t = low ? 0.0f : ( high ? 1.0f : t );
+		float dist2 = 0.0f;
+		for ( int k = 0; k < 3; ++k )
+		{
+			float d = r[k] + s * d1[k] - t * dd[k];
+			dist2 += d * d;
+		}
+		w[0][l] = s, w[1][l] = t;
+		d2[l] = dist2;
+	}
+}
+
+/* Appends the contact of edges e and f (e < f), closer than the thickness with both closest
+ * points inside. */
+static void detect_edge_emit( detect_context* c, int32_t e, int32_t f, const float a0[3], const float a1[3],
+							  const float b0[3], const float b1[3] )
+{
+	c->edge_found += 1;
+	if ( c->edge_used < c->capacity )
+	{
+		float w[2], d[3];
+		float d2 = closest_segments( a0, a1, b0, b1, w, d );
+		float u[3] = { a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2] };
+		float v[3] = { b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2] };
+		float n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+		float side = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+		c->edge_buffer[c->edge_used++] = ( sere_edge_contact ){
+			c->edge_end[2 * e], c->edge_end[2 * e + 1],		c->edge_end[2 * f], c->edge_end[2 * f + 1], w[0], w[1],
+			sqrtf( d2 ),		side < 0.0f ? -1.0f : 1.0f,
+		};
+	}
+}
+
+/* The exact test of the buffered edge pairs, CLOSEST_LANES at a time, in the order they were
+ * buffered. A pair is a contact when it is closer than the thickness and both closest points
+ * lie strictly inside their edges: where one is an end, that vertex is within the thickness of
+ * the other edge's triangles, a vertex–triangle pair. */
+static void detect_edge_flush( detect_context* c )
+{
+	for ( int32_t start = 0; start < c->pair_count; start += CLOSEST_LANES )
+	{
+		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
+		float a0[3][CLOSEST_LANES], a1[3][CLOSEST_LANES], b0[3][CLOSEST_LANES], b1[3][CLOSEST_LANES];
+		float w[2][CLOSEST_LANES], d2[CLOSEST_LANES];
+		for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
+		{
+			/* lanes past the end repeat the last pair and are ignored */
+			int32_t k = start + ( l < count ? l : count - 1 );
+			const int32_t* e = c->edge_end + 2 * (size_t) c->pair_item[k];
+			const int32_t* f = c->edge_end + 2 * (size_t) c->pair_target[k];
+			a0[0][l] = c->x[e[0]], a0[1][l] = c->y[e[0]], a0[2][l] = c->z[e[0]];
+			a1[0][l] = c->x[e[1]], a1[1][l] = c->y[e[1]], a1[2][l] = c->z[e[1]];
+			b0[0][l] = c->x[f[0]], b0[1][l] = c->y[f[0]], b0[2][l] = c->z[f[0]];
+			b1[0][l] = c->x[f[1]], b1[1][l] = c->y[f[1]], b1[2][l] = c->z[f[1]];
+		}
+		closest_segments_lanes( a0, a1, b0, b1, w, d2 );
+		uint32_t hits = 0;
+		for ( int32_t l = 0; l < count; ++l )
+		{
+			int inside = ( w[0][l] > 0.0f ) & ( w[0][l] < 1.0f ) & ( w[1][l] > 0.0f ) & ( w[1][l] < 1.0f );
+			hits |= (uint32_t) ( inside & ( d2[l] < c->h2 ) ) << l;
+		}
+		while ( hits != 0 )
+		{
+			int32_t l = __builtin_ctz( hits );
+			hits &= hits - 1;
+			float p0[3] = { a0[0][l], a0[1][l], a0[2][l] }, p1[3] = { a1[0][l], a1[1][l], a1[2][l] };
+			float q0[3] = { b0[0][l], b0[1][l], b0[2][l] }, q1[3] = { b1[0][l], b1[1][l], b1[2][l] };
+			detect_edge_emit( c, c->pair_item[start + l], c->pair_target[start + l], p0, p1, q0, q1 );
+		}
+	}
+	c->pair_count = 0;
+}
+
+/* Bit l set when row j = from + l of the table (8 rows) is a candidate for edge f = (f0, f1) with
+ * ends p, q and box lo, hi: the row's edge comes before f (its lower end is below f0: each pair is
+ * tested once), shares no end with it, has its grown box overlapping f's, and f does not lie
+ * beyond the row's margin on one side of the plane through the row's edge across it: where a
+ * flat sheet puts the edges beside it, which boxes alone let through (on the flat Table 1 maple
+ * this plane takes the pairs left by the boxes from 23 thousand to 10). */
+static inline uint32_t table_hits( const detect_context* c, int32_t from, const float lo[3], const float hi[3],
+								   const float p[3], const float q[3], int32_t f0, int32_t f1 )
+{
+#if defined( __AVX2__ )
+	__m256 hit = _mm256_castsi256_ps( _mm256_set1_epi32( -1 ) );
+	__m256 sp = _mm256_setzero_ps(), sq = _mm256_setzero_ps();
+	for ( int a = 0; a < 3; ++a )
+	{
+		hit = _mm256_and_ps(
+			hit, _mm256_cmp_ps( _mm256_set1_ps( lo[a] ), _mm256_loadu_ps( c->table_hi[a] + from ), _CMP_LE_OQ ) );
+		hit = _mm256_and_ps(
+			hit, _mm256_cmp_ps( _mm256_set1_ps( hi[a] ), _mm256_loadu_ps( c->table_lo[a] + from ), _CMP_GE_OQ ) );
+		__m256 at = _mm256_loadu_ps( c->table_at[a] + from ), across = _mm256_loadu_ps( c->table_across[a] + from );
+		sp = _mm256_add_ps( sp, _mm256_mul_ps( _mm256_sub_ps( _mm256_set1_ps( p[a] ), at ), across ) );
+		sq = _mm256_add_ps( sq, _mm256_mul_ps( _mm256_sub_ps( _mm256_set1_ps( q[a] ), at ), across ) );
+	}
+	__m256 margin = _mm256_loadu_ps( c->table_margin + from );
+	__m256 low = _mm256_sub_ps( _mm256_setzero_ps(), margin );
+	__m256 beyond =
+		_mm256_or_ps( _mm256_and_ps( _mm256_cmp_ps( sp, margin, _CMP_GT_OQ ), _mm256_cmp_ps( sq, margin, _CMP_GT_OQ ) ),
+					  _mm256_and_ps( _mm256_cmp_ps( sp, low, _CMP_LT_OQ ), _mm256_cmp_ps( sq, low, _CMP_LT_OQ ) ) );
+	__m256i lower = _mm256_loadu_si256( (const __m256i*) ( c->table_lower + from ) );
+	__m256i upper = _mm256_loadu_si256( (const __m256i*) ( c->table_upper + from ) );
+	__m256i skip = _mm256_or_si256( _mm256_cmpeq_epi32( upper, _mm256_set1_epi32( f0 ) ),
+									_mm256_cmpeq_epi32( upper, _mm256_set1_epi32( f1 ) ) );
+	skip = _mm256_or_si256( skip, _mm256_cmpgt_epi32( lower, _mm256_set1_epi32( f0 - 1 ) ) );
+	hit = _mm256_andnot_ps( _mm256_or_ps( beyond, _mm256_castsi256_ps( skip ) ), hit );
+	return (uint32_t) _mm256_movemask_ps( hit );
+#else
+	uint32_t mask = 0;
+	for ( int l = 0; l < 8; ++l )
+	{
+		int32_t j = from + l;
+		int hit = ( c->table_lower[j] < f0 ) & ( c->table_upper[j] != f0 ) & ( c->table_upper[j] != f1 );
+		float sp = 0.0f, sq = 0.0f;
+		for ( int a = 0; a < 3; ++a )
+		{
+			hit &= ( lo[a] <= c->table_hi[a][j] ) & ( hi[a] >= c->table_lo[a][j] );
+			sp += ( p[a] - c->table_at[a][j] ) * c->table_across[a][j];
+			sq += ( q[a] - c->table_at[a][j] ) * c->table_across[a][j];
+		}
+		float margin = c->table_margin[j];
+		hit &= !( ( ( sp > margin ) & ( sq > margin ) ) | ( ( sp < -margin ) & ( sq < -margin ) ) );
+		mask |= (uint32_t) hit << l;
+	}
+	return mask;
+#endif
+}
+
+/* Tests the buffered candidate edges f against the rows of the lanes whose box overlaps their
+ * triangle's (table_hits) and buffers the pairs that pass for the exact test. */
+static void detect_edge_candidates( detect_context* c )
+{
+	for ( int32_t k = 0; k < c->candidate_count; ++k )
+	{
+		int32_t f = c->candidate_edge[k];
+		uint32_t lanes = c->candidate_lanes[k];
+		int32_t f0 = c->edge_end[2 * f], f1 = c->edge_end[2 * f + 1];
+		float p[3], q[3], lo[3], hi[3];
+		load3( c->x, c->y, c->z, f0, p );
+		load3( c->x, c->y, c->z, f1, q );
+		for ( int a = 0; a < 3; ++a )
+		{
+			lo[a] = p[a] < q[a] ? p[a] : q[a];
+			hi[a] = p[a] < q[a] ? q[a] : p[a];
+		}
+		int32_t rows = c->table_lane[32 - __builtin_clz( lanes )];
+		for ( int32_t from = c->table_lane[__builtin_ctz( lanes )]; from < rows; from += 8 )
+		{
+			uint32_t hits = table_hits( c, from, lo, hi, p, q, f0, f1 );
+			hits &= rows - from >= 8 ? 0xffu : ( 1u << ( rows - from ) ) - 1;
+			while ( hits != 0 )
+			{
+				int32_t j = from + __builtin_ctz( hits );
+				hits &= hits - 1;
+				if ( c->pair_count == PAIR_BUFFER )
+				{
+					detect_edge_flush( c );
+				}
+				c->pair_item[c->pair_count] = c->table_edge[j];
+				c->pair_target[c->pair_count] = f;
+				c->pair_count += 1;
+			}
+		}
+	}
+	c->candidate_count = 0;
+}
+
+/* Buffers the edges f triangle t owns that may pair with an edge of the group (their lower end is
+ * above the group's lowest lane vertex), with the group's lanes whose box overlaps t's, for
+ * detect_edge_candidates. A pair is any two edges sharing no end: unlike a vertex and the
+ * triangles beside it (detect_visit), edges a ring or two apart are not excluded. Two edges of a
+ * smooth sheet have their closest points at an end, and only where the sheet folds back on
+ * itself do both fall inside, closer than the thickness; there the fold must be held open. On
+ * the maple at 1500 points a folding tip let two edges joined through one mesh edge pass through
+ * each other, and no rule excluding neighbours' edges kept the six drying runs of the tests free
+ * of crossings. */
+static void detect_edge_visit( void* context, int32_t t, uint32_t lanes )
+{
+	detect_context* c = context;
+	if ( c->candidate_count > CANDIDATES - 3 )
+	{
+		detect_edge_candidates( c );
+	}
+	const int32_t* owned = c->owned + 3 * (size_t) t;
+	/* without branches: which owned edges pass is as good as random */
+	for ( int r = 0; r < 3; ++r )
+	{
+		int32_t f = owned[r];
+		int32_t f0 = c->edge_end[2 * ( f < 0 ? 0 : f )];
+		c->candidate_edge[c->candidate_count] = f;
+		c->candidate_lanes[c->candidate_count] = (uint8_t) lanes;
+		c->candidate_count += ( f >= 0 ) & ( f0 > c->first );
 	}
 }
 
@@ -842,19 +1295,21 @@ static inline float cull_radius( float h, const float p[3] )
 	return h + h * 0x1p-10f + ( fabsf( p[0] ) + fabsf( p[1] ) + fabsf( p[2] ) ) * 0x1p-18f;
 }
 
-/* Lists the total contacts found: copies each block's contacts from its thread's buffer to the
- * block's place in the list (thread 0's are there already), with the per-contact arrays of the response, and builds the
- * per-vertex gather lists by a stable counting sort, in one parallel region. Each thread counts
- * the entries of its own (static, contiguous) share of blocks per vertex; then, over its run of
- * vertices, turns the counts of every thread into where each thread's entries of each vertex
- * begin, thread by thread: a vertex's list is then in contact order whatever the thread count.
- * Each thread finally writes the entries of the contacts it copied. Run sequentially, the gather
- * lists alone cost a fifth of the search's time on two threads (random writes into a list of
- * 4 × contacts entries). */
-static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, int threads )
+/* Lists the contacts found (total vertex–triangle ones, then edge_total edge–edge ones): copies
+ * each block's contacts from its thread's buffer to the block's place in its list (thread 0's
+ * vertex–triangle contacts are there already), with the per-contact arrays of the response, and
+ * builds the per-vertex gather lists by a stable counting sort, in one parallel region. Each
+ * thread counts the entries of its own (static, contiguous) share of blocks per vertex; then,
+ * over its run of vertices, turns the counts of every thread into where each thread's entries of
+ * each vertex begin, thread by thread: a vertex's list is then in contact order whatever the
+ * thread count. Each thread finally writes the entries of the contacts it copied. Run
+ * sequentially, the gather lists alone cost a fifth of the search's time on two threads (random
+ * writes into a list of 4 × contacts entries). */
+static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, int64_t edge_total, int threads )
 {
 	int32_t n = c->vertex_count;
 	size_t stride = (size_t) sere_pad( n );
+	int64_t all = total + edge_total;
 #pragma omp parallel num_threads( threads )
 	{
 		int tid = omp_get_thread_num(), team = omp_get_num_threads();
@@ -863,23 +1318,48 @@ static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, i
 #pragma omp for schedule( static )
 		for ( int32_t block = 0; block < c->block_count; ++block )
 		{
-			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : total;
-			size_t count = (size_t) ( next - c->block_found[block] );
-			const sere_contact* from = thread_buffer( c, c->block_thread[block] ) + c->block_start[block];
-			if ( count > 0 && from != c->contacts + c->block_found[block] )
+			int64_t begin = c->block_found[block];
+			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : all;
+			size_t count = (size_t) ( next - begin );
+			if ( block < c->vertex_blocks )
 			{
-				memcpy( c->contacts + c->block_found[block], from, sizeof( sere_contact ) * count );
+				const sere_contact* from = thread_buffer( c, c->block_thread[block] ) + c->block_start[block];
+				if ( count > 0 && from != c->contacts + begin )
+				{
+					memcpy( c->contacts + begin, from, sizeof( sere_contact ) * count );
+				}
+				for ( int64_t k = begin; k < next; ++k )
+				{
+					const sere_contact* contact = c->contacts + k;
+					const int32_t* v = tri + 3 * (size_t) contact->triangle;
+					c->member[0][k] = contact->vertex;
+					c->member[1][k] = v[0], c->member[2][k] = v[1], c->member[3][k] = v[2];
+					c->contact_side[k] = contact->side;
+					c->weight[0][k] = contact->u, c->weight[1][k] = contact->v, c->weight[2][k] = contact->w;
+				}
 			}
-			for ( int64_t k = c->block_found[block]; k < next; ++k )
+			else
 			{
-				const sere_contact* contact = c->contacts + k;
-				const int32_t* v = tri + 3 * (size_t) contact->triangle;
-				c->contact_vertex[k] = contact->vertex;
-				c->contact_a[k] = v[0], c->contact_b[k] = v[1], c->contact_c[k] = v[2];
-				c->contact_side[k] = contact->side;
-				c->bary_u[k] = contact->u, c->bary_v[k] = contact->v, c->bary_w[k] = contact->w;
-				mine[contact->vertex] += 1;
-				mine[v[0]] += 1, mine[v[1]] += 1, mine[v[2]] += 1;
+				const sere_edge_contact* from = thread_edge_buffer( c, c->block_thread[block] ) + c->block_start[block];
+				if ( count > 0 )
+				{
+					memcpy( c->edge_contacts + ( begin - total ), from, sizeof( sere_edge_contact ) * count );
+				}
+				for ( int64_t k = begin; k < next; ++k )
+				{
+					const sere_edge_contact* contact = c->edge_contacts + ( k - total );
+					c->member[0][k] = contact->a0, c->member[1][k] = contact->a1;
+					c->member[2][k] = contact->b0, c->member[3][k] = contact->b1;
+					c->contact_side[k] = contact->side;
+					c->weight[0][k] = contact->s, c->weight[1][k] = contact->t, c->weight[2][k] = 0.0f;
+				}
+			}
+			for ( int64_t k = begin; k < next; ++k )
+			{
+				for ( int r = 0; r < 4; ++r )
+				{
+					mine[c->member[r][k]] += 1;
+				}
 			}
 		}
 		/* this thread's run of vertices: its entries and touched vertices */
@@ -928,12 +1408,21 @@ static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, i
 #pragma omp for schedule( static )
 		for ( int32_t block = 0; block < c->block_count; ++block )
 		{
-			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : total;
+			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : all;
 			for ( int64_t k = c->block_found[block]; k < next; ++k )
 			{
-				/* the corners move against the push by their barycentric weight, the vertex with it */
-				int32_t member[4] = { c->contact_a[k], c->contact_b[k], c->contact_c[k], c->contact_vertex[k] };
-				float coef[4] = { -c->bary_u[k], -c->bary_v[k], -c->bary_w[k], 1.0f };
+				/* a triangle's corners move against the push by their barycentric weight, the
+				 * vertex with it; the first edge's ends with it by their weights on the edge, the
+				 * second edge's against it */
+				bool vertex = k < total;
+				float s = c->weight[0][k], t = c->weight[1][k];
+				int32_t member[4] = { c->member[vertex ? 1 : 0][k], c->member[vertex ? 2 : 1][k],
+									  c->member[vertex ? 3 : 2][k], c->member[vertex ? 0 : 3][k] };
+				float coef[4] = { -s, -t, -c->weight[2][k], 1.0f };
+				if ( !vertex )
+				{
+					coef[0] = 1.0f - s, coef[1] = s, coef[2] = -( 1.0f - t ), coef[3] = -t;
+				}
 				for ( int r = 0; r < 4; ++r )
 				{
 					int32_t e = mine[member[r]]++;
@@ -943,6 +1432,128 @@ static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, i
 			}
 		}
 	}
+}
+
+/* Queries the groups of vertex block `block` (lanes are vertices: detect_visit). */
+static int detect_vertex_block( detect_context* c, const sere_bvh* bvh, int32_t block, int32_t n, float thickness )
+{
+	int bad = 0;
+	int32_t end = ( block + 1 ) * DETECT_BLOCK < n ? ( block + 1 ) * DETECT_BLOCK : n;
+	for ( int32_t first = block * DETECT_BLOCK; first < end; first += SERE_BVH_WIDTH )
+	{
+		sere_bvh_group group;
+		group.count = end - first < SERE_BVH_WIDTH ? end - first : SERE_BVH_WIDTH;
+		c->first = first;
+		for ( int32_t k = 0; k < group.count; ++k )
+		{
+			float p[3];
+			load3( c->x, c->y, c->z, first + k, p );
+			/* a NaN or infinite vertex leaves its lane non-finite: the query ignores it */
+			bad |= !( isfinite( p[0] ) && isfinite( p[1] ) && isfinite( p[2] ) );
+			float r = cull_radius( thickness, p );
+			group.lo_x[k] = p[0] - r, group.lo_y[k] = p[1] - r, group.lo_z[k] = p[2] - r;
+			group.hi_x[k] = p[0] + r, group.hi_y[k] = p[1] + r, group.hi_z[k] = p[2] + r;
+		}
+		mark_lanes( c, true );
+		sere_bvh_query_group( bvh, &group, detect_visit, c );
+		mark_lanes( c, false );
+	}
+	detect_flush( c );
+	return bad;
+}
+
+/* Adds the edges e .. end (at most LANE_EDGES) of vertex a to the table as lane k of group. The
+ * lane's box is the box of those edges grown by the cull radius of its farthest corner. */
+static void table_lane( detect_context* c, sere_bvh_group* group, int32_t k, int32_t a, int32_t e, int32_t end,
+						float thickness )
+{
+	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+	float pa[3];
+	load3( c->x, c->y, c->z, a, pa );
+	int32_t from = c->table_lane[k] = c->table_count;
+	for ( int32_t i = e; i < end; ++i )
+	{
+		int32_t j = c->table_count++, b = c->edge_end[2 * i + 1];
+		float pb[3], corner[3][3], n[3];
+		load3( c->x, c->y, c->z, b, pb );
+		for ( int d = 0; d < 3; ++d )
+		{
+			c->table_lo[d][j] = pa[d] < pb[d] ? pa[d] : pb[d];
+			c->table_hi[d][j] = pa[d] < pb[d] ? pb[d] : pa[d];
+			lo[d] = c->table_lo[d][j] < lo[d] ? c->table_lo[d][j] : lo[d];
+			hi[d] = c->table_hi[d][j] > hi[d] ? c->table_hi[d][j] : hi[d];
+		}
+		/* across the edge in the plane of its first triangle: n × (b − a), normalized */
+		triangle_frame( c->x, c->y, c->z, c->tri + 3 * (size_t) c->edge_triangle[i], corner[0], corner[1], corner[2],
+						n );
+		float u[3] = { pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2] };
+		float m[3] = { n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0] };
+		float length = sqrtf( m[0] * m[0] + m[1] * m[1] + m[2] * m[2] );
+		float inverse = length > 0.0f ? 1.0f / length : 0.0f;
+		for ( int d = 0; d < 3; ++d )
+		{
+			c->table_at[d][j] = pa[d];
+			c->table_across[d][j] = m[d] * inverse;
+		}
+		c->table_lower[j] = a, c->table_upper[j] = b, c->table_edge[j] = i;
+	}
+	float far[3];
+	for ( int d = 0; d < 3; ++d )
+	{
+		far[d] = fabsf( lo[d] ) > fabsf( hi[d] ) ? fabsf( lo[d] ) : fabsf( hi[d] );
+	}
+	float r = cull_radius( thickness, far );
+	for ( int32_t j = from; j < c->table_count; ++j )
+	{
+		for ( int d = 0; d < 3; ++d )
+		{
+			c->table_lo[d][j] -= r, c->table_hi[d][j] += r;
+		}
+		c->table_margin[j] = r;
+	}
+	group->lo_x[k] = lo[0] - r, group->lo_y[k] = lo[1] - r, group->lo_z[k] = lo[2] - r;
+	group->hi_x[k] = hi[0] + r, group->hi_y[k] = hi[1] + r, group->hi_z[k] = hi[2] + r;
+}
+
+/* Queries vertex block `block` for edge–edge pairs: groups of up to eight lanes, each standing
+ * for up to LANE_EDGES of the edges a vertex is the lower end of, in vertex order (a vertex that is
+ * no edge's lower end takes no lane). Non-finite positions are reported by the vertex–triangle
+ * blocks. */
+static void detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_t block, int32_t n, float thickness )
+{
+	int32_t a = block * DETECT_BLOCK, end = ( block + 1 ) * DETECT_BLOCK < n ? ( block + 1 ) * DETECT_BLOCK : n;
+	int32_t e = c->lower_edge[a];
+	for ( ;; )
+	{
+		sere_bvh_group group;
+		group.count = 0;
+		c->table_count = 0;
+		while ( group.count < SERE_BVH_WIDTH && a < end )
+		{
+			int32_t last = c->lower_edge[a + 1];
+			if ( e == last )
+			{
+				a += 1;
+				e = c->lower_edge[a];
+				continue;
+			}
+			int32_t stop = last - e > LANE_EDGES ? e + LANE_EDGES : last;
+			if ( group.count == 0 )
+			{
+				c->first = a;
+			}
+			table_lane( c, &group, group.count++, a, e, stop, thickness );
+			e = stop;
+		}
+		if ( group.count == 0 )
+		{
+			break;
+		}
+		c->table_lane[group.count] = c->table_count;
+		sere_bvh_query_group( bvh, &group, detect_edge_visit, c );
+		detect_edge_candidates( c );
+	}
+	detect_edge_flush( c );
 }
 
 sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
@@ -961,6 +1572,8 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	}
 	*contact_count = 0;
 	collide->contact_count = 0;
+	collide->edge_contact_count = 0;
+	collide->edge_found = 0;
 	collide->touched_count = 0;
 	int32_t n = collide->vertex_count;
 	int32_t threads = sere_team_default();
@@ -980,44 +1593,37 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			.y = y,
 			.z = z,
 			.tri = tri,
+			.edge_end = collide->edge_end,
+			.lower_edge = collide->lower_edge,
+			.owned = collide->owned,
+			.edge_triangle = collide->edge_triangle,
 			.mark_offset = collide->mark_offset,
 			.mark_vertex = collide->mark_vertex,
 			.mark_bits = collide->mark_bits,
 			.mark = collide->lane_mark + (size_t) tid * (size_t) sere_pad( n ),
 			.h2 = h2,
 			.buffer = thread_buffer( collide, tid ),
+			.edge_buffer = thread_edge_buffer( collide, tid ),
 			.capacity = collide->capacity,
 		};
 		int32_t run_end = run_begin( collide, tid + 1, team );
 		for ( int32_t block = run_begin( collide, tid, team ); block < run_end; ++block )
 		{
-			int32_t start = c.used;
-			int64_t found = c.found;
+			bool vertices = block < collide->vertex_blocks;
+			int32_t start = vertices ? c.used : c.edge_used;
+			int64_t found = vertices ? c.found : c.edge_found;
 			double clock = omp_get_wtime();
-			int32_t end = ( block + 1 ) * DETECT_BLOCK < n ? ( block + 1 ) * DETECT_BLOCK : n;
-			for ( int32_t first = block * DETECT_BLOCK; first < end; first += SERE_BVH_WIDTH )
+			if ( vertices )
 			{
-				sere_bvh_group group;
-				group.count = end - first < SERE_BVH_WIDTH ? end - first : SERE_BVH_WIDTH;
-				c.first = first;
-				for ( int32_t k = 0; k < group.count; ++k )
-				{
-					float p[3];
-					load3( x, y, z, first + k, p );
-					/* a NaN or infinite vertex leaves its lane non-finite: the query ignores it */
-					bad |= !( isfinite( p[0] ) && isfinite( p[1] ) && isfinite( p[2] ) );
-					float r = cull_radius( thickness, p );
-					group.lo_x[k] = p[0] - r, group.lo_y[k] = p[1] - r, group.lo_z[k] = p[2] - r;
-					group.hi_x[k] = p[0] + r, group.hi_y[k] = p[1] + r, group.hi_z[k] = p[2] + r;
-				}
-				mark_lanes( &c, true );
-				sere_bvh_query_group( bvh, &group, detect_visit, &c );
-				mark_lanes( &c, false );
+				bad |= detect_vertex_block( &c, bvh, block, n, thickness );
 			}
-			detect_flush( &c );
+			else
+			{
+				detect_edge_block( &c, bvh, block - collide->vertex_blocks, n, thickness );
+			}
 			collide->block_thread[block] = tid;
 			collide->block_start[block] = start;
-			collide->block_found[block] = c.found - found;
+			collide->block_found[block] = ( vertices ? c.found : c.edge_found ) - found;
 			collide->block_work[block] = (int64_t) ( ( omp_get_wtime() - clock ) * 1e9 );
 		}
 	}
@@ -1025,17 +1631,19 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	{
 		return SERE_ERR_NONFINITE;
 	}
-	int64_t total = 0;
+	int64_t total = 0, edge_total = 0;
 	for ( int32_t block = 0; block < collide->block_count; ++block )
 	{
-		total += collide->block_found[block];
+		*( block < collide->vertex_blocks ? &total : &edge_total ) += collide->block_found[block];
 	}
 	*contact_count = total < INT32_MAX ? (int32_t) total : INT32_MAX;
-	if ( total > collide->capacity )
+	collide->edge_found = edge_total;
+	if ( total > collide->capacity || edge_total > collide->capacity )
 	{
 		return SERE_ERR_CAPACITY;
 	}
-	/* block_found becomes each block's offset in the list */
+	/* block_found becomes each block's offset in the per-contact arrays: the vertex–triangle
+	 * contacts, then the edge–edge ones */
 	int64_t offset = 0;
 	for ( int32_t block = 0; block < collide->block_count; ++block )
 	{
@@ -1043,27 +1651,21 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 		collide->block_found[block] = offset;
 		offset += found;
 	}
-	list_contacts( collide, tri, total, threads );
+	list_contacts( collide, tri, total, edge_total, threads );
 	collide->contact_count = (int32_t) total;
+	collide->edge_contact_count = (int32_t) edge_total;
 	return SERE_OK;
 }
 
-/* Evaluates contacts [begin, end), at most EVALUATE_BLOCK of them, at the current positions (see
- * sere_collide_respond) at their points of detection q = u a + v b + w c: stores
- * corr[4k ..] = (λ n̂, 1) for a contact that pushes, zeros for one that does not, and returns
- * how many push by more than the tolerance. The four points are gathered first, eight contacts
- * at a time (gather_points), then the arithmetic runs as straight-line vector code across
- * contacts. */
-static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, float h2, float tolerance )
+/* Gathers the four members' points of contacts [begin, begin + count) into rows 3r .. 3r + 2 of
+ * point (x, y, z of member r), eight contacts at a time (gather_points). */
+static void gather_members( const sere_collide* c, int32_t begin, int32_t count, float point[12][EVALUATE_BLOCK] )
 {
-	float point[12][EVALUATE_BLOCK];
-	int32_t count = end - begin;
-	const int32_t* member[4] = { c->contact_vertex, c->contact_a, c->contact_b, c->contact_c };
 	for ( int32_t m = 0; m < count; m += GATHER_LANES )
 	{
 		for ( int r = 0; r < 4; ++r )
 		{
-			const int32_t* index = member[r] + begin + m;
+			const int32_t* index = c->member[r] + begin + m;
 			int32_t tail[GATHER_LANES];
 			if ( m + GATHER_LANES > count )
 			{
@@ -1077,7 +1679,35 @@ static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, f
 			gather_points( c->position, index, point[3 * r] + m, point[3 * r + 1] + m, point[3 * r + 2] + m );
 		}
 	}
-	const float* restrict bu = c->bary_u + begin, * restrict bv = c->bary_v + begin, * restrict bw = c->bary_w + begin;
+}
+
+/* Writes the corrections of contacts [begin, begin + count), rows (λ n̂, push), to corr as
+ * records. */
+static void store_corrections( sere_collide* c, int32_t begin, int32_t count, float row[4][EVALUATE_BLOCK] )
+{
+	float* corr = c->corr + 4 * (size_t) begin;
+	int32_t whole = count - count % GATHER_LANES;
+	for ( int32_t m = 0; m < whole; m += GATHER_LANES )
+	{
+		scatter_records( row[0] + m, row[1] + m, row[2] + m, row[3] + m, corr + 4 * (size_t) m );
+	}
+	for ( int32_t k = whole; k < count; ++k )
+	{
+		corr[4 * k] = row[0][k], corr[4 * k + 1] = row[1][k], corr[4 * k + 2] = row[2][k], corr[4 * k + 3] = row[3][k];
+	}
+}
+
+/* Evaluates vertex–triangle contacts [begin, end), at most EVALUATE_BLOCK of them, at the current
+ * positions (see sere_collide_respond) at their points of detection q = u a + v b + w c: stores
+ * corr[4k ..] = (λ n̂, 1) for a contact that pushes, zeros for one that does not, and returns
+ * how many push by more than the tolerance. The four points are gathered first, then the
+ * arithmetic runs as straight-line vector code across contacts. */
+static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, float h2, float tolerance )
+{
+	float point[12][EVALUATE_BLOCK];
+	int32_t count = end - begin;
+	gather_members( c, begin, count, point );
+	const float* restrict bu = c->weight[0] + begin, * restrict bv = c->weight[1] + begin, * restrict bw = c->weight[2] + begin;
 	const float* restrict side = c->contact_side + begin, * restrict inv_weight = c->inv_weight + begin;
 	/* the corrections as rows (λ n̂, push), written to corr as records below */
 	float row[4][EVALUATE_BLOCK];
@@ -1118,16 +1748,56 @@ static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, f
 		row[3][k] = push ? 1.0f : 0.0f;
 		far += push & ( deficit > tolerance );
 	}
-	float* corr = c->corr + 4 * (size_t) begin;
-	int32_t whole = count - count % GATHER_LANES;
-	for ( int32_t m = 0; m < whole; m += GATHER_LANES )
+	store_corrections( c, begin, count, row );
+	return far;
+}
+
+/* evaluate_contacts for edge–edge contacts [begin, end): the same constraint between the points
+ * of detection p = (1 − s) a0 + s a1 and q = (1 − t) b0 + t b1, along n = (a1 − a0) × (b1 − b0).
+ * Parallel edges have no normal (scale 0) and never push. */
+static int32_t evaluate_edges( sere_collide* c, int32_t begin, int32_t end, float h2, float tolerance )
+{
+	float point[12][EVALUATE_BLOCK];
+	int32_t count = end - begin;
+	gather_members( c, begin, count, point );
+	const float* restrict ws = c->weight[0] + begin, * restrict wt = c->weight[1] + begin;
+	const float* restrict side = c->contact_side + begin, * restrict inv_weight = c->inv_weight + begin;
+	float row[4][EVALUATE_BLOCK];
+	int32_t far = 0;
+#pragma omp simd reduction( + : far )
+	for ( int32_t k = 0; k < count; ++k )
 	{
-		scatter_records( row[0] + m, row[1] + m, row[2] + m, row[3] + m, corr + 4 * (size_t) m );
+		float a0[3] = { point[0][k], point[1][k], point[2][k] };
+		float a1[3] = { point[3][k], point[4][k], point[5][k] };
+		float b0[3] = { point[6][k], point[7][k], point[8][k] };
+		float b1[3] = { point[9][k], point[10][k], point[11][k] };
+		float u[3] = { a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2] };
+		float v[3] = { b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2] };
+		float n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+		float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+		float inverse_length = length2 > 0.0f ? 1.0f / sqrtf( length2 > 0.0f ? length2 : 1.0f ) : 0.0f;
+		float scale = side[k] * inverse_length;
+		float inverse = inv_weight[k];
+		n[0] *= scale, n[1] *= scale, n[2] *= scale;
+		float s = ws[k], t = wt[k];
+		float d[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			d[r] = ( ( 1.0f - s ) * a0[r] + s * a1[r] ) - ( ( 1.0f - t ) * b0[r] + t * b1[r] );
+		}
+		float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+		float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
+		float room = h2 - ( l[0] * l[0] + l[1] * l[1] + l[2] * l[2] );
+		float deficit = sqrtf( room > 0.0f ? room : 0.0f ) - height;
+		int push = ( room > 0.0f ) & ( deficit > 0.0f ) & ( scale != 0.0f ) & ( inverse > 0.0f );
+		float lambda = push ? deficit * inverse : 0.0f;
+		row[0][k] = lambda * n[0];
+		row[1][k] = lambda * n[1];
+		row[2][k] = lambda * n[2];
+		row[3][k] = push ? 1.0f : 0.0f;
+		far += push & ( deficit > tolerance );
 	}
-	for ( int32_t k = whole; k < count; ++k )
-	{
-		corr[4 * k] = row[0][k], corr[4 * k + 1] = row[1][k], corr[4 * k + 2] = row[2][k], corr[4 * k + 3] = row[3][k];
-	}
+	store_corrections( c, begin, count, row );
 	return far;
 }
 
@@ -1278,21 +1948,30 @@ static bool state_valid( const sere_collide_state* s )
 
 /* The side of contact k's triangle its vertex was on at the start of the step: the sign of
  * (p₀ − q₀) · n₀ at the detection weights, or the detection side when that is neither positive
- * nor negative (the vertex in the plane, a degenerate triangle, or NaN, which respond refuses). */
-static inline float history_side( const sere_collide* c, const sere_collide_state* s, int32_t k )
+ * nor negative (the vertex in the plane, a degenerate triangle, or NaN, which respond refuses).
+ * For an edge–edge contact (vertex false), the side of its second edge the first was on: the same
+ * sign with p₀, q₀ the points of detection on the two edges and n₀ = (a1 − a0) × (b1 − b0). */
+static inline float history_side( const sere_collide* c, const sere_collide_state* s, int32_t k, bool vertex )
 {
-	int32_t member[4] = { c->contact_vertex[k], c->contact_a[k], c->contact_b[k], c->contact_c[k] };
 	float point[4][3];
 	for ( int r = 0; r < 4; ++r )
 	{
-		load3( s->x0, s->y0, s->z0, member[r], point[r] );
+		load3( s->x0, s->y0, s->z0, c->member[r][k], point[r] );
 	}
-	float u = c->bary_u[k], v = c->bary_v[k], w = c->bary_w[k];
+	float u = c->weight[0][k], v = c->weight[1][k], w = c->weight[2][k];
 	float ab[3], ac[3], d[3];
 	for ( int r = 0; r < 3; ++r )
 	{
-		ab[r] = point[2][r] - point[1][r], ac[r] = point[3][r] - point[1][r];
-		d[r] = point[0][r] - ( u * point[1][r] + v * point[2][r] + w * point[3][r] );
+		if ( vertex )
+		{
+			ab[r] = point[2][r] - point[1][r], ac[r] = point[3][r] - point[1][r];
+			d[r] = point[0][r] - ( u * point[1][r] + v * point[2][r] + w * point[3][r] );
+		}
+		else
+		{
+			ab[r] = point[1][r] - point[0][r], ac[r] = point[3][r] - point[2][r];
+			d[r] = ( ( 1.0f - u ) * point[0][r] + u * point[1][r] ) - ( ( 1.0f - v ) * point[2][r] + v * point[3][r] );
+		}
 	}
 	float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
 	float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
@@ -1319,7 +1998,9 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	int32_t contacts = collide->contact_count, touched = collide->touched_count;
+	/* the vertex–triangle contacts [0, vertex_contacts), then the edge–edge ones */
+	int32_t vertex_contacts = collide->contact_count, touched = collide->touched_count;
+	int32_t contacts = vertex_contacts + collide->edge_contact_count;
 	/* A few hundred contacts take less time than the barriers of a parallel response; the result
 	 * is the same either way. */
 	bool parallel = contacts >= RESPOND_PARALLEL;
@@ -1340,13 +2021,18 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			float* acc = collide->acc + 4 * (size_t) j;
 			acc[0] = acc[1] = acc[2] = acc[3] = 0.0f;
 		}
-		/* W = w_p + Σ w_k b_k² with the weights of detection, fixed for the response */
+		/* W = w_p + Σ w_k b_k² (or Σ over the edge ends of w times the squared weight on the
+		 * edge) with the weights of detection, fixed for the response */
 #pragma omp for schedule( static )
 		for ( int32_t k = 0; k < contacts; ++k )
 		{
-			float u = collide->bary_u[k], v = collide->bary_v[k], w = collide->bary_w[k];
-			float weight = inv_m[collide->contact_vertex[k]] + inv_m[collide->contact_a[k]] * u * u +
-						   inv_m[collide->contact_b[k]] * v * v + inv_m[collide->contact_c[k]] * w * w;
+			int32_t* const* m = collide->member;
+			float u = collide->weight[0][k], v = collide->weight[1][k], w = collide->weight[2][k];
+			float weight =
+				k < vertex_contacts
+					? inv_m[m[0][k]] + inv_m[m[1][k]] * u * u + inv_m[m[2][k]] * v * v + inv_m[m[3][k]] * w * w
+					: inv_m[m[0][k]] * ( 1.0f - u ) * ( 1.0f - u ) + inv_m[m[1][k]] * u * u +
+						  inv_m[m[2][k]] * ( 1.0f - v ) * ( 1.0f - v ) + inv_m[m[3][k]] * v * v;
 			collide->inv_weight[k] = weight > 0.0f ? 1.0f / weight : 0.0f;
 		}
 	}
@@ -1357,7 +2043,9 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	float h = params->thickness, h2 = h * h;
 	float tolerance = SERE_COLLIDE_TOLERANCE * h;
 	float inv_dt = 1.0f / params->dt;
-	int32_t blocks = ( contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
+	/* evaluation blocks of each kind, the edge–edge ones after the others */
+	int32_t vertex_blocks = ( vertex_contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
+	int32_t blocks = vertex_blocks + ( contacts - vertex_contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
 	int32_t remaining = 0, applied = 0;
 	int32_t* far = collide->far_count;
 	int threads = sere_team_default();
@@ -1374,7 +2062,10 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp for schedule( static )
 			for ( int32_t k = 0; k < contacts; ++k )
 			{
-				collide->contact_side[k] = collide->contacts[k].side = history_side( collide, state, k );
+				bool vertex = k < vertex_contacts;
+				float side = history_side( collide, state, k, vertex );
+				collide->contact_side[k] = side;
+				*( vertex ? &collide->contacts[k].side : &collide->edge_contacts[k - vertex_contacts].side ) = side;
 			}
 		}
 		for ( int32_t it = 0; it <= params->iterations; ++it )
@@ -1383,8 +2074,13 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp for schedule( static ) nowait
 			for ( int32_t block = 0; block < blocks; ++block )
 			{
-				int32_t end = ( block + 1 ) * EVALUATE_BLOCK < contacts ? ( block + 1 ) * EVALUATE_BLOCK : contacts;
-				mine += evaluate_contacts( collide, block * EVALUATE_BLOCK, end, h2, tolerance );
+				bool vertex = block < vertex_blocks;
+				int32_t begin =
+					vertex ? block * EVALUATE_BLOCK : vertex_contacts + ( block - vertex_blocks ) * EVALUATE_BLOCK;
+				int32_t last = vertex ? vertex_contacts : contacts;
+				int32_t end = begin + EVALUATE_BLOCK < last ? begin + EVALUATE_BLOCK : last;
+				mine += vertex ? evaluate_contacts( collide, begin, end, h2, tolerance )
+							   : evaluate_edges( collide, begin, end, h2, tolerance );
 			}
 			far[tid * FAR_STRIDE] = mine;
 #pragma omp barrier
@@ -1468,6 +2164,7 @@ sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const se
 		if ( round == 0 )
 		{
 			local.contacts = found;
+			local.edge_contacts = collide->edge_found < INT32_MAX ? (int32_t) collide->edge_found : INT32_MAX;
 		}
 		if ( status != SERE_OK )
 		{
@@ -1475,7 +2172,7 @@ sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const se
 		}
 		local.rounds += 1;
 		local.unresolved = 0;
-		if ( found == 0 )
+		if ( found == 0 && collide->edge_contact_count == 0 )
 		{
 			break;
 		}
@@ -1488,23 +2185,6 @@ sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const se
 		*stats = local;
 	}
 	return status;
-}
-
-/* The unit normal of triangle t and its three corners; zero normal when degenerate. */
-static inline void triangle_frame( const float* x, const float* y, const float* z, const int32_t* v, float a[3],
-								   float b[3], float c[3], float n[3] )
-{
-	load3( x, y, z, v[0], a );
-	load3( x, y, z, v[1], b );
-	load3( x, y, z, v[2], c );
-	float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
-	float ac[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
-	n[0] = ab[1] * ac[2] - ab[2] * ac[1];
-	n[1] = ab[2] * ac[0] - ab[0] * ac[2];
-	n[2] = ab[0] * ac[1] - ab[1] * ac[0];
-	float length = sqrtf( n[0] * n[0] + n[1] * n[1] + n[2] * n[2] );
-	float inv = length > 0.0f ? 1.0f / length : 0.0f;
-	n[0] *= inv, n[1] *= inv, n[2] *= inv;
 }
 
 sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,

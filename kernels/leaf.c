@@ -614,6 +614,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 			return status;
 		}
 		stats->contacts = collide_stats.contacts;
+		stats->edge_contacts = collide_stats.edge_contacts;
 		stats->unresolved = collide_stats.unresolved;
 		stats->collision_thickness = collide.thickness;
 #pragma omp parallel for simd schedule( static )

@@ -71,9 +71,10 @@ typedef struct sere_leaf_stats
 	int pbd_converged; /* the residual reached pbd.tolerance (and the ground was met) before the cap */
 	int32_t grounded;  /* particles (either layer) touching the ground after the frame */
 	int pbd_hit_cap;
-	int pbd_stalled; /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
-	int32_t contacts;
-	int32_t unresolved;		   /* contacts still short of the thickness after the pass */
+	int pbd_stalled;		   /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
+	int32_t contacts;		   /* vertex–triangle contacts found */
+	int32_t edge_contacts;	   /* edge–edge contacts found */
+	int32_t unresolved;		   /* contacts of either kind still short of the thickness after the pass */
 	float collision_thickness; /* the thickness the pass used */
 	int desiccated;			   /* a layer ran dry: flow and shrinkage have stopped (Sec. 6) */
 	/* Table 1's breakdown, milliseconds of wall time */

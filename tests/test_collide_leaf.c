@@ -1,5 +1,6 @@
 /* Self-collision on the shipped leaves (the issue's case): random smooth deformations and a
- * crumple of real leaf meshes; the BVH must find exactly the brute-force pair set. */
+ * crumple of real leaf meshes; the BVH must find exactly the brute-force pair sets, vertex–triangle
+ * and edge–edge. */
 #include "collide.h"
 #include "leafload.h"
 #include "model.h"
@@ -22,6 +23,47 @@ static int compare_pair( const void* pa, const void* pb )
 	const pair* a = pa;
 	const pair* b = pb;
 	return a->v != b->v ? ( a->v > b->v ) - ( a->v < b->v ) : ( a->t > b->t ) - ( a->t < b->t );
+}
+
+static int compare_quad( const void* pa, const void* pb )
+{
+	const int32_t *a = pa, *b = pb;
+	for ( int k = 0; k < 4; ++k )
+	{
+		if ( a[k] != b[k] )
+		{
+			return a[k] < b[k] ? -1 : 1;
+		}
+	}
+	return 0;
+}
+
+/* The edge–edge contacts of the last detection equal the brute-force pair set exactly; returns
+ * their count. */
+static int32_t check_edge_pairs( const sere_collide* collide, const float* x, const float* y, const float* z,
+								 const int32_t* tri, int32_t triangles, float thickness, const char* what )
+{
+	int32_t listed;
+	const sere_edge_contact* contacts = sere_collide_edge_contacts( collide, &listed );
+	int64_t capacity = 1 << 20;
+	int32_t* expected = malloc( sizeof( int32_t ) * 4 * (size_t) capacity );
+	int64_t brute = sere_collide_ref_edge_pairs( x, y, z, tri, triangles, thickness, expected, NULL, capacity );
+	cr_assert_leq( brute, capacity );
+	cr_expect_eq( listed, brute, "%s: BVH %d edge pairs, brute force %lld", what, listed, (long long) brute );
+	int32_t* found = malloc( sizeof( int32_t ) * 4 * (size_t) ( listed + 1 ) );
+	for ( int32_t c = 0; c < listed; ++c )
+	{
+		found[4 * c] = contacts[c].a0, found[4 * c + 1] = contacts[c].a1;
+		found[4 * c + 2] = contacts[c].b0, found[4 * c + 3] = contacts[c].b1;
+	}
+	qsort( found, (size_t) listed, 4 * sizeof( int32_t ), compare_quad );
+	for ( int32_t c = 0; c < listed && c < brute; ++c )
+	{
+		cr_assert( compare_quad( found + 4 * c, expected + 4 * c ) == 0, "%s: edge pair %d differs", what, c );
+	}
+	free( found );
+	free( expected );
+	return listed;
 }
 
 Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
@@ -106,9 +148,13 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 				cr_assert( found[c].v == expected[c].v && found[c].t == expected[c].t, "%s shape %d: pair %d differs",
 						   names[k], shape, c );
 			}
+			char what[64];
+			snprintf( what, sizeof( what ), "%s shape %d", names[k], shape );
+			int32_t edges = check_edge_pairs( collide, x, y, z, m.tri, m.triangle_count, thickness, what );
 			if ( shape == 1 )
 			{
 				cr_expect_gt( brute, 0, "%s: the roll should bring layers into contact", names[k] );
+				cr_expect_gt( edges, 0, "%s: the roll should bring edges across each other", names[k] );
 			}
 			free( found ), free( expected ), free( rv ), free( rt );
 			sere_collide_destroy( collide );
@@ -119,10 +165,10 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 	}
 }
 
-/* The crumpled shipped maple at a thickness that brings thousands of vertex–triangle pairs
- * together (past the parallel response's threshold, with vertices in dozens of contacts): the
- * contact list, the pushed positions and the velocities are bitwise the same for 1, 2 and 3
- * threads, and the list is still the brute-force pair set. */
+/* The crumpled shipped maple at a thickness that brings thousands of vertex–triangle and
+ * edge–edge pairs together (past the parallel response's threshold, with vertices in dozens of
+ * contacts): the contact lists, the pushed positions and the velocities are bitwise the same for
+ * 1, 2 and 3 threads, and the lists are still the brute-force pair sets. */
 Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 {
 	sere_leaf leaf;
@@ -149,7 +195,8 @@ Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 	int saved = omp_get_max_threads();
 	float* first = NULL;
 	sere_contact* first_contacts = NULL;
-	int32_t first_count = 0;
+	sere_edge_contact* first_edges = NULL;
+	int32_t first_count = 0, first_edge_count = 0;
 	size_t bytes = sizeof( float ) * 6 * (size_t) n;
 	for ( int threads = 1; threads <= 3; ++threads )
 	{
@@ -183,12 +230,22 @@ Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 			first_count = listed;
 			first_contacts = malloc( sizeof( sere_contact ) * (size_t) listed );
 			memcpy( first_contacts, contacts, sizeof( sere_contact ) * (size_t) listed );
+			first_edge_count =
+				check_edge_pairs( collide, state, state + n, state + 2 * n, m.tri, f, thickness, "crumpled maple" );
+			cr_assert_gt( first_edge_count, 1000, "%d edge contacts", first_edge_count );
+			first_edges = malloc( sizeof( sere_edge_contact ) * (size_t) first_edge_count );
+			memcpy( first_edges, sere_collide_edge_contacts( collide, &listed ),
+					sizeof( sere_edge_contact ) * (size_t) first_edge_count );
 		}
 		else
 		{
 			cr_assert_eq( listed, first_count );
 			cr_assert_eq( memcmp( contacts, first_contacts, sizeof( sere_contact ) * (size_t) listed ), 0,
 						  "%d threads: contact list differs", threads );
+			const sere_edge_contact* edges = sere_collide_edge_contacts( collide, &listed );
+			cr_assert_eq( listed, first_edge_count );
+			cr_assert_eq( memcmp( edges, first_edges, sizeof( sere_edge_contact ) * (size_t) listed ), 0,
+						  "%d threads: edge contact list differs", threads );
 		}
 		sere_collide_params p = sere_collide_params_default();
 		p.thickness = thickness;
@@ -209,7 +266,7 @@ Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 		sere_bvh_destroy( bvh );
 	}
 	omp_set_num_threads( saved );
-	free( first ), free( first_contacts );
+	free( first ), free( first_contacts ), free( first_edges );
 	free( rest[0] ), free( rest[1] ), free( rest[2] );
 	sere_model_destroy( &m );
 	sere_leaf_free( &leaf );

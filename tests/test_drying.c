@@ -261,6 +261,36 @@ Test( drying, grass_rolls_from_the_tip, .disabled = SERE_LONG_TEST_DISABLED )
 	dry_free( &run );
 }
 
+/* Item 3 where the leaf folds hardest: the maple-green maple shrunk to l_min = 0.7 (0.75 as well
+ * at 1500 points), dried to the end at 600, 800 and 1500 points, as `sere run maple.leaf --preset
+ * maple-green --points P --until-dry --set min_length_ratio=0.7` does. Its tip and margin fold
+ * over: with vertex–triangle contacts alone an outline edge passed through an edge of the fold
+ * (3 crossings at 800 points, 2 at 1500, every vertex farther than the thickness from the other
+ * sheet); the edge–edge contacts keep every frame free of crossings. */
+Test( drying, folding_maple_has_no_edge_crossings, .disabled = SERE_LONG_TEST_DISABLED )
+{
+	static const struct
+	{
+		int points;
+		const char* ratio;
+	} runs[] = { { 600, "min_length_ratio=0.7" },
+				 { 800, "min_length_ratio=0.7" },
+				 { 1500, "min_length_ratio=0.7" },
+				 { 1500, "min_length_ratio=0.75" } };
+	for ( size_t k = 0; k < sizeof( runs ) / sizeof( runs[0] ); ++k )
+	{
+		dry_run run;
+		const char* sets[] = { runs[k].ratio };
+		dry( "maple-green", "maple", runs[k].points, 8000, sets, 1, &run );
+		cr_log_info( "%d points, %s: %d frames, %lld crossings at most", runs[k].points, runs[k].ratio, run.frames,
+					 (long long) run.crossings_max );
+		cr_expect_gt( run.frames, 500, "%d points: dried in %d frames", runs[k].points, run.frames );
+		cr_expect_eq( run.crossings_max, 0, "%d points, %s: %lld crossings", runs[k].points, runs[k].ratio,
+					  (long long) run.crossings_max );
+		dry_free( &run );
+	}
+}
+
 static double slide( const dry_run* run )
 {
 	return hypot( run->dry.centroid[0] - run->fresh.centroid[0], run->dry.centroid[1] - run->fresh.centroid[1] );

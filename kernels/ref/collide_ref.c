@@ -3,6 +3,7 @@
 #include "collide.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* Whether vertex i shares an edge with a corner of the triangle v: some triangle holds both. */
 static int near_corner( const int32_t* tri, int32_t triangle_count, int32_t i, const int32_t* v )
@@ -42,7 +43,8 @@ int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, 
 			float b[3] = { x[v[1]], y[v[1]], z[v[1]] };
 			float c[3] = { x[v[2]], y[v[2]], z[v[2]] };
 			float w[3];
-			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 && !near_corner( tri, triangle_count, i, v ) )
+			if ( sere_closest_point_triangle( p, a, b, c, w ) < h2 &&
+				 ( ( w[0] > 0.0f && w[1] > 0.0f && w[2] > 0.0f ) || !near_corner( tri, triangle_count, i, v ) ) )
 			{
 				if ( count < capacity )
 				{
@@ -70,6 +72,107 @@ static double segment_distance2( const double p[3], const double a[3], const dou
 	t = t < 0.0 ? 0.0 : ( t > 1.0 ? 1.0 : t );
 	double d[3] = { ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2] };
 	return dot3( d, d );
+}
+
+static int compare_edge( const void* a, const void* b )
+{
+	const int32_t *u = a, *v = b;
+	return u[0] != v[0] ? ( u[0] > v[0] ) - ( u[0] < v[0] ) : ( u[1] > v[1] ) - ( u[1] < v[1] );
+}
+
+int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float* z, const int32_t* tri,
+									 int32_t triangle_count, float thickness, int32_t* ends, float* weights,
+									 int64_t capacity )
+{
+	/* every triangle side, lower vertex first, sorted, repeats and zero-length sides dropped */
+	int32_t* edge = malloc( sizeof( int32_t ) * 6 * ( (size_t) triangle_count + 1 ) );
+	if ( edge == NULL )
+	{
+		return -1;
+	}
+	int64_t sides = 0;
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		for ( int r = 0; r < 3; ++r )
+		{
+			int32_t i = tri[3 * t + r], j = tri[3 * t + ( r + 1 ) % 3];
+			if ( i != j )
+			{
+				edge[2 * sides] = i < j ? i : j, edge[2 * sides + 1] = i < j ? j : i;
+				sides += 1;
+			}
+		}
+	}
+	qsort( edge, (size_t) sides, 2 * sizeof( int32_t ), compare_edge );
+	int64_t edges = 0;
+	for ( int64_t k = 0; k < sides; ++k )
+	{
+		if ( edges == 0 || compare_edge( edge + 2 * k, edge + 2 * ( edges - 1 ) ) != 0 )
+		{
+			edge[2 * edges] = edge[2 * k], edge[2 * edges + 1] = edge[2 * k + 1];
+			edges += 1;
+		}
+	}
+	float h2 = thickness * thickness;
+	int64_t count = 0;
+	for ( int64_t e = 0; e < edges; ++e )
+	{
+		int32_t a0 = edge[2 * e], a1 = edge[2 * e + 1];
+		float p0[3] = { x[a0], y[a0], z[a0] }, p1[3] = { x[a1], y[a1], z[a1] };
+		for ( int64_t f = e + 1; f < edges; ++f )
+		{
+			int32_t b0 = edge[2 * f], b1 = edge[2 * f + 1];
+			if ( a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1 )
+			{
+				continue;
+			}
+			float q0[3] = { x[b0], y[b0], z[b0] }, q1[3] = { x[b1], y[b1], z[b1] };
+			float w[2];
+			float d2 = sere_closest_points_segments( p0, p1, q0, q1, w );
+			if ( d2 < h2 && w[0] > 0.0f && w[0] < 1.0f && w[1] > 0.0f && w[1] < 1.0f )
+			{
+				if ( count < capacity )
+				{
+					ends[4 * count] = a0, ends[4 * count + 1] = a1, ends[4 * count + 2] = b0, ends[4 * count + 3] = b1;
+					if ( weights != NULL )
+					{
+						weights[2 * count] = w[0], weights[2 * count + 1] = w[1];
+					}
+				}
+				count += 1;
+			}
+		}
+	}
+	free( edge );
+	return count;
+}
+
+double sere_collide_ref_segment_distance2( const double p0[3], const double p1[3], const double q0[3],
+										   const double q1[3] )
+{
+	double u[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+	double v[3] = { q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2] };
+	double w[3] = { p0[0] - q0[0], p0[1] - q0[1], p0[2] - q0[2] };
+	double a = dot3( u, u ), b = dot3( u, v ), c = dot3( v, v ), d = dot3( u, w ), e = dot3( v, w );
+	double denom = a * c - b * b;
+	if ( denom > 1e-12 * a * c )
+	{
+		/* Cramer's rule for the lines' closest points */
+		double s = ( b * e - c * d ) / denom, t = ( a * e - b * d ) / denom;
+		if ( s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0 )
+		{
+			double g[3] = { w[0] + s * u[0] - t * v[0], w[1] + s * u[1] - t * v[1], w[2] + s * u[2] - t * v[2] };
+			return dot3( g, g );
+		}
+	}
+	double best = segment_distance2( p0, q0, q1 );
+	double other[3] = { segment_distance2( p1, q0, q1 ), segment_distance2( q0, p0, p1 ),
+						segment_distance2( q1, p0, p1 ) };
+	for ( int k = 0; k < 3; ++k )
+	{
+		best = other[k] < best ? other[k] : best;
+	}
+	return best;
 }
 
 double sere_collide_ref_distance2( const double p[3], const double a[3], const double b[3], const double c[3] )

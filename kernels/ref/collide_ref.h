@@ -10,12 +10,30 @@ extern "C"
 #endif
 
 /* Brute force over all vertex_count × triangle_count pairs: every (vertex, triangle) with the
- * vertex neither a corner of the triangle nor joined by an edge to one, and squared distance
- * (sere_closest_point_triangle, the same float test the BVH search applies) below thickness². Pairs come vertex-major,
- * triangles ascending; the first min(count, capacity) are written and the count is returned. */
+ * vertex not a corner of the triangle and squared distance (sere_closest_point_triangle, the same
+ * float test the BVH search applies) below thickness², where a vertex joined by an edge to a corner
+ * counts only when its closest point lies inside the face (all three weights positive). Pairs
+ * come vertex-major, triangles ascending; the first min(count, capacity) are written and the
+ * count is returned. */
 int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, int32_t vertex_count,
 								const int32_t* tri, int32_t triangle_count, float thickness, int32_t* vertex,
 								int32_t* triangle, int64_t capacity );
+
+/* Brute force over all pairs of the triangles' distinct edges: every two edges sharing no vertex
+ * whose closest points (sere_closest_points_segments, the same float test the BVH search applies)
+ * lie strictly inside both and are closer than thickness. Edges are taken with their lower vertex
+ * first and ordered by it, then by the higher; pair (e, f) has e before f. For each pair ends gets
+ * e's and f's ends (4 entries) and weights (may be NULL) the closest points' parameters s, t (2
+ * entries), for the first min(count, capacity) pairs, in order of e, then f; returns the count. */
+int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float* z, const int32_t* tri,
+									 int32_t triangle_count, float thickness, int32_t* ends, float* weights,
+									 int64_t capacity );
+
+/* Squared distance between the segments p0 p1 and q0 q1 in double by a different route than the
+ * kernel's: the closest points of the two lines when both fall inside the segments, else the
+ * nearest of the four end-to-segment distances. */
+double sere_collide_ref_segment_distance2( const double p0[3], const double p1[3], const double q0[3],
+										   const double q1[3] );
 
 /* Squared distance from p to triangle abc in double by a different route than the kernel's:
  * the plane projection when it falls inside the triangle, else the nearest of the three edges. */
