@@ -74,7 +74,7 @@ typedef struct sere_collide_params
 	float dt;			  /* time step: velocities change by Δx / dt */
 	int32_t iterations;	  /* Jacobi response iterations per round (stops early once all are resolved) */
 	int32_t rounds;		  /* detect + respond rounds; later rounds catch contacts made by the push-out */
-	float relaxation;	  /* ω of the averaged update, in (0, 2]: see sere_collide_respond */
+	float relaxation;	  /* ω of the shared update, in (0, 2]: see sere_collide_respond */
 	double rebuild_ratio; /* BVH quality ratio that triggers a rebuild (SERE_BVH_REBUILD_RATIO) */
 } sere_collide_params;
 
@@ -136,10 +136,12 @@ const sere_edge_contact* sere_collide_edge_contacts( const sere_collide* collide
  * and corner k by −w_k b_k λ n̂. An edge–edge contact is the same constraint between
  * p = (1 − s) a0 + s a1 and q = (1 − t) b0 + t b1 along n = (a1 − a0) × (b1 − b0), with
  * W = w_a0 (1 − s)² + w_a1 s² + w_b0 (1 − t)² + w_b1 t²: a0 moves by w_a0 (1 − s) λ n̂, b0 by
- * −w_b0 (1 − t) λ n̂, and so on. Every vertex then gathers the corrections of its pushing
- * contacts (as vertex or corner) in contact order and moves by ω times their mean (Jacobi
- * averaging, Macklin et al. 2014: never scattered in thread order, so the result is bitwise
- * the same for every thread count). ω = 1 solves an isolated contact exactly; up to 2
+ * −w_b0 (1 − t) λ n̂, and so on. Each pushing contact's correction is divided by the largest
+ * number of pushing contacts any of its four members takes part in, so that every member takes
+ * the same share and the contact moves no momentum (dividing each vertex's sum by its own count,
+ * Macklin et al. 2014, does); every vertex then gathers those corrections in contact order and
+ * moves by ω times their sum (never scattered in thread order, so the result is bitwise the same
+ * for every thread count). ω = 1 solves an isolated contact exactly; up to 2
  * converges faster where contacts crowd (a U-fold: 4 iterations instead of 16) but overshoots
  * isolated ones by ω − 1. Iterations stop once every contact is within
  * SERE_COLLIDE_TOLERANCE. Velocities change by the total Δx / dt, as the paper's PBD does
@@ -176,9 +178,15 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 /* Eq. 14 where the collision response acted (Sec. 5.3: "when a particle on the triangle layer
  * passes through the Voronoi layer as a result of a displacement introduced to correct a
  * self-collision, the positions and velocities of Voronoi particles are also modified"): only
- * for triangles with a corner flagged in moved (per triangle-layer particle), x_t^V is set to
- * the centroid + h_t n_t and its velocity changed by the displacement over dt. Triangles the
- * response left alone keep the Voronoi particle the projection placed. Unlike Eq. 14 applied to
+ * for triangles with a corner flagged in moved (per triangle-layer particle) whose Voronoi
+ * particle the move has left on the wrong side of the triangle (its height along n_t no longer
+ * has the sign of h_t, or is 0), x_t^V is set to the centroid + h_t n_t and its velocity changed
+ * by the displacement over dt. Every other triangle keeps the Voronoi particle the projection
+ * placed, and the next frame's link springs bring it back to its thickness with the triangle's
+ * corners sharing the push. Restoring every triangle with a moved corner teleported deep
+ * Voronoi particles by up to 2.5 times the push (a corner pushed by δ turns n by about
+ * δ / spacing, and h_vein is 2.5 spacings), and those one-sided moves carried a green maple's
+ * centre of mass 0.01 L over its run. Unlike Eq. 14 applied to
  * every triangle with the corners' mean velocity, this injects no velocity where nothing
  * collided: that version, on a curled leaf, lifted the whole leaf frame after frame. Errors as
  * sere_collide_restore_voronoi (positions and velocities of the corners are not checked), plus
