@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "build.h"
 #include "commands.h"
+#include "glb.h"
 #include "io.h"
 #include "leaf.h"
 #include "leafpics.h"
@@ -137,6 +138,7 @@ static void litter_help( void )
 			"  leaves/leaf_NNNNN.ply  each leaf's final triangle layer in the scene, as soon as it is done\n"
 			"                         (x, y, z, color, relative_water per vertex)\n"
 			"  litter.ply             every leaf in index order, one mesh\n"
+			"  litter.glb             the same as glTF 2.0 binary (positions, normals, colors, indices)\n"
 			"  litter.png             the scene from an oblique camera, with the ground and shadows\n"
 			"  summary.json           per leaf: index, species, preset, points, frames, ms, status; totals\n\n"
 			"A rerun into the same DIR with the same options keeps the leaves already written and gives the\n"
@@ -577,7 +579,7 @@ int sere_cmd_litter( int argc, char** argv )
 		fprintf( stderr, "sere litter: cannot create %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
-	static const char* const outputs[] = { "litter.ply", "litter.png", "summary.json" };
+	static const char* const outputs[] = { "litter.ply", "litter.glb", "litter.png", "summary.json" };
 	if ( sere_check_outputs( o.out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere litter: %s\n", err );
@@ -636,6 +638,18 @@ int sere_cmd_litter( int argc, char** argv )
 		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
 		status = 1;
 	}
+	snprintf( path, sizeof( path ), "%s/litter.glb", o.out );
+	sere_glb_mesh glb = { scene.x, scene.y, scene.z, scene.rgb, scene.vertices, scene.tri, scene.triangles };
+	if ( scene.vertices == 0 )
+	{
+		/* glTF has no empty mesh; and no scene of an earlier run is left beside this one */
+		remove( path );
+	}
+	else if ( sere_write_glb( path, &glb, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere litter: %s\n", err );
+		status = 1;
+	}
 	snprintf( path, sizeof( path ), "%s/litter.png", o.out );
 	if ( scene.vertices == 0 )
 	{
@@ -675,7 +689,8 @@ int sere_cmd_litter( int argc, char** argv )
 	}
 	printf( "litter: %ld leaves (%ld failed), %d vertices, %d triangles, %.2f s on %d thread%s\n", o.leaves, failed,
 			scene.vertices, scene.triangles, seconds, bound, bound == 1 ? "" : "s" );
-	printf( "  %s/litter.ply, %s/litter.png, %s/summary.json, leaves in %s/leaves\n", o.out, o.out, o.out, o.out );
+	printf( "  %s/litter.ply, %s/litter.glb, %s/litter.png, %s/summary.json, leaves in %s/leaves\n", o.out, o.out,
+			o.out, o.out, o.out );
 	mesh_free( &scene );
 	free( results );
 	return status;

@@ -1,11 +1,15 @@
 /* sere litter as a user meets it (issue #21): the scene depends on the seed alone, not on the
  * thread count; a rerun after a crash redoes only the missing leaves and gives the same scene;
- * one leaf's failure costs no other. Small leaves (400 points, 20 frames) keep it to seconds;
- * SERE_BIN names the binary under test. */
+ * one leaf's failure costs no other; a real glTF reader (assimp) opens litter.glb. Small leaves (400 points, 20 frames)
+ * keep it to seconds; SERE_BIN names the binary under test. */
 #define _DEFAULT_SOURCE
 #include "fixture.h"
 
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
 #include <criterion/criterion.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -200,4 +204,54 @@ Test( litter, bad_options_one_clear_line )
 	expect_error( "litter --leaves 2 --points", "--points needs a value" );
 	expect_error( "litter --leaves 2 --colour red", "unknown option '--colour'" );
 	expect_error( "litter --leaves 2 maple", "unexpected argument 'maple'" );
+}
+
+Test( litter, glb_opens_in_assimp_with_the_ply_counts )
+{
+	char dir[64], err[4096], path[160];
+	make_dir( dir, sizeof( dir ), "glb" );
+	cr_assert_eq( litter( dir, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	/* the counts and the first vertex of litter.ply, the scene the .glb must hold */
+	snprintf( path, sizeof( path ), "%s/litter.ply", dir );
+	long size;
+	char* ply = read_all( path, &size );
+	cr_assert_not_null( ply );
+	int vertices = 0, triangles = 0;
+	const char* at = strstr( ply, "element vertex " );
+	cr_assert( at != NULL && sscanf( at, "element vertex %d", &vertices ) == 1 );
+	at = strstr( ply, "element face " );
+	cr_assert( at != NULL && sscanf( at, "element face %d", &triangles ) == 1 );
+	const char* body = strstr( ply, "end_header\n" );
+	cr_assert_not_null( body );
+	float first[3];
+	memcpy( first, body + strlen( "end_header\n" ), sizeof( first ) );
+	free( ply );
+	cr_assert( vertices > 0 && triangles > 0 );
+
+	snprintf( path, sizeof( path ), "%s/litter.glb", dir );
+	const struct aiScene* scene = aiImportFile( path, aiProcess_ValidateDataStructure );
+	cr_assert_not_null( scene, "assimp cannot open %s: %s", path, aiGetErrorString() );
+	cr_assert_eq( scene->mNumMeshes, 1 );
+	const struct aiMesh* mesh = scene->mMeshes[0];
+	cr_expect_eq( (int) mesh->mNumVertices, vertices );
+	cr_expect_eq( (int) mesh->mNumFaces, triangles );
+	cr_expect_not_null( mesh->mNormals );
+	cr_expect_not_null( mesh->mColors[0], "no COLOR_0" );
+	int bad_faces = 0;
+	for ( unsigned f = 0; f < mesh->mNumFaces; ++f )
+	{
+		bad_faces += mesh->mFaces[f].mNumIndices != 3;
+	}
+	cr_expect_eq( bad_faces, 0 );
+	cr_expect( mesh->mVertices[0].x == first[0] && mesh->mVertices[0].y == first[1] && mesh->mVertices[0].z == first[2],
+			   "first vertex (%g, %g, %g), the PLY's (%g, %g, %g)", (double) mesh->mVertices[0].x,
+			   (double) mesh->mVertices[0].y, (double) mesh->mVertices[0].z, (double) first[0], (double) first[1],
+			   (double) first[2] );
+	if ( mesh->mNormals != NULL )
+	{
+		const struct aiVector3D n = mesh->mNormals[0];
+		cr_expect_float_eq( sqrt( (double) n.x * n.x + (double) n.y * n.y + (double) n.z * n.z ), 1.0, 1e-5 );
+	}
+	aiReleaseImport( scene );
+	remove_tree( dir );
 }
