@@ -170,8 +170,9 @@ $(LIB_SO): $(LIB_SO_MAJOR)
 $(SERE): $(MAIN_OBJ) $(HARNESS_OBJ) $(LIB_A)
 	$(CC) -fopenmp $(LDSAN) -o $@ $(MAIN_OBJ) $(HARNESS_OBJ) $(LIB_A) $(LIBS_HARNESS)
 
+# assimp: the tests open sere litter's .glb with a real glTF reader.
 $(TESTS): $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A)
-	$(CC) -fopenmp $(LDSAN) -o $@ $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A) -lcriterion $(LIBS_HARNESS)
+	$(CC) -fopenmp $(LDSAN) -o $@ $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A) -lcriterion -lassimp $(LIBS_HARNESS)
 
 $(BENCHX): $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A)
 	$(CXX) -fopenmp $(LDSAN) -o $@ $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A) -lbenchmark -lpthread -lembree3 $(LIBS_HARNESS)

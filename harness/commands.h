@@ -9,3 +9,4 @@ int sere_cmd_table1( int argc, char** argv );
 int sere_cmd_topo( int argc, char** argv );
 int sere_cmd_season( int argc, char** argv );
 int sere_cmd_wilt( int argc, char** argv );
+int sere_cmd_litter( int argc, char** argv );

@@ -21,6 +21,8 @@ static const command commands[] = {
 	{ "season", sere_cmd_season,
 	  "seasonal leaves on an L-system tree (seed 002): Markov chain of leaf states under a weather schedule" },
 	{ "wilt", sere_cmd_wilt, "wilt a leaf or a plant on a stem (venation skeleton, seed 003): PLY/VTK/PNG frames" },
+	{ "litter", sere_cmd_litter,
+	  "N leaves drying on the ground as one scene: per-leaf files, resumable, a PLY, a picture" },
 	{ "topo", sere_cmd_topo, "show the hwloc topology and how threads are bound" },
 };
 

@@ -44,7 +44,7 @@ Test( cli, bad_input_one_clear_line )
 
 Test( cli, help_describes_every_command )
 {
-	const char* commands[] = { "model", "run", "osmosis", "table1", "topo", "wilt", "season" };
+	const char* commands[] = { "model", "run", "osmosis", "table1", "topo", "wilt", "season", "litter" };
 	for ( size_t k = 0; k < sizeof( commands ) / sizeof( commands[0] ); ++k )
 	{
 		char command[512], out[8192];

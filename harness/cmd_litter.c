@@ -1,0 +1,697 @@
+/* sere litter — N leaves drying on the ground as one autumn scene (issue #21). Every leaf is
+ * drawn from (seed, index) alone and dried as `sere run` dries it, then written on its own, so a
+ * rerun into the same directory redoes only the leaves that are missing, and one leaf's failure
+ * costs no other leaf. */
+#define _POSIX_C_SOURCE 200809L
+#include "build.h"
+#include "commands.h"
+#include "glb.h"
+#include "io.h"
+#include "leaf.h"
+#include "leafpics.h"
+#include "params.h"
+#include "render.h"
+#include "topo.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* The shipped leaves that have a preset, the species a litter draws from. */
+static const char* const species_names[] = { "maple", "maple", "plane", "wisteria", "grass" };
+static const char* const preset_names[] = { "maple-red", "maple-green", "plane-tree", "wisteria", "grass" };
+enum
+{
+	species_count = sizeof( species_names ) / sizeof( species_names[0] )
+};
+
+/* One leaf of the scene as its seed and index draw it. */
+typedef struct litter_draw
+{
+	int species;
+	double scale, angle, x, y;
+} litter_draw;
+
+/* What the leaf files must say about the run that wrote them to be reused. */
+typedef struct litter_options
+{
+	const char* out;
+	long leaves, seed, points, frames;
+} litter_options;
+
+/* A leaf's outcome: dried now, reused from an earlier run, or failed with a reason. */
+typedef enum litter_state
+{
+	LITTER_FAILED,
+	LITTER_DRIED,
+	LITTER_RESUMED
+} litter_state;
+
+typedef struct litter_result
+{
+	litter_state state;
+	int32_t vertices, triangles;
+	long frames;
+	double ms;
+	char error[4400];
+} litter_result;
+
+/* A leaf's final triangle layer in the scene, or the whole scene. */
+typedef struct litter_mesh
+{
+	float *x, *y, *z, *rwc;
+	uint8_t* rgb;
+	int32_t* tri;
+	int32_t vertices, triangles;
+} litter_mesh;
+
+static void mesh_free( litter_mesh* m )
+{
+	free( m->x ), free( m->y ), free( m->z ), free( m->rwc ), free( m->rgb ), free( m->tri );
+	*m = ( litter_mesh ){ 0 };
+}
+
+static int mesh_alloc( litter_mesh* m, int32_t vertices, int32_t triangles )
+{
+	size_t n = (size_t) vertices > 0 ? (size_t) vertices : 1, t = (size_t) triangles > 0 ? (size_t) triangles : 1;
+	*m = ( litter_mesh ){ malloc( sizeof( float ) * n ),
+						  malloc( sizeof( float ) * n ),
+						  malloc( sizeof( float ) * n ),
+						  malloc( sizeof( float ) * n ),
+						  malloc( 3 * n ),
+						  malloc( sizeof( int32_t ) * 3 * t ),
+						  vertices,
+						  triangles };
+	if ( !m->x || !m->y || !m->z || !m->rwc || !m->rgb || !m->tri )
+	{
+		mesh_free( m );
+		return -1;
+	}
+	return 0;
+}
+
+/* splitmix64: a leaf's numbers come from its own stream, so they do not depend on how many
+ * leaves there are, which were dried before it, or on which thread. */
+static uint64_t next_u64( uint64_t* state )
+{
+	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
+	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
+	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
+	return z ^ ( z >> 31 );
+}
+
+static double next_unit( uint64_t* state )
+{
+	return (double) ( next_u64( state ) >> 11 ) * ( 1.0 / 9007199254740992.0 );
+}
+
+/* The leaves fall on a square that grows with their number, about two leaves' area (a leaf is
+ * about one unit across) of room each, so a litter of any size is dense but mostly one layer:
+ * leaves do not collide with each other. */
+static litter_draw draw_leaf( long seed, long index, long leaves )
+{
+	uint64_t state = (uint64_t) seed;
+	state = next_u64( &state ) ^ ( (uint64_t) index * 0xd1b54a32d192ed03ull );
+	litter_draw d;
+	d.species = (int) ( next_unit( &state ) * species_count );
+	d.scale = 0.7 + 0.6 * next_unit( &state );
+	d.angle = 2.0 * 3.14159265358979323846 * next_unit( &state );
+	double side = 1.5 * sqrt( (double) leaves );
+	d.x = side * ( next_unit( &state ) - 0.5 );
+	d.y = side * ( next_unit( &state ) - 0.5 );
+	return d;
+}
+
+static void litter_help( void )
+{
+	printf( "usage: sere litter --leaves N --seed S --out DIR [options]\n\n"
+			"Dries N leaves lying on the ground (gravity_z = -9.8, ground at z = 0), each as sere run dries it,\n"
+			"until it is desiccated or F frames. Each leaf's species and preset (maple/maple-red,\n"
+			"maple/maple-green, plane/plane-tree, wisteria, grass), size, turn about z and place on the ground\n"
+			"come from S and the leaf's index alone. Writes, in DIR:\n"
+			"  leaves/leaf_NNNNN.ply  each leaf's final triangle layer in the scene, as soon as it is done\n"
+			"                         (x, y, z, color, relative_water per vertex)\n"
+			"  litter.ply             every leaf in index order, one mesh\n"
+			"  litter.glb             the same as glTF 2.0 binary (positions, normals, colors, indices)\n"
+			"  litter.png             the scene from an oblique camera, with the ground and shadows\n"
+			"  summary.json           per leaf: index, species, preset, points, frames, ms, status; totals\n\n"
+			"A rerun into the same DIR with the same options keeps the leaves already written and gives the\n"
+			"same litter.ply. A leaf that fails costs no other: it is reported (stderr, summary.json) and the\n"
+			"command exits 1.\n\n"
+			"options:\n"
+			"  --leaves N    number of leaves (required)\n"
+			"  --seed S      the scene's seed, a whole number >= 0 (default 1)\n"
+			"  --out DIR     output directory (default out/litter)\n"
+			"  --points P    triangle-layer points per leaf (default 600; the grass needs 390 for its outline and\n"
+			"                veins, the plane tree 187: fewer fail those leaves, naming a count that builds)\n"
+			"  --frames F    at most F frames per leaf (default 400)\n"
+			"  --threads T   leaves dried at once, threads bound to cores with hwloc (default: one per core)\n" );
+}
+
+static const char* ply_vertex_properties = "property float x\nproperty float y\nproperty float z\n"
+										   "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+										   "property float relative_water\n";
+
+/* A PLY header for vertices and triangles with a comment line; the leaf files and litter.ply
+ * share it, and reading a leaf file rebuilds it to check every byte. */
+static int ply_header( char* out, size_t size, const char* comment, int32_t vertices, int32_t triangles )
+{
+	return snprintf( out, size,
+					 "ply\nformat binary_little_endian 1.0\ncomment %s\nelement vertex %d\n%s"
+					 "element face %d\nproperty list uchar int vertex_indices\nend_header\n",
+					 comment, vertices, ply_vertex_properties, triangles );
+}
+
+/* Vertex records of 19 bytes (3 floats, 3 bytes, 1 float) then triangles of 13 (count 3 and
+ * 3 ints, offset by base), little endian like every machine sere targets. */
+static void ply_body( FILE* f, const litter_mesh* m )
+{
+	for ( int32_t i = 0; i < m->vertices; ++i )
+	{
+		float p[3] = { m->x[i], m->y[i], m->z[i] };
+		fwrite( p, sizeof( float ), 3, f );
+		fwrite( m->rgb + 3 * i, 1, 3, f );
+		fwrite( m->rwc + i, sizeof( float ), 1, f );
+	}
+}
+
+static void ply_faces( FILE* f, const litter_mesh* m, int32_t base )
+{
+	for ( int32_t t = 0; t < m->triangles; ++t )
+	{
+		uint8_t three = 3;
+		int32_t v[3] = { m->tri[3 * t] + base, m->tri[3 * t + 1] + base, m->tri[3 * t + 2] + base };
+		fwrite( &three, 1, 1, f );
+		fwrite( v, sizeof( int32_t ), 3, f );
+	}
+}
+
+/* The comment that ties a leaf file to the run options; frames and ms are what the summary
+ * reports for a leaf kept from an earlier run. */
+static void leaf_comment( char* out, size_t size, const litter_options* o, long index, long frames, double ms )
+{
+	snprintf( out, size, "sere litter seed %ld leaf %ld points %ld frames_max %ld frames %ld ms %.3f", o->seed, index,
+			  o->points, o->frames, frames, ms );
+}
+
+static void leaf_path( char* out, size_t size, const litter_options* o, long index )
+{
+	snprintf( out, size, "%s/leaves/leaf_%05ld.ply", o->out, index );
+}
+
+/* Reads a leaf file written by this command with the same options; 0 with the mesh (when m
+ * is not NULL), its frames and ms, or -1 when it is missing, cut short, or from other options. */
+static int read_leaf( const litter_options* o, long index, litter_mesh* m, litter_result* r )
+{
+	char path[4200];
+	leaf_path( path, sizeof( path ), o, index );
+	FILE* f = fopen( path, "rb" );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	char head[2048];
+	size_t got = fread( head, 1, sizeof( head ) - 1, f );
+	head[got] = '\0';
+	char* end = strstr( head, "end_header\n" );
+	long seed, leaf, points, frames_max, frames;
+	double ms;
+	int32_t vertices, triangles;
+	struct stat info;
+	if ( end == NULL || fstat( fileno( f ), &info ) != 0 ||
+		 sscanf( head,
+				 "ply\nformat binary_little_endian 1.0\ncomment sere litter seed %ld leaf %ld points %ld frames_max "
+				 "%ld frames %ld ms %lf\nelement vertex %d",
+				 &seed, &leaf, &points, &frames_max, &frames, &ms, &vertices ) != 7 ||
+		 seed != o->seed || leaf != index || points != o->points || frames_max != o->frames || vertices < 3 )
+	{
+		fclose( f );
+		return -1;
+	}
+	const char* face = strstr( head, "element face " );
+	char expected[2048], comment[256];
+	size_t header = (size_t) ( end - head ) + strlen( "end_header\n" );
+	if ( face == NULL || sscanf( face, "element face %d", &triangles ) != 1 || triangles < 1 )
+	{
+		fclose( f );
+		return -1;
+	}
+	leaf_comment( comment, sizeof( comment ), o, index, frames, ms );
+	/* every header byte as this command writes it, and exactly the body it announces */
+	if ( (size_t) ply_header( expected, sizeof( expected ), comment, vertices, triangles ) != header ||
+		 memcmp( expected, head, header ) != 0 ||
+		 (long long) info.st_size != (long long) header + 19ll * vertices + 13ll * triangles )
+	{
+		fclose( f );
+		return -1;
+	}
+	r->vertices = vertices, r->triangles = triangles, r->frames = frames, r->ms = ms;
+	int failed = 0;
+	if ( m != NULL )
+	{
+		failed = mesh_alloc( m, vertices, triangles ) != 0 || fseek( f, (long) header, SEEK_SET ) != 0;
+		for ( int32_t i = 0; i < vertices && !failed; ++i )
+		{
+			float p[3];
+			failed = fread( p, sizeof( float ), 3, f ) != 3 || fread( m->rgb + 3 * i, 1, 3, f ) != 3 ||
+					 fread( m->rwc + i, sizeof( float ), 1, f ) != 1;
+			m->x[i] = p[0], m->y[i] = p[1], m->z[i] = p[2];
+		}
+		for ( int32_t t = 0; t < triangles && !failed; ++t )
+		{
+			uint8_t three;
+			failed =
+				fread( &three, 1, 1, f ) != 1 || three != 3 || fread( m->tri + 3 * t, sizeof( int32_t ), 3, f ) != 3;
+			for ( int k = 0; k < 3 && !failed; ++k )
+			{
+				failed = m->tri[3 * t + k] < 0 || m->tri[3 * t + k] >= vertices;
+			}
+		}
+		if ( failed && m->x != NULL )
+		{
+			mesh_free( m );
+		}
+	}
+	fclose( f );
+	return failed ? -1 : 0;
+}
+
+static int leaf_fail( litter_result* r, const char* text )
+{
+	snprintf( r->error, sizeof( r->error ), "%s", text );
+	r->state = LITTER_FAILED;
+	return -1;
+}
+
+/* Dries leaf index as sere run would (harness/cmd_run.c) on the ground, places it in the scene
+ * and writes its file; 0, or -1 with the reason in r->error. */
+static int dry_leaf( const litter_options* o, long index, litter_result* r )
+{
+	litter_draw d = draw_leaf( o->seed, index, o->leaves );
+	char err[4400], path[4200], name[128];
+	snprintf( name, sizeof( name ), "leaf_%05ld.ply", index );
+	char leaves_dir[4200];
+	snprintf( leaves_dir, sizeof( leaves_dir ), "%s/leaves", o->out );
+	const char* const names[] = { name };
+	if ( sere_check_outputs( leaves_dir, names, 1, err, sizeof( err ) ) != 0 )
+	{
+		return leaf_fail( r, err );
+	}
+	sere_sim_params params = sere_sim_params_default();
+	if ( sere_params_apply( &params, preset_names[d.species], NULL, 0, err, sizeof( err ) ) != 0 )
+	{
+		return leaf_fail( r, err );
+	}
+	/* the litter lies on the ground whatever the preset says: under gravity, on z = 0 */
+	params.gravity[0] = 0.0, params.gravity[1] = 0.0, params.gravity[2] = -9.8;
+	params.ground = 0.0;
+	char relative[64];
+	snprintf( relative, sizeof( relative ), "leaves/%s.leaf", species_names[d.species] );
+	if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )
+	{
+		snprintf( err, sizeof( err ), "cannot find %s (in SERE_DATA, ./data or the install prefix)", relative );
+		return leaf_fail( r, err );
+	}
+	double start = sere_now();
+	sere_model model;
+	sere_build_report report;
+	if ( sere_harness_build( path, -1, -1, o->points, &params, &model, &report, name, sizeof( name ), err,
+							 sizeof( err ) ) != 0 )
+	{
+		return leaf_fail( r, err );
+	}
+	if ( params.face_down != 0.0 )
+	{
+		sere_model_mirror_z( &model );
+	}
+	sere_model_rest_on( &model, (float) params.ground );
+	sere_leaf_sim* sim = NULL;
+	sere_status status = sere_leaf_create( &model, &sim );
+	sere_leaf_params leaf = sere_run_leaf_params( &params );
+	if ( status == SERE_OK && ( params.crease != 0.0 || params.curl != 0.0 ) )
+	{
+		/* Sec. 3.1, as sere run shapes a leaf before it dries */
+		sere_pbd_params shaping = leaf.pbd;
+		shaping.max_iterations = 2000;
+		status = sere_leaf_shape_initial( sim, (float) params.crease, (float) params.curl, &shaping );
+	}
+	long frame = 0;
+	while ( status == SERE_OK && frame < o->frames )
+	{
+		sere_leaf_stats stats;
+		status = sere_leaf_step( sim, &leaf, &stats );
+		frame += status == SERE_OK;
+		if ( status == SERE_OK && stats.desiccated )
+		{
+			break;
+		}
+	}
+	int32_t n = model.triangle_particles;
+	litter_mesh m = { 0 };
+	if ( status == SERE_OK && mesh_alloc( &m, n, model.triangle_count ) != 0 )
+	{
+		status = SERE_ERR_MEMORY;
+	}
+	float* rwc = status == SERE_OK ? malloc( sizeof( float ) * (size_t) model.p.capacity ) : NULL;
+	if ( status == SERE_OK && rwc == NULL )
+	{
+		status = SERE_ERR_MEMORY;
+	}
+	if ( status != SERE_OK )
+	{
+		snprintf( err, sizeof( err ), "frame %ld: %s", frame + 1, sere_status_text( status ) );
+		mesh_free( &m );
+		sere_leaf_destroy( sim );
+		sere_model_destroy( &model );
+		return leaf_fail( r, err );
+	}
+	sere_leaf_relative_water( sim, rwc );
+	/* into the scene: scaled (z too, so it stays on the ground), turned about z, moved */
+	double c = cos( d.angle ), s = sin( d.angle );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double x = d.scale * model.p.x[i], y = d.scale * model.p.y[i];
+		m.x[i] = (float) ( c * x - s * y + d.x );
+		m.y[i] = (float) ( s * x + c * y + d.y );
+		m.z[i] = (float) ( d.scale * model.p.z[i] );
+		m.rwc[i] = rwc[i];
+		float rgb[3];
+		sere_render_dry_color( rwc[i], rgb );
+		for ( int k = 0; k < 3; ++k )
+		{
+			m.rgb[3 * i + k] = (uint8_t) lrintf( 255.0f * rgb[k] );
+		}
+	}
+	memcpy( m.tri, model.tri, sizeof( int32_t ) * 3 * (size_t) model.triangle_count );
+	free( rwc );
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+	r->ms = 1000.0 * ( sere_now() - start );
+	r->frames = frame;
+	r->vertices = m.vertices, r->triangles = m.triangles;
+
+	leaf_path( path, sizeof( path ), o, index );
+	char comment[256], header[2048];
+	leaf_comment( comment, sizeof( comment ), o, index, frame, r->ms );
+	ply_header( header, sizeof( header ), comment, m.vertices, m.triangles );
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	int failed = f == NULL;
+	if ( f != NULL )
+	{
+		fputs( header, f );
+		ply_body( f, &m );
+		ply_faces( f, &m, 0 );
+		failed = sere_atomic_commit( &file ) != 0;
+	}
+	int error = errno;
+	mesh_free( &m );
+	if ( failed )
+	{
+		snprintf( err, sizeof( err ), "cannot write %s: %s", path, strerror( error ) );
+		return leaf_fail( r, err );
+	}
+	r->state = LITTER_DRIED;
+	return 0;
+}
+
+/* Appends a leaf's mesh to the scene's; 0, or -1 when out of memory. */
+static int mesh_append( litter_mesh* scene, const litter_mesh* leaf )
+{
+	size_t n = (size_t) scene->vertices + (size_t) leaf->vertices;
+	size_t t = (size_t) scene->triangles + (size_t) leaf->triangles;
+	if ( n > INT32_MAX || t > INT32_MAX / 3 )
+	{
+		return -1;
+	}
+	float** fields[4] = { &scene->x, &scene->y, &scene->z, &scene->rwc };
+	const float* from[4] = { leaf->x, leaf->y, leaf->z, leaf->rwc };
+	for ( int k = 0; k < 4; ++k )
+	{
+		float* grown = realloc( *fields[k], sizeof( float ) * n );
+		if ( grown == NULL )
+		{
+			return -1;
+		}
+		*fields[k] = grown;
+		memcpy( grown + scene->vertices, from[k], sizeof( float ) * (size_t) leaf->vertices );
+	}
+	uint8_t* rgb = realloc( scene->rgb, 3 * n );
+	int32_t* tri = rgb != NULL ? realloc( scene->tri, sizeof( int32_t ) * 3 * t ) : NULL;
+	if ( rgb != NULL )
+	{
+		scene->rgb = rgb;
+	}
+	if ( tri == NULL )
+	{
+		return -1;
+	}
+	scene->tri = tri;
+	memcpy( rgb + 3 * (size_t) scene->vertices, leaf->rgb, 3 * (size_t) leaf->vertices );
+	for ( size_t k = 0; k < 3 * (size_t) leaf->triangles; ++k )
+	{
+		tri[3 * (size_t) scene->triangles + k] = leaf->tri[k] + scene->vertices;
+	}
+	scene->vertices = (int32_t) n, scene->triangles = (int32_t) t;
+	return 0;
+}
+
+static int write_scene_ply( const char* path, const litter_options* o, const litter_mesh* scene )
+{
+	char comment[256], header[2048];
+	snprintf( comment, sizeof( comment ), "sere litter seed %ld leaves %ld points %ld frames_max %ld", o->seed,
+			  o->leaves, o->points, o->frames );
+	ply_header( header, sizeof( header ), comment, scene->vertices, scene->triangles );
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	fputs( header, f );
+	ply_body( f, scene );
+	ply_faces( f, scene, 0 );
+	return sere_atomic_commit( &file );
+}
+
+static int write_summary( const char* path, const litter_options* o, const litter_result* results, int bound,
+						  double seconds, const litter_mesh* scene )
+{
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	long dried = 0, resumed = 0, failed = 0;
+	double ms = 0.0;
+	fprintf( f, "{\n  \"seed\": %ld,\n  \"points\": %ld,\n  \"frames_max\": %ld,\n  \"threads\": %d,\n", o->seed,
+			 o->points, o->frames, bound );
+	fprintf( f, "  \"leaves\": [\n" );
+	for ( long i = 0; i < o->leaves; ++i )
+	{
+		const litter_result* r = results + i;
+		litter_draw d = draw_leaf( o->seed, i, o->leaves );
+		char status[6 * sizeof( r->error ) + 16];
+		if ( r->state == LITTER_FAILED )
+		{
+			char escaped[6 * sizeof( r->error ) + 1];
+			snprintf( status, sizeof( status ), "error: %s", sere_json_escape( escaped, sizeof( escaped ), r->error ) );
+		}
+		else
+		{
+			snprintf( status, sizeof( status ), "%s", r->state == LITTER_DRIED ? "dried" : "resumed" );
+		}
+		dried += r->state == LITTER_DRIED, resumed += r->state == LITTER_RESUMED, failed += r->state == LITTER_FAILED;
+		ms += r->state == LITTER_FAILED ? 0.0 : r->ms;
+		fprintf( f,
+				 "    {\"index\": %ld, \"species\": \"%s\", \"preset\": \"%s\", \"scale\": %.6g, "
+				 "\"angle\": %.6g, \"x\": %.6g, \"y\": %.6g, \"points\": %d, \"triangles\": %d, \"frames\": %ld, "
+				 "\"ms\": %.3f, \"status\": \"%s\"}%s\n",
+				 i, species_names[d.species], preset_names[d.species], d.scale, d.angle, d.x, d.y, r->vertices,
+				 r->triangles, r->frames, r->state == LITTER_FAILED ? 0.0 : r->ms, status,
+				 i + 1 < o->leaves ? "," : "" );
+	}
+	fprintf( f,
+			 "  ],\n  \"totals\": {\"leaves\": %ld, \"dried\": %ld, \"resumed\": %ld, \"failed\": %ld, "
+			 "\"vertices\": %d, \"triangles\": %d, \"leaf_ms\": %.3f, \"wall_seconds\": %.3f}\n}\n",
+			 o->leaves, dried, resumed, failed, scene->vertices, scene->triangles, ms, seconds );
+	return sere_atomic_commit( &file );
+}
+
+int sere_cmd_litter( int argc, char** argv )
+{
+	litter_options o = { "out/litter", -1, 1, 600, 400 };
+	long threads = 0;
+	for ( int i = 1; i < argc; ++i )
+	{
+		const char* a = argv[i];
+		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
+		{
+			litter_help();
+			return 0;
+		}
+		static const char* const valued[] = { "--leaves", "--seed", "--out", "--points", "--frames", "--threads" };
+		int takes_value = 0;
+		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
+		{
+			takes_value |= strcmp( a, valued[k] ) == 0;
+		}
+		if ( !takes_value )
+		{
+			fprintf( stderr, "sere litter: %s '%s' (see sere litter --help)\n",
+					 a[0] == '-' ? "unknown option" : "unexpected argument", a );
+			return 2;
+		}
+		if ( i + 1 >= argc )
+		{
+			fprintf( stderr, "sere litter: %s needs a value (see sere litter --help)\n", a );
+			return 2;
+		}
+		const char* v = argv[++i];
+		int bad = strcmp( a, "--leaves" ) == 0	  ? sere_parse_long( "litter", a, v, 1, 99999, &o.leaves )
+				  : strcmp( a, "--seed" ) == 0	  ? sere_parse_long( "litter", a, v, 0, LONG_MAX, &o.seed )
+				  : strcmp( a, "--points" ) == 0  ? sere_parse_long( "litter", a, v, 10, 10000000, &o.points )
+				  : strcmp( a, "--frames" ) == 0  ? sere_parse_long( "litter", a, v, 1, 100000000, &o.frames )
+				  : strcmp( a, "--threads" ) == 0 ? sere_parse_long( "litter", a, v, 0, 256, &threads )
+												  : sere_parse_dir( "litter", a, v );
+		if ( bad != 0 )
+		{
+			return 2;
+		}
+		o.out = strcmp( a, "--out" ) == 0 ? v : o.out;
+	}
+	if ( o.leaves < 0 )
+	{
+		fprintf( stderr, "sere litter: missing --leaves N (see sere litter --help)\n" );
+		return 2;
+	}
+	char path[4200], err[1024];
+	snprintf( path, sizeof( path ), "%s/leaves", o.out );
+	if ( sere_mkdirs( path ) != 0 )
+	{
+		fprintf( stderr, "sere litter: cannot create %s: %s\n", path, strerror( errno ) );
+		return 1;
+	}
+	static const char* const outputs[] = { "litter.ply", "litter.glb", "litter.png", "summary.json" };
+	if ( sere_check_outputs( o.out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere litter: %s\n", err );
+		return 1;
+	}
+	litter_result* results = calloc( (size_t) o.leaves, sizeof( litter_result ) );
+	if ( results == NULL )
+	{
+		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		return 1;
+	}
+	int bound = sere_topo_bind( (int) threads, NULL );
+	/* one leaf per thread: the kernels' own regions then run on one thread each (their results
+	 * do not depend on the count), and a small leaf is not cut into slivers of work */
+	omp_set_max_active_levels( 1 );
+	double start = sere_now();
+#pragma omp parallel for schedule( dynamic, 1 ) num_threads( bound )
+	for ( long i = 0; i < o.leaves; ++i )
+	{
+		litter_result* r = results + i;
+		if ( read_leaf( &o, i, NULL, r ) == 0 )
+		{
+			r->state = LITTER_RESUMED;
+		}
+		else if ( dry_leaf( &o, i, r ) != 0 )
+		{
+			litter_draw d = draw_leaf( o.seed, i, o.leaves );
+			fprintf( stderr, "sere litter: leaf %ld (%s, %s) failed: %s\n", i, species_names[d.species],
+					 preset_names[d.species], r->error );
+		}
+	}
+	/* The scene from the leaf files alone, in index order: a resumed run reads exactly the bytes
+	 * an uninterrupted one does. */
+	litter_mesh scene = { 0 };
+	long failed = 0;
+	for ( long i = 0; i < o.leaves; ++i )
+	{
+		litter_result* r = results + i;
+		litter_mesh leaf = { 0 };
+		if ( r->state != LITTER_FAILED && ( read_leaf( &o, i, &leaf, r ) != 0 || mesh_append( &scene, &leaf ) != 0 ) )
+		{
+			leaf_path( path, sizeof( path ), &o, i );
+			snprintf( r->error, sizeof( r->error ), "cannot read back %s (changed during the run, or out of memory)",
+					  path );
+			r->state = LITTER_FAILED;
+			fprintf( stderr, "sere litter: leaf %ld failed: %s\n", i, r->error );
+		}
+		mesh_free( &leaf );
+		failed += r->state == LITTER_FAILED;
+	}
+	double seconds = sere_now() - start;
+	int status = failed > 0;
+	snprintf( path, sizeof( path ), "%s/litter.ply", o.out );
+	if ( write_scene_ply( path, &o, &scene ) != 0 )
+	{
+		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
+		status = 1;
+	}
+	snprintf( path, sizeof( path ), "%s/litter.glb", o.out );
+	sere_glb_mesh glb = { scene.x, scene.y, scene.z, scene.rgb, scene.vertices, scene.tri, scene.triangles };
+	if ( scene.vertices == 0 )
+	{
+		/* glTF has no empty mesh; and no scene of an earlier run is left beside this one */
+		remove( path );
+	}
+	else if ( sere_write_glb( path, &glb, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere litter: %s\n", err );
+		status = 1;
+	}
+	snprintf( path, sizeof( path ), "%s/litter.png", o.out );
+	if ( scene.vertices == 0 )
+	{
+		/* no leaf to show: no picture of an earlier run left beside this run's empty scene */
+		remove( path );
+	}
+	else
+	{
+		double water = 0.0;
+		for ( int32_t i = 0; i < scene.vertices; ++i )
+		{
+			water += scene.rwc[i];
+		}
+		/* the caption's frame: the longest-drying leaf's */
+		long frames = 0;
+		for ( long i = 0; i < o.leaves; ++i )
+		{
+			frames = results[i].state != LITTER_FAILED && results[i].frames > frames ? results[i].frames : frames;
+		}
+		sere_leafpics_frame frame = {
+			scene.x, scene.y, scene.z, scene.rwc, scene.vertices, (int) frames, water / scene.vertices
+		};
+		char title[160];
+		snprintf( title, sizeof( title ), "litter: %ld leaves, seed %ld", o.leaves - failed, o.seed );
+		if ( sere_leafpics_view( path, title, &frame, scene.tri, scene.triangles, 0.0f, 1200, err, sizeof( err ) ) !=
+			 0 )
+		{
+			fprintf( stderr, "sere litter: %s\n", err );
+			status = 1;
+		}
+	}
+	snprintf( path, sizeof( path ), "%s/summary.json", o.out );
+	if ( write_summary( path, &o, results, bound, seconds, &scene ) != 0 )
+	{
+		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
+		status = 1;
+	}
+	printf( "litter: %ld leaves (%ld failed), %d vertices, %d triangles, %.2f s on %d thread%s\n", o.leaves, failed,
+			scene.vertices, scene.triangles, seconds, bound, bound == 1 ? "" : "s" );
+	printf( "  %s/litter.ply, %s/litter.glb, %s/litter.png, %s/summary.json, leaves in %s/leaves\n", o.out, o.out,
+			o.out, o.out, o.out );
+	mesh_free( &scene );
+	free( results );
+	return status;
+}

@@ -1,0 +1,257 @@
+/* sere litter as a user meets it (issue #21): the scene depends on the seed alone, not on the
+ * thread count; a rerun after a crash redoes only the missing leaves and gives the same scene;
+ * one leaf's failure costs no other; a real glTF reader (assimp) opens litter.glb. Small leaves (400 points, 20 frames)
+ * keep it to seconds; SERE_BIN names the binary under test. */
+#define _DEFAULT_SOURCE
+#include "fixture.h"
+
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* Seed 6 draws wisteria, plane tree, maple and grass; 400 points are enough for every
+ * species' outline and veins (the grass needs 390). */
+#define LITTER_ARGS "--leaves 4 --seed 6 --points 400 --frames 20"
+
+/* A fresh directory under /tmp; the caller removes it with remove_tree. */
+static void make_dir( char* dir, size_t size, const char* name )
+{
+	snprintf( dir, size, "/tmp/sere-litter-%s-XXXXXX", name );
+	cr_assert_not_null( mkdtemp( dir ) );
+}
+
+static void remove_tree( const char* dir )
+{
+	char command[600];
+	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
+	cr_expect_eq( system( command ), 0 );
+}
+
+/* The whole file, NUL terminated; *size its length. NULL when it cannot be read. */
+static char* read_all( const char* path, long* size )
+{
+	FILE* f = fopen( path, "rb" );
+	if ( f == NULL )
+	{
+		return NULL;
+	}
+	fseek( f, 0, SEEK_END );
+	*size = ftell( f );
+	fseek( f, 0, SEEK_SET );
+	char* data = malloc( (size_t) *size + 1 );
+	size_t got = data != NULL ? fread( data, 1, (size_t) *size, f ) : 0;
+	fclose( f );
+	if ( data != NULL )
+	{
+		data[got] = '\0';
+	}
+	return data;
+}
+
+static void expect_same_file( const char* a, const char* b )
+{
+	long size_a = -1, size_b = -1;
+	char* data_a = read_all( a, &size_a );
+	char* data_b = read_all( b, &size_b );
+	cr_assert_not_null( data_a, "cannot read %s", a );
+	cr_assert_not_null( data_b, "cannot read %s", b );
+	cr_expect( size_a > 0 && size_a == size_b && memcmp( data_a, data_b, (size_t) size_a ) == 0,
+			   "%s (%ld bytes) and %s (%ld bytes) differ", a, size_a, b, size_b );
+	free( data_a ), free( data_b );
+}
+
+static int litter( const char* dir, const char* extra, char* err, size_t err_size )
+{
+	char args[1024];
+	snprintf( args, sizeof( args ), "litter " LITTER_ARGS " --out %s %s", dir, extra );
+	return sere_test_run( args, err, err_size );
+}
+
+static int count_of( const char* text, const char* phrase )
+{
+	int count = 0;
+	for ( const char* at = strstr( text, phrase ); at != NULL; at = strstr( at + 1, phrase ) )
+	{
+		count += 1;
+	}
+	return count;
+}
+
+Test( litter, same_scene_on_one_and_two_threads )
+{
+	char one[64], two[64], err[4096], a[128], b[128];
+	make_dir( one, sizeof( one ), "t1" );
+	make_dir( two, sizeof( two ), "t2" );
+	cr_assert_eq( litter( one, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( litter( two, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	snprintf( a, sizeof( a ), "%s/litter.ply", one );
+	snprintf( b, sizeof( b ), "%s/litter.ply", two );
+	expect_same_file( a, b );
+	snprintf( a, sizeof( a ), "%s/litter.png", one );
+	struct stat info;
+	cr_expect( stat( a, &info ) == 0 && info.st_size > 0, "no %s", a );
+	snprintf( a, sizeof( a ), "%s/summary.json", one );
+	long size;
+	char* summary = read_all( a, &size );
+	cr_assert_not_null( summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 4, "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"failed\": 0" ), "%s", summary );
+	free( summary );
+	remove_tree( one );
+	remove_tree( two );
+}
+
+Test( litter, rerun_redoes_missing_and_cut_leaves_only )
+{
+	char whole[64], resumed[64], err[4096], path[160], other[160];
+	make_dir( whole, sizeof( whole ), "whole" );
+	make_dir( resumed, sizeof( resumed ), "resumed" );
+	cr_assert_eq( litter( whole, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( litter( resumed, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	/* a crash: one leaf never written, another cut short */
+	snprintf( path, sizeof( path ), "%s/leaves/leaf_00001.ply", resumed );
+	cr_assert_eq( unlink( path ), 0 );
+	snprintf( path, sizeof( path ), "%s/leaves/leaf_00002.ply", resumed );
+	struct stat info;
+	cr_assert_eq( stat( path, &info ), 0 );
+	cr_assert_eq( truncate( path, info.st_size / 2 ), 0 );
+	snprintf( path, sizeof( path ), "%s/litter.ply", resumed );
+	cr_assert_eq( unlink( path ), 0 );
+	cr_assert_eq( litter( resumed, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	snprintf( path, sizeof( path ), "%s/litter.ply", whole );
+	snprintf( other, sizeof( other ), "%s/litter.ply", resumed );
+	expect_same_file( path, other );
+	/* the two damaged leaves dried again, the others kept */
+	snprintf( path, sizeof( path ), "%s/summary.json", resumed );
+	long size;
+	char* summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 2, "%s", summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"resumed\"" ), 2, "%s", summary );
+	free( summary );
+	/* a leaf written with other options is not reused */
+	char changed[64];
+	make_dir( changed, sizeof( changed ), "changed" );
+	cr_assert_eq( litter( changed, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( litter( changed, "--threads 1 --frames 10", err, sizeof( err ) ), 0, "%s", err );
+	snprintf( path, sizeof( path ), "%s/summary.json", changed );
+	summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 4, "%s", summary );
+	free( summary );
+	remove_tree( whole );
+	remove_tree( resumed );
+	remove_tree( changed );
+}
+
+Test( litter, failed_leaf_is_reported_and_costs_no_other )
+{
+	char dir[64], err[4096], path[160];
+	make_dir( dir, sizeof( dir ), "fail" );
+	/* a directory where leaf 1's file goes: that leaf cannot be written */
+	snprintf( path, sizeof( path ), "%s/leaves", dir );
+	cr_assert_eq( mkdir( path, 0755 ), 0 );
+	snprintf( path, sizeof( path ), "%s/leaves/leaf_00001.ply", dir );
+	cr_assert_eq( mkdir( path, 0755 ), 0 );
+	int code = litter( dir, "--threads 2", err, sizeof( err ) );
+	cr_expect_eq( code, 1, "exit %d: %s", code, err );
+	cr_expect_not_null( strstr( err, "sere litter: leaf 1 (" ), "%s", err );
+	cr_expect_not_null( strstr( err, "leaf_00001.ply is a directory, not a file" ), "%s", err );
+	cr_expect_eq( count_of( err, "\n" ), 1, "one line per failed leaf: %s", err );
+	for ( int i = 0; i < 4; ++i )
+	{
+		snprintf( path, sizeof( path ), "%s/leaves/leaf_%05d.ply", dir, i );
+		struct stat info;
+		cr_expect( stat( path, &info ) == 0 && ( i == 1 ) == S_ISDIR( info.st_mode ), "%s", path );
+	}
+	snprintf( path, sizeof( path ), "%s/summary.json", dir );
+	long size;
+	char* summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 3, "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"index\": 1," ), "%s", summary );
+	cr_expect_not_null( strstr( summary, "is a directory, not a file\"" ), "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"failed\": 1" ), "%s", summary );
+	free( summary );
+	snprintf( path, sizeof( path ), "%s/litter.ply", dir );
+	struct stat info;
+	cr_expect( stat( path, &info ) == 0 && info.st_size > 0, "no %s", path );
+	remove_tree( dir );
+}
+
+static void expect_error( const char* args, const char* phrase )
+{
+	char err[4096];
+	int code = sere_test_run( args, err, sizeof( err ) );
+	cr_expect_eq( code, 2, "'%s' should fail with 2, not %d", args, code );
+	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
+	char* newline = strchr( err, '\n' );
+	cr_expect( newline != NULL && newline[1] == '\0', "'%s': not one line: %s", args, err );
+}
+
+Test( litter, bad_options_one_clear_line )
+{
+	expect_error( "litter --seed 3 --out /tmp/sere-litter-bad", "missing --leaves N" );
+	expect_error( "litter --leaves 0 --out /tmp/sere-litter-bad", "--leaves takes" );
+	expect_error( "litter --leaves 2 --seed -1 --out /tmp/sere-litter-bad", "--seed takes" );
+	expect_error( "litter --leaves 2 --points", "--points needs a value" );
+	expect_error( "litter --leaves 2 --colour red", "unknown option '--colour'" );
+	expect_error( "litter --leaves 2 maple", "unexpected argument 'maple'" );
+}
+
+Test( litter, glb_opens_in_assimp_with_the_ply_counts )
+{
+	char dir[64], err[4096], path[160];
+	make_dir( dir, sizeof( dir ), "glb" );
+	cr_assert_eq( litter( dir, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	/* the counts and the first vertex of litter.ply, the scene the .glb must hold */
+	snprintf( path, sizeof( path ), "%s/litter.ply", dir );
+	long size;
+	char* ply = read_all( path, &size );
+	cr_assert_not_null( ply );
+	int vertices = 0, triangles = 0;
+	const char* at = strstr( ply, "element vertex " );
+	cr_assert( at != NULL && sscanf( at, "element vertex %d", &vertices ) == 1 );
+	at = strstr( ply, "element face " );
+	cr_assert( at != NULL && sscanf( at, "element face %d", &triangles ) == 1 );
+	const char* body = strstr( ply, "end_header\n" );
+	cr_assert_not_null( body );
+	float first[3];
+	memcpy( first, body + strlen( "end_header\n" ), sizeof( first ) );
+	free( ply );
+	cr_assert( vertices > 0 && triangles > 0 );
+
+	snprintf( path, sizeof( path ), "%s/litter.glb", dir );
+	const struct aiScene* scene = aiImportFile( path, aiProcess_ValidateDataStructure );
+	cr_assert_not_null( scene, "assimp cannot open %s: %s", path, aiGetErrorString() );
+	cr_assert_eq( scene->mNumMeshes, 1 );
+	const struct aiMesh* mesh = scene->mMeshes[0];
+	cr_expect_eq( (int) mesh->mNumVertices, vertices );
+	cr_expect_eq( (int) mesh->mNumFaces, triangles );
+	cr_expect_not_null( mesh->mNormals );
+	cr_expect_not_null( mesh->mColors[0], "no COLOR_0" );
+	int bad_faces = 0;
+	for ( unsigned f = 0; f < mesh->mNumFaces; ++f )
+	{
+		bad_faces += mesh->mFaces[f].mNumIndices != 3;
+	}
+	cr_expect_eq( bad_faces, 0 );
+	cr_expect( mesh->mVertices[0].x == first[0] && mesh->mVertices[0].y == first[1] && mesh->mVertices[0].z == first[2],
+			   "first vertex (%g, %g, %g), the PLY's (%g, %g, %g)", (double) mesh->mVertices[0].x,
+			   (double) mesh->mVertices[0].y, (double) mesh->mVertices[0].z, (double) first[0], (double) first[1],
+			   (double) first[2] );
+	if ( mesh->mNormals != NULL )
+	{
+		const struct aiVector3D n = mesh->mNormals[0];
+		cr_expect_float_eq( sqrt( (double) n.x * n.x + (double) n.y * n.y + (double) n.z * n.z ), 1.0, 1e-5 );
+	}
+	aiReleaseImport( scene );
+	remove_tree( dir );
+}
