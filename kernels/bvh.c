@@ -57,7 +57,11 @@ struct sere_bvh
 	int32_t cut_count;
 	int32_t* cut_roots;
 	double* cut_key;
-	float* node_area;	  /* per node: surface area of the node's own box */
+	float* node_area; /* per node: surface area of the node's own box */
+	/* Per node, SERE_BVH_WIDTH apart: the highest corner index of the triangles below child k
+	 * (−1 for an empty child), for sere_bvh_query_group_above. Set by the build: a refit moves
+	 * boxes, never triangles between subtrees. */
+	int32_t* child_top;
 	double quality;		  /* SAH cost of the internal nodes after the last refit */
 	double quality_built; /* the same right after the last build */
 
@@ -636,6 +640,31 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->subtree_begin[i] = begin < end ? begin : end;
 		bvh->subtree_end[i] = end;
 	}
+	/* children come after their parent: bottom-up from the last node */
+	for ( int32_t i = bvh->node_count - 1; i >= 0; --i )
+	{
+		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+		{
+			int32_t c = bvh->nodes[i].child[k], top = -1;
+			if ( c >= 0 )
+			{
+				for ( int j = 0; j < SERE_BVH_WIDTH; ++j )
+				{
+					int32_t below = bvh->child_top[(size_t) c * SERE_BVH_WIDTH + (size_t) j];
+					top = below > top ? below : top;
+				}
+			}
+			else if ( c != SERE_BVH_EMPTY )
+			{
+				for ( int r = 0; r < 3; ++r )
+				{
+					int32_t v = bvh->tri[3 * (size_t) ~c + (size_t) r];
+					top = v > top ? v : top;
+				}
+			}
+			bvh->child_top[(size_t) i * SERE_BVH_WIDTH + (size_t) k] = top;
+		}
+	}
 
 	bvh->cut_level = levels - 1 < 2 ? levels - 1 : 2;
 	bvh->cut_count = bvh->level_start[bvh->cut_level + 1] - bvh->level_start[bvh->cut_level];
@@ -716,10 +745,11 @@ sere_status sere_bvh_create( const int32_t* tri, int32_t triangle_count, int32_t
 	bvh->cut_roots = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
 	bvh->cut_key = sere_alloc( sizeof( double ) * (size_t) capacity );
 	bvh->node_area = sere_alloc( sizeof( float ) * (size_t) capacity );
+	bvh->child_top = sere_alloc( sizeof( int32_t ) * SERE_BVH_WIDTH * (size_t) capacity );
 	float** scratch[] = { &bvh->lo_x, &bvh->lo_y, &bvh->lo_z, &bvh->hi_x, &bvh->hi_y,
 						  &bvh->hi_z, &bvh->c_x,  &bvh->c_y,  &bvh->c_z };
 	bool ok = bvh->tri && bvh->nodes && bvh->node_level && bvh->level_nodes && bvh->level_start && bvh->subtree_begin &&
-			  bvh->subtree_end && bvh->cut_roots && bvh->cut_key && bvh->node_area;
+			  bvh->subtree_end && bvh->cut_roots && bvh->cut_key && bvh->node_area && bvh->child_top;
 	for ( size_t i = 0; i < sizeof( scratch ) / sizeof( scratch[0] ); ++i )
 	{
 		*scratch[i] = sere_alloc( fn );
@@ -754,7 +784,7 @@ void sere_bvh_destroy( sere_bvh* bvh )
 					   bvh->subtree_begin, bvh->subtree_end, bvh->cut_roots,  bvh->cut_key,		bvh->node_area,
 					   bvh->lo_x,		   bvh->lo_y,		 bvh->lo_z,		  bvh->hi_x,		bvh->hi_y,
 					   bvh->hi_z,		   bvh->c_x,		 bvh->c_y,		  bvh->c_z,			bvh->order,
-					   bvh->stack };
+					   bvh->stack,		   bvh->child_top };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -897,8 +927,22 @@ static inline uint32_t leaf_mask( const sere_bvh_node* node )
 	return mask;
 }
 
-void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
-						   void* context )
+/* Bit k set when child k of node n holds a triangle with a corner index above floor. */
+static inline uint32_t above_mask( const sere_bvh* bvh, int32_t n, int32_t floor )
+{
+	const int32_t* top = bvh->child_top + (size_t) n * SERE_BVH_WIDTH;
+	uint32_t mask = 0;
+	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+	{
+		mask |= (uint32_t) ( top[k] > floor ) << k;
+	}
+	return mask;
+}
+
+/* sere_bvh_query_group, or sere_bvh_query_group_above when above (inlined with a constant, so
+ * the plain query carries no index test). */
+static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group, bool above, int32_t floor,
+								sere_bvh_visit_group_fn* visit, void* context )
 {
 	/* the lanes as given, ignored ones emptied, and their union for the walk down */
 	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
@@ -931,7 +975,8 @@ void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, ser
 	stack[size++] = 0;
 	while ( size > 0 )
 	{
-		const sere_bvh_node* node = bvh->nodes + stack[--size];
+		int32_t index = stack[--size];
+		const sere_bvh_node* node = bvh->nodes + index;
 		/* Each child inside the union is tested against the eight lanes: a child inside the union
 		 * can still miss every lane (the union of eight cubes along a curve of vertices is mostly
 		 * empty space), and skipping such subtrees saved 14% of the flat maple's detection and 9%
@@ -941,6 +986,10 @@ void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, ser
 		 * one thread). The children pushed here are popped only after this node's leaves are
 		 * visited, so the visits come in the same order as when each child was handled in turn. */
 		uint32_t mask = overlap_mask( node, &q );
+		if ( above )
+		{
+			mask &= above_mask( bvh, index, floor );
+		}
 		uint32_t hits[SERE_BVH_WIDTH];
 		uint32_t live = 0;
 		while ( mask != 0 )
@@ -964,6 +1013,18 @@ void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, ser
 			visit( context, ~node->child[k], hits[k] );
 		}
 	}
+}
+
+void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
+						   void* context )
+{
+	query_group( bvh, group, false, 0, visit, context );
+}
+
+void sere_bvh_query_group_above( const sere_bvh* bvh, const sere_bvh_group* group, int32_t floor,
+								 sere_bvh_visit_group_fn* visit, void* context )
+{
+	query_group( bvh, group, true, floor, visit, context );
 }
 
 typedef struct collect_context

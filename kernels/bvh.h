@@ -97,6 +97,13 @@ typedef void sere_bvh_visit_group_fn( void* context, int32_t triangle, uint32_t 
 void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
 						   void* context );
 
+/* sere_bvh_query_group restricted to the triangles with a corner index above floor, visited in
+ * the same order: a subtree whose triangles' corners all lie at or below floor is not entered. A
+ * search for pairs counted once (the other member's index above the query's) skips the part of
+ * the tree that can only hold the pairs counted from the other side. */
+void sere_bvh_query_group_above( const sere_bvh* bvh, const sere_bvh_group* group, int32_t floor,
+								 sere_bvh_visit_group_fn* visit, void* context );
+
 /* Triangles whose box overlaps the cube of half-width r around (x, y, z), i.e. whose box padded
  * by r contains the point. Writes the first min(count, capacity) into out and returns count. */
 int32_t sere_bvh_query( const sere_bvh* bvh, float x, float y, float z, float r, int32_t* out, int32_t capacity );

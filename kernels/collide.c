@@ -1555,7 +1555,9 @@ static void detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_t b
 			break;
 		}
 		c->table_lane[group.count] = c->table_count;
-		sere_bvh_query_group( bvh, &group, detect_edge_visit, c );
+		/* detect_edge_visit keeps only edges whose lower end is above c->first, so whose upper
+		 * end is above c->first + 1: a triangle with no corner above that owns none of them */
+		sere_bvh_query_group_above( bvh, &group, c->first + 1, detect_edge_visit, c );
 		detect_edge_candidates( c );
 	}
 	detect_edge_flush( c );

@@ -231,6 +231,82 @@ Test( bvh, group_query_matches_brute_force )
 	bvh_sheet_free( &s );
 }
 
+typedef struct bvh_visit_log
+{
+	int32_t* triangle;
+	uint32_t* lanes;
+	int32_t count;
+	int32_t capacity;
+} bvh_visit_log;
+
+static void bvh_log_visit( void* context, int32_t triangle, uint32_t lanes )
+{
+	bvh_visit_log* log = context;
+	if ( log->count < log->capacity )
+	{
+		log->triangle[log->count] = triangle, log->lanes[log->count] = lanes;
+	}
+	log->count += 1;
+}
+
+/* The query above a floor is the plain group query with the triangles whose corners all lie at
+ * or below the floor left out, the rest visited in the same order with the same lanes (the edge
+ * search's contact order depends on it); also after a rebuild for moved positions. */
+Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
+{
+	bvh_sheet s;
+	bvh_sheet_make( &s, 40, 30, 12 );
+	bvh_sheet_bump( &s, 0.05, 0.5 * s.cell, 2 );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	int32_t capacity = s.triangles;
+	bvh_visit_log plain = { malloc( sizeof( int32_t ) * (size_t) capacity ),
+							malloc( sizeof( uint32_t ) * (size_t) capacity ), 0, capacity };
+	bvh_visit_log above = { malloc( sizeof( int32_t ) * (size_t) capacity ),
+							malloc( sizeof( uint32_t ) * (size_t) capacity ), 0, capacity };
+	uint64_t state = 5;
+	for ( int g = 0; g < 400; ++g )
+	{
+		if ( g == 200 )
+		{
+			bvh_sheet_roll( &s );
+			cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		}
+		sere_bvh_group group;
+		group.count = 1 + g % SERE_BVH_WIDTH;
+		int32_t base = (int32_t) ( bvh_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
+		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+		{
+			int32_t i = base + k;
+			float r = (float) ( 3.0 * s.cell * bvh_unit( &state ) );
+			group.lo_x[k] = s.x[i] - r, group.lo_y[k] = s.y[i] - r, group.lo_z[k] = s.z[i] - r;
+			group.hi_x[k] = s.x[i] + r, group.hi_y[k] = s.y[i] + r, group.hi_z[k] = s.z[i] + r;
+		}
+		/* below every index, around the group's own, and above every index */
+		int32_t floor = g % 3 == 0 ? -1 : ( g % 3 == 1 ? base + g % 7 : s.n - 1 );
+		plain.count = above.count = 0;
+		sere_bvh_query_group( bvh, &group, bvh_log_visit, &plain );
+		sere_bvh_query_group_above( bvh, &group, floor, bvh_log_visit, &above );
+		cr_assert_leq( plain.count, capacity );
+		int32_t kept = 0;
+		for ( int32_t k = 0; k < plain.count; ++k )
+		{
+			const int32_t* v = s.tri + 3 * plain.triangle[k];
+			if ( v[0] > floor || v[1] > floor || v[2] > floor )
+			{
+				cr_assert_lt( kept, above.count, "group %d: visit %d missing", g, k );
+				cr_assert_eq( above.triangle[kept], plain.triangle[k], "group %d: visit %d", g, kept );
+				cr_assert_eq( above.lanes[kept], plain.lanes[k], "group %d: visit %d", g, kept );
+				kept += 1;
+			}
+		}
+		cr_assert_eq( above.count, kept, "group %d: %d visits, %d expected", g, above.count, kept );
+	}
+	free( plain.triangle ), free( plain.lanes ), free( above.triangle ), free( above.lanes );
+	sere_bvh_destroy( bvh );
+	bvh_sheet_free( &s );
+}
+
 /* Refit boxes are exact: a triangle lane is the min/max of its corners, a node lane the union of
  * the child's lanes; so they contain everything below them whatever the deformation. Also the
  * structure: each triangle in exactly one lane, children after their parent. */
