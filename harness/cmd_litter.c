@@ -96,35 +96,22 @@ static int mesh_alloc( litter_mesh* m, int32_t vertices, int32_t triangles )
 	return 0;
 }
 
-/* splitmix64: a leaf's numbers come from its own stream, so they do not depend on how many
- * leaves there are, which were dried before it, or on which thread. */
-static uint64_t next_u64( uint64_t* state )
-{
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	return z ^ ( z >> 31 );
-}
-
-static double next_unit( uint64_t* state )
-{
-	return (double) ( next_u64( state ) >> 11 ) * ( 1.0 / 9007199254740992.0 );
-}
-
 /* The leaves fall on a square that grows with their number, about two leaves' area (a leaf is
  * about one unit across) of room each, so a litter of any size is dense but mostly one layer:
  * leaves do not collide with each other. */
 static litter_draw draw_leaf( long seed, long index, long leaves )
 {
+	/* a leaf's numbers come from its own stream, so they do not depend on how many leaves there
+	 * are, which were dried before it, or on which thread */
 	uint64_t state = (uint64_t) seed;
-	state = next_u64( &state ) ^ ( (uint64_t) index * 0xd1b54a32d192ed03ull );
+	state = sere_splitmix64( &state ) ^ ( (uint64_t) index * 0xd1b54a32d192ed03ull );
 	litter_draw d;
-	d.species = (int) ( next_unit( &state ) * species_count );
-	d.scale = 0.7 + 0.6 * next_unit( &state );
-	d.angle = 2.0 * 3.14159265358979323846 * next_unit( &state );
+	d.species = (int) ( sere_splitmix_unit( &state ) * species_count );
+	d.scale = 0.7 + 0.6 * sere_splitmix_unit( &state );
+	d.angle = 2.0 * 3.14159265358979323846 * sere_splitmix_unit( &state );
 	double side = 1.5 * sqrt( (double) leaves );
-	d.x = side * ( next_unit( &state ) - 0.5 );
-	d.y = side * ( next_unit( &state ) - 0.5 );
+	d.x = side * ( sere_splitmix_unit( &state ) - 0.5 );
+	d.y = side * ( sere_splitmix_unit( &state ) - 0.5 );
 	return d;
 }
 

@@ -50,6 +50,22 @@ static inline int32_t sere_pad( int32_t n )
 	return ( n + SERE_PAD - 1 ) & ~( SERE_PAD - 1 );
 }
 
+/* splitmix64: small, fast and fully determined by its state, so that sampling and scene
+ * drawing give the same numbers on every machine and for every thread count. */
+static inline uint64_t sere_splitmix64( uint64_t* state )
+{
+	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
+	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
+	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
+	return z ^ ( z >> 31 );
+}
+
+/* A double in [0, 1) from the top 53 bits of sere_splitmix64. */
+static inline double sere_splitmix_unit( uint64_t* state )
+{
+	return (double) ( sere_splitmix64( state ) >> 11 ) * ( 1.0 / 9007199254740992.0 );
+}
+
 #ifdef __cplusplus
 }
 #endif

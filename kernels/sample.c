@@ -4,20 +4,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* splitmix64: small, fast and fully determined by the seed. */
-static uint64_t next_u64( uint64_t* state )
-{
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	return z ^ ( z >> 31 );
-}
-
-static double next_unit( uint64_t* state )
-{
-	return (double) ( next_u64( state ) >> 11 ) * ( 1.0 / 9007199254740992.0 );
-}
-
 int sere_point_in_polygon( const double* xy, int32_t count, double px, double py )
 {
 	int inside = 0;
@@ -587,8 +573,8 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 		double best_score = -1.0, best_x = 0.0, best_y = 0.0;
 		for ( int32_t c = 0; c < candidates && attempts_left > 0; --attempts_left )
 		{
-			double cx = x0 + ( x1 - x0 ) * next_unit( &state );
-			double cy = y0 + ( y1 - y0 ) * next_unit( &state );
+			double cx = x0 + ( x1 - x0 ) * sere_splitmix_unit( &state );
+			double cy = y0 + ( y1 - y0 ) * sere_splitmix_unit( &state );
 			if ( !sere_point_in_polygon( polygon, b, cx, cy ) )
 			{
 				continue;
