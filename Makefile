@@ -91,7 +91,7 @@ SERE    := $(BUILD)/sere
 TESTS   := $(BUILD)/sere-tests
 BENCHX  := $(BUILD)/sere-bench
 
-.PHONY: all run test test-fast test-asan bench deps install uninstall examples-check header-check format \
+.PHONY: all run test test-fast test-asan test-widths bench deps install uninstall examples-check header-check format \
 	format-check clean
 .DEFAULT_GOAL := all
 
@@ -119,6 +119,16 @@ test-fast: $(TESTS) $(SERE)
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 build/asan/sere-tests build/asan/sere
 	SERE_ADAPTIVE_THREADS=0 ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
+
+# The SIMD lane layer (kernels/internal/simd.h) at its other widths: an AVX2 build (when this
+# CPU has AVX2) and the portable 4-lane C build run the tests that pin a kernel's bits with a
+# stored hash, so every width is checked to give the bits of the native one.
+WIDTH_TESTS ?= massspring/*
+test-widths:
+	@if grep -qw avx2 /proc/cpuinfo; then $(MAKE) --no-print-directory BUILD=build/avx2 ARCH=-march=x86-64-v3 build/avx2/sere-tests; fi
+	@$(MAKE) --no-print-directory BUILD=build/portable ARCH=-march=x86-64 build/portable/sere-tests
+	@for w in avx2 portable; do test -x build/$$w/sere-tests || continue; echo "width: $$w"; \
+	  SERE_ADAPTIVE_THREADS=0 build/$$w/sere-tests --jobs 1 --filter '$(WIDTH_TESTS)' || exit 1; done
 
 bench: deps
 	@$(MAKE) --no-print-directory $(BENCHX)

@@ -6,9 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined( __AVX512F__ ) || defined( __AVX__ )
-#include <immintrin.h>
-#endif
+#include "internal/simd.h"
 
 struct sere_massspring
 {
@@ -523,155 +521,20 @@ typedef struct spring_law
 	float c;	/* damping */
 } spring_law;
 
-#if defined( __AVX512F__ )
-/* Lane j of c0..c3 receives the four floats of record at[j]. Lane j's record sits in 128-bit
- * lane j / 4 of register j % 4; a 4 × 4 transpose inside every 128-bit lane then gathers the
- * components. */
-static inline void load16( const float* rec, const int32_t* at, __m512* c0, __m512* c1, __m512* c2, __m512* c3 )
-{
-	__m512 r[4];
-	for ( int k = 0; k < 4; ++k )
-	{
-		r[k] = _mm512_castps128_ps512( _mm_load_ps( rec + 4 * at[k] ) );
-		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( rec + 4 * at[k + 4] ), 1 );
-		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( rec + 4 * at[k + 8] ), 2 );
-		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( rec + 4 * at[k + 12] ), 3 );
-	}
-	__m512 t0 = _mm512_unpacklo_ps( r[0], r[1] ), t1 = _mm512_unpackhi_ps( r[0], r[1] );
-	__m512 t2 = _mm512_unpacklo_ps( r[2], r[3] ), t3 = _mm512_unpackhi_ps( r[2], r[3] );
-	*c0 = _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) );
-	*c1 = _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) );
-	*c2 = _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) );
-	*c3 = _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) );
-}
-
-/* The inverse of load16 for the first `lanes` lanes (the transpose is its own inverse). */
-static inline void store16( float* rec, const int32_t* at, int32_t lanes, __m512 c0, __m512 c1, __m512 c2, __m512 c3 )
-{
-	_Alignas( 64 ) float tmp[64];
-	__m512 t0 = _mm512_unpacklo_ps( c0, c1 ), t1 = _mm512_unpackhi_ps( c0, c1 );
-	__m512 t2 = _mm512_unpacklo_ps( c2, c3 ), t3 = _mm512_unpackhi_ps( c2, c3 );
-	_mm512_store_ps( tmp, _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) ) );
-	_mm512_store_ps( tmp + 16,
-					 _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) ) );
-	_mm512_store_ps( tmp + 32,
-					 _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) ) );
-	_mm512_store_ps( tmp + 48,
-					 _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) ) );
-	for ( int32_t j = 0; j < lanes; ++j )
-	{
-		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 16 * ( j % 4 ) + 4 * ( j / 4 ) ) );
-	}
-}
-
-/* The spring indices of a chunk of 16 from [s, s + left); lanes past the end repeat lane 0,
- * whose particles this chunk owns, so their loads never read a record another thread writes. */
+/* The spring indices of a chunk of SERE_LANES from [s, s + left); lanes past the end repeat
+ * lane 0, whose particles this chunk owns, so their loads never read a record another thread
+ * writes. */
 static inline int32_t chunk_ends( const int32_t* sa, const int32_t* sb, int32_t s, int32_t left, int32_t* ia,
 								  int32_t* ib )
 {
-	const int32_t lanes = left < 16 ? left : 16;
-	for ( int32_t j = 0; j < 16; ++j )
+	const int32_t lanes = left < SERE_LANES ? left : SERE_LANES;
+	for ( int32_t j = 0; j < SERE_LANES; ++j )
 	{
 		ia[j] = sa[s + ( j < lanes ? j : 0 )];
 		ib[j] = sb[s + ( j < lanes ? j : 0 )];
 	}
 	return lanes;
 }
-
-static inline __m512 norm3( __m512 x, __m512 y, __m512 z )
-{
-	return _mm512_sqrt_ps(
-		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( x, x ), _mm512_mul_ps( y, y ) ), _mm512_mul_ps( z, z ) ) );
-}
-#elif defined( __AVX__ )
-/* The AVX (256-bit) build: the same operations as the AVX-512 one, eight springs to a step.
- * Without it a machine lacking AVX-512 ran the one-spring loops, slower than the reference. */
-
-/* Lane j of c0..c3 receives the four floats of record at[j] (the 128-bit loads and in-lane
- * 4 × 4 transpose of load16). */
-static inline void load8( const float* rec, const int32_t* at, __m256* c0, __m256* c1, __m256* c2, __m256* c3 )
-{
-	__m256 r[4];
-	for ( int k = 0; k < 4; ++k )
-	{
-		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( rec + 4 * at[k] ) ),
-									 _mm_load_ps( rec + 4 * at[k + 4] ), 1 );
-	}
-	__m256 t0 = _mm256_unpacklo_ps( r[0], r[1] ), t1 = _mm256_unpackhi_ps( r[0], r[1] );
-	__m256 t2 = _mm256_unpacklo_ps( r[2], r[3] ), t3 = _mm256_unpackhi_ps( r[2], r[3] );
-	*c0 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
-	*c1 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
-	*c2 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
-	*c3 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
-}
-
-/* The inverse of load8 for the first `lanes` lanes. */
-static inline void store8( float* rec, const int32_t* at, int32_t lanes, __m256 c0, __m256 c1, __m256 c2, __m256 c3 )
-{
-	_Alignas( 32 ) float tmp[32];
-	__m256 t0 = _mm256_unpacklo_ps( c0, c1 ), t1 = _mm256_unpackhi_ps( c0, c1 );
-	__m256 t2 = _mm256_unpacklo_ps( c2, c3 ), t3 = _mm256_unpackhi_ps( c2, c3 );
-	_mm256_store_ps( tmp, _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) ) );
-	_mm256_store_ps( tmp + 8,
-					 _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) ) );
-	_mm256_store_ps( tmp + 16,
-					 _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) ) );
-	_mm256_store_ps( tmp + 24,
-					 _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) ) );
-	for ( int32_t j = 0; j < lanes; ++j )
-	{
-		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 8 * ( j % 4 ) + 4 * ( j / 4 ) ) );
-	}
-}
-
-/* The spring indices of a chunk of 8 from [s, s + left); lanes past the end repeat lane 0 (see
- * chunk_ends). */
-static inline int32_t chunk_ends8( const int32_t* sa, const int32_t* sb, int32_t s, int32_t left, int32_t* ia,
-								   int32_t* ib )
-{
-	const int32_t lanes = left < 8 ? left : 8;
-	for ( int32_t j = 0; j < 8; ++j )
-	{
-		ia[j] = sa[s + ( j < lanes ? j : 0 )];
-		ib[j] = sb[s + ( j < lanes ? j : 0 )];
-	}
-	return lanes;
-}
-
-/* All ones in the first `lanes` lanes. */
-static inline __m256i lane_mask8( int32_t lanes )
-{
-	return _mm256_cmpgt_epi32( _mm256_set1_epi32( lanes ), _mm256_setr_epi32( 0, 1, 2, 3, 4, 5, 6, 7 ) );
-}
-
-/* rest0[s ..] in the first `lanes` lanes, 1 in the others (as _mm512_mask_loadu_ps with 1). */
-static inline __m256 load_rest8( const float* rest0, int32_t s, int32_t lanes )
-{
-	__m256i m = lane_mask8( lanes );
-	return _mm256_blendv_ps( _mm256_set1_ps( 1.0f ), _mm256_maskload_ps( rest0 + s, m ), _mm256_castsi256_ps( m ) );
-}
-
-static inline __m256 norm3_8( __m256 x, __m256 y, __m256 z )
-{
-	return _mm256_sqrt_ps(
-		_mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( x, x ), _mm256_mul_ps( y, y ) ), _mm256_mul_ps( z, z ) ) );
-}
-
-/* Largest of the lanes of v whose sign bit is set in mask (−inf when none). */
-static inline float masked_max8( __m256 v, __m256 mask )
-{
-	v = _mm256_blendv_ps( _mm256_set1_ps( -INFINITY ), v, mask );
-	__m128 m = _mm_max_ps( _mm256_castps256_ps128( v ), _mm256_extractf128_ps( v, 1 ) );
-	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	return _mm_cvtss_f32( m );
-}
-
-static inline __m256 abs8( __m256 v )
-{
-	return _mm256_and_ps( v, _mm256_castsi256_ps( _mm256_set1_epi32( 0x7fffffff ) ) );
-}
-#endif
 
 /* Packs the particles into records (x, y, z, 1/m) and (vx, vy, vz, 0). */
 static void pack( sere_massspring* ms, const sere_ms_particles* p )
@@ -703,87 +566,34 @@ static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, sp
 	float* restrict fx = ms->fx;
 	float* restrict fy = ms->fy;
 	float* restrict fz = ms->fz;
-#if defined( __AVX512F__ )
-	const int32_t chunks = ( count + 15 ) / 16;
-	const __m512 keep = _mm512_set1_ps( law.keep ), k = _mm512_set1_ps( law.k ), c = _mm512_set1_ps( law.c );
-	const __m512 one = _mm512_set1_ps( 1.0f ), zero = _mm512_setzero_ps();
+	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
+	const sere_vf keep = sere_vf_splat( law.keep ), k = sere_vf_splat( law.k ), c = sere_vf_splat( law.c );
+	const sere_vf one = sere_vf_splat( 1.0f ), zero = sere_vf_splat( 0.0f );
 #pragma omp for schedule( static )
 	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
 	{
-		const int32_t s = first + 16 * chunk;
-		int32_t ia[16], ib[16];
-		const int32_t lanes = chunk_ends( sa, sb, s, count - 16 * chunk, ia, ib );
-		const __mmask16 m = (__mmask16) ( ( 1u << lanes ) - 1u );
-		__m512 ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
-		load16( xr, ia, &ax, &ay, &az, &aw );
-		load16( xr, ib, &bx, &by, &bz, &bw );
-		load16( vr, ia, &avx, &avy, &avz, &unused );
-		load16( vr, ib, &bvx, &bvy, &bvz, &unused );
-		__m512 dx = _mm512_sub_ps( bx, ax ), dy = _mm512_sub_ps( by, ay ), dz = _mm512_sub_ps( bz, az );
-		__m512 len = norm3( dx, dy, dz );
-		__m512 inv = _mm512_maskz_div_ps( _mm512_cmp_ps_mask( len, zero, _CMP_GT_OQ ), one, len );
-		__m512 nx = _mm512_mul_ps( dx, inv ), ny = _mm512_mul_ps( dy, inv ), nz = _mm512_mul_ps( dz, inv );
-		__m512 rest = _mm512_mul_ps( _mm512_mask_loadu_ps( one, m, rest0 + s ), keep );
-		__m512 strain = _mm512_div_ps( _mm512_sub_ps( len, rest ), rest );
-		__m512 rvx = _mm512_sub_ps( bvx, avx ), rvy = _mm512_sub_ps( bvy, avy ), rvz = _mm512_sub_ps( bvz, avz );
-		__m512 along = _mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( rvx, nx ), _mm512_mul_ps( rvy, ny ) ),
-									  _mm512_mul_ps( rvz, nz ) );
-		__m512 f = _mm512_add_ps( _mm512_mul_ps( k, strain ), _mm512_mul_ps( c, along ) );
-		_mm512_mask_storeu_ps( fx + s, m, _mm512_mul_ps( f, nx ) );
-		_mm512_mask_storeu_ps( fy + s, m, _mm512_mul_ps( f, ny ) );
-		_mm512_mask_storeu_ps( fz + s, m, _mm512_mul_ps( f, nz ) );
+		const int32_t s = first + SERE_LANES * chunk;
+		int32_t ia[SERE_LANES], ib[SERE_LANES];
+		const int32_t lanes = chunk_ends( sa, sb, s, count - SERE_LANES * chunk, ia, ib );
+		sere_vf ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
+		sere_vf_load_records( xr, ia, &ax, &ay, &az, &aw );
+		sere_vf_load_records( xr, ib, &bx, &by, &bz, &bw );
+		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &unused );
+		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &unused );
+		sere_vf dx = sere_vf_sub( bx, ax ), dy = sere_vf_sub( by, ay ), dz = sere_vf_sub( bz, az );
+		sere_vf len = sere_vf_norm3( dx, dy, dz );
+		sere_vf inv = sere_vf_keep( sere_vf_gt( len, zero ), sere_vf_div( one, len ) );
+		sere_vf nx = sere_vf_mul( dx, inv ), ny = sere_vf_mul( dy, inv ), nz = sere_vf_mul( dz, inv );
+		sere_vf rest = sere_vf_mul( sere_vf_load_first( rest0 + s, lanes, 1.0f ), keep );
+		sere_vf strain = sere_vf_div( sere_vf_sub( len, rest ), rest );
+		sere_vf rvx = sere_vf_sub( bvx, avx ), rvy = sere_vf_sub( bvy, avy ), rvz = sere_vf_sub( bvz, avz );
+		sere_vf along =
+			sere_vf_add( sere_vf_add( sere_vf_mul( rvx, nx ), sere_vf_mul( rvy, ny ) ), sere_vf_mul( rvz, nz ) );
+		sere_vf f = sere_vf_add( sere_vf_mul( k, strain ), sere_vf_mul( c, along ) );
+		sere_vf_store_first( fx + s, lanes, sere_vf_mul( f, nx ) );
+		sere_vf_store_first( fy + s, lanes, sere_vf_mul( f, ny ) );
+		sere_vf_store_first( fz + s, lanes, sere_vf_mul( f, nz ) );
 	}
-#elif defined( __AVX__ )
-	const int32_t chunks = ( count + 7 ) / 8;
-	const __m256 keep = _mm256_set1_ps( law.keep ), k = _mm256_set1_ps( law.k ), c = _mm256_set1_ps( law.c );
-	const __m256 one = _mm256_set1_ps( 1.0f ), zero = _mm256_setzero_ps();
-#pragma omp for schedule( static )
-	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
-	{
-		const int32_t s = first + 8 * chunk;
-		int32_t ia[8], ib[8];
-		const int32_t lanes = chunk_ends8( sa, sb, s, count - 8 * chunk, ia, ib );
-		const __m256i m = lane_mask8( lanes );
-		__m256 ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
-		load8( xr, ia, &ax, &ay, &az, &aw );
-		load8( xr, ib, &bx, &by, &bz, &bw );
-		load8( vr, ia, &avx, &avy, &avz, &unused );
-		load8( vr, ib, &bvx, &bvy, &bvz, &unused );
-		__m256 dx = _mm256_sub_ps( bx, ax ), dy = _mm256_sub_ps( by, ay ), dz = _mm256_sub_ps( bz, az );
-		__m256 len = norm3_8( dx, dy, dz );
-		__m256 inv = _mm256_and_ps( _mm256_cmp_ps( len, zero, _CMP_GT_OQ ), _mm256_div_ps( one, len ) );
-		__m256 nx = _mm256_mul_ps( dx, inv ), ny = _mm256_mul_ps( dy, inv ), nz = _mm256_mul_ps( dz, inv );
-		__m256 rest = _mm256_mul_ps( load_rest8( rest0, s, lanes ), keep );
-		__m256 strain = _mm256_div_ps( _mm256_sub_ps( len, rest ), rest );
-		__m256 rvx = _mm256_sub_ps( bvx, avx ), rvy = _mm256_sub_ps( bvy, avy ), rvz = _mm256_sub_ps( bvz, avz );
-		__m256 along = _mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( rvx, nx ), _mm256_mul_ps( rvy, ny ) ),
-									  _mm256_mul_ps( rvz, nz ) );
-		__m256 f = _mm256_add_ps( _mm256_mul_ps( k, strain ), _mm256_mul_ps( c, along ) );
-		_mm256_maskstore_ps( fx + s, m, _mm256_mul_ps( f, nx ) );
-		_mm256_maskstore_ps( fy + s, m, _mm256_mul_ps( f, ny ) );
-		_mm256_maskstore_ps( fz + s, m, _mm256_mul_ps( f, nz ) );
-	}
-#else
-#pragma omp for schedule( static )
-	for ( int32_t s = first; s < first + count; ++s )
-	{
-		const float* a = xr + 4 * sa[s];
-		const float* b = xr + 4 * sb[s];
-		const float* va = vr + 4 * sa[s];
-		const float* vb = vr + 4 * sb[s];
-		float dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
-		float len = sqrtf( ( dx * dx + dy * dy ) + dz * dz );
-		float inv = len > 0.0f ? 1.0f / len : 0.0f;
-		float nx = dx * inv, ny = dy * inv, nz = dz * inv;
-		float rest = rest0[s] * law.keep;
-		float strain = ( len - rest ) / rest;
-		float along = ( ( vb[0] - va[0] ) * nx + ( vb[1] - va[1] ) * ny ) + ( vb[2] - va[2] ) * nz;
-		float f = law.k * strain + law.c * along;
-		fx[s] = f * nx;
-		fy[s] = f * ny;
-		fz[s] = f * nz;
-	}
-#endif
 }
 
 /* Eq. 1: every particle gathers its springs' forces in a fixed order, then a = g + F/m,
@@ -829,8 +639,8 @@ static void integrate_velocities( sere_massspring* ms, int32_t count, const sere
 }
 
 /* Eq. 2 on one run of structural springs [first, first + count), by the calling thread: no two
- * of them share a particle, so they are limited at the same time (16, or 8 with AVX, to a SIMD step). Each spring off
- * [lo_factor L, hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the
+ * of them share a particle, so they are limited at the same time (SERE_LANES to a step of the lane layer). Each spring
+ * off [lo_factor L, hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the
  * nearer bound. Raises *worst_io to the largest distance off the band (relative to L) this thread found before
  * correcting and adds the number of its springs that were off to *off_band. */
 static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float keep, float lo_factor, float hi_factor,
@@ -843,117 +653,45 @@ static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float 
 	float* restrict vr = ms->vrec;
 	float worst = *worst_io;
 	int32_t n = 0;
-#if defined( __AVX512F__ )
-	const int32_t chunks = ( count + 15 ) / 16;
-	const __m512 vkeep = _mm512_set1_ps( keep ), vlo = _mm512_set1_ps( lo_factor ), vhi = _mm512_set1_ps( hi_factor );
-	const __m512 vdt = _mm512_set1_ps( dt ), one = _mm512_set1_ps( 1.0f ), zero = _mm512_setzero_ps();
+	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
+	const sere_vf vkeep = sere_vf_splat( keep ), vlo = sere_vf_splat( lo_factor ), vhi = sere_vf_splat( hi_factor );
+	const sere_vf vdt = sere_vf_splat( dt ), zero = sere_vf_splat( 0.0f );
 	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
 	{
-		const int32_t s = first + 16 * chunk;
-		int32_t ia[16], ib[16];
-		const int32_t lanes = chunk_ends( sa, sb, s, count - 16 * chunk, ia, ib );
-		const __mmask16 m = (__mmask16) ( ( 1u << lanes ) - 1u );
-		__m512 ax, ay, az, wa, bx, by, bz, wb, avx, avy, avz, avw, bvx, bvy, bvz, bvw;
-		load16( xr, ia, &ax, &ay, &az, &wa );
-		load16( xr, ib, &bx, &by, &bz, &wb );
-		load16( vr, ia, &avx, &avy, &avz, &avw );
-		load16( vr, ib, &bvx, &bvy, &bvz, &bvw );
-		__m512 px = _mm512_add_ps( _mm512_sub_ps( bx, ax ), _mm512_mul_ps( vdt, _mm512_sub_ps( bvx, avx ) ) );
-		__m512 py = _mm512_add_ps( _mm512_sub_ps( by, ay ), _mm512_mul_ps( vdt, _mm512_sub_ps( bvy, avy ) ) );
-		__m512 pz = _mm512_add_ps( _mm512_sub_ps( bz, az ), _mm512_mul_ps( vdt, _mm512_sub_ps( bvz, avz ) ) );
-		__m512 len = norm3( px, py, pz );
-		__m512 rest = _mm512_mul_ps( _mm512_mask_loadu_ps( one, m, rest0 + s ), vkeep );
-		__m512 target = _mm512_min_ps( _mm512_max_ps( len, _mm512_mul_ps( rest, vlo ) ), _mm512_mul_ps( rest, vhi ) );
-		__m512 off = _mm512_sub_ps( len, target );
-		__mmask16 violated = _mm512_mask_cmp_ps_mask( m, off, zero, _CMP_NEQ_UQ );
-		if ( violated == 0 )
+		const int32_t s = first + SERE_LANES * chunk;
+		int32_t ia[SERE_LANES], ib[SERE_LANES];
+		const int32_t lanes = chunk_ends( sa, sb, s, count - SERE_LANES * chunk, ia, ib );
+		sere_vf ax, ay, az, wa, bx, by, bz, wb, avx, avy, avz, avw, bvx, bvy, bvz, bvw;
+		sere_vf_load_records( xr, ia, &ax, &ay, &az, &wa );
+		sere_vf_load_records( xr, ib, &bx, &by, &bz, &wb );
+		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &avw );
+		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &bvw );
+		sere_vf px = sere_vf_add( sere_vf_sub( bx, ax ), sere_vf_mul( vdt, sere_vf_sub( bvx, avx ) ) );
+		sere_vf py = sere_vf_add( sere_vf_sub( by, ay ), sere_vf_mul( vdt, sere_vf_sub( bvy, avy ) ) );
+		sere_vf pz = sere_vf_add( sere_vf_sub( bz, az ), sere_vf_mul( vdt, sere_vf_sub( bvz, avz ) ) );
+		sere_vf len = sere_vf_norm3( px, py, pz );
+		sere_vf rest = sere_vf_mul( sere_vf_load_first( rest0 + s, lanes, 1.0f ), vkeep );
+		sere_vf target = sere_vf_min( sere_vf_max( len, sere_vf_mul( rest, vlo ) ), sere_vf_mul( rest, vhi ) );
+		sere_vf off = sere_vf_sub( len, target );
+		sere_vmask violated = sere_vmask_and( sere_vmask_first( lanes ), sere_vf_ne( off, zero ) );
+		const int32_t off_lanes = sere_vmask_count( violated );
+		if ( off_lanes == 0 )
 		{
 			continue;
 		}
-		n += __builtin_popcount( violated );
-		worst = fmaxf( worst, _mm512_mask_reduce_max_ps( violated, _mm512_div_ps( _mm512_abs_ps( off ), rest ) ) );
-		__m512 w = _mm512_add_ps( wa, wb );
-		__mmask16 move =
-			_mm512_mask_cmp_ps_mask( _mm512_mask_cmp_ps_mask( violated, w, zero, _CMP_GT_OQ ), len, zero, _CMP_GT_OQ );
-		__m512 scale = _mm512_maskz_div_ps( move, off, _mm512_mul_ps( _mm512_mul_ps( len, vdt ), w ) );
-		__m512 sa_ = _mm512_mul_ps( wa, scale ), sb_ = _mm512_mul_ps( wb, scale );
-		store16( vr, ia, lanes, _mm512_add_ps( avx, _mm512_mul_ps( sa_, px ) ),
-				 _mm512_add_ps( avy, _mm512_mul_ps( sa_, py ) ), _mm512_add_ps( avz, _mm512_mul_ps( sa_, pz ) ), avw );
-		store16( vr, ib, lanes, _mm512_sub_ps( bvx, _mm512_mul_ps( sb_, px ) ),
-				 _mm512_sub_ps( bvy, _mm512_mul_ps( sb_, py ) ), _mm512_sub_ps( bvz, _mm512_mul_ps( sb_, pz ) ), bvw );
+		n += off_lanes;
+		worst = fmaxf( worst, sere_vf_max_where( violated, sere_vf_div( sere_vf_abs( off ), rest ) ) );
+		sere_vf w = sere_vf_add( wa, wb );
+		sere_vmask move = sere_vmask_and( sere_vmask_and( violated, sere_vf_gt( w, zero ) ), sere_vf_gt( len, zero ) );
+		sere_vf scale = sere_vf_keep( move, sere_vf_div( off, sere_vf_mul( sere_vf_mul( len, vdt ), w ) ) );
+		sere_vf sa_ = sere_vf_mul( wa, scale ), sb_ = sere_vf_mul( wb, scale );
+		sere_vf_store_records( vr, ia, lanes, sere_vf_add( avx, sere_vf_mul( sa_, px ) ),
+							   sere_vf_add( avy, sere_vf_mul( sa_, py ) ), sere_vf_add( avz, sere_vf_mul( sa_, pz ) ),
+							   avw );
+		sere_vf_store_records( vr, ib, lanes, sere_vf_sub( bvx, sere_vf_mul( sb_, px ) ),
+							   sere_vf_sub( bvy, sere_vf_mul( sb_, py ) ), sere_vf_sub( bvz, sere_vf_mul( sb_, pz ) ),
+							   bvw );
 	}
-#elif defined( __AVX__ )
-	const int32_t chunks = ( count + 7 ) / 8;
-	const __m256 vkeep = _mm256_set1_ps( keep ), vlo = _mm256_set1_ps( lo_factor ), vhi = _mm256_set1_ps( hi_factor );
-	const __m256 vdt = _mm256_set1_ps( dt ), zero = _mm256_setzero_ps();
-	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
-	{
-		const int32_t s = first + 8 * chunk;
-		int32_t ia[8], ib[8];
-		const int32_t lanes = chunk_ends8( sa, sb, s, count - 8 * chunk, ia, ib );
-		const __m256 m = _mm256_castsi256_ps( lane_mask8( lanes ) );
-		__m256 ax, ay, az, wa, bx, by, bz, wb, avx, avy, avz, avw, bvx, bvy, bvz, bvw;
-		load8( xr, ia, &ax, &ay, &az, &wa );
-		load8( xr, ib, &bx, &by, &bz, &wb );
-		load8( vr, ia, &avx, &avy, &avz, &avw );
-		load8( vr, ib, &bvx, &bvy, &bvz, &bvw );
-		__m256 px = _mm256_add_ps( _mm256_sub_ps( bx, ax ), _mm256_mul_ps( vdt, _mm256_sub_ps( bvx, avx ) ) );
-		__m256 py = _mm256_add_ps( _mm256_sub_ps( by, ay ), _mm256_mul_ps( vdt, _mm256_sub_ps( bvy, avy ) ) );
-		__m256 pz = _mm256_add_ps( _mm256_sub_ps( bz, az ), _mm256_mul_ps( vdt, _mm256_sub_ps( bvz, avz ) ) );
-		__m256 len = norm3_8( px, py, pz );
-		__m256 rest = _mm256_mul_ps( load_rest8( rest0, s, lanes ), vkeep );
-		__m256 target = _mm256_min_ps( _mm256_max_ps( len, _mm256_mul_ps( rest, vlo ) ), _mm256_mul_ps( rest, vhi ) );
-		__m256 off = _mm256_sub_ps( len, target );
-		__m256 violated = _mm256_and_ps( m, _mm256_cmp_ps( off, zero, _CMP_NEQ_UQ ) );
-		int violated_bits = _mm256_movemask_ps( violated );
-		if ( violated_bits == 0 )
-		{
-			continue;
-		}
-		n += __builtin_popcount( (unsigned) violated_bits );
-		worst = fmaxf( worst, masked_max8( _mm256_div_ps( abs8( off ), rest ), violated ) );
-		__m256 w = _mm256_add_ps( wa, wb );
-		__m256 move = _mm256_and_ps( _mm256_and_ps( violated, _mm256_cmp_ps( w, zero, _CMP_GT_OQ ) ),
-									 _mm256_cmp_ps( len, zero, _CMP_GT_OQ ) );
-		__m256 scale = _mm256_and_ps( move, _mm256_div_ps( off, _mm256_mul_ps( _mm256_mul_ps( len, vdt ), w ) ) );
-		__m256 sa_ = _mm256_mul_ps( wa, scale ), sb_ = _mm256_mul_ps( wb, scale );
-		store8( vr, ia, lanes, _mm256_add_ps( avx, _mm256_mul_ps( sa_, px ) ),
-				_mm256_add_ps( avy, _mm256_mul_ps( sa_, py ) ), _mm256_add_ps( avz, _mm256_mul_ps( sa_, pz ) ), avw );
-		store8( vr, ib, lanes, _mm256_sub_ps( bvx, _mm256_mul_ps( sb_, px ) ),
-				_mm256_sub_ps( bvy, _mm256_mul_ps( sb_, py ) ), _mm256_sub_ps( bvz, _mm256_mul_ps( sb_, pz ) ), bvw );
-	}
-#else
-	for ( int32_t s = first; s < first + count; ++s )
-	{
-		const float* a = xr + 4 * sa[s];
-		const float* b = xr + 4 * sb[s];
-		float* va = vr + 4 * sa[s];
-		float* vb = vr + 4 * sb[s];
-		float px = ( b[0] - a[0] ) + dt * ( vb[0] - va[0] );
-		float py = ( b[1] - a[1] ) + dt * ( vb[1] - va[1] );
-		float pz = ( b[2] - a[2] ) + dt * ( vb[2] - va[2] );
-		float len = sqrtf( ( px * px + py * py ) + pz * pz );
-		float rest = rest0[s] * keep;
-		float target = len < rest * lo_factor ? rest * lo_factor : ( len > rest * hi_factor ? rest * hi_factor : len );
-		float off = len - target;
-		if ( off == 0.0f )
-		{
-			continue;
-		}
-		n += 1;
-		float rel = fabsf( off ) / rest;
-		worst = rel > worst ? rel : worst;
-		float w = a[3] + b[3];
-		float scale = w > 0.0f && len > 0.0f ? off / ( ( len * dt ) * w ) : 0.0f;
-		float sa_ = a[3] * scale, sb_ = b[3] * scale;
-		va[0] = va[0] + sa_ * px;
-		va[1] = va[1] + sa_ * py;
-		va[2] = va[2] + sa_ * pz;
-		vb[0] = vb[0] - sb_ * px;
-		vb[1] = vb[1] - sb_ * py;
-		vb[2] = vb[2] - sb_ * pz;
-	}
-#endif
 	*worst_io = worst;
 	*off_band += n;
 }
@@ -970,81 +708,34 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 	const float* restrict xr = ms->xrec;
 	const float* restrict vr = ms->vrec;
 	float excess = -1.0f, strain = 0.0f;
-#if defined( __AVX512F__ )
 	const int32_t count = ms->structural_count;
-	const int32_t chunks = ( count + 15 ) / 16;
-	const __m512 vkeep = _mm512_set1_ps( keep ), vdt = _mm512_set1_ps( dt ), one = _mm512_set1_ps( 1.0f );
-	const __m512 hi = _mm512_set1_ps( 1.0f + tau ), lo = _mm512_set1_ps( 1.0f - tau );
+	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
+	const sere_vf vkeep = sere_vf_splat( keep ), vdt = sere_vf_splat( dt ), one = sere_vf_splat( 1.0f );
+	const sere_vf hi = sere_vf_splat( 1.0f + tau ), lo = sere_vf_splat( 1.0f - tau );
 #pragma omp for schedule( static )
 	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
 	{
-		const int32_t s = 16 * chunk;
-		int32_t ia[16], ib[16];
+		const int32_t s = SERE_LANES * chunk;
+		int32_t ia[SERE_LANES], ib[SERE_LANES];
 		const int32_t lanes = chunk_ends( sa, sb, s, count - s, ia, ib );
-		const __mmask16 m = (__mmask16) ( ( 1u << lanes ) - 1u );
-		__m512 ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
-		load16( xr, ia, &ax, &ay, &az, &aw );
-		load16( xr, ib, &bx, &by, &bz, &bw );
-		load16( vr, ia, &avx, &avy, &avz, &unused );
-		load16( vr, ib, &bvx, &bvy, &bvz, &unused );
-		__m512 px = _mm512_sub_ps( _mm512_add_ps( bx, _mm512_mul_ps( bvx, vdt ) ),
-								   _mm512_add_ps( ax, _mm512_mul_ps( avx, vdt ) ) );
-		__m512 py = _mm512_sub_ps( _mm512_add_ps( by, _mm512_mul_ps( bvy, vdt ) ),
-								   _mm512_add_ps( ay, _mm512_mul_ps( avy, vdt ) ) );
-		__m512 pz = _mm512_sub_ps( _mm512_add_ps( bz, _mm512_mul_ps( bvz, vdt ) ),
-								   _mm512_add_ps( az, _mm512_mul_ps( avz, vdt ) ) );
-		__m512 ratio =
-			_mm512_div_ps( norm3( px, py, pz ), _mm512_mul_ps( _mm512_mask_loadu_ps( one, m, rest0 + s ), vkeep ) );
-		__m512 out = _mm512_max_ps( _mm512_sub_ps( ratio, hi ), _mm512_sub_ps( lo, ratio ) );
-		excess = fmaxf( excess, _mm512_mask_reduce_max_ps( m, out ) );
-		strain = fmaxf( strain, _mm512_mask_reduce_max_ps( m, _mm512_abs_ps( _mm512_sub_ps( ratio, one ) ) ) );
+		const sere_vmask m = sere_vmask_first( lanes );
+		sere_vf ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
+		sere_vf_load_records( xr, ia, &ax, &ay, &az, &aw );
+		sere_vf_load_records( xr, ib, &bx, &by, &bz, &bw );
+		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &unused );
+		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &unused );
+		sere_vf px =
+			sere_vf_sub( sere_vf_add( bx, sere_vf_mul( bvx, vdt ) ), sere_vf_add( ax, sere_vf_mul( avx, vdt ) ) );
+		sere_vf py =
+			sere_vf_sub( sere_vf_add( by, sere_vf_mul( bvy, vdt ) ), sere_vf_add( ay, sere_vf_mul( avy, vdt ) ) );
+		sere_vf pz =
+			sere_vf_sub( sere_vf_add( bz, sere_vf_mul( bvz, vdt ) ), sere_vf_add( az, sere_vf_mul( avz, vdt ) ) );
+		sere_vf ratio = sere_vf_div( sere_vf_norm3( px, py, pz ),
+									 sere_vf_mul( sere_vf_load_first( rest0 + s, lanes, 1.0f ), vkeep ) );
+		sere_vf out = sere_vf_max( sere_vf_sub( ratio, hi ), sere_vf_sub( lo, ratio ) );
+		excess = fmaxf( excess, sere_vf_max_where( m, out ) );
+		strain = fmaxf( strain, sere_vf_max_where( m, sere_vf_abs( sere_vf_sub( ratio, one ) ) ) );
 	}
-#elif defined( __AVX__ )
-	const int32_t count = ms->structural_count;
-	const int32_t chunks = ( count + 7 ) / 8;
-	const __m256 vkeep = _mm256_set1_ps( keep ), vdt = _mm256_set1_ps( dt ), one = _mm256_set1_ps( 1.0f );
-	const __m256 hi = _mm256_set1_ps( 1.0f + tau ), lo = _mm256_set1_ps( 1.0f - tau );
-#pragma omp for schedule( static )
-	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
-	{
-		const int32_t s = 8 * chunk;
-		int32_t ia[8], ib[8];
-		const int32_t lanes = chunk_ends8( sa, sb, s, count - s, ia, ib );
-		const __m256 m = _mm256_castsi256_ps( lane_mask8( lanes ) );
-		__m256 ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
-		load8( xr, ia, &ax, &ay, &az, &aw );
-		load8( xr, ib, &bx, &by, &bz, &bw );
-		load8( vr, ia, &avx, &avy, &avz, &unused );
-		load8( vr, ib, &bvx, &bvy, &bvz, &unused );
-		__m256 px = _mm256_sub_ps( _mm256_add_ps( bx, _mm256_mul_ps( bvx, vdt ) ),
-								   _mm256_add_ps( ax, _mm256_mul_ps( avx, vdt ) ) );
-		__m256 py = _mm256_sub_ps( _mm256_add_ps( by, _mm256_mul_ps( bvy, vdt ) ),
-								   _mm256_add_ps( ay, _mm256_mul_ps( avy, vdt ) ) );
-		__m256 pz = _mm256_sub_ps( _mm256_add_ps( bz, _mm256_mul_ps( bvz, vdt ) ),
-								   _mm256_add_ps( az, _mm256_mul_ps( avz, vdt ) ) );
-		__m256 ratio = _mm256_div_ps( norm3_8( px, py, pz ), _mm256_mul_ps( load_rest8( rest0, s, lanes ), vkeep ) );
-		__m256 out = _mm256_max_ps( _mm256_sub_ps( ratio, hi ), _mm256_sub_ps( lo, ratio ) );
-		excess = fmaxf( excess, masked_max8( out, m ) );
-		strain = fmaxf( strain, masked_max8( abs8( _mm256_sub_ps( ratio, one ) ), m ) );
-	}
-#else
-#pragma omp for schedule( static )
-	for ( int32_t s = 0; s < ms->structural_count; ++s )
-	{
-		const float* a = xr + 4 * sa[s];
-		const float* b = xr + 4 * sb[s];
-		const float* va = vr + 4 * sa[s];
-		const float* vb = vr + 4 * sb[s];
-		float px = ( b[0] + vb[0] * dt ) - ( a[0] + va[0] * dt );
-		float py = ( b[1] + vb[1] * dt ) - ( a[1] + va[1] * dt );
-		float pz = ( b[2] + vb[2] * dt ) - ( a[2] + va[2] * dt );
-		float ratio = sqrtf( ( px * px + py * py ) + pz * pz ) / ( rest0[s] * keep );
-		float out = ratio - ( 1.0f + tau ) > ( 1.0f - tau ) - ratio ? ratio - ( 1.0f + tau ) : ( 1.0f - tau ) - ratio;
-		excess = out > excess ? out : excess;
-		float dev = fabsf( ratio - 1.0f );
-		strain = dev > strain ? dev : strain;
-	}
-#endif
 	*excess_out = excess;
 	*strain_out = strain;
 }
