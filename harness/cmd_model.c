@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "io.h"
 #include "model.h"
+#include "options.h"
 #include "params.h"
 #include "pbd.h"
 
@@ -27,102 +28,39 @@ static void model_help( void )
 			"  --json                     print one JSON object instead of text\n" );
 }
 
-static int parse_count( const char* option, const char* text, long long lo, long long hi, long long* value )
-{
-	char* end;
-	long long v = strtoll( text, &end, 10 );
-	if ( *text == '\0' || *end != '\0' || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere model: %s takes a whole number from %lld to %lld, not '%s'\n", option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
 int sere_cmd_model( int argc, char** argv )
 {
-	const char* path = NULL;
 	long long particles = -1, springs = -1, points = 3000, seed = 1;
 	int json = 0;
 	char err[1024];
-	sere_sim_params params = sere_sim_params_default();
-	for ( int i = 1; i < argc; ++i )
+	const char* preset = NULL;
+	sere_option_list sets = { .count = 0 };
+	const sere_option options[] = {
+		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
+		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
+		{ "--points", SERE_OPTION_COUNT, &points, 3, 30000000, NULL },
+		{ "--seed", SERE_OPTION_COUNT, &seed, 0, 4294967295.0, NULL },
+		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
+		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "model", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
+							 &parsed ) != SERE_OK )
 	{
-		const char* a = argv[i];
-		const char* next = i + 1 < argc ? argv[i + 1] : NULL;
-		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
-		{
-			model_help();
-			return 0;
-		}
-		else if ( strcmp( a, "--json" ) == 0 )
-		{
-			json = 1;
-		}
-		else if ( next == NULL && a[0] == '-' )
-		{
-			fprintf( stderr, "sere model: %s needs a value\n", a );
-			return 2;
-		}
-		else if ( strcmp( a, "--particles" ) == 0 )
-		{
-			if ( parse_count( a, argv[++i], 4, 100000000, &particles ) != 0 )
-			{
-				return 2;
-			}
-		}
-		else if ( strcmp( a, "--springs" ) == 0 )
-		{
-			if ( parse_count( a, argv[++i], 1, 400000000, &springs ) != 0 )
-			{
-				return 2;
-			}
-		}
-		else if ( strcmp( a, "--points" ) == 0 )
-		{
-			if ( parse_count( a, argv[++i], 3, 30000000, &points ) != 0 )
-			{
-				return 2;
-			}
-		}
-		else if ( strcmp( a, "--seed" ) == 0 )
-		{
-			if ( parse_count( a, argv[++i], 0, 4294967295LL, &seed ) != 0 )
-			{
-				return 2;
-			}
-		}
-		else if ( strcmp( a, "--preset" ) == 0 )
-		{
-			if ( sere_params_load_preset( &params, argv[++i], err, sizeof( err ) ) != 0 )
-			{
-				fprintf( stderr, "sere model: %s\n", err );
-				return 2;
-			}
-		}
-		else if ( strcmp( a, "--set" ) == 0 )
-		{
-			if ( sere_params_set( &params, argv[++i], err, sizeof( err ) ) != 0 )
-			{
-				fprintf( stderr, "sere model: %s\n", err );
-				return 2;
-			}
-		}
-		else if ( a[0] == '-' )
-		{
-			fprintf( stderr, "sere model: unknown option '%s' (see sere model --help)\n", a );
-			return 2;
-		}
-		else if ( path == NULL )
-		{
-			path = a;
-		}
-		else
-		{
-			fprintf( stderr, "sere model: one LEAF only, got '%s' and '%s'\n", path, a );
-			return 2;
-		}
+		return 2;
+	}
+	if ( parsed.help )
+	{
+		model_help();
+		return 0;
+	}
+	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
+	sere_sim_params params = sere_sim_params_default();
+	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere model: %s\n", err );
+		return 2;
 	}
 	if ( path == NULL )
 	{

@@ -1,6 +1,7 @@
 #include "build.h"
 #include "commands.h"
 #include "io.h"
+#include "options.h"
 #include "osmosis.h"
 #include "topo.h"
 
@@ -105,71 +106,47 @@ static int dump( const char* dir, const sere_osmosis* o, const sere_model* model
 
 int sere_cmd_osmosis( int argc, char** argv )
 {
-	const char *path = NULL, *preset = NULL, *dump_dir = NULL;
+	const char *preset = NULL, *dump_dir = NULL;
 	long long steps = 10, points = 1500, particles = -1, springs = -1, threads = 0;
 	int conservative = -1;
 	char err[1024];
 	sere_sim_params params = sere_sim_params_default();
-	const char* sets[64];
-	int set_count = 0;
-	for ( int i = 1; i < argc; ++i )
+	sere_option_list sets = { .count = 0 };
+	static const char* const modes[] = { "paper", "conservative", NULL };
+	const sere_option options[] = {
+		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
+		{ "--dump", SERE_OPTION_DIR, &dump_dir, 0, 0, NULL },
+		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		{ "--mode", SERE_OPTION_CHOICE, &conservative, 0, 0, modes },
+		{ "--steps", SERE_OPTION_COUNT, &steps, 1, 100000000, NULL },
+		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
+		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
+		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
+							 &parsed ) != SERE_OK )
 	{
-		const char* a = argv[i];
-		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
-		{
-			osmosis_help();
-			return 0;
-		}
-		if ( a[0] != '-' )
-		{
-			if ( path != NULL )
-			{
-				fprintf( stderr, "sere osmosis: one LEAF only, got '%s' and '%s'\n", path, a );
-				return 2;
-			}
-			path = a;
-			continue;
-		}
-		if ( i + 1 >= argc )
-		{
-			fprintf( stderr, "sere osmosis: unknown option or missing value: '%s' (see sere osmosis --help)\n", a );
-			return 2;
-		}
-		const char* value = argv[++i];
-		char* end = NULL;
-		long long number = strtoll( value, &end, 10 );
-		int numeric = *value != '\0' && *end == '\0';
-		if ( strcmp( a, "--preset" ) == 0 )
-			preset = value;
-		else if ( strcmp( a, "--dump" ) == 0 )
-			dump_dir = value;
-		else if ( strcmp( a, "--set" ) == 0 && set_count < 64 )
-			sets[set_count++] = value;
-		else if ( strcmp( a, "--mode" ) == 0 &&
-				  ( strcmp( value, "paper" ) == 0 || strcmp( value, "conservative" ) == 0 ) )
-			conservative = strcmp( value, "conservative" ) == 0;
-		else if ( strcmp( a, "--steps" ) == 0 && numeric && number >= 1 && number <= 100000000 )
-			steps = number;
-		else if ( strcmp( a, "--points" ) == 0 && numeric && number >= 10 && number <= 10000000 )
-			points = number;
-		else if ( strcmp( a, "--particles" ) == 0 && numeric && number >= 4 )
-			particles = number;
-		else if ( strcmp( a, "--springs" ) == 0 && numeric && number >= 1 )
-			springs = number;
-		else if ( strcmp( a, "--threads" ) == 0 && numeric && number >= 0 && number <= 256 )
-			threads = number;
-		else
-		{
-			fprintf( stderr, "sere osmosis: bad option '%s %s' (see sere osmosis --help)\n", a, value );
-			return 2;
-		}
+		return 2;
 	}
+	if ( parsed.help )
+	{
+		osmosis_help();
+		return 0;
+	}
+	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	if ( path == NULL )
 	{
 		fprintf( stderr, "sere osmosis: missing LEAF (see sere osmosis --help)\n" );
 		return 2;
 	}
-	if ( sere_params_apply( &params, preset, sets, set_count, err, sizeof( err ) ) != 0 )
+	if ( ( particles < 0 ) != ( springs < 0 ) )
+	{
+		fprintf( stderr, "sere osmosis: --particles and --springs go together\n" );
+		return 2;
+	}
+	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere osmosis: %s\n", err );
 		return 2;

@@ -6,6 +6,7 @@
 #include "leafload.h"
 #include "leafpics.h"
 #include "machine.h"
+#include "options.h"
 #include "render.h"
 #include "topo.h"
 #include "watch.h"
@@ -57,19 +58,6 @@ static void run_help( void )
 			"  --set key=value   override a parameter; keys:\n" );
 	sere_params_describe( stdout );
 	printf( "Interrupting (Ctrl-C) stops after the current frame and still writes the summary and pictures.\n" );
-}
-
-static int parse_long( const char* option, const char* text, long long lo, long long hi, long long* value )
-{
-	char* end;
-	long long v = strtoll( text, &end, 10 );
-	if ( *text == '\0' || *end != '\0' || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere run: %s takes a whole number from %lld to %lld, not '%s'\n", option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
 }
 
 sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
@@ -295,104 +283,37 @@ static void print_shape( FILE* f, const char* key, const sere_shape* shape, doub
 
 int sere_cmd_run( int argc, char** argv )
 {
-	const char* path = NULL;
 	const char* preset = NULL;
 	const char* out = "out/run";
 	long long frames = 400, every = 0, points = 1500, particles = -1, springs = -1, threads = 0;
 	char err[1024];
 	int until_dry = 0;
 	sere_sim_params params = sere_sim_params_default();
-	const char* sets[64];
-	int set_count = 0;
-	for ( int i = 1; i < argc; ++i )
+	sere_option_list sets = { .count = 0 };
+	const sere_option options[] = {
+		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
+		{ "--out", SERE_OPTION_DIR, &out, 0, 0, NULL },
+		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		{ "--until-dry", SERE_OPTION_FLAG, &until_dry, 0, 0, NULL },
+		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 100000000, NULL },
+		{ "--every", SERE_OPTION_COUNT, &every, 1, 100000000, NULL },
+		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
+		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
+		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
+							 &parsed ) != SERE_OK )
 	{
-		const char* a = argv[i];
-		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
-		{
-			run_help();
-			return 0;
-		}
-		if ( strcmp( a, "--until-dry" ) == 0 )
-		{
-			until_dry = 1;
-			continue;
-		}
-		static const char* const valued[] = { "--preset", "--out",		 "--set",	  "--frames", "--every",
-											  "--points", "--particles", "--springs", "--threads" };
-		int takes_value = 0;
-		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
-		{
-			takes_value |= strcmp( a, valued[k] ) == 0;
-		}
-		if ( takes_value && i + 1 >= argc )
-		{
-			fprintf( stderr, "sere run: %s needs a value (see sere run --help)\n", a );
-			return 2;
-		}
-		if ( strcmp( a, "--preset" ) == 0 )
-		{
-			preset = argv[++i];
-		}
-		else if ( strcmp( a, "--out" ) == 0 )
-		{
-			out = argv[++i];
-			if ( sere_parse_dir( "run", a, out ) != 0 )
-				return 2;
-		}
-		else if ( strcmp( a, "--set" ) == 0 )
-		{
-			if ( set_count == 64 )
-			{
-				fprintf( stderr, "sere run: at most 64 --set options\n" );
-				return 2;
-			}
-			sets[set_count++] = argv[++i];
-		}
-		else if ( strcmp( a, "--frames" ) == 0 )
-		{
-			if ( parse_long( a, argv[++i], 1, 100000000, &frames ) != 0 )
-				return 2;
-		}
-		else if ( strcmp( a, "--every" ) == 0 )
-		{
-			if ( parse_long( a, argv[++i], 1, 100000000, &every ) != 0 )
-				return 2;
-		}
-		else if ( strcmp( a, "--points" ) == 0 )
-		{
-			if ( parse_long( a, argv[++i], 10, 10000000, &points ) != 0 )
-				return 2;
-		}
-		else if ( strcmp( a, "--particles" ) == 0 )
-		{
-			if ( parse_long( a, argv[++i], 4, 100000000, &particles ) != 0 )
-				return 2;
-		}
-		else if ( strcmp( a, "--springs" ) == 0 )
-		{
-			if ( parse_long( a, argv[++i], 1, 400000000, &springs ) != 0 )
-				return 2;
-		}
-		else if ( strcmp( a, "--threads" ) == 0 )
-		{
-			if ( parse_long( a, argv[++i], 0, 256, &threads ) != 0 )
-				return 2;
-		}
-		else if ( a[0] == '-' )
-		{
-			fprintf( stderr, "sere run: unknown option '%s' (see sere run --help)\n", a );
-			return 2;
-		}
-		else if ( path == NULL )
-		{
-			path = a;
-		}
-		else
-		{
-			fprintf( stderr, "sere run: one LEAF only, got '%s' and '%s'\n", path, a );
-			return 2;
-		}
+		return 2;
 	}
+	if ( parsed.help )
+	{
+		run_help();
+		return 0;
+	}
+	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	if ( path == NULL )
 	{
 		fprintf( stderr, "sere run: missing LEAF (a .leaf file; see sere run --help)\n" );
@@ -403,7 +324,7 @@ int sere_cmd_run( int argc, char** argv )
 		fprintf( stderr, "sere run: --particles and --springs go together\n" );
 		return 2;
 	}
-	if ( sere_params_apply( &params, preset, sets, set_count, err, sizeof( err ) ) != 0 )
+	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
 		return 2;

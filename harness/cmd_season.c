@@ -6,6 +6,7 @@
 #include "io.h"
 #include "lsystem.h"
 #include "markov.h"
+#include "options.h"
 #include "params.h"
 #include "render.h"
 #include "seasonleaf.h"
@@ -399,17 +400,17 @@ typedef struct options
 	const char* silhouette;
 	const char* mask;
 	const char* out;
-	long days;
+	long long days;
 	double temperature, humidity;
 	int have_weather;
-	long leaves;
-	long seed;
-	long threads;
-	long iterations;
-	long optimize;
-	long samples;
-	long steps;
-	long size;
+	long long leaves;
+	long long seed;
+	long long threads;
+	long long iterations;
+	long long optimize;
+	long long samples;
+	long long steps;
+	long long size;
 	int pictures;
 } options;
 
@@ -466,83 +467,39 @@ static int parse_options( int argc, char** argv, options* o )
 					  .steps = 400,
 					  .size = 900,
 					  .pictures = 1 };
-	for ( int i = 1; i < argc; ++i )
+	int no_pictures = 0;
+	const sere_option table[] = {
+		{ "--chain", SERE_OPTION_TEXT, &o->chain, 0, 0, NULL },
+		{ "--schedule", SERE_OPTION_TEXT, &o->schedule, 0, 0, NULL },
+		{ "--keys", SERE_OPTION_TEXT, &o->keys, 0, 0, NULL },
+		{ "--silhouette", SERE_OPTION_TEXT, &o->silhouette, 0, 0, NULL },
+		{ "--mask", SERE_OPTION_TEXT, &o->mask, 0, 0, NULL },
+		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
+		{ "--days", SERE_OPTION_COUNT, &o->days, 1, MAX_DAYS, NULL },
+		{ "--temperature", SERE_OPTION_REAL, &o->temperature, -90.0, 70.0, NULL },
+		{ "--humidity", SERE_OPTION_REAL, &o->humidity, 0.0, 1.0, NULL },
+		{ "--leaves", SERE_OPTION_COUNT, &o->leaves, 1, 1000000000, NULL },
+		{ "--seed", SERE_OPTION_COUNT, &o->seed, 0, 2147483647, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, 256, NULL },
+		{ "--iterations", SERE_OPTION_COUNT, &o->iterations, 0, 9, NULL },
+		{ "--samples", SERE_OPTION_COUNT, &o->samples, 8, 2000, NULL },
+		{ "--optimize", SERE_OPTION_COUNT, &o->optimize, 0, 10000, NULL },
+		{ "--steps", SERE_OPTION_COUNT, &o->steps, 0, 100000, NULL },
+		{ "--size", SERE_OPTION_COUNT, &o->size, 200, 4000, NULL },
+		{ "--no-pictures", SERE_OPTION_FLAG, &no_pictures, 0, 0, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "season", argc, argv, table, sizeof( table ) / sizeof( table[0] ), 0, NULL, &parsed ) !=
+		 SERE_OK )
 	{
-		const char* a = argv[i];
-		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
-		{
-			season_help();
-			return 1;
-		}
-		if ( strcmp( a, "--no-pictures" ) == 0 )
-		{
-			o->pictures = 0;
-			continue;
-		}
-		static const char* const valued[] = { "--chain", "--schedule", "--keys",		"--silhouette", "--mask",
-											  "--out",	 "--days",	   "--temperature", "--humidity",	"--leaves",
-											  "--seed",	 "--threads",  "--iterations",	"--samples",	"--steps",
-											  "--size",	 "--optimize" };
-		int known = 0;
-		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
-		{
-			known |= strcmp( a, valued[k] ) == 0;
-		}
-		if ( !known )
-		{
-			fprintf( stderr, "sere season: unknown %s '%s' (see sere season --help)\n",
-					 a[0] == '-' ? "option" : "argument", a );
-			return 2;
-		}
-		if ( i + 1 >= argc )
-		{
-			fprintf( stderr, "sere season: %s needs a value\n", a );
-			return 2;
-		}
-		const char* v = argv[++i];
-		int bad = 0;
-		if ( strcmp( a, "--chain" ) == 0 )
-			o->chain = v;
-		else if ( strcmp( a, "--schedule" ) == 0 )
-			o->schedule = v;
-		else if ( strcmp( a, "--keys" ) == 0 )
-			o->keys = v;
-		else if ( strcmp( a, "--silhouette" ) == 0 )
-			o->silhouette = v;
-		else if ( strcmp( a, "--mask" ) == 0 )
-			o->mask = v;
-		else if ( strcmp( a, "--out" ) == 0 )
-		{
-			o->out = v;
-			bad = sere_parse_dir( "season", a, v );
-		}
-		else if ( strcmp( a, "--days" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 1, MAX_DAYS, &o->days );
-		else if ( strcmp( a, "--temperature" ) == 0 )
-			bad = sere_parse_real( "season", a, v, -90.0, 70.0, &o->temperature );
-		else if ( strcmp( a, "--humidity" ) == 0 )
-			bad = sere_parse_real( "season", a, v, 0.0, 1.0, &o->humidity );
-		else if ( strcmp( a, "--leaves" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 1, 1000000000L, &o->leaves );
-		else if ( strcmp( a, "--seed" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 0, 2147483647L, &o->seed );
-		else if ( strcmp( a, "--threads" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 0, 256, &o->threads );
-		else if ( strcmp( a, "--iterations" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 0, 9, &o->iterations );
-		else if ( strcmp( a, "--samples" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 8, 2000, &o->samples );
-		else if ( strcmp( a, "--optimize" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 0, 10000, &o->optimize );
-		else if ( strcmp( a, "--steps" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 0, 100000, &o->steps );
-		else if ( strcmp( a, "--size" ) == 0 )
-			bad = sere_parse_long( "season", a, v, 200, 4000, &o->size );
-		if ( bad )
-		{
-			return 2;
-		}
+		return 2;
 	}
+	if ( parsed.help )
+	{
+		season_help();
+		return 1;
+	}
+	o->pictures = !no_pictures;
 	int constant = o->days > 0 || isfinite( o->temperature ) || isfinite( o->humidity );
 	if ( constant && ( o->days < 0 || !isfinite( o->temperature ) || !isfinite( o->humidity ) ) )
 	{
@@ -939,7 +896,7 @@ int sere_cmd_season( int argc, char** argv )
 	}
 	if ( tree.leaf_count > o.leaves )
 	{
-		fprintf( stderr, "sere season: --leaves %ld is fewer than the tree's %d leaves\n", o.leaves, tree.leaf_count );
+		fprintf( stderr, "sere season: --leaves %lld is fewer than the tree's %d leaves\n", o.leaves, tree.leaf_count );
 		sere_tree_free( &tree );
 		sere_season_leaf_free( &leaf );
 		return 2;
@@ -977,7 +934,7 @@ int sere_cmd_season( int argc, char** argv )
 	if ( states == NULL || exact == NULL || sampled == NULL || P == NULL || counts == NULL || snapshots == NULL ||
 		 day_table == NULL )
 	{
-		fprintf( stderr, "sere season: out of memory for %ld leaves\n", o.leaves );
+		fprintf( stderr, "sere season: out of memory for %lld leaves\n", o.leaves );
 		rc = 1;
 		goto done;
 	}
@@ -1178,7 +1135,7 @@ int sere_cmd_season( int argc, char** argv )
 		rc = 1;
 		goto done;
 	}
-	fprintf( f, "{\n  \"leaves\": %ld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %ld,\n", o.leaves, days,
+	fprintf( f, "{\n  \"leaves\": %lld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %lld,\n", o.leaves, days,
 			 threads, o.seed );
 	fprintf( f,
 			 "  \"leaf\": { \"vertices\": %d, \"triangles\": %d, \"levels\": %d, \"build_s\": %.4f },\n"
@@ -1202,12 +1159,12 @@ int sere_cmd_season( int argc, char** argv )
 		rc = 1;
 		goto done;
 	}
-	printf( "leaf     %d vertices, %d triangles after %ld optimization iterations, %d deformation levels (%.2f s)\n",
+	printf( "leaf     %d vertices, %d triangles after %lld optimization iterations, %d deformation levels (%.2f s)\n",
 			leaf.vertex_count, leaf.triangle_count, o.optimize, leaf.level_count, leaf_seconds );
-	printf( "tree     %d branch segments, %d leaves (L-system, %ld iterations)\n", tree.segment_count, tree.leaf_count,
+	printf( "tree     %d branch segments, %d leaves (L-system, %lld iterations)\n", tree.segment_count, tree.leaf_count,
 			o.iterations );
-	printf( "chain    %d states, %ld leaves, %d days, %d threads: %.3f ms per day (%.3g leaves/s)\n", S, o.leaves, days,
-			threads, 1e3 * step_seconds / days, (double) N * days / step_seconds );
+	printf( "chain    %d states, %lld leaves, %d days, %d threads: %.3f ms per day (%.3g leaves/s)\n", S, o.leaves,
+			days, threads, 1e3 * step_seconds / days, (double) N * days / step_seconds );
 	printf( "day %-4d", days );
 	for ( int32_t s = 0; s < S; ++s )
 	{

@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "leaf.h"
 #include "machine.h"
+#include "options.h"
 #include "topo.h"
 
 #include <stdio.h>
@@ -28,15 +29,22 @@ int sere_cmd_table1( int argc, char** argv )
 {
 	long long frames = 20, threads = 0;
 	int json = 0;
-	const char* sets[64];
-	int set_count = 0;
-	for ( int i = 1; i < argc; ++i )
+	sere_option_list sets = { .count = 0 };
+	const sere_option options[] = {
+		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "table1", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
+							 &parsed ) != SERE_OK )
 	{
-		char* end;
-		if ( strcmp( argv[i], "--help" ) == 0 || strcmp( argv[i], "-h" ) == 0 )
-		{
-			printf(
-				"usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
+		return 2;
+	}
+	if ( parsed.help )
+	{
+		printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
 				"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
 				"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
 				"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
@@ -44,44 +52,7 @@ int sere_cmd_table1( int argc, char** argv )
 				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
 				"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
 				"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
-			return 0;
-		}
-		else if ( strcmp( argv[i], "--json" ) == 0 )
-		{
-			json = 1;
-		}
-		else if ( strcmp( argv[i], "--frames" ) == 0 && i + 1 < argc )
-		{
-			frames = strtoll( argv[++i], &end, 10 );
-			if ( *end != '\0' || frames < 1 || frames > 1000000 )
-			{
-				fprintf( stderr, "sere table1: --frames takes a whole number from 1 to 1000000, not '%s'\n", argv[i] );
-				return 2;
-			}
-		}
-		else if ( strcmp( argv[i], "--set" ) == 0 && i + 1 < argc )
-		{
-			if ( set_count == (int) ( sizeof( sets ) / sizeof( sets[0] ) ) )
-			{
-				fprintf( stderr, "sere table1: at most %d --set options\n", set_count );
-				return 2;
-			}
-			sets[set_count++] = argv[++i];
-		}
-		else if ( strcmp( argv[i], "--threads" ) == 0 && i + 1 < argc )
-		{
-			threads = strtoll( argv[++i], &end, 10 );
-			if ( *end != '\0' || threads < 0 || threads > 256 )
-			{
-				fprintf( stderr, "sere table1: --threads takes a whole number from 0 to 256, not '%s'\n", argv[i] );
-				return 2;
-			}
-		}
-		else
-		{
-			fprintf( stderr, "sere table1: unknown option '%s' (see sere table1 --help)\n", argv[i] );
-			return 2;
-		}
+		return 0;
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
 	if ( json )
@@ -108,7 +79,7 @@ int sere_cmd_table1( int argc, char** argv )
 		const table1_row* row = rows + k;
 		char err[1024], name[128];
 		sere_sim_params params = sere_sim_params_default();
-		if ( sere_params_apply( &params, row->preset, sets, set_count, err, sizeof( err ) ) != 0 )
+		if ( sere_params_apply( &params, row->preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
 		{
 			fprintf( stderr, "sere table1: %s\n", err );
 			return 1;
@@ -179,12 +150,12 @@ int sere_cmd_table1( int argc, char** argv )
 				"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
 				"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
 				"paper's Table 1)." );
-		if ( set_count > 0 )
+		if ( sets.count > 0 )
 		{
 			printf( " Overrides:" );
-			for ( int k = 0; k < set_count; ++k )
+			for ( int k = 0; k < sets.count; ++k )
 			{
-				printf( " %s", sets[k] );
+				printf( " %s", sets.items[k] );
 			}
 		}
 		printf( "\n" );
