@@ -35,8 +35,18 @@ int sere_harness_build( const char* path, long long particles, long long springs
 	{
 		return -1;
 	}
-	const sere_leaf_shape* shape = &leaf.file.shape;
-	snprintf( name, name_size, "%s", leaf.file.name );
+	int result = sere_harness_build_leaf( &leaf, path, particles, springs, points, params, model, report, name,
+										  name_size, err, err_size );
+	sere_leaf_free( &leaf );
+	return result;
+}
+
+int sere_harness_build_leaf( const sere_leaf* leaf, const char* path, long long particles, long long springs,
+							 long long points, const sere_sim_params* params, sere_model* model,
+							 sere_build_report* report, char* name, size_t name_size, char* err, size_t err_size )
+{
+	const sere_leaf_shape* shape = &leaf->file.shape;
+	snprintf( name, name_size, "%s", leaf->file.name );
 	sere_build_params build = sere_build_params_default();
 	build.layer = params->layer;
 	build.seed = (uint64_t) params->seed;
@@ -48,7 +58,6 @@ int sere_harness_build( const char* path, long long particles, long long springs
 					  "no triangulation has %lld particles and %lld springs (need particles = 3N - B - 2, springs = "
 					  "12N - 6B - 12 with 3 <= B <= N)",
 					  particles, springs );
-			sere_leaf_free( &leaf );
 			return -1;
 		}
 	}
@@ -75,11 +84,9 @@ int sere_harness_build( const char* path, long long particles, long long springs
 					"%s: --points %lld is too few for this leaf (its outline and %d veins need more); --points %d "
 					"builds",
 					path, points, (int) shape->vein_count, (int) n );
-				sere_leaf_free( &leaf );
 				return -1;
 			}
 		}
-		sere_leaf_free( &leaf );
 		if ( status != SERE_OK )
 		{
 			snprintf( err, err_size, "%s: cannot build %lld triangle-layer points: %s", path, points,
@@ -89,7 +96,6 @@ int sere_harness_build( const char* path, long long particles, long long springs
 		return 0;
 	}
 	sere_status status = sere_model_build( shape, &build, model, report );
-	sere_leaf_free( &leaf );
 	if ( status != SERE_OK )
 	{
 		snprintf( err, err_size, "%s: cannot build N=%d B=%d: %s", path, build.point_count, build.boundary_count,

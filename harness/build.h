@@ -2,6 +2,7 @@
 #pragma once
 
 #include "leaf.h"
+#include "leafload.h"
 #include "model.h"
 #include "params.h"
 
@@ -17,6 +18,11 @@ extern "C"
 int sere_harness_build( const char* path, long long particles, long long springs, long long points,
 						const sere_sim_params* params, sere_model* model, sere_build_report* report, char* name,
 						size_t name_size, char* err, size_t err_size );
+
+/* The same from a leaf already read (path names it in messages). */
+int sere_harness_build_leaf( const sere_leaf* leaf, const char* path, long long particles, long long springs,
+							 long long points, const sere_sim_params* params, sere_model* model,
+							 sere_build_report* report, char* name, size_t name_size, char* err, size_t err_size );
 
 /* The leaf-kernel parameters a set of named parameters stands for (harness/cmd_run.c). */
 sere_leaf_params sere_run_leaf_params( const sere_sim_params* s );
