@@ -1,30 +1,17 @@
 #include "sample.h"
 
+#include "geometry.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-int sere_point_in_polygon( const double* xy, int32_t count, double px, double py )
-{
-	int inside = 0;
-	for ( int32_t i = 0, j = count - 1; i < count; j = i++ )
-	{
-		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
-		if ( ( yi > py ) != ( yj > py ) && px < xj + ( py - yj ) * ( xi - xj ) / ( yi - yj ) )
-		{
-			inside = !inside;
-		}
-	}
-	return inside;
-}
-
+/* Squared distance from (px, py) to the segment a–b. */
 static double segment_distance2( double px, double py, double ax, double ay, double bx, double by )
 {
-	double ex = bx - ax, ey = by - ay;
-	double length2 = ex * ex + ey * ey;
-	double t = length2 > 0.0 ? ( ( px - ax ) * ex + ( py - ay ) * ey ) / length2 : 0.0;
-	t = fmin( 1.0, fmax( 0.0, t ) );
-	double dx = ax + t * ex - px, dy = ay + t * ey - py;
+	const double p[2] = { px, py }, a[2] = { ax, ay }, b[2] = { bx, by };
+	double dx, dy;
+	sere_segment_offset( p, a, b, &dx, &dy );
 	return dx * dx + dy * dy;
 }
 

@@ -40,9 +40,6 @@ typedef struct sere_samples
 sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_params* params, sere_samples* out );
 void sere_samples_destroy( sere_samples* samples );
 
-/* Even-odd point-in-polygon test for a polygon of count vertices (xy interleaved). */
-int sere_point_in_polygon( const double* xy, int32_t count, double px, double py );
-
 #ifdef __cplusplus
 }
 #endif

@@ -8,6 +8,7 @@
 #include "cg.h"
 #include "collide.h"
 #include "color.h"
+#include "geometry.h"
 #include "layers.h"
 #include "leaf.h"
 #include "lsystem.h"

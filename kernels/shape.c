@@ -1,5 +1,7 @@
 #include "shape.h"
 
+#include "geometry.h"
+
 #include <math.h>
 #include <stdlib.h>
 
@@ -84,30 +86,6 @@ static int segments_meet( const double* a, const double* b, const double* c, con
 		   ( o3 == 0 && within_box( c, d, a ) ) || ( o4 == 0 && within_box( c, d, b ) );
 }
 
-static double point_segment_distance( const double* p, const double* a, const double* b )
-{
-	double ex = b[0] - a[0], ey = b[1] - a[1];
-	double length2 = ex * ex + ey * ey;
-	double t = length2 > 0.0 ? ( ( p[0] - a[0] ) * ex + ( p[1] - a[1] ) * ey ) / length2 : 0.0;
-	t = fmin( 1.0, fmax( 0.0, t ) );
-	return hypot( a[0] + t * ex - p[0], a[1] + t * ey - p[1] );
-}
-
-/* Even-odd rule; a point exactly on an edge may go either way, which the segment tests catch. */
-static int inside( const double* xy, int32_t n, const double* p )
-{
-	int in = 0;
-	for ( int32_t i = 0, j = n - 1; i < n; j = i++ )
-	{
-		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
-		if ( ( yi > p[1] ) != ( yj > p[1] ) && p[0] < xj + ( p[1] - yj ) * ( xi - xj ) / ( yi - yj ) )
-		{
-			in = !in;
-		}
-	}
-	return in;
-}
-
 /* Every segment of the shape in one index space: outline edge i runs from point i to point
  * i + 1 (the last one back to 0); then the segments of each vein in vein order. */
 typedef struct segment
@@ -139,8 +117,9 @@ static void keep_first( crossing* best, sere_shape_problem problem, int32_t late
  * stay off t, so a first segment running along t is not excused. */
 static int meets_at_start( const segment* s, const segment* t, double tolerance )
 {
-	return s->vein >= 0 && s->k == 0 && s->vein != t->vein && point_segment_distance( s->a, t->a, t->b ) <= tolerance &&
-		   point_segment_distance( s->b, t->a, t->b ) > tolerance;
+	return s->vein >= 0 && s->k == 0 && s->vein != t->vein &&
+		   sere_point_segment_distance( s->a, t->a, t->b ) <= tolerance &&
+		   sere_point_segment_distance( s->b, t->a, t->b ) > tolerance;
 }
 
 /* Adjacent segments share a point; they are wrong only when the second folds back onto the first. */
@@ -413,7 +392,7 @@ sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check*
 	double nearest = INFINITY;
 	for ( int32_t i = 0; i < n; ++i )
 	{
-		nearest = fmin( nearest, point_segment_distance( base, xy + 2 * i, xy + 2 * ( ( i + 1 ) % n ) ) );
+		nearest = fmin( nearest, sere_point_segment_distance( base, xy + 2 * i, xy + 2 * ( ( i + 1 ) % n ) ) );
 	}
 	if ( nearest > tolerance )
 	{
@@ -434,7 +413,7 @@ sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check*
 			const double* q = shape->vein_xy + 2 * parent->first;
 			for ( int32_t k = 0; k + 1 < parent->count; ++k )
 			{
-				d = fmin( d, point_segment_distance( p, q + 2 * k, q + 2 * k + 2 ) );
+				d = fmin( d, sere_point_segment_distance( p, q + 2 * k, q + 2 * k + 2 ) );
 			}
 		}
 		if ( d > tolerance )
@@ -443,7 +422,7 @@ sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check*
 		}
 		for ( int32_t k = 1; k < vn->count; ++k )
 		{
-			if ( !inside( xy, n, p + 2 * k ) )
+			if ( !sere_point_in_polygon( xy, n, p[2 * k], p[2 * k + 1] ) )
 			{
 				return fail( check, SERE_SHAPE_VEIN_OUTSIDE, v, vn->first + k );
 			}

@@ -1,3 +1,4 @@
+#include "geometry.h"
 #include "leafload.h"
 #include "model.h"
 #include "sample.h"
