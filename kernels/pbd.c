@@ -719,22 +719,21 @@ FORCE_INLINE void store_records( float* packed, const int32_t* at, __m512 x, __m
 	_mm_store_ps( packed + at[15], _mm512_extractf32x4_ps( r3, 3 ) );
 }
 
-FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+/* What the measuring part of a block leaves for the moving part: both ends and the factor f. */
+typedef struct part_state
 {
-	__m512 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	if ( mode == MODE_TOUCH )
-	{
-		const __m512 one = _mm512_set1_ps( ctx->one );
-		store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
-					   _mm512_mul_ps( az, one ), aw );
-		store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
-					   _mm512_mul_ps( bz, one ), bw );
-		return;
-	}
+	__m512 ax, ay, az, aw, bx, by, bz, bw, f;
+} part_state;
+
+/* Loads both ends of the block at q and measures it (Eq. 13): the residual into acc and, unless
+ * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
+FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+{
+	part_state h;
+	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
+	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
 	const __m512 zero = _mm512_setzero_ps();
-	__m512 dx = _mm512_sub_ps( bx, ax ), dy = _mm512_sub_ps( by, ay ), dz = _mm512_sub_ps( bz, az );
+	__m512 dx = _mm512_sub_ps( h.bx, h.ax ), dy = _mm512_sub_ps( h.by, h.ay ), dz = _mm512_sub_ps( h.bz, h.az );
 	__m512 len2 =
 		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( dx, dx ), _mm512_mul_ps( dy, dy ) ), _mm512_mul_ps( dz, dz ) );
 	__m512 len = _mm512_sqrt_ps( len2 );
@@ -742,7 +741,7 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 	__m512 c = _mm512_sub_ps( len, rest ); /* Eq. 13 */
 	acc->zero |= _mm512_cmp_ps_mask( len, zero, _CMP_EQ_OQ );
 	acc->nonfinite |= _mm512_cmp_ps_mask( len, _mm512_set1_ps( FLT_MAX ), _CMP_NLE_UQ );
-	__m512 wsum = _mm512_add_ps( aw, bw );
+	__m512 wsum = _mm512_add_ps( h.aw, h.bw );
 	__m512 lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
@@ -751,11 +750,11 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 		residual = _mm512_add_ps( c, _mm512_mul_ps( alpha, lambda ) );
 	}
 	acc->worst = _mm512_max_ps( acc->worst, _mm512_div_ps( _mm512_abs_ps( residual ), rest ) );
+	h.f = zero;
 	if ( mode == MODE_MEASURE )
 	{
-		return;
+		return h;
 	}
-	__m512 f;
 	if ( xpbd )
 	{
 		__m512 denominator = _mm512_add_ps( wsum, alpha );
@@ -763,24 +762,49 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 		__m512 numerator = _mm512_sub_ps( _mm512_sub_ps( zero, c ), _mm512_mul_ps( alpha, lambda ) );
 		__m512 dlambda = _mm512_maskz_div_ps( movable, numerator, denominator );
 		_mm512_store_ps( ctx->lambda + q, _mm512_add_ps( lambda, dlambda ) );
-		f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
+		h.f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
 	}
 	else
 	{
 		__mmask16 movable = _mm512_cmp_ps_mask( wsum, zero, _CMP_GT_OQ );
-		f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
+		h.f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
 	}
 	if ( mode == MODE_JACOBI )
 	{
-		_mm512_store_ps( ctx->factor + q, f );
-		return;
+		_mm512_store_ps( ctx->factor + q, h.f );
 	}
-	__m512 fa = _mm512_mul_ps( aw, f ), fb = _mm512_mul_ps( bw, f );
-	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( ax, _mm512_mul_ps( fa, dx ) ),
-				   _mm512_add_ps( ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( az, _mm512_mul_ps( fa, dz ) ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( bx, _mm512_mul_ps( fb, dx ) ),
-				   _mm512_sub_ps( by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( bz, _mm512_mul_ps( fb, dz ) ), bw );
+	return h;
 }
+
+/* The moving part of a Gauss–Seidel block: p_a += (w_a f) d, p_b −= (w_b f) d (Eq. 13), stored.
+ * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
+ * bits; recomputing it keeps three registers fewer alive between the two parts. */
+FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
+{
+	__m512 dx = _mm512_sub_ps( h->bx, h->ax ), dy = _mm512_sub_ps( h->by, h->ay ), dz = _mm512_sub_ps( h->bz, h->az );
+	__m512 fa = _mm512_mul_ps( h->aw, h->f ), fb = _mm512_mul_ps( h->bw, h->f );
+	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( h->ax, _mm512_mul_ps( fa, dx ) ),
+				   _mm512_add_ps( h->ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( h->az, _mm512_mul_ps( fa, dz ) ),
+				   h->aw );
+	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( h->bx, _mm512_mul_ps( fb, dx ) ),
+				   _mm512_sub_ps( h->by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( h->bz, _mm512_mul_ps( fb, dz ) ),
+				   h->bw );
+}
+
+FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
+{
+	__m512 ax, ay, az, aw, bx, by, bz, bw;
+	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
+	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
+	const __m512 one = _mm512_set1_ps( ctx->one );
+	store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
+				   _mm512_mul_ps( az, one ), aw );
+	store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
+				   _mm512_mul_ps( bz, one ), bw );
+}
+
+/* Constraints per measure/move part: one block of 16. */
+#define PART LANES
 
 #elif defined( __AVX__ )
 
@@ -865,16 +889,16 @@ FORCE_INLINE void store_records( float* packed, const int32_t* at, __m256 x, __m
 }
 
 /* What the measuring part of a half leaves for the moving part: both ends and the factor f. */
-typedef struct half_state
+typedef struct part_state
 {
 	__m256 ax, ay, az, aw, bx, by, bz, bw, f;
-} half_state;
+} part_state;
 
 /* Loads both ends of the half at q and measures it (Eq. 13): the residual into acc and, unless
  * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
-FORCE_INLINE half_state measure_half( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
 {
-	half_state h;
+	part_state h;
 	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
 	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
 	const __m256 zero = _mm256_setzero_ps();
@@ -925,9 +949,9 @@ FORCE_INLINE half_state measure_half( const block_context* ctx, int32_t q, block
 }
 
 /* The moving part of a Gauss–Seidel half: p_a += (w_a f) d, p_b −= (w_b f) d (Eq. 13), stored.
- * d = p_b − p_a again, the same operation on the same values as in measure_half, so the same
+ * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
  * bits; recomputing it keeps three registers fewer alive between the two parts. */
-FORCE_INLINE void move_half( const block_context* ctx, int32_t q, const half_state* h )
+FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
 {
 	__m256 dx = _mm256_sub_ps( h->bx, h->ax ), dy = _mm256_sub_ps( h->by, h->ay ), dz = _mm256_sub_ps( h->bz, h->az );
 	__m256 fa = _mm256_mul_ps( h->aw, h->f ), fb = _mm256_mul_ps( h->bw, h->f );
@@ -939,7 +963,7 @@ FORCE_INLINE void move_half( const block_context* ctx, int32_t q, const half_sta
 				   h->bw );
 }
 
-FORCE_INLINE void touch_half( const block_context* ctx, int32_t q )
+FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
 {
 	__m256 ax, ay, az, aw, bx, by, bz, bw;
 	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
@@ -951,48 +975,8 @@ FORCE_INLINE void touch_half( const block_context* ctx, int32_t q )
 				   _mm256_mul_ps( bz, one ), bw );
 }
 
-/* Lanes [first, last) of one color of one item, a multiple of LANES.
- *
- * Gauss–Seidel is software-pipelined by one half: the next half is measured before this one
- * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
- * and a half's moves wait at its end; issued in program order they filled the out-of-order
- * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
- * so an AVX2 core worked on about one half at a time. Measured one half ahead, a half's moves
- * find f ready. On the maple at one thread this took a sweep from 2.2 to 1.8 times its floor
- * (sere_pbd_touch_sweeps). All lanes of one color share no particle, so reading the next half
- * before this one is stored reads the same values. */
-FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
-								   lane_accum* acc )
-{
-	const int32_t half = LANES / 2;
-	if ( mode != MODE_GAUSS_SEIDEL )
-	{
-		for ( int32_t q = first; q < last; q += half )
-		{
-			if ( mode == MODE_TOUCH )
-			{
-				touch_half( ctx, q );
-			}
-			else
-			{
-				measure_half( ctx, q, mode, xpbd, acc );
-			}
-		}
-		return;
-	}
-	if ( first == last )
-	{
-		return;
-	}
-	half_state current = measure_half( ctx, first, mode, xpbd, acc );
-	for ( int32_t q = first; q + half < last; q += half )
-	{
-		half_state next = measure_half( ctx, q + half, mode, xpbd, acc );
-		move_half( ctx, q, &current );
-		current = next;
-	}
-	move_half( ctx, last - half, &current );
-}
+/* Constraints per measure/move part: half a block. */
+#define PART ( LANES / 2 )
 
 #else
 
@@ -1072,7 +1056,50 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mod
 
 #endif
 
-#if defined( __AVX512F__ ) || !defined( __AVX__ )
+#if defined( __AVX512F__ ) || defined( __AVX__ )
+/* Lanes [first, last) of one color of one item, a multiple of LANES, in parts of PART lanes.
+ *
+ * Gauss–Seidel is software-pipelined by one part: the next part is measured before this one
+ * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
+ * and a part's moves wait at its end; issued in program order they filled the out-of-order
+ * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
+ * so a core worked on about one part at a time. Measured one part ahead, a part's moves find f
+ * ready. On the maple at one thread this took an AVX2 sweep from 2.2 to 1.8 times its floor
+ * (sere_pbd_touch_sweeps) and an AVX-512 sweep (one block a part) from 1.6 to 1.3 (CPU time). All lanes
+ * of one color share no particle, so reading the next part before this one is stored reads the
+ * same values. */
+FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
+								   lane_accum* acc )
+{
+	if ( mode != MODE_GAUSS_SEIDEL )
+	{
+		for ( int32_t q = first; q < last; q += PART )
+		{
+			if ( mode == MODE_TOUCH )
+			{
+				touch_part( ctx, q );
+			}
+			else
+			{
+				measure_part( ctx, q, mode, xpbd, acc );
+			}
+		}
+		return;
+	}
+	if ( first == last )
+	{
+		return;
+	}
+	part_state current = measure_part( ctx, first, mode, xpbd, acc );
+	for ( int32_t q = first; q + PART < last; q += PART )
+	{
+		part_state next = measure_part( ctx, q + PART, mode, xpbd, acc );
+		move_part( ctx, q, &current );
+		current = next;
+	}
+	move_part( ctx, last - PART, &current );
+}
+#else
 /* Lanes [first, last) of one color of one item, a multiple of LANES: block after block. */
 FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
 								   lane_accum* acc )
