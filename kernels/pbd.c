@@ -106,6 +106,8 @@ struct sere_pbd
 	int32_t* band_start;	   /* bands + 1 slot offsets, multiples of 4 but the last (particle_count) */
 	int32_t slot_count;		   /* particles rounded up to 4, then a dummy pair per item */
 	float* packed[2];		   /* (x, y, z, w) per slot; Jacobi alternates the two, the others use [0] */
+	float* history[2];		   /* Chebyshev: records of the last two iterates, x_{k−1} and x_k */
+	float* lambda_history[2];  /* Chebyshev: multipliers of the last two iterates, per lane */
 	int32_t* adjacency_offset; /* per slot < particle_count, Jacobi */
 	int32_t* adjacency;		   /* pairs (lane, 4·slot of the other end) */
 	float* inv_degree;		   /* per slot: 1/n_i, 0 for a particle without constraints */
@@ -128,6 +130,8 @@ sere_pbd_params sere_pbd_params_default( void )
 		.relaxation = 1.5f,
 		.linear_stiffness = 0,
 		.warm = 0,
+		.chebyshev_rho = 0.0f,
+		.chebyshev_delay = 10,
 	};
 	return params;
 }
@@ -152,6 +156,10 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->band_start );
 	sere_free( pbd->packed[0] );
 	sere_free( pbd->packed[1] );
+	sere_free( pbd->history[0] );
+	sere_free( pbd->history[1] );
+	sere_free( pbd->lambda_history[0] );
+	sere_free( pbd->lambda_history[1] );
 	sere_free( pbd->adjacency_offset );
 	sere_free( pbd->adjacency );
 	sere_free( pbd->inv_degree );
@@ -382,8 +390,14 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
 	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
 	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+	for ( int h = 0; h < 2; ++h )
+	{
+		pbd->history[h] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+		pbd->lambda_history[h] = sere_alloc( sizeof( float ) * lanes );
+	}
 	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->weight || !pbd->factor ||
-		 !pbd->packed[0] || !pbd->packed[1] )
+		 !pbd->packed[0] || !pbd->packed[1] || !pbd->history[0] || !pbd->history[1] || !pbd->lambda_history[0] ||
+		 !pbd->lambda_history[1] )
 	{
 		free( band_of_slot ), free( keys ), free( fill );
 		return SERE_ERR_MEMORY;
@@ -1432,6 +1446,8 @@ typedef struct solve_setup
 	float k, alpha, omega, tolerance;
 	int32_t max_iterations;
 	int xpbd, warm;
+	float rho;	   /* Chebyshev ρ, 0: off */
+	int32_t delay; /* Chebyshev: plain sweeps before the first extrapolation */
 } solve_setup;
 
 typedef struct solve_result
@@ -1450,12 +1466,63 @@ static void sweep( sere_pbd* pbd, const block_context* ctx, block_mode mode, int
 	exchange( pbd, t, threads, parity, worst, flags );
 }
 
+/* Chebyshev semi-iteration (Wang 2015): x_{k+1} = ω_{k+1} (x̂_{k+1} − x_{k−1}) + x_{k−1},
+ * x̂_{k+1} the sweep's result in the records, x_{k−1} in history[*older]; with XPBD the same
+ * combination of the multipliers, so each position stays the inertia anchor plus the
+ * multipliers' corrections (Δx = M⁻¹ ∇Cᵀ Δλ is linear in Δλ for fixed gradients). ω = 1 only
+ * records x_{k+1} = x̂_{k+1} (ω (x̂ − x) + x would round it). The new iterate overwrites
+ * x_{k−1}, which becomes x_k for the next sweep. Thread t takes its share of the floats; a
+ * barrier follows, since any thread may project any item next. */
+static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t, int threads )
+{
+	int32_t first, last;
+	float* restrict p = pbd->packed[0];
+	float* restrict h = pbd->history[*older];
+	share( 4 * pbd->slot_count, t, threads, &first, &last );
+	if ( omega == 1.0f )
+	{
+		memcpy( h + first, p + first, sizeof( float ) * (size_t) ( last - first ) );
+	}
+	else
+	{
+		for ( int32_t s = first; s < last; ++s )
+		{
+			float n = omega * ( p[s] - h[s] ) + h[s];
+			p[s] = n, h[s] = n;
+		}
+	}
+	if ( xpbd )
+	{
+		float* restrict l = pbd->lambda;
+		float* restrict g = pbd->lambda_history[*older];
+		share( pbd->lanes, t, threads, &first, &last );
+		if ( omega == 1.0f )
+		{
+			memcpy( g + first, l + first, sizeof( float ) * (size_t) ( last - first ) );
+		}
+		else
+		{
+			for ( int32_t q = first; q < last; ++q )
+			{
+				float n = omega * ( l[q] - g[q] ) + g[q];
+				l[q] = n, g[q] = n;
+			}
+		}
+	}
+	*older ^= 1;
+	barrier_wait( pbd->barrier, threads );
+}
+
 /* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. */
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
 	solve_result result = { 0, 0, 0.0f, 0 };
 	const block_mode mode = setup->kind == SOLVER_TOUCH ? MODE_TOUCH : MODE_GAUSS_SEIDEL;
+	/* Chebyshev weights (Wang 2015), the same sequence on every thread. */
+	const double rho2 = (double) setup->rho * (double) setup->rho;
+	double omega = 1.0;
+	int older = 0;
 	while ( result.iterations < setup->max_iterations )
 	{
 		float worst = 0.0f;
@@ -1479,6 +1546,14 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 				result.strain = worst, result.converged = flags == 0;
 				break;
 			}
+		}
+		if ( setup->rho > 0.0f && result.iterations < setup->max_iterations )
+		{
+			const int32_t k = result.iterations;
+			omega = k <= setup->delay		? 1.0
+					: k == setup->delay + 1 ? 2.0 / ( 2.0 - rho2 )
+											: 4.0 / ( 4.0 - rho2 * omega );
+			extrapolate( pbd, (float) omega, setup->xpbd, &older, t, threads );
 		}
 	}
 	return result;
@@ -1578,7 +1653,8 @@ static sere_status check_call( const sere_pbd* pbd, const float* px, const float
 {
 	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || params == NULL || report == NULL ||
 		 !( params->stiffness >= 0.0f && params->stiffness <= 1.0f ) || !( params->tolerance > 0.0f ) ||
-		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) )
+		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) ||
+		 !( params->chebyshev_rho >= 0.0f && params->chebyshev_rho < 1.0f ) || params->chebyshev_delay < 2 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -1604,6 +1680,8 @@ static solve_setup setup_of( const sere_pbd_params* params, solver kind )
 		.max_iterations = params->max_iterations,
 		.xpbd = params->compliance > 0.0f,
 		.warm = params->warm,
+		.rho = params->chebyshev_rho,
+		.delay = params->chebyshev_delay,
 	};
 	return setup;
 }
@@ -1641,7 +1719,8 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 	{
 		return status;
 	}
-	if ( !( params->relaxation > 0.0f && params->relaxation < 2.0f ) || params->linear_stiffness )
+	if ( !( params->relaxation > 0.0f && params->relaxation < 2.0f ) || params->linear_stiffness ||
+		 params->chebyshev_rho > 0.0f )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
