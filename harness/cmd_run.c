@@ -90,6 +90,7 @@ sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
 	p.friction_static = (float) s->friction_static;
 	p.friction_kinetic = (float) s->friction_kinetic;
 	p.pbd_stall = (float) s->pbd_stall;
+	p.pbd.chebyshev_rho = (float) s->chebyshev_rho;
 	p.collide.thickness = (float) s->collision_thickness;
 	p.collisions = s->collision_thickness > 0.0;
 	p.scale_thickness = s->collision_scaling != 0.0;

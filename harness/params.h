@@ -33,6 +33,7 @@ typedef struct sere_sim_params
 	double friction_static;	   /* Coulomb coefficients of the ground contact */
 	double friction_kinetic;
 	double max_iterations;		/* PBD iteration cap */
+	double chebyshev_rho;		/* Chebyshev semi-iteration of the XPBD sweeps (Wang 2015): 0 off, else ρ */
 	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
 	double collision_thickness; /* vertex–triangle proximity distance, leaf units (at rest when scaled) */
 	double collision_scaling;	/* the thickness shrinks with the triangle layer (1) or stays fixed (0) */

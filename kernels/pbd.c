@@ -106,6 +106,8 @@ struct sere_pbd
 	int32_t* band_start;	   /* bands + 1 slot offsets, multiples of 4 but the last (particle_count) */
 	int32_t slot_count;		   /* particles rounded up to 4, then a dummy pair per item */
 	float* packed[2];		   /* (x, y, z, w) per slot; Jacobi alternates the two, the others use [0] */
+	float* history[2];		   /* Chebyshev: records of the last two iterates, x_{k−1} and x_k */
+	float* lambda_history[2];  /* Chebyshev: multipliers of the last two iterates, per lane */
 	int32_t* adjacency_offset; /* per slot < particle_count, Jacobi */
 	int32_t* adjacency;		   /* pairs (lane, 4·slot of the other end) */
 	float* inv_degree;		   /* per slot: 1/n_i, 0 for a particle without constraints */
@@ -128,6 +130,8 @@ sere_pbd_params sere_pbd_params_default( void )
 		.relaxation = 1.5f,
 		.linear_stiffness = 0,
 		.warm = 0,
+		.chebyshev_rho = 0.0f,
+		.chebyshev_delay = 10,
 	};
 	return params;
 }
@@ -152,6 +156,10 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->band_start );
 	sere_free( pbd->packed[0] );
 	sere_free( pbd->packed[1] );
+	sere_free( pbd->history[0] );
+	sere_free( pbd->history[1] );
+	sere_free( pbd->lambda_history[0] );
+	sere_free( pbd->lambda_history[1] );
 	sere_free( pbd->adjacency_offset );
 	sere_free( pbd->adjacency );
 	sere_free( pbd->inv_degree );
@@ -382,8 +390,14 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
 	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
 	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+	for ( int h = 0; h < 2; ++h )
+	{
+		pbd->history[h] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+		pbd->lambda_history[h] = sere_alloc( sizeof( float ) * lanes );
+	}
 	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->weight || !pbd->factor ||
-		 !pbd->packed[0] || !pbd->packed[1] )
+		 !pbd->packed[0] || !pbd->packed[1] || !pbd->history[0] || !pbd->history[1] || !pbd->lambda_history[0] ||
+		 !pbd->lambda_history[1] )
 	{
 		free( band_of_slot ), free( keys ), free( fill );
 		return SERE_ERR_MEMORY;
@@ -719,22 +733,21 @@ FORCE_INLINE void store_records( float* packed, const int32_t* at, __m512 x, __m
 	_mm_store_ps( packed + at[15], _mm512_extractf32x4_ps( r3, 3 ) );
 }
 
-FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+/* What the measuring part of a block leaves for the moving part: both ends and the factor f. */
+typedef struct part_state
 {
-	__m512 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	if ( mode == MODE_TOUCH )
-	{
-		const __m512 one = _mm512_set1_ps( ctx->one );
-		store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
-					   _mm512_mul_ps( az, one ), aw );
-		store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
-					   _mm512_mul_ps( bz, one ), bw );
-		return;
-	}
+	__m512 ax, ay, az, aw, bx, by, bz, bw, f;
+} part_state;
+
+/* Loads both ends of the block at q and measures it (Eq. 13): the residual into acc and, unless
+ * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
+FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+{
+	part_state h;
+	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
+	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
 	const __m512 zero = _mm512_setzero_ps();
-	__m512 dx = _mm512_sub_ps( bx, ax ), dy = _mm512_sub_ps( by, ay ), dz = _mm512_sub_ps( bz, az );
+	__m512 dx = _mm512_sub_ps( h.bx, h.ax ), dy = _mm512_sub_ps( h.by, h.ay ), dz = _mm512_sub_ps( h.bz, h.az );
 	__m512 len2 =
 		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( dx, dx ), _mm512_mul_ps( dy, dy ) ), _mm512_mul_ps( dz, dz ) );
 	__m512 len = _mm512_sqrt_ps( len2 );
@@ -742,7 +755,7 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 	__m512 c = _mm512_sub_ps( len, rest ); /* Eq. 13 */
 	acc->zero |= _mm512_cmp_ps_mask( len, zero, _CMP_EQ_OQ );
 	acc->nonfinite |= _mm512_cmp_ps_mask( len, _mm512_set1_ps( FLT_MAX ), _CMP_NLE_UQ );
-	__m512 wsum = _mm512_add_ps( aw, bw );
+	__m512 wsum = _mm512_add_ps( h.aw, h.bw );
 	__m512 lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
@@ -751,11 +764,11 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 		residual = _mm512_add_ps( c, _mm512_mul_ps( alpha, lambda ) );
 	}
 	acc->worst = _mm512_max_ps( acc->worst, _mm512_div_ps( _mm512_abs_ps( residual ), rest ) );
+	h.f = zero;
 	if ( mode == MODE_MEASURE )
 	{
-		return;
+		return h;
 	}
-	__m512 f;
 	if ( xpbd )
 	{
 		__m512 denominator = _mm512_add_ps( wsum, alpha );
@@ -763,24 +776,49 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q, block_mode
 		__m512 numerator = _mm512_sub_ps( _mm512_sub_ps( zero, c ), _mm512_mul_ps( alpha, lambda ) );
 		__m512 dlambda = _mm512_maskz_div_ps( movable, numerator, denominator );
 		_mm512_store_ps( ctx->lambda + q, _mm512_add_ps( lambda, dlambda ) );
-		f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
+		h.f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
 	}
 	else
 	{
 		__mmask16 movable = _mm512_cmp_ps_mask( wsum, zero, _CMP_GT_OQ );
-		f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
+		h.f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
 	}
 	if ( mode == MODE_JACOBI )
 	{
-		_mm512_store_ps( ctx->factor + q, f );
-		return;
+		_mm512_store_ps( ctx->factor + q, h.f );
 	}
-	__m512 fa = _mm512_mul_ps( aw, f ), fb = _mm512_mul_ps( bw, f );
-	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( ax, _mm512_mul_ps( fa, dx ) ),
-				   _mm512_add_ps( ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( az, _mm512_mul_ps( fa, dz ) ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( bx, _mm512_mul_ps( fb, dx ) ),
-				   _mm512_sub_ps( by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( bz, _mm512_mul_ps( fb, dz ) ), bw );
+	return h;
 }
+
+/* The moving part of a Gauss–Seidel block: p_a += (w_a f) d, p_b −= (w_b f) d (Eq. 13), stored.
+ * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
+ * bits; recomputing it keeps three registers fewer alive between the two parts. */
+FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
+{
+	__m512 dx = _mm512_sub_ps( h->bx, h->ax ), dy = _mm512_sub_ps( h->by, h->ay ), dz = _mm512_sub_ps( h->bz, h->az );
+	__m512 fa = _mm512_mul_ps( h->aw, h->f ), fb = _mm512_mul_ps( h->bw, h->f );
+	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( h->ax, _mm512_mul_ps( fa, dx ) ),
+				   _mm512_add_ps( h->ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( h->az, _mm512_mul_ps( fa, dz ) ),
+				   h->aw );
+	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( h->bx, _mm512_mul_ps( fb, dx ) ),
+				   _mm512_sub_ps( h->by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( h->bz, _mm512_mul_ps( fb, dz ) ),
+				   h->bw );
+}
+
+FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
+{
+	__m512 ax, ay, az, aw, bx, by, bz, bw;
+	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
+	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
+	const __m512 one = _mm512_set1_ps( ctx->one );
+	store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
+				   _mm512_mul_ps( az, one ), aw );
+	store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
+				   _mm512_mul_ps( bz, one ), bw );
+}
+
+/* Constraints per measure/move part: one block of 16. */
+#define PART LANES
 
 #elif defined( __AVX__ )
 
@@ -865,16 +903,16 @@ FORCE_INLINE void store_records( float* packed, const int32_t* at, __m256 x, __m
 }
 
 /* What the measuring part of a half leaves for the moving part: both ends and the factor f. */
-typedef struct half_state
+typedef struct part_state
 {
 	__m256 ax, ay, az, aw, bx, by, bz, bw, f;
-} half_state;
+} part_state;
 
 /* Loads both ends of the half at q and measures it (Eq. 13): the residual into acc and, unless
  * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
-FORCE_INLINE half_state measure_half( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
+FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
 {
-	half_state h;
+	part_state h;
 	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
 	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
 	const __m256 zero = _mm256_setzero_ps();
@@ -925,9 +963,9 @@ FORCE_INLINE half_state measure_half( const block_context* ctx, int32_t q, block
 }
 
 /* The moving part of a Gauss–Seidel half: p_a += (w_a f) d, p_b −= (w_b f) d (Eq. 13), stored.
- * d = p_b − p_a again, the same operation on the same values as in measure_half, so the same
+ * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
  * bits; recomputing it keeps three registers fewer alive between the two parts. */
-FORCE_INLINE void move_half( const block_context* ctx, int32_t q, const half_state* h )
+FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
 {
 	__m256 dx = _mm256_sub_ps( h->bx, h->ax ), dy = _mm256_sub_ps( h->by, h->ay ), dz = _mm256_sub_ps( h->bz, h->az );
 	__m256 fa = _mm256_mul_ps( h->aw, h->f ), fb = _mm256_mul_ps( h->bw, h->f );
@@ -939,7 +977,7 @@ FORCE_INLINE void move_half( const block_context* ctx, int32_t q, const half_sta
 				   h->bw );
 }
 
-FORCE_INLINE void touch_half( const block_context* ctx, int32_t q )
+FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
 {
 	__m256 ax, ay, az, aw, bx, by, bz, bw;
 	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
@@ -951,48 +989,8 @@ FORCE_INLINE void touch_half( const block_context* ctx, int32_t q )
 				   _mm256_mul_ps( bz, one ), bw );
 }
 
-/* Lanes [first, last) of one color of one item, a multiple of LANES.
- *
- * Gauss–Seidel is software-pipelined by one half: the next half is measured before this one
- * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
- * and a half's moves wait at its end; issued in program order they filled the out-of-order
- * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
- * so an AVX2 core worked on about one half at a time. Measured one half ahead, a half's moves
- * find f ready. On the maple at one thread this took a sweep from 2.2 to 1.8 times its floor
- * (sere_pbd_touch_sweeps). All lanes of one color share no particle, so reading the next half
- * before this one is stored reads the same values. */
-FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
-								   lane_accum* acc )
-{
-	const int32_t half = LANES / 2;
-	if ( mode != MODE_GAUSS_SEIDEL )
-	{
-		for ( int32_t q = first; q < last; q += half )
-		{
-			if ( mode == MODE_TOUCH )
-			{
-				touch_half( ctx, q );
-			}
-			else
-			{
-				measure_half( ctx, q, mode, xpbd, acc );
-			}
-		}
-		return;
-	}
-	if ( first == last )
-	{
-		return;
-	}
-	half_state current = measure_half( ctx, first, mode, xpbd, acc );
-	for ( int32_t q = first; q + half < last; q += half )
-	{
-		half_state next = measure_half( ctx, q + half, mode, xpbd, acc );
-		move_half( ctx, q, &current );
-		current = next;
-	}
-	move_half( ctx, last - half, &current );
-}
+/* Constraints per measure/move part: half a block. */
+#define PART ( LANES / 2 )
 
 #else
 
@@ -1072,7 +1070,50 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mod
 
 #endif
 
-#if defined( __AVX512F__ ) || !defined( __AVX__ )
+#if defined( __AVX512F__ ) || defined( __AVX__ )
+/* Lanes [first, last) of one color of one item, a multiple of LANES, in parts of PART lanes.
+ *
+ * Gauss–Seidel is software-pipelined by one part: the next part is measured before this one
+ * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
+ * and a part's moves wait at its end; issued in program order they filled the out-of-order
+ * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
+ * so a core worked on about one part at a time. Measured one part ahead, a part's moves find f
+ * ready. On the maple at one thread this took an AVX2 sweep from 2.2 to 1.8 times its floor
+ * (sere_pbd_touch_sweeps) and an AVX-512 sweep (one block a part) from 1.6 to 1.3 (CPU time). All lanes
+ * of one color share no particle, so reading the next part before this one is stored reads the
+ * same values. */
+FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
+								   lane_accum* acc )
+{
+	if ( mode != MODE_GAUSS_SEIDEL )
+	{
+		for ( int32_t q = first; q < last; q += PART )
+		{
+			if ( mode == MODE_TOUCH )
+			{
+				touch_part( ctx, q );
+			}
+			else
+			{
+				measure_part( ctx, q, mode, xpbd, acc );
+			}
+		}
+		return;
+	}
+	if ( first == last )
+	{
+		return;
+	}
+	part_state current = measure_part( ctx, first, mode, xpbd, acc );
+	for ( int32_t q = first; q + PART < last; q += PART )
+	{
+		part_state next = measure_part( ctx, q + PART, mode, xpbd, acc );
+		move_part( ctx, q, &current );
+		current = next;
+	}
+	move_part( ctx, last - PART, &current );
+}
+#else
 /* Lanes [first, last) of one color of one item, a multiple of LANES: block after block. */
 FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
 								   lane_accum* acc )
@@ -1405,6 +1446,8 @@ typedef struct solve_setup
 	float k, alpha, omega, tolerance;
 	int32_t max_iterations;
 	int xpbd, warm;
+	float rho;	   /* Chebyshev ρ, 0: off */
+	int32_t delay; /* Chebyshev: plain sweeps before the first extrapolation */
 } solve_setup;
 
 typedef struct solve_result
@@ -1423,12 +1466,63 @@ static void sweep( sere_pbd* pbd, const block_context* ctx, block_mode mode, int
 	exchange( pbd, t, threads, parity, worst, flags );
 }
 
+/* Chebyshev semi-iteration (Wang 2015): x_{k+1} = ω_{k+1} (x̂_{k+1} − x_{k−1}) + x_{k−1},
+ * x̂_{k+1} the sweep's result in the records, x_{k−1} in history[*older]; with XPBD the same
+ * combination of the multipliers, so each position stays the inertia anchor plus the
+ * multipliers' corrections (Δx = M⁻¹ ∇Cᵀ Δλ is linear in Δλ for fixed gradients). ω = 1 only
+ * records x_{k+1} = x̂_{k+1} (ω (x̂ − x) + x would round it). The new iterate overwrites
+ * x_{k−1}, which becomes x_k for the next sweep. Thread t takes its share of the floats; a
+ * barrier follows, since any thread may project any item next. */
+static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t, int threads )
+{
+	int32_t first, last;
+	float* restrict p = pbd->packed[0];
+	float* restrict h = pbd->history[*older];
+	share( 4 * pbd->slot_count, t, threads, &first, &last );
+	if ( omega == 1.0f )
+	{
+		memcpy( h + first, p + first, sizeof( float ) * (size_t) ( last - first ) );
+	}
+	else
+	{
+		for ( int32_t s = first; s < last; ++s )
+		{
+			float n = omega * ( p[s] - h[s] ) + h[s];
+			p[s] = n, h[s] = n;
+		}
+	}
+	if ( xpbd )
+	{
+		float* restrict l = pbd->lambda;
+		float* restrict g = pbd->lambda_history[*older];
+		share( pbd->lanes, t, threads, &first, &last );
+		if ( omega == 1.0f )
+		{
+			memcpy( g + first, l + first, sizeof( float ) * (size_t) ( last - first ) );
+		}
+		else
+		{
+			for ( int32_t q = first; q < last; ++q )
+			{
+				float n = omega * ( l[q] - g[q] ) + g[q];
+				l[q] = n, g[q] = n;
+			}
+		}
+	}
+	*older ^= 1;
+	barrier_wait( pbd->barrier, threads );
+}
+
 /* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. */
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
 	solve_result result = { 0, 0, 0.0f, 0 };
 	const block_mode mode = setup->kind == SOLVER_TOUCH ? MODE_TOUCH : MODE_GAUSS_SEIDEL;
+	/* Chebyshev weights (Wang 2015), the same sequence on every thread. */
+	const double rho2 = (double) setup->rho * (double) setup->rho;
+	double omega = 1.0;
+	int older = 0;
 	while ( result.iterations < setup->max_iterations )
 	{
 		float worst = 0.0f;
@@ -1452,6 +1546,14 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 				result.strain = worst, result.converged = flags == 0;
 				break;
 			}
+		}
+		if ( setup->rho > 0.0f && result.iterations < setup->max_iterations )
+		{
+			const int32_t k = result.iterations;
+			omega = k <= setup->delay		? 1.0
+					: k == setup->delay + 1 ? 2.0 / ( 2.0 - rho2 )
+											: 4.0 / ( 4.0 - rho2 * omega );
+			extrapolate( pbd, (float) omega, setup->xpbd, &older, t, threads );
 		}
 	}
 	return result;
@@ -1551,7 +1653,8 @@ static sere_status check_call( const sere_pbd* pbd, const float* px, const float
 {
 	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || params == NULL || report == NULL ||
 		 !( params->stiffness >= 0.0f && params->stiffness <= 1.0f ) || !( params->tolerance > 0.0f ) ||
-		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) )
+		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) ||
+		 !( params->chebyshev_rho >= 0.0f && params->chebyshev_rho < 1.0f ) || params->chebyshev_delay < 2 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -1577,6 +1680,8 @@ static solve_setup setup_of( const sere_pbd_params* params, solver kind )
 		.max_iterations = params->max_iterations,
 		.xpbd = params->compliance > 0.0f,
 		.warm = params->warm,
+		.rho = params->chebyshev_rho,
+		.delay = params->chebyshev_delay,
 	};
 	return setup;
 }
@@ -1614,7 +1719,8 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 	{
 		return status;
 	}
-	if ( !( params->relaxation > 0.0f && params->relaxation < 2.0f ) || params->linear_stiffness )
+	if ( !( params->relaxation > 0.0f && params->relaxation < 2.0f ) || params->linear_stiffness ||
+		 params->chebyshev_rho > 0.0f )
 	{
 		return SERE_ERR_ARGUMENT;
 	}

@@ -30,6 +30,13 @@ typedef struct sere_pbd_params
 	 * contacts (a ground plane, say) goes on solving the same problem; the inertia anchor of
 	 * the step stays where the first call of the step started. */
 	int warm;
+	/* Chebyshev semi-iteration of the Gauss–Seidel sweeps (Wang 2015): ρ ∈ [0, 1), an estimate of
+	 * the sweeps' spectral radius; 0 (the default) turns it off. After sweep k > delay the
+	 * positions (and with XPBD the multipliers) become ω_k (x̂_k − x_{k−2}) + x_{k−2}, x̂_k the
+	 * sweep's result, with ω_{delay+1} = 2/(2 − ρ²) and ω_k = 4/(4 − ρ² ω_{k−1}) after it. A
+	 * converged sweep's result is verified and returned as it is. The Jacobi variant refuses it. */
+	float chebyshev_rho;
+	int32_t chebyshev_delay; /* plain sweeps before the first extrapolation, ≥ 2 (default 10) */
 } sere_pbd_params;
 
 /* k = 1, λ_C = 1e-3, 200 sweeps, no compliance, dt = 0.002 (Table 2), ω = 1.5. */
