@@ -2137,6 +2137,11 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			whole = whole && collide->cache_used[FAR_STRIDE * t] >= 0;
 		}
 		collide->cache_valid = whole;
+		if ( !whole && !bad )
+		{
+			/* the list outgrew its room: the next one lists fewer pairs */
+			collide->skin = SKIN_MIN;
+		}
 		if ( whole )
 		{
 			memcpy( collide->cache_x, x, sizeof( float ) * (size_t) n );
