@@ -5,6 +5,7 @@
 #include "internal/team.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #if defined( __AVX__ )
@@ -64,6 +65,7 @@ struct sere_bvh
 	int32_t* child_top;
 	double quality;		  /* SAH cost of the internal nodes after the last refit */
 	double quality_built; /* the same right after the last build */
+	uint64_t generation;  /* sere_bvh_generation: unique to the last build */
 
 	/* Build scratch: per-triangle box and box centre, the triangle permutation being split,
 	 * and the pending nodes. */
@@ -562,6 +564,9 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 	return true;
 }
 
+/* Builds so far, of every BVH in the process: each build's generation is its ordinal. */
+static _Atomic uint64_t builds;
+
 sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const float* z )
 {
 	if ( bvh == NULL || x == NULL || y == NULL || z == NULL )
@@ -700,6 +705,7 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 
 	refit_tree( bvh, x, y, z );
 	bvh->quality_built = bvh->quality;
+	bvh->generation = atomic_fetch_add( &builds, 1 ) + 1;
 	return SERE_OK;
 }
 
@@ -1067,6 +1073,11 @@ const int32_t* sere_bvh_triangles( const sere_bvh* bvh, int32_t* triangle_count 
 {
 	*triangle_count = bvh->triangle_count;
 	return bvh->tri;
+}
+
+uint64_t sere_bvh_generation( const sere_bvh* bvh )
+{
+	return bvh->generation;
 }
 
 int32_t sere_bvh_vertex_count( const sere_bvh* bvh )

@@ -114,6 +114,11 @@ int32_t sere_bvh_depth( const sere_bvh* bvh );
 const int32_t* sere_bvh_triangles( const sere_bvh* bvh, int32_t* triangle_count );
 int32_t sere_bvh_vertex_count( const sere_bvh* bvh );
 
+/* A number unique to the tree's last build among all builds of all BVHs in the process, never 0:
+ * two queries see the same tree (the same nodes, visited in the same order, refit or not) exactly
+ * when their BVH has the same generation. */
+uint64_t sere_bvh_generation( const sere_bvh* bvh );
+
 #ifdef __cplusplus
 }
 #endif

@@ -22,6 +22,39 @@
  * index, whichever thread ran it. */
 #define DETECT_BLOCK 64
 
+/* The skin of the candidate list, as a fraction of the thickness. A detection that searches the
+ * tree looks with the thickness plus twice the skin δ and lists, per block in the order it
+ * meets them, every pair that could then be a contact (each vertex–triangle pair whose distance
+ * a separating plane does not already put beyond that radius, bound_lanes; each edge pair the
+ * edge table passes, table_hits). While every vertex stays within δ of where it was at the
+ * listing (and the tree is the same build, for the same thickness), the next detections run the
+ * exact test on the list alone instead of searching: a point of a triangle or edge is a convex
+ * combination of its corners, so it moves by at most δ when they do, and a distance between two
+ * of them changes by at most 2δ; a pair the exact test would accept now was closer than the
+ * thickness (plus cull_radius's rounding margin), so closer than that plus 2δ at the listing,
+ * where its boxes overlapped the grown query boxes and no separating plane put it beyond that
+ * radius: it is on the list. The list keeps the order of the search (the tree is walked in a
+ * fixed order, and a larger query box only adds visits between the same ones), so the exact test
+ * meets the same pairs in the same order and finds the same contacts in the same order as a
+ * search would: the same bits. On the Table 1 maple a vertex moves by about 0.1 thickness a
+ * frame; half a thickness lists pairs up to two thicknesses apart, and rebuilds every few frames. */
+#define SKIN 0.25f
+
+/* The skin adapts to how long lists last (the list never changes what a detection finds, only
+ * what it costs): a list the motion outgrew within SKIN_SHORT detections is replaced by one
+ * with a 1.25 times wider skin, one that served over SKIN_LONG by one 0.8 times as wide, within
+ * [SKIN_MIN, SKIN_MAX]. Listed pairs grow steeply with the radius (on the Table 1 maple 500 at
+ * 0.1, 5000 at 0.25, 22000 at 0.35: the sheet's own neighbours sit about two thicknesses apart),
+ * so the skin stays well below one thickness. */
+#define SKIN_MIN   0.125f
+#define SKIN_MAX   0.35f
+#define SKIN_SHORT 4
+#define SKIN_LONG  16
+
+/* The list's room per vertex per thread; a detection that would list more keeps no list (the next
+ * one searches again). */
+#define CACHE_PAIRS 48
+
 /* Below this many contacts the response runs on the calling thread alone. */
 #define RESPOND_PARALLEL 512
 
@@ -143,6 +176,25 @@ struct sere_collide
 	 * lane_bits while the group's lanes are queried, so the lanes a triangle is near are the OR
 	 * of its corners' marks. */
 	lane_bits* lane_mark;
+
+	/* The candidate list (see SKIN): the positions it was built at, the thickness and tree
+	 * generation it was built for, and per block the pairs the exact test must see while no
+	 * vertex has moved by more than the skin, in the order the search met them: per thread
+	 * cache_capacity pairs (the vertex or edge, the triangle or other edge, and the vertex's
+	 * neighbour flag), and per block the thread, first pair and count. */
+	bool cache_valid;
+	float skin;			/* the next list's skin, a fraction of the thickness (SKIN) */
+	float cache_delta;	/* the list's skin δ */
+	int32_t cache_uses; /* detections the list has served */
+	float* edge_across; /* per edge, 3 rows pad(edge_count) apart: edge_across_at at the listing */
+	float cache_thickness;
+	uint64_t cache_generation;
+	int32_t cache_capacity;
+	float *cache_x, *cache_y, *cache_z;
+	int32_t *cache_item, *cache_target;
+	uint8_t* cache_near;
+	int32_t *cache_block_thread, *cache_block_start, *cache_block_count;
+	int32_t* cache_used; /* per thread, FAR_STRIDE apart: pairs listed, or −1 after an overflow */
 };
 
 sere_collide_params sere_collide_params_default( void )
@@ -470,11 +522,14 @@ static void collide_free( sere_collide* c )
 	{
 		sere_free( *slot[i] );
 	}
-	void* arrays[] = { c->block_thread, c->block_start,	 c->block_found, c->block_work,	 c->work_prefix,
-					   c->entry_offset, c->entry_cursor, c->run_total,	 c->touched,	 c->position,
-					   c->acc,			c->far_count,	 c->lane_mark,	 c->mark_offset, c->mark_vertex,
-					   c->mark_bits,	c->edge_end,	 c->lower_edge,	 c->owned,		 c->edge_triangle,
-					   c->push_count };
+	void* arrays[] = { c->block_thread,		 c->block_start,	   c->block_found,	c->block_work,
+					   c->work_prefix,		 c->entry_offset,	   c->entry_cursor, c->run_total,
+					   c->touched,			 c->position,		   c->acc,			c->far_count,
+					   c->lane_mark,		 c->mark_offset,	   c->mark_vertex,	c->mark_bits,
+					   c->edge_end,			 c->lower_edge,		   c->owned,		c->edge_triangle,
+					   c->push_count,		 c->cache_x,		   c->cache_y,		c->cache_z,
+					   c->cache_item,		 c->cache_target,	   c->cache_near,	c->cache_block_thread,
+					   c->cache_block_start, c->cache_block_count, c->cache_used,	c->edge_across };
 	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
 	{
 		sere_free( arrays[i] );
@@ -752,6 +807,23 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->block_work = sere_alloc( sizeof( int64_t ) * blocks );
 	c->work_prefix = sere_alloc( sizeof( int64_t ) * blocks );
 	ok = ok && c->block_thread && c->block_start && c->block_found && c->block_work && c->work_prefix;
+	c->cache_valid = false;
+	c->skin = SKIN;
+	c->edge_across = sere_alloc( 3 * sizeof( float ) * (size_t) sere_pad( c->edge_count > 0 ? c->edge_count : 1 ) );
+	c->cache_capacity = CACHE_PAIRS * n + DETECT_BLOCK;
+	size_t listed = (size_t) c->cache_capacity * (size_t) c->slots;
+	c->cache_x = sere_alloc( sizeof( float ) * vn );
+	c->cache_y = sere_alloc( sizeof( float ) * vn );
+	c->cache_z = sere_alloc( sizeof( float ) * vn );
+	c->cache_item = sere_alloc( sizeof( int32_t ) * listed );
+	c->cache_target = sere_alloc( sizeof( int32_t ) * listed );
+	c->cache_near = sere_alloc( listed );
+	c->cache_block_thread = sere_alloc( sizeof( int32_t ) * blocks );
+	c->cache_block_start = sere_alloc( sizeof( int32_t ) * blocks );
+	c->cache_block_count = sere_alloc( sizeof( int32_t ) * blocks );
+	c->cache_used = sere_alloc( sizeof( int32_t ) * FAR_STRIDE * (size_t) c->slots );
+	ok = ok && c->cache_x && c->cache_y && c->cache_z && c->cache_item && c->cache_target && c->cache_near &&
+		 c->cache_block_thread && c->cache_block_start && c->cache_block_count && c->cache_used && c->edge_across;
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
 		collide_free( c );
@@ -783,6 +855,17 @@ sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacit
 		return SERE_OK;
 	}
 	return alloc_contacts( collide, contact_capacity );
+}
+
+int32_t sere_collide_list_uses( const sere_collide* collide )
+{
+	return collide->cache_uses;
+}
+
+void sere_collide_drop_list( sere_collide* collide )
+{
+	collide->cache_valid = false;
+	collide->cache_uses = 0;
 }
 
 const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count )
@@ -854,6 +937,16 @@ typedef struct detect_context
 	int32_t edge_used;
 	int64_t edge_found;
 	int32_t capacity;
+	/* Listing (a searching detection, see SKIN): the query radii grow by grow = 2δ (with room
+	 * for rounding), and the pairs that could be contacts within it go to the calling thread's
+	 * list (list_used = −1 once it is full). */
+	bool listing;
+	float thickness;
+	float grow;
+	int32_t *list_item, *list_target;
+	uint8_t* list_near;
+	int32_t list_used, list_capacity;
+	const float* across[3]; /* sere_collide.edge_across's rows */
 } detect_context;
 
 /* closest_point for CLOSEST_LANES point–triangle pairs at once, as selects instead of branches:
@@ -961,27 +1054,248 @@ static void detect_emit( detect_context* c, int32_t vertex, int32_t t, const flo
 	}
 }
 
+/* Half-width of the query cube around a vertex: the thickness plus what rounding can add. The
+ * float distance test may accept a pair up to a few ulps of the thickness too far, and the
+ * closest point (and p ± r) carry a few ulps of the coordinates; both margins are far below
+ * any geometric scale, and the exact test decides anyway. */
+static inline float cull_radius( float h, const float p[3] )
+{
+	return h + h * 0x1p-10f + ( fabsf( p[0] ) + fabsf( p[1] ) + fabsf( p[2] ) ) * 0x1p-18f;
+}
+
+/* Appends pair k of the pair buffer to the calling thread's list (see SKIN). */
+static inline void list_pair( detect_context* c, int32_t k )
+{
+	if ( c->list_used >= 0 && c->list_used < c->list_capacity )
+	{
+		c->list_item[c->list_used] = c->pair_item[k];
+		c->list_target[c->list_used] = c->pair_target[k];
+		c->list_near[c->list_used] = c->pair_near[k];
+		c->list_used += 1;
+	}
+	else
+	{
+		c->list_used = -1;
+	}
+}
+
+/* Separating directions (see SKIN): the projections of a convex set onto a unit direction d̂
+ * span the interval of its corners' projections, and |p − q| ≥ (p − q) · d̂ for any points p, q,
+ * so the gap between two sets' intervals on d̂ bounds their distance from below. Rounding moves
+ * the projections by a few ulps of the coordinates and the directions by a few ulps of 1 off unit
+ * length, which the |p| 2⁻¹⁶ (64 times cull_radius's own allowance) and the 2⁻¹⁰ of the radius
+ * added by list_radius cover. */
+static inline float interval_gap( float p_lo, float p_hi, float q_lo, float q_hi )
+{
+	float gap = q_lo - p_hi, other = p_lo - q_hi;
+	return gap > other ? gap : other;
+}
+
+/* The radius a listed pair must be within: the thickness with its rounding margin (cull_radius at
+ * the pair's farthest coordinates far), the grown skin, and room for the bounds' rounding. */
+static inline float list_radius( const detect_context* c, const float far[3] )
+{
+	float r = cull_radius( c->thickness, far ) + c->grow;
+	return r + r * 0x1p-10f + ( fabsf( far[0] ) + fabsf( far[1] ) + fabsf( far[2] ) ) * 0x1p-16f;
+}
+
+/* For CLOSEST_LANES point–triangle pairs: bit l set unless separating directions put the point
+ * farther than list_radius from the triangle. With n̂ the unit normal, |p − x|² = ((p − x) · n̂)²
+ * + |p' − x|² for x in the triangle and p' the projection of p onto its plane; the first term is
+ * ((p − a) · n̂)² exactly, and the in-plane distance is bounded by the gaps (interval_gap) on the
+ * in-plane directions: each edge's outward normal (edge × n̂) and each edge's direction, the
+ * latter bounding the corner regions within cos 30° on a triangle of 60° angles. A triangle whose
+ * sin² of the corner angle is below 2⁻²⁰ (closest_lanes' degenerate case) is always kept. */
+static uint32_t bound_lanes( const detect_context* c, float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES],
+							 float b[3][CLOSEST_LANES], float cc[3][CLOSEST_LANES] )
+{
+	int32_t keep[CLOSEST_LANES];
+#pragma omp simd
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		float ab[3], ac[3], bc[3], ap[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			ab[r] = b[r][l] - a[r][l], ac[r] = cc[r][l] - a[r][l], bc[r] = cc[r][l] - b[r][l];
+			ap[r] = p[r][l] - a[r][l];
+		}
+		float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
+		float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+		float ab2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+		float ac2 = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2];
+		int degenerate = !( nn > 0x1p-20f * ab2 * ac2 );
+		float inv = 1.0f / sqrtf( degenerate ? 1.0f : nn );
+		float u[3] = { n[0] * inv, n[1] * inv, n[2] * inv };
+		float plane = ap[0] * u[0] + ap[1] * u[1] + ap[2] * u[2];
+		/* in-plane directions: edges ab, bc, ca, and their outward normals edge × n̂; corners
+		 * relative to a */
+		float d[6][3];
+		const float* edge[3] = { ab, bc, ac };
+		for ( int k = 0; k < 3; ++k )
+		{
+			const float* e = edge[k];
+			float m[3] = { e[1] * u[2] - e[2] * u[1], e[2] * u[0] - e[0] * u[2], e[0] * u[1] - e[1] * u[0] };
+			float ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], mm = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+			float ie = 1.0f / sqrtf( ee > 0.0f ? ee : 1.0f ), im = 1.0f / sqrtf( mm > 0.0f ? mm : 1.0f );
+			for ( int r = 0; r < 3; ++r )
+			{
+				d[k][r] = e[r] * ie, d[3 + k][r] = m[r] * im;
+			}
+		}
+		float inplane = 0.0f;
+		for ( int k = 0; k < 6; ++k )
+		{
+			float pb = ab[0] * d[k][0] + ab[1] * d[k][1] + ab[2] * d[k][2];
+			float pc = ac[0] * d[k][0] + ac[1] * d[k][1] + ac[2] * d[k][2];
+			float pp = ap[0] * d[k][0] + ap[1] * d[k][1] + ap[2] * d[k][2];
+			float lo = pb < pc ? pb : pc, hi = pb < pc ? pc : pb;
+			lo = lo < 0.0f ? lo : 0.0f, hi = hi > 0.0f ? hi : 0.0f;
+			float gap = interval_gap( pp, pp, lo, hi );
+			inplane = gap > inplane ? gap : inplane;
+		}
+		float far[3] = { fabsf( p[0][l] ), fabsf( p[1][l] ), fabsf( p[2][l] ) };
+		for ( int r = 0; r < 3; ++r )
+		{
+			float m = fabsf( a[r][l] ) > fabsf( b[r][l] ) ? fabsf( a[r][l] ) : fabsf( b[r][l] );
+			m = m > fabsf( cc[r][l] ) ? m : fabsf( cc[r][l] );
+			far[r] = far[r] > m ? far[r] : m;
+		}
+		float radius = list_radius( c, far );
+		keep[l] = degenerate | !( plane * plane + inplane * inplane >= radius * radius );
+	}
+	uint32_t mask = 0;
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		mask |= (uint32_t) ( keep[l] != 0 ) << l;
+	}
+	return mask;
+}
+
+/* For CLOSEST_LANES segment pairs: bit l set unless separating directions put the segments
+ * farther apart than list_radius: their common normal (e × f normalized, where they are not
+ * parallel to within sin² 2⁻²⁰), each one's direction and the unit vector across each one in the
+ * plane of its first triangle (the table's across for e, recomputed for f). */
+static uint32_t edge_bound_lanes( const detect_context* c, const int32_t* item, const int32_t* target,
+								  float a0[3][CLOSEST_LANES], float a1[3][CLOSEST_LANES], float b0[3][CLOSEST_LANES],
+								  float b1[3][CLOSEST_LANES] )
+{
+	float across[2][3][CLOSEST_LANES];
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		for ( int r = 0; r < 3; ++r )
+		{
+			across[0][r][l] = c->across[r][item[l]], across[1][r][l] = c->across[r][target[l]];
+		}
+	}
+	int32_t keep[CLOSEST_LANES];
+#pragma omp simd
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		float u[3], v[3], w1[3], w0[3], w2[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			u[r] = a1[r][l] - a0[r][l], v[r] = b1[r][l] - b0[r][l];
+			w0[r] = b0[r][l] - a0[r][l], w1[r] = b1[r][l] - a0[r][l], w2[r] = u[r];
+		}
+		float n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+		float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+		float uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+		int skew = nn > 0x1p-20f * uu * vv;
+		float in = skew ? 1.0f / sqrtf( nn ) : 0.0f;
+		float iu = uu > 0.0f ? 1.0f / sqrtf( uu ) : 0.0f, iv = vv > 0.0f ? 1.0f / sqrtf( vv ) : 0.0f;
+		float d[5][3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			d[0][r] = n[r] * in, d[1][r] = u[r] * iu, d[2][r] = v[r] * iv;
+			d[3][r] = across[0][r][l], d[4][r] = across[1][r][l];
+		}
+		float bound = 0.0f;
+		for ( int k = 0; k < 5; ++k )
+		{
+			/* e's ends a0, a1 and f's b0, b1, relative to a0 */
+			float pa = w2[0] * d[k][0] + w2[1] * d[k][1] + w2[2] * d[k][2];
+			float q0 = w0[0] * d[k][0] + w0[1] * d[k][1] + w0[2] * d[k][2];
+			float q1 = w1[0] * d[k][0] + w1[1] * d[k][1] + w1[2] * d[k][2];
+			float gap =
+				interval_gap( pa < 0.0f ? pa : 0.0f, pa > 0.0f ? pa : 0.0f, q0 < q1 ? q0 : q1, q0 < q1 ? q1 : q0 );
+			bound = gap > bound ? gap : bound;
+		}
+		float far[3];
+		for ( int r = 0; r < 3; ++r )
+		{
+			float m0 = fabsf( a0[r][l] ) > fabsf( a1[r][l] ) ? fabsf( a0[r][l] ) : fabsf( a1[r][l] );
+			float m1 = fabsf( b0[r][l] ) > fabsf( b1[r][l] ) ? fabsf( b0[r][l] ) : fabsf( b1[r][l] );
+			far[r] = m0 > m1 ? m0 : m1;
+		}
+		keep[l] = !( bound >= list_radius( c, far ) );
+	}
+	uint32_t mask = 0;
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		mask |= (uint32_t) ( keep[l] != 0 ) << l;
+	}
+	return mask;
+}
+
+/* Gathers the points of buffered vertex–triangle pairs start .. start + CLOSEST_LANES − 1 (lanes
+ * past the end repeat the last pair). */
+static void gather_pairs( const detect_context* c, int32_t start, int32_t count, float p[3][CLOSEST_LANES],
+						  float a[3][CLOSEST_LANES], float b[3][CLOSEST_LANES], float cc[3][CLOSEST_LANES] )
+{
+	for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
+	{
+		int32_t k = start + ( l < count ? l : count - 1 );
+		int32_t vertex = c->pair_item[k];
+		const int32_t* v = c->tri + 3 * (size_t) c->pair_target[k];
+		p[0][l] = c->x[vertex], p[1][l] = c->y[vertex], p[2][l] = c->z[vertex];
+		a[0][l] = c->x[v[0]], a[1][l] = c->y[v[0]], a[2][l] = c->z[v[0]];
+		b[0][l] = c->x[v[1]], b[1][l] = c->y[v[1]], b[2][l] = c->z[v[1]];
+		cc[0][l] = c->x[v[2]], cc[1][l] = c->y[v[2]], cc[2][l] = c->z[v[2]];
+	}
+}
+
+/* Listing: keeps in the pair buffer (in order) only the pairs bound_lanes keeps and lists them;
+ * the others cannot be contacts now either (the bound is below the distance, the radius above
+ * the thickness). */
+static void list_vertex_pairs( detect_context* c )
+{
+	int32_t kept = 0;
+	for ( int32_t start = 0; start < c->pair_count; start += CLOSEST_LANES )
+	{
+		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
+		float p[3][CLOSEST_LANES], a[3][CLOSEST_LANES], b[3][CLOSEST_LANES], cc[3][CLOSEST_LANES];
+		gather_pairs( c, start, count, p, a, b, cc );
+		uint32_t keep = bound_lanes( c, p, a, b, cc ) & ( ( 1u << count ) - 1u );
+		while ( keep != 0 )
+		{
+			int32_t k = start + __builtin_ctz( keep );
+			keep &= keep - 1;
+			c->pair_item[kept] = c->pair_item[k];
+			c->pair_target[kept] = c->pair_target[k];
+			c->pair_near[kept] = c->pair_near[k];
+			list_pair( c, kept );
+			kept += 1;
+		}
+	}
+	c->pair_count = kept;
+}
+
 /* The exact test of the buffered pairs, CLOSEST_LANES at a time, in the order they were
  * buffered (the tree's, then the lanes'), so the contact list does not depend on the batching. */
 static void detect_flush( detect_context* c )
 {
+	if ( c->listing )
+	{
+		list_vertex_pairs( c );
+	}
 	for ( int32_t start = 0; start < c->pair_count; start += CLOSEST_LANES )
 	{
 		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
 		float p[3][CLOSEST_LANES], a[3][CLOSEST_LANES], b[3][CLOSEST_LANES], cc[3][CLOSEST_LANES];
 		float w[3][CLOSEST_LANES], q[3][CLOSEST_LANES], d2[CLOSEST_LANES];
 		int32_t slow[CLOSEST_LANES];
-		for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
-		{
-			/* lanes past the end repeat the last pair and are ignored */
-			int32_t k = start + ( l < count ? l : count - 1 );
-			int32_t vertex = c->pair_item[k];
-			const int32_t* v = c->tri + 3 * (size_t) c->pair_target[k];
-			p[0][l] = c->x[vertex], p[1][l] = c->y[vertex], p[2][l] = c->z[vertex];
-			a[0][l] = c->x[v[0]], a[1][l] = c->y[v[0]], a[2][l] = c->z[v[0]];
-			b[0][l] = c->x[v[1]], b[1][l] = c->y[v[1]], b[2][l] = c->z[v[1]];
-			cc[0][l] = c->x[v[2]], cc[1][l] = c->y[v[2]], cc[2][l] = c->z[v[2]];
-		}
+		/* lanes past the end repeat the last pair and are ignored */
+		gather_pairs( c, start, count, p, a, b, cc );
 		closest_lanes( p, a, b, cc, w, q, d2, slow );
 		uint32_t candidates = 0;
 		for ( int32_t l = 0; l < count; ++l )
@@ -1098,28 +1412,71 @@ static void detect_edge_emit( detect_context* c, int32_t e, int32_t f, const flo
 	}
 }
 
+/* Gathers the ends of buffered edge pairs start .. start + CLOSEST_LANES − 1 (lanes past the end
+ * repeat the last pair). */
+static void gather_edge_pairs( const detect_context* c, int32_t start, int32_t count, float a0[3][CLOSEST_LANES],
+							   float a1[3][CLOSEST_LANES], float b0[3][CLOSEST_LANES], float b1[3][CLOSEST_LANES] )
+{
+	for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
+	{
+		int32_t k = start + ( l < count ? l : count - 1 );
+		const int32_t* e = c->edge_end + 2 * (size_t) c->pair_item[k];
+		const int32_t* f = c->edge_end + 2 * (size_t) c->pair_target[k];
+		a0[0][l] = c->x[e[0]], a0[1][l] = c->y[e[0]], a0[2][l] = c->z[e[0]];
+		a1[0][l] = c->x[e[1]], a1[1][l] = c->y[e[1]], a1[2][l] = c->z[e[1]];
+		b0[0][l] = c->x[f[0]], b0[1][l] = c->y[f[0]], b0[2][l] = c->z[f[0]];
+		b1[0][l] = c->x[f[1]], b1[1][l] = c->y[f[1]], b1[2][l] = c->z[f[1]];
+	}
+}
+
+/* Listing: keeps in the pair buffer (in order) only the edge pairs edge_bound_lanes keeps and
+ * lists them, as list_vertex_pairs. */
+static void list_edge_pairs( detect_context* c )
+{
+	int32_t kept = 0;
+	for ( int32_t start = 0; start < c->pair_count; start += CLOSEST_LANES )
+	{
+		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
+		float a0[3][CLOSEST_LANES], a1[3][CLOSEST_LANES], b0[3][CLOSEST_LANES], b1[3][CLOSEST_LANES];
+		gather_edge_pairs( c, start, count, a0, a1, b0, b1 );
+		int32_t item[CLOSEST_LANES], target[CLOSEST_LANES];
+		for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
+		{
+			int32_t k = start + ( l < count ? l : count - 1 );
+			item[l] = c->pair_item[k], target[l] = c->pair_target[k];
+		}
+		uint32_t keep = edge_bound_lanes( c, item, target, a0, a1, b0, b1 ) & ( ( 1u << count ) - 1u );
+		while ( keep != 0 )
+		{
+			int32_t k = start + __builtin_ctz( keep );
+			keep &= keep - 1;
+			c->pair_item[kept] = c->pair_item[k];
+			c->pair_target[kept] = c->pair_target[k];
+			c->pair_near[kept] = 0;
+			list_pair( c, kept );
+			kept += 1;
+		}
+	}
+	c->pair_count = kept;
+}
+
 /* The exact test of the buffered edge pairs, CLOSEST_LANES at a time, in the order they were
  * buffered. A pair is a contact when it is closer than the thickness and both closest points
  * lie strictly inside their edges: where one is an end, that vertex is within the thickness of
  * the other edge's triangles, a vertex–triangle pair. */
 static void detect_edge_flush( detect_context* c )
 {
+	if ( c->listing )
+	{
+		list_edge_pairs( c );
+	}
 	for ( int32_t start = 0; start < c->pair_count; start += CLOSEST_LANES )
 	{
 		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
 		float a0[3][CLOSEST_LANES], a1[3][CLOSEST_LANES], b0[3][CLOSEST_LANES], b1[3][CLOSEST_LANES];
 		float w[2][CLOSEST_LANES], d2[CLOSEST_LANES];
-		for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
-		{
-			/* lanes past the end repeat the last pair and are ignored */
-			int32_t k = start + ( l < count ? l : count - 1 );
-			const int32_t* e = c->edge_end + 2 * (size_t) c->pair_item[k];
-			const int32_t* f = c->edge_end + 2 * (size_t) c->pair_target[k];
-			a0[0][l] = c->x[e[0]], a0[1][l] = c->y[e[0]], a0[2][l] = c->z[e[0]];
-			a1[0][l] = c->x[e[1]], a1[1][l] = c->y[e[1]], a1[2][l] = c->z[e[1]];
-			b0[0][l] = c->x[f[0]], b0[1][l] = c->y[f[0]], b0[2][l] = c->z[f[0]];
-			b1[0][l] = c->x[f[1]], b1[1][l] = c->y[f[1]], b1[2][l] = c->z[f[1]];
-		}
+		/* lanes past the end repeat the last pair and are ignored */
+		gather_edge_pairs( c, start, count, a0, a1, b0, b1 );
 		closest_segments_lanes( a0, a1, b0, b1, w, d2 );
 		uint32_t hits = 0;
 		for ( int32_t l = 0; l < count; ++l )
@@ -1291,15 +1648,6 @@ static int32_t run_begin( const sere_collide* c, int part, int parts )
 	return lo;
 }
 
-/* Half-width of the query cube around a vertex: the thickness plus what rounding can add. The
- * float distance test may accept a pair up to a few ulps of the thickness too far, and the
- * closest point (and p ± r) carry a few ulps of the coordinates; both margins are far below
- * any geometric scale, and the exact test decides anyway. */
-static inline float cull_radius( float h, const float p[3] )
-{
-	return h + h * 0x1p-10f + ( fabsf( p[0] ) + fabsf( p[1] ) + fabsf( p[2] ) ) * 0x1p-18f;
-}
-
 /* Lists the contacts found (total vertex–triangle ones, then edge_total edge–edge ones): copies
  * each block's contacts from its thread's buffer to the block's place in its list (thread 0's
  * vertex–triangle contacts are there already), with the per-contact arrays of the response, and
@@ -1455,7 +1803,7 @@ static int detect_vertex_block( detect_context* c, const sere_bvh* bvh, int32_t 
 			load3( c->x, c->y, c->z, first + k, p );
 			/* a NaN or infinite vertex leaves its lane non-finite: the query ignores it */
 			bad |= !( isfinite( p[0] ) && isfinite( p[1] ) && isfinite( p[2] ) );
-			float r = cull_radius( thickness, p );
+			float r = cull_radius( thickness, p ) + c->grow;
 			group.lo_x[k] = p[0] - r, group.lo_y[k] = p[1] - r, group.lo_z[k] = p[2] - r;
 			group.hi_x[k] = p[0] + r, group.hi_y[k] = p[1] + r, group.hi_z[k] = p[2] + r;
 		}
@@ -1479,7 +1827,7 @@ static void table_lane( detect_context* c, sere_bvh_group* group, int32_t k, int
 	for ( int32_t i = e; i < end; ++i )
 	{
 		int32_t j = c->table_count++, b = c->edge_end[2 * i + 1];
-		float pb[3], corner[3][3], n[3];
+		float pb[3];
 		load3( c->x, c->y, c->z, b, pb );
 		for ( int d = 0; d < 3; ++d )
 		{
@@ -1488,17 +1836,10 @@ static void table_lane( detect_context* c, sere_bvh_group* group, int32_t k, int
 			lo[d] = c->table_lo[d][j] < lo[d] ? c->table_lo[d][j] : lo[d];
 			hi[d] = c->table_hi[d][j] > hi[d] ? c->table_hi[d][j] : hi[d];
 		}
-		/* across the edge in the plane of its first triangle: n × (b − a), normalized */
-		triangle_frame( c->x, c->y, c->z, c->tri + 3 * (size_t) c->edge_triangle[i], corner[0], corner[1], corner[2],
-						n );
-		float u[3] = { pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2] };
-		float m[3] = { n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0] };
-		float length = sqrtf( m[0] * m[0] + m[1] * m[1] + m[2] * m[2] );
-		float inverse = length > 0.0f ? 1.0f / length : 0.0f;
 		for ( int d = 0; d < 3; ++d )
 		{
 			c->table_at[d][j] = pa[d];
-			c->table_across[d][j] = m[d] * inverse;
+			c->table_across[d][j] = c->across[d][i];
 		}
 		c->table_lower[j] = a, c->table_upper[j] = b, c->table_edge[j] = i;
 	}
@@ -1507,7 +1848,7 @@ static void table_lane( detect_context* c, sere_bvh_group* group, int32_t k, int
 	{
 		far[d] = fabsf( lo[d] ) > fabsf( hi[d] ) ? fabsf( lo[d] ) : fabsf( hi[d] );
 	}
-	float r = cull_radius( thickness, far );
+	float r = cull_radius( thickness, far ) + c->grow;
 	for ( int32_t j = from; j < c->table_count; ++j )
 	{
 		for ( int d = 0; d < 3; ++d )
@@ -1563,6 +1904,105 @@ static void detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_t b
 	detect_edge_flush( c );
 }
 
+/* The unit vector across edge e = (a, b) in the plane of its first triangle: n × (b − a),
+ * normalized (zero when that is degenerate), for table_hits and edge_bound_lanes. */
+static void edge_across_at( sere_collide* collide, const int32_t* tri, const float* x, const float* y, const float* z,
+							int32_t e )
+{
+	float corner[3][3], n[3], pa[3], pb[3];
+	triangle_frame( x, y, z, tri + 3 * (size_t) collide->edge_triangle[e], corner[0], corner[1], corner[2], n );
+	load3( x, y, z, collide->edge_end[2 * e], pa );
+	load3( x, y, z, collide->edge_end[2 * e + 1], pb );
+	float u[3] = { pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2] };
+	float m[3] = { n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0] };
+	float length = sqrtf( m[0] * m[0] + m[1] * m[1] + m[2] * m[2] );
+	float inverse = length > 0.0f ? 1.0f / length : 0.0f;
+	size_t stride = (size_t) sere_pad( collide->edge_count );
+	for ( int d = 0; d < 3; ++d )
+	{
+		collide->edge_across[(size_t) d * stride + (size_t) e] = m[d] * inverse;
+	}
+}
+
+/* Runs the exact test on block `block`'s listed pairs (see SKIN), in their order, as the search
+ * would have buffered them. */
+static void replay_block( detect_context* c, const sere_collide* collide, int32_t block, bool vertices )
+{
+	size_t base = (size_t) collide->cache_block_thread[block] * (size_t) collide->cache_capacity +
+				  (size_t) collide->cache_block_start[block];
+	int32_t count = collide->cache_block_count[block];
+	for ( int32_t done = 0; done < count; done += PAIR_BUFFER )
+	{
+		int32_t batch = count - done < PAIR_BUFFER ? count - done : PAIR_BUFFER;
+		memcpy( c->pair_item, collide->cache_item + base + done, sizeof( int32_t ) * (size_t) batch );
+		memcpy( c->pair_target, collide->cache_target + base + done, sizeof( int32_t ) * (size_t) batch );
+		memcpy( c->pair_near, collide->cache_near + base + done, (size_t) batch );
+		c->pair_count = batch;
+		if ( vertices )
+		{
+			detect_flush( c );
+		}
+		else
+		{
+			detect_edge_flush( c );
+		}
+	}
+}
+
+/* True when the list (see SKIN) serves positions x, y, z and this thickness: it is whole, was made
+ * for a thickness no smaller and for this build of the tree, and every vertex is within δ of
+ * where it was then, up to one translation T common to all (the middle of the displacements'
+ * box): distances, the only thing the list's argument uses, do not see T. The float |Δ − T|²
+ * is within a few ulps of the true one, and the |T| 2⁻¹⁴ taken off δ covers what T adds to
+ * cull_radius's |p| term and to the rounding of Δ − T, both far inside the 2⁻⁸ δ of room the
+ * grown radius keeps; a NaN fails the test. */
+static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+						 const float* z, float thickness, int threads )
+{
+	if ( !collide->cache_valid || !( thickness <= collide->cache_thickness ) ||
+		 sere_bvh_generation( bvh ) != collide->cache_generation )
+	{
+		return false;
+	}
+	int32_t n = collide->vertex_count;
+	const float* now[3] = { x, y, z };
+	const float* then[3] = { collide->cache_x, collide->cache_y, collide->cache_z };
+	float lo[3], hi[3];
+	for ( int a = 0; a < 3; ++a )
+	{
+		float l = INFINITY, h = -INFINITY;
+		const float *p = now[a], *q = then[a];
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( min : l ) reduction( max : h )
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			float d = p[i] - q[i];
+			l = d < l ? d : l;
+			h = d > h ? d : h;
+		}
+		lo[a] = l, hi[a] = h;
+	}
+	if ( !( isfinite( lo[0] + lo[1] + lo[2] ) && isfinite( hi[0] + hi[1] + hi[2] ) ) )
+	{
+		return false;
+	}
+	float t[3] = { 0.5f * ( lo[0] + hi[0] ), 0.5f * ( lo[1] + hi[1] ), 0.5f * ( lo[2] + hi[2] ) };
+	float skin = collide->cache_delta - ( fabsf( t[0] ) + fabsf( t[1] ) + fabsf( t[2] ) ) * 0x1p-14f;
+	if ( !( skin > 0.0f ) )
+	{
+		return false;
+	}
+	float limit = skin * skin;
+	int far = 0;
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( | : far )
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		float dx = x[i] - collide->cache_x[i] - t[0], dy = y[i] - collide->cache_y[i] - t[1];
+		float dz = z[i] - collide->cache_z[i] - t[2];
+		far |= !( dx * dx + dy * dy + dz * dz <= limit );
+	}
+	return !far;
+}
+
 sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 								 const float* z, float thickness, int32_t* contact_count )
 {
@@ -1591,6 +2031,38 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	{
 		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
 	}
+	bool replay = list_serves( collide, bvh, x, y, z, thickness, threads );
+	bool listing = !replay;
+	if ( replay )
+	{
+		collide->cache_uses += 1;
+	}
+	else
+	{
+		if ( collide->cache_valid && collide->cache_uses < SKIN_SHORT )
+		{
+			collide->skin = collide->skin * 1.25f < SKIN_MAX ? collide->skin * 1.25f : SKIN_MAX;
+		}
+		else if ( collide->cache_valid && collide->cache_uses > SKIN_LONG )
+		{
+			collide->skin = collide->skin * 0.8f > SKIN_MIN ? collide->skin * 0.8f : SKIN_MIN;
+		}
+		collide->cache_valid = false;
+		collide->cache_uses = 0;
+		collide->cache_delta = collide->skin * thickness;
+		int32_t edges = collide->edge_count;
+#pragma omp parallel for num_threads( threads ) schedule( static )
+		for ( int32_t e = 0; e < edges; ++e )
+		{
+			edge_across_at( collide, tri, x, y, z, e );
+		}
+	}
+	size_t across_stride = (size_t) sere_pad( collide->edge_count );
+	for ( int t = 0; t < threads; ++t )
+	{
+		/* a thread the team turns out not to have lists nothing */
+		collide->cache_used[FAR_STRIDE * t] = 0;
+	}
 	int bad = 0;
 #pragma omp parallel num_threads( threads ) reduction( | : bad )
 	{
@@ -1612,6 +2084,17 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			.buffer = thread_buffer( collide, tid ),
 			.edge_buffer = thread_edge_buffer( collide, tid ),
 			.capacity = collide->capacity,
+			.listing = listing,
+			.thickness = thickness,
+			/* 2δ, and 2⁻⁸ of it for the rounding of the displacement test and of cull_radius's
+			 * |p| term at the moved positions */
+			.grow = listing ? 2.0f * collide->cache_delta * ( 1.0f + 0x1p-8f ) : 0.0f,
+			.list_item = collide->cache_item + (size_t) tid * (size_t) collide->cache_capacity,
+			.list_target = collide->cache_target + (size_t) tid * (size_t) collide->cache_capacity,
+			.list_near = collide->cache_near + (size_t) tid * (size_t) collide->cache_capacity,
+			.list_capacity = collide->cache_capacity,
+			.across = { collide->edge_across, collide->edge_across + across_stride,
+						collide->edge_across + 2 * across_stride },
 		};
 		int32_t run_end = run_begin( collide, tid + 1, team );
 		for ( int32_t block = run_begin( collide, tid, team ); block < run_end; ++block )
@@ -1620,7 +2103,12 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			int32_t start = vertices ? c.used : c.edge_used;
 			int64_t found = vertices ? c.found : c.edge_found;
 			double clock = omp_get_wtime();
-			if ( vertices )
+			int32_t listed = c.list_used;
+			if ( replay )
+			{
+				replay_block( &c, collide, block, vertices );
+			}
+			else if ( vertices )
 			{
 				bad |= detect_vertex_block( &c, bvh, block, n, thickness );
 			}
@@ -1628,10 +2116,39 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			{
 				detect_edge_block( &c, bvh, block - collide->vertex_blocks, n, thickness );
 			}
+			if ( listing )
+			{
+				collide->cache_block_thread[block] = tid;
+				collide->cache_block_start[block] = listed;
+				collide->cache_block_count[block] = c.list_used - listed;
+			}
 			collide->block_thread[block] = tid;
 			collide->block_start[block] = start;
 			collide->block_found[block] = ( vertices ? c.found : c.edge_found ) - found;
 			collide->block_work[block] = (int64_t) ( ( omp_get_wtime() - clock ) * 1e9 );
+		}
+		collide->cache_used[FAR_STRIDE * tid] = c.list_used;
+	}
+	if ( listing )
+	{
+		bool whole = !bad;
+		for ( int t = 0; t < threads; ++t )
+		{
+			whole = whole && collide->cache_used[FAR_STRIDE * t] >= 0;
+		}
+		collide->cache_valid = whole;
+		if ( !whole && !bad )
+		{
+			/* the list outgrew its room: the next one lists fewer pairs */
+			collide->skin = SKIN_MIN;
+		}
+		if ( whole )
+		{
+			memcpy( collide->cache_x, x, sizeof( float ) * (size_t) n );
+			memcpy( collide->cache_y, y, sizeof( float ) * (size_t) n );
+			memcpy( collide->cache_z, z, sizeof( float ) * (size_t) n );
+			collide->cache_thickness = thickness;
+			collide->cache_generation = sere_bvh_generation( bvh );
 		}
 	}
 	if ( bad )

@@ -124,6 +124,17 @@ sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacit
 sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 								 const float* z, float thickness, int32_t* contact_count );
 
+/* Detections served by the current candidate list without searching the tree, since the
+ * detection that searched and made it (0 right after that one; see SKIN in collide.c). A
+ * detection finds the same contacts, bit for bit and in the same order, either way; this only
+ * says which way it went, for tests and benchmarks. */
+int32_t sere_collide_list_uses( const sere_collide* collide );
+
+/* Drops the candidate list: the next detection searches the tree (and makes a new list). It
+ * finds the same contacts as it would have from the list; benchmarks use this to time the
+ * search. */
+void sere_collide_drop_list( sere_collide* collide );
+
 const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
 const sere_edge_contact* sere_collide_edge_contacts( const sere_collide* collide, int32_t* count );
 

@@ -545,3 +545,34 @@ Test( bvh, degenerate_meshes )
 	sere_bvh_destroy( bvh );
 	bvh_sheet_free( &s );
 }
+
+/* The generation names a build: the candidate list of sere_collide trusts it to say the tree's
+ * order is unchanged, so a refit must keep it, a build must change it, and two trees never share
+ * one. */
+Test( bvh, generation_changes_with_builds_only )
+{
+	bvh_sheet s;
+	bvh_sheet_make( &s, 12, 8, 3 );
+	sere_bvh *a, *b;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &a ), SERE_OK );
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &b ), SERE_OK );
+	uint64_t first = sere_bvh_generation( a );
+	cr_assert_neq( first, 0u );
+	cr_assert_neq( sere_bvh_generation( b ), first );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.z[i] = 0.1f * s.x[i] * s.x[i];
+	}
+	cr_assert_eq( sere_bvh_refit( a, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_generation( a ), first );
+	bool rebuilt = true;
+	cr_assert_eq( sere_bvh_update( a, s.x, s.y, s.z, 1e9, &rebuilt ), SERE_OK );
+	cr_assert( !rebuilt );
+	cr_assert_eq( sere_bvh_generation( a ), first );
+	cr_assert_eq( sere_bvh_build( a, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_neq( sere_bvh_generation( a ), first );
+	cr_assert_neq( sere_bvh_generation( a ), sere_bvh_generation( b ) );
+	sere_bvh_destroy( a );
+	sere_bvh_destroy( b );
+	bvh_sheet_free( &s );
+}

@@ -395,6 +395,123 @@ Test( collide, pairs_match_brute_force_on_crumpled_sheet )
 	collide_sheet_free( &s );
 }
 
+/* A detection served by the candidate list (collide.c, SKIN) must find what a search finds: the
+ * same contacts of both kinds, bit for bit and in the same order. A crumpled sheet folded through
+ * itself moves by a slowly growing amplitude (about 0.1 thickness a step at the folds), drifts by
+ * a common translation of 1.2 thicknesses a step (which the list allows for), thins by 0.1% a
+ * step, and has its tree rebuilt once midway; a workspace kept across the steps (the list
+ * serving most of them) is compared with a fresh one each step (always searching) and with
+ * brute force, at 1, 2 and 3 threads. */
+Test( collide, listed_detection_equals_search_while_the_sheet_moves )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h0 = 0.3f * s.cell;
+	for ( int threads = 1; threads <= 3; ++threads )
+	{
+		omp_set_num_threads( threads );
+		collide_sheet_crumple( &s, 0.3, 0.3 * h0, 5 );
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+		sere_collide* kept;
+		cr_assert_eq( sere_collide_create( bvh, 1 << 16, &kept ), SERE_OK );
+		int32_t served = 0, searched = 0, most = 0, most_edges = 0;
+		for ( int step = 0; step < 40; ++step )
+		{
+			float h = h0 * powf( 0.999f, (float) step );
+			collide_sheet_crumple( &s, 0.3 + 0.0005 * step, 0.3 * h0, 5 );
+			for ( int32_t i = 0; i < s.n; ++i )
+			{
+				s.x[i] += 1.2f * h0 * (float) step, s.y[i] -= 0.7f * h0 * (float) step;
+			}
+			if ( step == 20 )
+			{
+				cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+			}
+			cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+			int32_t edges = 0;
+			int32_t count = collide_check_pairs( &s, bvh, kept, h, "listed", &edges );
+			int32_t uses = sere_collide_list_uses( kept );
+			served += uses > 0, searched += uses == 0;
+			most = count > most ? count : most;
+			most_edges = edges > most_edges ? edges : most_edges;
+			sere_collide* fresh;
+			cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+			int32_t fresh_count = -1;
+			cr_assert_eq( sere_collide_detect( fresh, bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+			cr_assert_eq( sere_collide_list_uses( fresh ), 0 );
+			int32_t n_kept, n_fresh, e_kept, e_fresh;
+			const sere_contact* a = sere_collide_contacts( kept, &n_kept );
+			const sere_contact* b = sere_collide_contacts( fresh, &n_fresh );
+			const sere_edge_contact* ea = sere_collide_edge_contacts( kept, &e_kept );
+			const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_fresh );
+			cr_assert( n_kept == n_fresh && e_kept == e_fresh, "%d threads, step %d: %d + %d contacts, search %d + %d",
+					   threads, step, n_kept, e_kept, n_fresh, e_fresh );
+			/* tolerance 0: the same pairs through the same exact test, in the same order */
+			cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_kept ) == 0, "%d threads, step %d", threads,
+					   step );
+			cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_kept ) == 0, "%d threads, step %d",
+					   threads, step );
+			sere_collide_destroy( fresh );
+		}
+		cr_assert_gt( most, 50, "the crumple must fold the sheet onto itself" );
+		cr_assert_gt( most_edges, 20, "the crumple must bring edges across each other" );
+		cr_assert_gt( served, 20, "%d threads: the list must serve most steps (served %d)", threads, served );
+		cr_assert_gt( searched, 2, "%d threads: the motion and the rebuild must outgrow the list (searched %d)",
+					  threads, searched );
+		sere_collide_destroy( kept );
+		sere_bvh_destroy( bvh );
+	}
+	collide_sheet_free( &s );
+}
+
+/* The list's radius at its bound: a U-fold whose halves face each other at 1.47 thicknesses (a
+ * fresh workspace's first list has a skin of 0.25 thickness, so it lists pairs up to 1.5
+ * thicknesses apart) closes to 0.99 thickness by moving every vertex 0.24 thickness at most
+ * (z ↦ d + z (gap − 2d) / gap): the list must serve that detection and hold every pair that has
+ * come within the thickness, both kinds, as the fresh search and brute force find them. */
+Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h = 0.3f * s.cell, gap = 1.47f * h, d = 0.24f * h;
+	collide_sheet_fold( &s, gap );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	int32_t before = -1;
+	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
+	cr_assert_eq( sere_collide_list_uses( c ), 0 );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.z[i] = d + s.z[i] * ( gap - 2.0f * d ) / gap;
+	}
+	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t edges = 0;
+	int32_t count = collide_check_pairs( &s, bvh, c, h, "closed fold", &edges );
+	cr_assert_eq( sere_collide_list_uses( c ), 1, "the list must serve a move within its skin" );
+	cr_assert_gt( count, 10 * ( before + 10 ), "closing the fold must bring the halves within the thickness" );
+	cr_assert_gt( edges, 100 );
+	sere_collide* fresh;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+	int32_t fresh_count = -1;
+	cr_assert_eq( sere_collide_detect( fresh, bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+	int32_t n_a, n_b, e_a, e_b;
+	const sere_contact* a = sere_collide_contacts( c, &n_a );
+	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
+	const sere_edge_contact* ea = sere_collide_edge_contacts( c, &e_a );
+	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
+	cr_assert( n_a == n_b && e_a == e_b );
+	/* tolerance 0: the same pairs through the same exact test, in the same order */
+	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0 );
+	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0 );
+	sere_collide_destroy( fresh );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( &s );
+}
+
 /* One vertex over the middle of a triangle, everything else far away: a single contact whose
  * solution is known in closed form. */
 /* Slivers and collapsed triangles take closest_point's nearest-edge fallback, which the
