@@ -157,11 +157,17 @@ $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(HARNESS_CFLAGS) -Itests -c $< -o $@
 
+# hypre (BoomerAMG, the CG benchmark's peer): Debian builds it with MPI, whose headers and
+# library pkg-config's mpi names (its C API only: no MPI C++ bindings to link).
+HYPRE_CFLAGS := -isystem /usr/include/hypre $(patsubst -I%,-isystem %,$(shell pkg-config --cflags mpi 2>/dev/null)) \
+                -DOMPI_SKIP_MPICXX -DMPICH_SKIP_MPICXX
+HYPRE_LIBS   := -lHYPRE $(shell pkg-config --libs mpi 2>/dev/null)
+
 # gcc 12 reports a false maybe-uninitialized inside Eigen's AVX-512 reductions (system header
 # code inlined into the Eigen peer); everything else stays -Werror. (clang has no such warning.)
 $(BUILD)/obj/bench/%.o: bench/%.cc
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS_ALL) $(if $(CXX_IS_CLANG),,-Wno-maybe-uninitialized) -isystem /usr/include/embree3 -Ibench -c $< -o $@
+	$(CXX) $(CXXFLAGS_ALL) $(if $(CXX_IS_CLANG),,-Wno-maybe-uninitialized) -isystem /usr/include/embree3 $(HYPRE_CFLAGS) -Ibench -c $< -o $@
 
 $(LIB_A): $(KERNEL_OBJ)
 	@rm -f $@
@@ -185,7 +191,7 @@ $(TESTS): $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A)
 	$(CC) -fopenmp $(LDSAN) -o $@ $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A) -lcriterion -lassimp $(LIBS_HARNESS)
 
 $(BENCHX): $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A)
-	$(CXX) -fopenmp $(LDSAN) -o $@ $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A) -lbenchmark -lpthread -lembree3 $(LIBS_HARNESS)
+	$(CXX) -fopenmp $(LDSAN) -o $@ $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A) -lbenchmark -lpthread -lembree3 $(HYPRE_LIBS) $(LIBS_HARNESS)
 
 # Installed layout (all relative to PREFIX, so the tree can be moved as a whole: sere finds
 # ../share/sere beside its own binary, sere.pc and the CMake package locate themselves):

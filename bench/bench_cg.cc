@@ -7,9 +7,16 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
+#include <HYPRE.h>
+#include <HYPRE_krylov.h>
+#include <HYPRE_parcsr_ls.h>
 #include <benchmark/benchmark.h>
+#include <mpi.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <vector>
 
 namespace
@@ -20,16 +27,19 @@ struct system_t
 	std::vector<double> b;
 };
 
-// Layer 0 = T, 1 = V; assembled once from the maple at rest with the maple-green lambda.
-system_t& maple_system( int layer )
+// Systems by index: 0 = the maple's T layer, 1 = its V layer (lambda 0.04, maple-green), 2 = the
+// plane tree's V layer (lambda 100, plane-tree: the stiff Voronoi system). Each is assembled once
+// from its leaf at rest.
+system_t& leaf_system( int index )
 {
-	static system_t systems[2];
-	system_t& s = systems[layer];
+	static system_t systems[3];
+	system_t& s = systems[index];
 	if ( s.osmosis != nullptr )
 	{
 		return s;
 	}
-	const sere_model* m = sere_bench_model( SERE_BENCH_MAPLE );
+	const int layer = index == 0 ? 0 : 1;
+	const sere_model* m = sere_bench_model( index == 2 ? SERE_BENCH_PLANE : SERE_BENCH_MAPLE );
 	int32_t first = layer == 0 ? 0 : m->triangle_particles;
 	int32_t count = layer == 0 ? m->triangle_particles : m->triangle_count;
 	int32_t s0 = layer == 0 ? 0 : m->t_springs;
@@ -37,12 +47,34 @@ system_t& maple_system( int layer )
 	sere_osmosis_create( first, count, m->s.a + s0, m->s.b + s0, sc, &s.osmosis );
 	std::vector<double> w( m->p.w, m->p.w + m->p.count ), mass( m->p.m, m->p.m + m->p.count );
 	sere_osmosis_params params = sere_osmosis_params_default();
-	params.lambda_min = params.lambda_max = 0.04;
+	params.lambda_min = params.lambda_max = index == 2 ? 100.0 : 0.04;
 	sere_osmosis_report report;
 	sere_osmosis_step( s.osmosis, m->p.x, m->p.y, m->p.z, m->p.tau, m->p.M, w.data(), mass.data(), &params, &report );
 	const double* rhs = sere_osmosis_rhs( s.osmosis );
 	s.b.assign( rhs, rhs + count );
 	return s;
+}
+
+// max over rows of sum_j |a_ij| / a_ii (j != i): Gershgorin's bound on the Jacobi-scaled
+// spectrum, [1 - q, 1 + q]; the osmosis picks its preconditioner by it.
+double offdiag_ratio( const sere_csr* a )
+{
+	double q = 0.0;
+	for ( int32_t i = 0; i < a->rows; ++i )
+	{
+		double off = 0.0, d = 0.0;
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			( a->col[k] == i ? d : off ) += std::fabs( a->val[k] );
+		}
+		q = std::max( q, off / d );
+	}
+	return q;
+}
+
+system_t& maple_system( int layer )
+{
+	return leaf_system( layer );
 }
 
 void BM_SpMV( benchmark::State& state )
@@ -102,14 +134,24 @@ void BM_SellUpdate( benchmark::State& state )
 	sere_sell_destroy( sell );
 }
 
-// One solve on the SELL layout the osmosis step keeps and fills while assembling.
+// One solve from x = 0 to relative residual 1e-8. Args: system (0 maple T, 1 maple V, 2 plane
+// tree V), threads, preconditioner (0 Jacobi on the SELL layout the osmosis keeps, 1 multicolor
+// SGS in Eisenstat's form). GFLOP/s counts 2 flops per matrix entry per product (SGS: its two
+// sweeps read each entry once) and the vector updates; GB/s the matrix (12 bytes an entry) and
+// the vectors each iteration streams.
 void BM_PCG( benchmark::State& state )
 {
 	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
-	system_t& s = maple_system( static_cast<int>( state.range( 0 ) ) );
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const bool sgs_on = state.range( 2 ) == 1;
 	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
-	sere_sell* sell;
-	sere_sell_create( a, SERE_SELL_SIGMA, &sell );
+	sere_sell* sell = nullptr;
+	sere_sgs* sgs = nullptr;
+	if ( ( sgs_on ? sere_sgs_create( a, &sgs ) : sere_sell_create( a, SERE_SELL_SIGMA, &sell ) ) != SERE_OK )
+	{
+		state.SkipWithError( "layout failed" );
+		return;
+	}
 	sere_cg_workspace* w;
 	sere_cg_create( a->rows, &w );
 	std::vector<double> x( a->rows );
@@ -117,20 +159,39 @@ void BM_PCG( benchmark::State& state )
 	for ( auto _ : state )
 	{
 		std::fill( x.begin(), x.end(), 0.0 );
-		sere_cg_solve( w, sell, s.b.data(), x.data(), 1e-8, 10000, &result );
+		if ( sgs_on )
+		{
+			sere_cg_solve_sgs( w, sgs, s.b.data(), x.data(), 1e-8, 10000, &result );
+		}
+		else
+		{
+			sere_cg_solve( w, sell, s.b.data(), x.data(), 1e-8, 10000, &result );
+		}
 		benchmark::DoNotOptimize( x.data() );
 	}
+	const double per_iteration_flops = 2.0 * a->nnz + 14.0 * a->rows;
+	const double per_iteration_bytes = 12.0 * a->nnz + 8.0 * ( sgs_on ? 16 : 11 ) * a->rows;
 	state.counters["iterations"] = result.iterations;
 	state.counters["residual"] = result.residual;
 	state.counters["rows"] = a->rows;
+	state.counters["colors"] = sgs_on ? sgs->colors : 0;
+	state.counters["offdiag"] = offdiag_ratio( a );
+	const int32_t stored =
+		sgs_on ? sgs->upper_ptr[sgs->chunks] + sgs->chunks * SERE_SELL_C : sell->chunk_ptr[sell->chunks];
+	state.counters["padding"] = static_cast<double>( stored - a->nnz ) / a->nnz;
+	state.counters["GFLOP/s"] = benchmark::Counter( per_iteration_flops * result.iterations * state.iterations() * 1e-9,
+													benchmark::Counter::kIsRate );
+	state.counters["GB/s"] = benchmark::Counter( per_iteration_bytes * result.iterations * state.iterations() * 1e-9,
+												 benchmark::Counter::kIsRate );
 	sere_cg_destroy( w );
 	sere_sell_destroy( sell );
+	sere_sgs_destroy( sgs );
 }
 
 void BM_EigenCG( benchmark::State& state )
 {
 	Eigen::setNbThreads( static_cast<int>( state.range( 1 ) ) );
-	system_t& s = maple_system( static_cast<int>( state.range( 0 ) ) );
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
 	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
 	std::vector<Eigen::Triplet<double>> entries;
 	for ( int32_t i = 0; i < a->rows; ++i )
@@ -157,6 +218,114 @@ void BM_EigenCG( benchmark::State& state )
 	state.counters["iterations"] = static_cast<double>( cg.iterations() );
 	state.counters["rows"] = a->rows;
 }
+
+// hypre (Debian's build: MPI, no OpenMP, so one thread) in one process: MPI_COMM_SELF, MPI and
+// hypre started once and finalized at exit.
+void hypre_start()
+{
+	static bool started = false;
+	if ( started )
+	{
+		return;
+	}
+	int initialized = 0;
+	MPI_Initialized( &initialized );
+	if ( !initialized )
+	{
+		MPI_Init( nullptr, nullptr );
+	}
+	HYPRE_Init();
+	std::atexit( [] {
+		HYPRE_Finalize();
+		MPI_Finalize();
+	} );
+	started = true;
+}
+
+// hypre's PCG with one BoomerAMG V-cycle as the preconditioner (HMIS coarsening, ext+i
+// interpolation, hybrid symmetric Gauss-Seidel smoothing: hypre's recommended defaults for 2D/3D
+// diffusion), same system and tolerance (two-norm relative residual 1e-8). Args: system, setup
+// (0: the AMG hierarchy is built once, outside the timing: the solve alone; 1: built for every
+// solve, as a simulation whose matrix changes every frame would have to).
+void BM_HypreAMG( benchmark::State& state )
+{
+	hypre_start();
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const bool setup_each = state.range( 1 ) == 1;
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	const HYPRE_Int n = a->rows;
+	HYPRE_IJMatrix ij;
+	HYPRE_IJMatrixCreate( MPI_COMM_SELF, 0, n - 1, 0, n - 1, &ij );
+	HYPRE_IJMatrixSetObjectType( ij, HYPRE_PARCSR );
+	HYPRE_IJMatrixInitialize( ij );
+	for ( HYPRE_Int i = 0; i < n; ++i )
+	{
+		HYPRE_Int count = a->row_ptr[i + 1] - a->row_ptr[i];
+		std::vector<HYPRE_Int> cols( a->col + a->row_ptr[i], a->col + a->row_ptr[i + 1] );
+		HYPRE_IJMatrixSetValues( ij, 1, &count, &i, cols.data(), a->val + a->row_ptr[i] );
+	}
+	HYPRE_IJMatrixAssemble( ij );
+	HYPRE_ParCSRMatrix matrix;
+	HYPRE_IJMatrixGetObject( ij, reinterpret_cast<void**>( &matrix ) );
+	std::vector<HYPRE_Int> rows( static_cast<size_t>( n ) );
+	for ( HYPRE_Int i = 0; i < n; ++i )
+	{
+		rows[static_cast<size_t>( i )] = i;
+	}
+	std::vector<double> zero( static_cast<size_t>( n ), 0.0 );
+	HYPRE_IJVector ijb, ijx;
+	HYPRE_ParVector b, x;
+	for ( HYPRE_IJVector* v : { &ijb, &ijx } )
+	{
+		HYPRE_IJVectorCreate( MPI_COMM_SELF, 0, n - 1, v );
+		HYPRE_IJVectorSetObjectType( *v, HYPRE_PARCSR );
+		HYPRE_IJVectorInitialize( *v );
+		HYPRE_IJVectorSetValues( *v, n, rows.data(), v == &ijb ? s.b.data() : zero.data() );
+		HYPRE_IJVectorAssemble( *v );
+	}
+	HYPRE_IJVectorGetObject( ijb, reinterpret_cast<void**>( &b ) );
+	HYPRE_IJVectorGetObject( ijx, reinterpret_cast<void**>( &x ) );
+	HYPRE_Solver pcg, amg;
+	HYPRE_ParCSRPCGCreate( MPI_COMM_SELF, &pcg );
+	HYPRE_PCGSetTol( pcg, 1e-8 );
+	HYPRE_PCGSetMaxIter( pcg, 10000 );
+	HYPRE_PCGSetTwoNorm( pcg, 1 );
+	HYPRE_PCGSetPrintLevel( pcg, 0 );
+	HYPRE_BoomerAMGCreate( &amg );
+	HYPRE_BoomerAMGSetPrintLevel( amg, 0 );
+	HYPRE_BoomerAMGSetCoarsenType( amg, 10 );
+	HYPRE_BoomerAMGSetInterpType( amg, 6 );
+	HYPRE_BoomerAMGSetRelaxType( amg, 6 );
+	HYPRE_BoomerAMGSetNumSweeps( amg, 1 );
+	HYPRE_BoomerAMGSetStrongThreshold( amg, 0.25 );
+	HYPRE_BoomerAMGSetTol( amg, 0.0 );
+	HYPRE_BoomerAMGSetMaxIter( amg, 1 );
+	HYPRE_PCGSetPrecond( pcg, reinterpret_cast<HYPRE_PtrToSolverFcn>( HYPRE_BoomerAMGSolve ),
+						 reinterpret_cast<HYPRE_PtrToSolverFcn>( HYPRE_BoomerAMGSetup ), amg );
+	HYPRE_ParCSRPCGSetup( pcg, matrix, b, x );
+	for ( auto _ : state )
+	{
+		HYPRE_ParVectorSetConstantValues( x, 0.0 );
+		if ( setup_each )
+		{
+			HYPRE_BoomerAMGSetup( amg, matrix, b, x );
+		}
+		HYPRE_ParCSRPCGSolve( pcg, matrix, b, x );
+		benchmark::DoNotOptimize( x );
+	}
+	HYPRE_Int iterations = 0;
+	double residual = 0.0;
+	HYPRE_PCGGetNumIterations( pcg, &iterations );
+	HYPRE_PCGGetFinalRelativeResidualNorm( pcg, &residual );
+	state.counters["iterations"] = iterations;
+	state.counters["residual"] = residual;
+	state.counters["rows"] = n;
+	HYPRE_BoomerAMGDestroy( amg );
+	HYPRE_ParCSRPCGDestroy( pcg );
+	HYPRE_IJVectorDestroy( ijb );
+	HYPRE_IJVectorDestroy( ijx );
+	HYPRE_IJMatrixDestroy( ij );
+}
 } // namespace
 
 // Args: layer (0 = T, 1 = V), threads.
@@ -167,12 +336,17 @@ BENCHMARK( BM_SellSpMV )
 	->UseRealTime();
 BENCHMARK( BM_SellUpdate )->ArgNames( { "layer", "threads" } )->ArgsProduct( { { 0, 1 }, { 1, 2 } } )->UseRealTime();
 BENCHMARK( BM_PCG )
-	->ArgNames( { "layer", "threads" } )
-	->ArgsProduct( { { 0, 1 }, { 1, 2 } } )
+	->ArgNames( { "system", "threads", "sgs" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_EigenCG )
-	->ArgNames( { "layer", "threads" } )
-	->ArgsProduct( { { 0, 1 }, { 1, 2 } } )
+	->ArgNames( { "system", "threads" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 } } )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_HypreAMG )
+	->ArgNames( { "system", "setup" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 0, 1 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );

@@ -10,6 +10,7 @@ struct sere_osmosis
 	sere_csr a;
 	sere_sell* sell;		  /* a's SELL layout for the CG, built once (the pattern never changes) and
 							   * written by the assembly beside a, through sell->slot */
+	sere_sgs* sgs;			  /* a's multicolor SGS layout, built and written the same way */
 	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
@@ -57,6 +58,7 @@ void sere_osmosis_destroy( sere_osmosis* o )
 	sere_free( o->length );
 	sere_cg_destroy( o->cg );
 	sere_sell_destroy( o->sell );
+	sere_sgs_destroy( o->sgs );
 	free( o );
 }
 
@@ -152,6 +154,10 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 		}
 	}
 	sere_status status = sere_sell_create( &o->a, SERE_SELL_SIGMA, &o->sell );
+	if ( status == SERE_OK )
+	{
+		status = sere_sgs_create( &o->a, &o->sgs );
+	}
 	if ( status != SERE_OK )
 	{
 		sere_osmosis_destroy( o );
@@ -235,7 +241,8 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	/* Assembly, one row per iteration: every row gathers from its own entries (no atomics, the
 	 * same result for any thread count). */
 	const double rate_dt = params->water_rate * dt;
-#pragma omp parallel for schedule( static )
+	double offdiag = 0.0;
+#pragma omp parallel for schedule( static ) reduction( max : offdiag )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		const int32_t gi = first + i;
@@ -261,11 +268,16 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 			double value = -dt * kij;
 			o->a.val[k] = value;
 			o->sell->val[o->sell->slot[k]] = value;
+			o->sgs->val[o->sgs->slot[k]] = value;
 			off_sum += value;
 		}
 		double scale = params->mode == SERE_OSMOSIS_CONSERVATIVE ? 1.0 : 0.5 * ei;
 		o->a.val[o->diagonal[i]] = scale * mi - off_sum;
 		o->sell->val[o->sell->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
+		o->sgs->val[o->sgs->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
+		/* Σ_j |a_ij| / a_ii: off-diagonal entries are −Δt K_ij ≤ 0, so −off_sum is their sum */
+		double ratio = -off_sum / o->a.val[o->diagonal[i]];
+		offdiag = ratio > offdiag ? ratio : offdiag;
 		o->rhs[i] = scale * ( w[gi] + rate_dt );
 		/* Initial guess: the parabola through the last three concentrations, taken one step
 		 * ahead (3 c_n − 3 c_{n−1} + c_{n−2}; the line through two while there are only two). A
@@ -294,8 +306,12 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 
 	o->history = o->history < 2 ? o->history + 1 : 2;
 	sere_cg_result result;
+	report->sgs = offdiag > SERE_OSMOSIS_SGS_ABOVE;
 	sere_status status =
-		sere_cg_solve( o->cg, o->sell, o->rhs, o->c, params->tolerance, params->max_iterations, &result );
+		report->sgs
+			? sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, params->tolerance, params->max_iterations, &result )
+			: sere_cg_solve( o->cg, o->sell, o->rhs, o->c, params->tolerance, params->max_iterations, &result );
+	report->offdiag = offdiag;
 	report->iterations = result.iterations;
 	report->residual = result.residual;
 	if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )

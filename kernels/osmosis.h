@@ -1,5 +1,5 @@
 /* sere — osmotic water flow on one layer (Sec. 4, Eq. 3–10), solved as an SPD system with the
- * Jacobi-preconditioned CG of cg.h. */
+ * CG of cg.h, Jacobi- or multicolor-SGS-preconditioned (SERE_OSMOSIS_SGS_ABOVE). */
 #pragma once
 
 #include "cg.h"
@@ -35,10 +35,23 @@ typedef struct sere_osmosis_params
 
 sere_osmosis_params sere_osmosis_params_default( void );
 
+/* The preconditioner, chosen per step from q = max_i Σ_{j≠i} |a_ij| / a_ii of the assembled
+ * system. Gershgorin bounds the Jacobi-scaled spectrum by [1 − q, 1 + q], so Jacobi PCG's
+ * condition number is at most (1 + q)/(1 − q), and its iterations grow like its square root:
+ * below the threshold (κ ≤ 39) the system is easy, Jacobi needs a few iterations a frame from
+ * the extrapolated start (maple, λ = 0.04: q = 0.73 on T, 0.84 on V, about 3 iterations a frame),
+ * and SGS's fixed cost per solve (two sweeps into and out of its variables, a residual check)
+ * would outweigh what it saves. Above it the system is diffusion-dominated (plane tree,
+ * λ = 100: q = 0.9999 on V, about 90 Jacobi iterations a frame), SGS halves the iterations at
+ * about 1.3× the cost of one (BM_PCG). */
+#define SERE_OSMOSIS_SGS_ABOVE 0.95
+
 typedef struct sere_osmosis_report
 {
 	int32_t iterations;
 	double residual;
+	int sgs;		/* 1: solved with the SGS preconditioner, 0: Jacobi */
+	double offdiag; /* q of the assembled system (above) */
 	double water_before, water_after;
 	int stopped; /* the layer had no water left: nothing was solved (Sec. 6) */
 } sere_osmosis_report;
