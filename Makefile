@@ -68,7 +68,12 @@ CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
 CFLAGS_ALL   := -std=c17 $(COMMON) $(WARN) $(INCLUDES)
 HARNESS_CFLAGS := $(CFLAGS_ALL) $(CAIRO_CFLAGS) -DSERE_DATA_DIR='"$(PREFIX)/share/sere"'
 CXXFLAGS_ALL := -std=c++17 $(COMMON) $(WARN) $(INCLUDES) -isystem /usr/include/eigen3
-LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) -lm
+# MPI when Open MPI's development files are there (scripts/deps.sh installs them): only
+# cmd_litter.c calls it, so only it gets the flags and -DSERE_MPI; without them the same sources
+# build without MPI and sere litter runs every leaf in one process.
+MPI_CFLAGS   := $(shell pkg-config --cflags ompi-c 2>/dev/null)
+MPI_LIBS     := $(shell pkg-config --libs ompi-c 2>/dev/null)
+LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) $(MPI_LIBS) -lm
 
 KERNEL_SRC  := $(sort $(wildcard kernels/*.c kernels/ref/*.c))
 HARNESS_SRC := $(sort $(filter-out harness/main.c,$(wildcard harness/*.c)))
@@ -135,6 +140,10 @@ $(BUILD)/obj/harness/%.o: harness/%.c
 # The version reaches the code as a define on base.c alone (sere_version()).
 $(BUILD)/obj/kernels/base.o: CFLAGS_ALL += -DSERE_VERSION='"$(VERSION)"'
 $(BUILD)/obj/kernels/base.o: VERSION
+
+ifneq ($(MPI_LIBS),)
+$(BUILD)/obj/harness/cmd_litter.o: HARNESS_CFLAGS += -DSERE_MPI $(MPI_CFLAGS)
+endif
 
 # The commit reaches main.c (sere --version) and machine.c (the machine facts of every result);
 # the stamp changes only when the commit does, so both are rebuilt then and only then.

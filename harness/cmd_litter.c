@@ -23,6 +23,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#ifdef SERE_MPI
+#include <mpi.h>
+#endif
+
 /* The shipped leaves that have a preset, the species a litter draws from. */
 static const char* const species_names[] = { "maple", "maple", "plane", "wisteria", "grass" };
 static const char* const preset_names[] = { "maple-red", "maple-green", "plane-tree", "wisteria", "grass" };
@@ -30,6 +34,12 @@ enum
 {
 	species_count = sizeof( species_names ) / sizeof( species_names[0] )
 };
+
+/* What a leaf of each species costs relative to the others: ms measured for 400 points and
+ * 20 frames on one thread (build included), where the grass is about three wisterias. Every leaf
+ * of a run has the same points and frame limit, so the species alone tells their costs apart;
+ * the ranks share the leaves by these weights. */
+static const long species_cost[] = { 30, 30, 31, 22, 72 };
 
 /* One leaf of the scene as its seed and index draw it. */
 typedef struct litter_draw
@@ -56,6 +66,7 @@ typedef enum litter_state
 typedef struct litter_result
 {
 	litter_state state;
+	int rank;
 	int32_t vertices, triangles;
 	long frames;
 	double ms;
@@ -115,6 +126,181 @@ static litter_draw draw_leaf( long seed, long index, long leaves )
 	return d;
 }
 
+/* The processes sharing the leaves: MPI's ranks under mpirun (one alone without it), and
+ * those of them on this machine, which share its cores. Without MPI, one process. */
+typedef struct litter_world
+{
+	int rank, size, local_rank, local_size;
+} litter_world;
+
+static int world_init( litter_world* w )
+{
+	*w = ( litter_world ){ 0, 1, 0, 1 };
+#ifdef SERE_MPI
+	/* only the main thread calls MPI; the OpenMP threads only dry leaves */
+	int provided;
+	if ( MPI_Init_thread( NULL, NULL, MPI_THREAD_FUNNELED, &provided ) != MPI_SUCCESS )
+	{
+		return -1;
+	}
+	MPI_Comm_rank( MPI_COMM_WORLD, &w->rank );
+	MPI_Comm_size( MPI_COMM_WORLD, &w->size );
+	MPI_Comm local;
+	MPI_Comm_split_type( MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local );
+	MPI_Comm_rank( local, &w->local_rank );
+	MPI_Comm_size( local, &w->local_size );
+	MPI_Comm_free( &local );
+#endif
+	return 0;
+}
+
+/* Ends the run on every rank with the worst of their statuses, so that a leaf failed on any
+ * rank makes every rank's exit code non-zero. */
+static int world_finish( int status )
+{
+#ifdef SERE_MPI
+	int worst = status;
+	MPI_Allreduce( &status, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD );
+	MPI_Finalize();
+	return worst;
+#else
+	return status;
+#endif
+}
+
+/* Out of memory after MPI started: the other ranks would wait for this one forever. */
+static int world_abort( void )
+{
+#ifdef SERE_MPI
+	MPI_Abort( MPI_COMM_WORLD, 1 );
+#endif
+	return 1;
+}
+
+static void world_barrier( void )
+{
+#ifdef SERE_MPI
+	MPI_Barrier( MPI_COMM_WORLD );
+#endif
+}
+
+/* Rank 0 gets every rank's results (each rank's leaves in the order of order[] that owner[]
+ * gives it) and every rank's drying wall time; the other ranks keep their own. Its return also
+ * tells rank 0 that every leaf file is written, as each rank sends only after writing its own. */
+static int world_gather( const litter_world* w, litter_result* results, const long* order, const int* owner,
+						 long leaves, double wall_ms, double* rank_wall_ms )
+{
+	rank_wall_ms[0] = wall_ms;
+	if ( w->size == 1 )
+	{
+		return 0;
+	}
+#ifdef SERE_MPI
+	long mine = 0;
+	for ( long k = 0; k < leaves; ++k )
+	{
+		mine += owner[order[k]] == w->rank;
+	}
+	litter_result* packed = malloc( sizeof( litter_result ) * (size_t) ( mine > 0 ? mine : 1 ) );
+	int* counts = malloc( sizeof( int ) * (size_t) w->size );
+	int* displs = malloc( sizeof( int ) * (size_t) w->size );
+	litter_result* all = w->rank == 0 ? malloc( sizeof( litter_result ) * (size_t) leaves ) : NULL;
+	if ( packed == NULL || counts == NULL || displs == NULL || ( w->rank == 0 && all == NULL ) )
+	{
+		return -1;
+	}
+	long at = 0;
+	for ( long k = 0; k < leaves; ++k )
+	{
+		if ( owner[order[k]] == w->rank )
+		{
+			packed[at++] = results[order[k]];
+		}
+	}
+	for ( int r = 0; r < w->size; ++r )
+	{
+		counts[r] = 0;
+	}
+	for ( long k = 0; k < leaves; ++k )
+	{
+		counts[owner[k]] += (int) sizeof( litter_result );
+	}
+	for ( int r = 0, sum = 0; r < w->size; sum += counts[r], ++r )
+	{
+		displs[r] = sum;
+	}
+	MPI_Gatherv( packed, (int) ( sizeof( litter_result ) * (size_t) mine ), MPI_BYTE, all, counts, displs, MPI_BYTE, 0,
+				 MPI_COMM_WORLD );
+	MPI_Gather( &wall_ms, 1, MPI_DOUBLE, rank_wall_ms, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD );
+	if ( w->rank == 0 )
+	{
+		/* each rank's block holds its leaves in the order it was given them */
+		for ( int r = 0; r < w->size; ++r )
+		{
+			long next = displs[r] / (long) sizeof( litter_result );
+			for ( long k = 0; k < leaves; ++k )
+			{
+				if ( owner[order[k]] == r )
+				{
+					results[order[k]] = all[next++];
+				}
+			}
+		}
+	}
+	free( all ), free( displs ), free( counts ), free( packed );
+#else
+	/* one process holds every result already */
+	(void) results, (void) order, (void) owner, (void) leaves;
+#endif
+	return 0;
+}
+
+/* A leaf and what it costs, for dealing out. */
+typedef struct litter_cost
+{
+	long cost, index;
+} litter_cost;
+
+/* Falling cost, ties by index: the order in which the leaves are dealt out. */
+static int by_cost( const void* a, const void* b )
+{
+	const litter_cost *x = a, *y = b;
+	return x->cost != y->cost ? ( x->cost < y->cost ) - ( x->cost > y->cost )
+							  : ( x->index > y->index ) - ( x->index < y->index );
+}
+
+/* Deals the leaves to the ranks, statically and the same on every rank: the costliest first,
+ * each to the least loaded rank (ties to the lowest rank), so that the ranks finish together
+ * without talking to each other. order[] gets the dealing order, owner[] each leaf's rank. */
+static int share_leaves( long seed, long leaves, int ranks, long* order, int* owner )
+{
+	long* load = calloc( (size_t) ranks, sizeof( long ) );
+	litter_cost* costs = malloc( sizeof( litter_cost ) * (size_t) leaves );
+	if ( load == NULL || costs == NULL )
+	{
+		free( load ), free( costs );
+		return -1;
+	}
+	for ( long i = 0; i < leaves; ++i )
+	{
+		costs[i] = ( litter_cost ){ species_cost[draw_leaf( seed, i, leaves ).species], i };
+	}
+	qsort( costs, (size_t) leaves, sizeof( litter_cost ), by_cost );
+	for ( long k = 0; k < leaves; ++k )
+	{
+		int least = 0;
+		for ( int r = 1; r < ranks; ++r )
+		{
+			least = load[r] < load[least] ? r : least;
+		}
+		order[k] = costs[k].index;
+		owner[costs[k].index] = least;
+		load[least] += costs[k].cost;
+	}
+	free( costs ), free( load );
+	return 0;
+}
+
 static void litter_help( void )
 {
 	printf( "usage: sere litter --leaves N --seed S --out DIR [options]\n\n"
@@ -139,6 +325,11 @@ static void litter_help( void )
 			"                veins, the plane tree 187: fewer fail those leaves, naming a count that builds)\n"
 			"  --frames F    at most F frames per leaf (default 400)\n"
 			"  --threads T   leaves dried at once, threads bound to cores with hwloc (default: one per core)\n" );
+#ifdef SERE_MPI
+	printf( "\nBuilt with MPI: under mpirun -np K the ranks share the leaves (dealt out by cost, the same every run)\n"
+			"and rank 0 assembles the scene, the same as one process's. --threads is then per rank (default: the\n"
+			"cores over the ranks on the machine); summary.json gives each leaf's rank and each rank's ms.\n" );
+#endif
 }
 
 static const char* ply_vertex_properties = "property float x\nproperty float y\nproperty float z\n"
@@ -467,8 +658,8 @@ static int write_scene_ply( const char* path, const litter_options* o, const lit
 	return sere_atomic_commit( &file );
 }
 
-static int write_summary( const char* path, const litter_options* o, const litter_result* results, int bound,
-						  double seconds, const litter_mesh* scene )
+static int write_summary( const char* path, const litter_options* o, const litter_result* results, int bound, int ranks,
+						  const double* rank_wall_ms, double seconds, const litter_mesh* scene )
 {
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
@@ -478,8 +669,9 @@ static int write_summary( const char* path, const litter_options* o, const litte
 	}
 	long dried = 0, resumed = 0, failed = 0;
 	double ms = 0.0;
-	fprintf( f, "{\n  \"seed\": %ld,\n  \"points\": %ld,\n  \"frames_max\": %ld,\n  \"threads\": %d,\n", o->seed,
-			 o->points, o->frames, bound );
+	fprintf( f,
+			 "{\n  \"seed\": %ld,\n  \"points\": %ld,\n  \"frames_max\": %ld,\n  \"ranks\": %d,\n  \"threads\": %d,\n",
+			 o->seed, o->points, o->frames, ranks, bound );
 	fprintf( f, "  \"leaves\": [\n" );
 	for ( long i = 0; i < o->leaves; ++i )
 	{
@@ -500,10 +692,25 @@ static int write_summary( const char* path, const litter_options* o, const litte
 		fprintf( f,
 				 "    {\"index\": %ld, \"species\": \"%s\", \"preset\": \"%s\", \"scale\": %.6g, "
 				 "\"angle\": %.6g, \"x\": %.6g, \"y\": %.6g, \"points\": %d, \"triangles\": %d, \"frames\": %ld, "
-				 "\"ms\": %.3f, \"status\": \"%s\"}%s\n",
+				 "\"ms\": %.3f, \"rank\": %d, \"status\": \"%s\"}%s\n",
 				 i, species_names[d.species], preset_names[d.species], d.scale, d.angle, d.x, d.y, r->vertices,
-				 r->triangles, r->frames, r->state == LITTER_FAILED ? 0.0 : r->ms, status,
+				 r->triangles, r->frames, r->state == LITTER_FAILED ? 0.0 : r->ms, r->rank, status,
 				 i + 1 < o->leaves ? "," : "" );
+	}
+	/* per rank: the ms of the leaves it dried now (resumed ones cost it nothing) and the wall
+	 * time of its drying, whose spread says how evenly the leaves were dealt */
+	fprintf( f, "  ],\n  \"ranks_ms\": [\n" );
+	for ( int k = 0; k < ranks; ++k )
+	{
+		long count = 0;
+		double leaf_ms = 0.0;
+		for ( long i = 0; i < o->leaves; ++i )
+		{
+			count += results[i].rank == k;
+			leaf_ms += results[i].rank == k && results[i].state == LITTER_DRIED ? results[i].ms : 0.0;
+		}
+		fprintf( f, "    {\"rank\": %d, \"leaves\": %ld, \"leaf_ms\": %.3f, \"wall_ms\": %.3f}%s\n", k, count, leaf_ms,
+				 rank_wall_ms[k], k + 1 < ranks ? "," : "" );
 	}
 	fprintf( f,
 			 "  ],\n  \"totals\": {\"leaves\": %ld, \"dried\": %ld, \"resumed\": %ld, \"failed\": %ld, "
@@ -572,21 +779,43 @@ int sere_cmd_litter( int argc, char** argv )
 		fprintf( stderr, "sere litter: %s\n", err );
 		return 1;
 	}
-	litter_result* results = calloc( (size_t) o.leaves, sizeof( litter_result ) );
-	if ( results == NULL )
+	litter_world w;
+	if ( world_init( &w ) != 0 )
 	{
-		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		fprintf( stderr, "sere litter: MPI did not start\n" );
 		return 1;
 	}
-	int bound = sere_topo_bind( (int) threads, NULL );
+	litter_result* results = calloc( (size_t) o.leaves, sizeof( litter_result ) );
+	long* order = malloc( sizeof( long ) * (size_t) o.leaves );
+	int* owner = malloc( sizeof( int ) * (size_t) o.leaves );
+	double* rank_wall_ms = malloc( sizeof( double ) * (size_t) w.size );
+	if ( results == NULL || order == NULL || owner == NULL || rank_wall_ms == NULL ||
+		 share_leaves( o.seed, o.leaves, w.size, order, owner ) != 0 )
+	{
+		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		free( rank_wall_ms ), free( owner ), free( order ), free( results );
+		return world_abort();
+	}
+	/* the ranks on this machine share its cores, each its own run of them, unless told */
+	int per_rank = sere_topo_cores() / w.local_size;
+	int team = threads > 0 ? (int) threads : per_rank > 0 ? per_rank : 1;
+	int bound = sere_topo_bind_from( team, w.local_rank * team, NULL );
 	/* one leaf per thread: the kernels' own regions then run on one thread each (their results
 	 * do not depend on the count), and a small leaf is not cut into slivers of work */
 	omp_set_max_active_levels( 1 );
+	world_barrier();
 	double start = sere_now();
+	/* this rank's leaves in dealing order, costliest first, so the cheap ones fill in at the end */
 #pragma omp parallel for schedule( dynamic, 1 ) num_threads( bound )
-	for ( long i = 0; i < o.leaves; ++i )
+	for ( long k = 0; k < o.leaves; ++k )
 	{
+		long i = order[k];
+		if ( owner[i] != w.rank )
+		{
+			continue;
+		}
 		litter_result* r = results + i;
+		r->rank = w.rank;
 		if ( read_leaf( &o, i, NULL, r ) == 0 )
 		{
 			r->state = LITTER_RESUMED;
@@ -598,10 +827,26 @@ int sere_cmd_litter( int argc, char** argv )
 					 preset_names[d.species], r->error );
 		}
 	}
-	/* The scene from the leaf files alone, in index order: a resumed run reads exactly the bytes
-	 * an uninterrupted one does. */
-	litter_mesh scene = { 0 };
 	long failed = 0;
+	for ( long i = 0; i < o.leaves; ++i )
+	{
+		failed += owner[i] == w.rank && results[i].state == LITTER_FAILED;
+	}
+	if ( world_gather( &w, results, order, owner, o.leaves, 1000.0 * ( sere_now() - start ), rank_wall_ms ) != 0 )
+	{
+		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		return world_abort();
+	}
+	free( order ), free( owner );
+	if ( w.rank != 0 )
+	{
+		free( rank_wall_ms ), free( results );
+		return world_finish( failed > 0 );
+	}
+	/* The scene from the leaf files alone, in index order: a resumed run reads exactly the bytes
+	 * an uninterrupted one does, and so does a run on any number of ranks. */
+	litter_mesh scene = { 0 };
+	failed = 0;
 	for ( long i = 0; i < o.leaves; ++i )
 	{
 		litter_result* r = results + i;
@@ -669,16 +914,17 @@ int sere_cmd_litter( int argc, char** argv )
 		}
 	}
 	snprintf( path, sizeof( path ), "%s/summary.json", o.out );
-	if ( write_summary( path, &o, results, bound, seconds, &scene ) != 0 )
+	if ( write_summary( path, &o, results, bound, w.size, rank_wall_ms, seconds, &scene ) != 0 )
 	{
 		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
 		status = 1;
 	}
-	printf( "litter: %ld leaves (%ld failed), %d vertices, %d triangles, %.2f s on %d thread%s\n", o.leaves, failed,
-			scene.vertices, scene.triangles, seconds, bound, bound == 1 ? "" : "s" );
+	printf( "litter: %ld leaves (%ld failed), %d vertices, %d triangles, %.2f s on %d rank%s of %d thread%s\n",
+			o.leaves, failed, scene.vertices, scene.triangles, seconds, w.size, w.size == 1 ? "" : "s", bound,
+			bound == 1 ? "" : "s" );
 	printf( "  %s/litter.ply, %s/litter.glb, %s/litter.png, %s/summary.json, leaves in %s/leaves\n", o.out, o.out,
 			o.out, o.out, o.out );
 	mesh_free( &scene );
-	free( results );
-	return status;
+	free( rank_wall_ms ), free( results );
+	return world_finish( status );
 }
