@@ -1,5 +1,5 @@
 /* sere litter as a user meets it (issue #21): the scene depends on the seed alone, not on the
- * thread count; a rerun after a crash redoes only the missing leaves and gives the same scene;
+ * thread count nor on the MPI ranks; a rerun after a crash redoes only the missing leaves and gives the same scene;
  * one leaf's failure costs no other; a real glTF reader (assimp) opens litter.glb. Small leaves (400 points, 20 frames)
  * keep it to seconds; SERE_BIN names the binary under test. */
 #define _DEFAULT_SOURCE
@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 /* Seed 6 draws wisteria, plane tree, maple and grass; 400 points are enough for every
@@ -254,4 +255,73 @@ Test( litter, glb_opens_in_assimp_with_the_ply_counts )
 	}
 	aiReleaseImport( scene );
 	remove_tree( dir );
+}
+
+/* Runs a shell command with stdout discarded and stderr captured into err; its exit status. */
+static int shell( const char* command, char* err, size_t err_size )
+{
+	char full[2048];
+	snprintf( full, sizeof( full ), "%s 2>&1 >/dev/null", command );
+	err[0] = '\0';
+	FILE* pipe = popen( full, "r" );
+	cr_assert_not_null( pipe, "cannot run %s", full );
+	size_t used = fread( err, 1, err_size - 1, pipe );
+	err[used] = '\0';
+	int status = pclose( pipe );
+	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+}
+
+/* The ranks share the leaves but each leaf is still drawn from the seed and its index alone, and
+ * rank 0 assembles the scene from the files in index order: one, two and three ranks (three
+ * dealt 2, 2 and 1 of 5 leaves) and a run without mpirun give the same bytes. */
+Test( litter, same_scene_on_one_two_and_three_ranks )
+{
+	char err[4096], command[1024];
+	snprintf( command, sizeof( command ), "%s litter --help", sere_test_bin() );
+	FILE* help = popen( command, "r" );
+	cr_assert_not_null( help );
+	size_t used = fread( err, 1, sizeof( err ) - 1, help );
+	err[used] = '\0';
+	pclose( help );
+	if ( strstr( err, "Built with MPI" ) == NULL )
+	{
+		cr_skip( "%s was built without MPI (no Open MPI development files)", sere_test_bin() );
+	}
+	if ( system( "command -v mpirun >/dev/null 2>&1" ) != 0 )
+	{
+		cr_skip( "no mpirun on the PATH" );
+	}
+	char plain[64], path[160], other[160];
+	make_dir( plain, sizeof( plain ), "plain" );
+	snprintf( command, sizeof( command ), "%s litter --leaves 5 --seed 6 --points 400 --frames 20 --out %s",
+			  sere_test_bin(), plain );
+	cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%s", err );
+	snprintf( path, sizeof( path ), "%s/litter.ply", plain );
+	for ( int ranks = 1; ranks <= 3; ++ranks )
+	{
+		char dir[64];
+		make_dir( dir, sizeof( dir ), "mpi" );
+		snprintf( command, sizeof( command ),
+				  "mpirun --allow-run-as-root --oversubscribe -np %d %s litter --leaves 5 --seed 6 --points 400 "
+				  "--frames 20 --threads 1 --out %s",
+				  ranks, sere_test_bin(), dir );
+		cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%d ranks: %s", ranks, err );
+		snprintf( other, sizeof( other ), "%s/litter.ply", dir );
+		expect_same_file( path, other );
+		/* every rank dried its share: the summary names each rank */
+		snprintf( other, sizeof( other ), "%s/summary.json", dir );
+		long size;
+		char* summary = read_all( other, &size );
+		cr_assert_not_null( summary );
+		for ( int r = 0; r < ranks; ++r )
+		{
+			char rank[32];
+			snprintf( rank, sizeof( rank ), "\"rank\": %d, \"status\"", r );
+			cr_expect_not_null( strstr( summary, rank ), "%d ranks, no leaf on rank %d: %s", ranks, r, summary );
+		}
+		cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 5, "%s", summary );
+		free( summary );
+		remove_tree( dir );
+	}
+	remove_tree( plain );
 }
