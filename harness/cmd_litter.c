@@ -723,8 +723,16 @@ static int write_scene_ply( const char* path, const litter_options* o, const lit
 	return sere_atomic_commit( &file );
 }
 
+/* Where rank 0's time went, in seconds from the common start (the barrier after the deal). */
+typedef struct litter_times
+{
+	double wall;   /* up to the summary: everything but the summary itself */
+	double gather; /* from the slowest rank's end of drying to every result on rank 0 */
+	double scene;  /* the leaf files read back into one scene; litter.ply, .glb and .png written */
+} litter_times;
+
 static int write_summary( const char* path, const litter_options* o, const litter_result* results, int bound, int ranks,
-						  const double* rank_wall_ms, double seconds, const litter_mesh* scene )
+						  const double* rank_wall_ms, const litter_times* times, const litter_mesh* scene )
 {
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
@@ -778,11 +786,12 @@ static int write_summary( const char* path, const litter_options* o, const litte
 		fprintf( f, "    {\"rank\": %d, \"leaves\": %ld, \"leaf_ms\": %.3f, \"wall_ms\": %.3f}%s\n", k, count, leaf_ms,
 				 rank_wall_ms[k], k + 1 < ranks ? "," : "" );
 	}
-	fprintf(
-		f,
-		"  ],\n  \"totals\": {\"leaves\": %ld, \"dried\": %ld, \"resumed\": %ld, \"failed\": %ld, "
-		"\"desiccated\": %ld, \"vertices\": %d, \"triangles\": %d, \"leaf_ms\": %.3f, \"wall_seconds\": %.3f}\n}\n",
-		o->leaves, dried, resumed, failed, desiccated, scene->vertices, scene->triangles, ms, seconds );
+	fprintf( f,
+			 "  ],\n  \"totals\": {\"leaves\": %ld, \"dried\": %ld, \"resumed\": %ld, \"failed\": %ld, "
+			 "\"desiccated\": %ld, \"vertices\": %d, \"triangles\": %d, \"leaf_ms\": %.3f, \"wall_seconds\": %.3f, "
+			 "\"gather_seconds\": %.3f, \"scene_seconds\": %.3f}\n}\n",
+			 o->leaves, dried, resumed, failed, desiccated, scene->vertices, scene->triangles, ms, times->wall,
+			 times->gather, times->scene );
 	return sere_atomic_commit( &file );
 }
 
@@ -967,6 +976,11 @@ int sere_cmd_litter( int argc, char** argv )
 		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
 		return world_abort( &w );
 	}
+	double gathered = sere_now() - start, slowest = 0.0;
+	for ( int r = 0; w.rank == 0 && r < w.size; ++r )
+	{
+		slowest = fmax( slowest, rank_wall_ms[r] / 1000.0 );
+	}
 	free( order ), free( owner );
 	if ( w.rank != 0 )
 	{
@@ -992,7 +1006,6 @@ int sere_cmd_litter( int argc, char** argv )
 		mesh_free( &leaf );
 		failed += r->state == LITTER_FAILED;
 	}
-	double seconds = sere_now() - start;
 	int status = failed > 0;
 	long wet = 0;
 	for ( long i = 0; i < o.leaves; ++i )
@@ -1054,8 +1067,10 @@ int sere_cmd_litter( int argc, char** argv )
 			status = 1;
 		}
 	}
+	double seconds = sere_now() - start;
+	litter_times times = { seconds, gathered - slowest, seconds - gathered };
 	snprintf( path, sizeof( path ), "%s/summary.json", o.out );
-	if ( write_summary( path, &o, results, bound, w.size, rank_wall_ms, seconds, &scene ) != 0 )
+	if ( write_summary( path, &o, results, bound, w.size, rank_wall_ms, &times, &scene ) != 0 )
 	{
 		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
 		status = 1;
