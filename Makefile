@@ -68,7 +68,12 @@ CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
 CFLAGS_ALL   := -std=c17 $(COMMON) $(WARN) $(INCLUDES)
 HARNESS_CFLAGS := $(CFLAGS_ALL) $(CAIRO_CFLAGS) -DSERE_DATA_DIR='"$(PREFIX)/share/sere"'
 CXXFLAGS_ALL := -std=c++17 $(COMMON) $(WARN) $(INCLUDES) -isystem /usr/include/eigen3
-LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) -lm
+# MPI when Open MPI's development files are there (scripts/deps.sh installs them): only
+# cmd_litter.c calls it, so only it gets the flags and -DSERE_MPI; without them the same sources
+# build without MPI and sere litter runs every leaf in one process.
+MPI_CFLAGS   := $(shell pkg-config --cflags ompi-c 2>/dev/null)
+MPI_LIBS     := $(shell pkg-config --libs ompi-c 2>/dev/null)
+LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) $(MPI_LIBS) -lm
 
 KERNEL_SRC  := $(sort $(wildcard kernels/*.c kernels/ref/*.c))
 HARNESS_SRC := $(sort $(filter-out harness/main.c,$(wildcard harness/*.c)))
@@ -116,9 +121,14 @@ test: deps
 test-fast: $(TESTS) $(SERE)
 	SERE_ADAPTIVE_THREADS=0 SERE_BIN=$(SERE) $(TESTS) --jobs 1 $(if $(TEST_FILTER),--filter '$(TEST_FILTER)')
 
+# OMPI_MCA_mca_base_env_list sets the environment of the ranks that mpirun starts (sere litter's
+# MPI test). Open MPI's libraries have no frame pointers, so LeakSanitizer's fast unwinder stops
+# in them; the ranks unwind fully (fast_unwind_on_malloc=0), down to the Open MPI library that
+# tests/lsan.supp names. Only the ranks: everywhere it would slow every test down.
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 build/asan/sere-tests build/asan/sere
-	SERE_ADAPTIVE_THREADS=0 ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
+	SERE_ADAPTIVE_THREADS=0 ASAN_OPTIONS=detect_leaks=1 \
+	OMPI_MCA_mca_base_env_list='ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0' LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
 
 # The SIMD lane layer (kernels/internal/simd.h) at its other widths: an AVX2 build (when this
 # CPU has AVX2) and the portable 4-lane C build run the tests that pin a kernel's bits with a
@@ -145,6 +155,10 @@ $(BUILD)/obj/harness/%.o: harness/%.c
 # The version reaches the code as a define on base.c alone (sere_version()).
 $(BUILD)/obj/kernels/base.o: CFLAGS_ALL += -DSERE_VERSION='"$(VERSION)"'
 $(BUILD)/obj/kernels/base.o: VERSION
+
+ifneq ($(MPI_LIBS),)
+$(BUILD)/obj/harness/cmd_litter.o: HARNESS_CFLAGS += -DSERE_MPI $(MPI_CFLAGS)
+endif
 
 # The commit reaches main.c (sere --version) and machine.c (the machine facts of every result);
 # the stamp changes only when the commit does, so both are rebuilt then and only then.

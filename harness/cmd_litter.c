@@ -23,6 +23,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#ifdef SERE_MPI
+#include <mpi.h>
+#endif
+
 /* The shipped leaves that have a preset, the species a litter draws from. */
 static const char* const species_names[] = { "maple", "maple", "plane", "wisteria", "grass" };
 static const char* const preset_names[] = { "maple-red", "maple-green", "plane-tree", "wisteria", "grass" };
@@ -30,6 +34,17 @@ enum
 {
 	species_count = sizeof( species_names ) / sizeof( species_names[0] )
 };
+
+/* What drying a leaf of each species costs, for sharing the leaves out by particles x frames
+ * (issue #21): its ms per frame at 600 points on one thread, and the frames it takes to dry at
+ * 600 points (sere run's until-dry rule: a layer ran dry, Sec. 6). Every leaf of a run has the
+ * same points, and a leaf's scale, turn and place are applied after it dried, so the species
+ * alone tells the leaves' costs apart: ms per frame times the dry frames, or the cap if sooner. */
+static const double species_ms_per_frame[] = { 1.13, 1.33, 1.00, 1.61, 3.42 }; /* fastest of three, load 2 */
+static const long species_dry_frames[] = { 5000, 1016, 366, 2457, 4534 };
+
+/* Frames a leaf may take to dry unless --frames says otherwise: twice the slowest species'. */
+#define LITTER_FRAME_CAP 10000
 
 /* One leaf of the scene as its seed and index draw it. */
 typedef struct litter_draw
@@ -43,6 +58,9 @@ typedef struct litter_options
 {
 	const char* out;
 	long leaves, seed, points, frames;
+	int species;	  /* every leaf of this species (--preset), or -1: drawn per leaf */
+	int frames_given; /* --frames chose the cap: leaves it stops before they dry are no surprise */
+	long progress;	  /* seconds between progress lines on stderr */
 } litter_options;
 
 /* A leaf's outcome: dried now, reused from an earlier run, or failed with a reason. */
@@ -56,6 +74,8 @@ typedef enum litter_state
 typedef struct litter_result
 {
 	litter_state state;
+	int rank;
+	int desiccated; /* it dried to the end (a layer ran dry) before the frame cap */
 	int32_t vertices, triangles;
 	long frames;
 	double ms;
@@ -99,46 +119,276 @@ static int mesh_alloc( litter_mesh* m, int32_t vertices, int32_t triangles )
 /* The leaves fall on a square that grows with their number, about two leaves' area (a leaf is
  * about one unit across) of room each, so a litter of any size is dense but mostly one layer:
  * leaves do not collide with each other. */
-static litter_draw draw_leaf( long seed, long index, long leaves )
+static litter_draw draw_leaf( const litter_options* o, long index )
 {
 	/* a leaf's numbers come from its own stream, so they do not depend on how many leaves there
 	 * are, which were dried before it, or on which thread */
-	uint64_t state = (uint64_t) seed;
+	uint64_t state = (uint64_t) o->seed;
 	state = sere_splitmix64( &state ) ^ ( (uint64_t) index * 0xd1b54a32d192ed03ull );
 	litter_draw d;
 	d.species = (int) ( sere_splitmix_unit( &state ) * species_count );
+	/* a chosen species takes the drawn one's place, the other draws unchanged */
+	d.species = o->species >= 0 ? o->species : d.species;
 	d.scale = 0.7 + 0.6 * sere_splitmix_unit( &state );
 	d.angle = 2.0 * 3.14159265358979323846 * sere_splitmix_unit( &state );
-	double side = 1.5 * sqrt( (double) leaves );
+	double side = 1.5 * sqrt( (double) o->leaves );
 	d.x = side * ( sere_splitmix_unit( &state ) - 0.5 );
 	d.y = side * ( sere_splitmix_unit( &state ) - 0.5 );
 	return d;
 }
 
+/* The processes sharing the leaves: MPI's ranks under mpirun (one alone without it), and
+ * those of them on this machine, which share its cores. Without MPI, one process. */
+typedef struct litter_world
+{
+	int rank, size, local_rank, local_size;
+	int mpi; /* MPI was started (under a launcher): every rank must take part in its calls */
+} litter_world;
+
+#ifdef SERE_MPI
+/* Whether an MPI launcher started this process: Open MPI's mpirun sets OMPI_COMM_WORLD_SIZE,
+ * PMIx launchers (mpirun, srun --mpi=pmix) PMIX_RANK, PMI-1/2 ones (srun, MPICH's hydra)
+ * PMI_RANK. Started alone, the command runs as one process without MPI: Open MPI's singleton
+ * start would fork a daemon only to learn that there is one rank. */
+static int world_launched( void )
+{
+	return getenv( "OMPI_COMM_WORLD_SIZE" ) != NULL || getenv( "PMIX_RANK" ) != NULL || getenv( "PMI_RANK" ) != NULL;
+}
+#endif
+
+static int world_init( litter_world* w )
+{
+	*w = ( litter_world ){ 0, 1, 0, 1, 0 };
+#ifdef SERE_MPI
+	if ( !world_launched() )
+	{
+		return 0;
+	}
+	w->mpi = 1;
+	/* only the main thread calls MPI; the OpenMP threads only dry leaves */
+	int provided;
+	if ( MPI_Init_thread( NULL, NULL, MPI_THREAD_FUNNELED, &provided ) != MPI_SUCCESS )
+	{
+		return -1;
+	}
+	MPI_Comm_rank( MPI_COMM_WORLD, &w->rank );
+	MPI_Comm_size( MPI_COMM_WORLD, &w->size );
+	MPI_Comm local;
+	MPI_Comm_split_type( MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local );
+	MPI_Comm_rank( local, &w->local_rank );
+	MPI_Comm_size( local, &w->local_size );
+	MPI_Comm_free( &local );
+#endif
+	return 0;
+}
+
+/* Ends the run on every rank with the worst of their statuses, so that a leaf failed on any
+ * rank makes every rank's exit code non-zero. */
+static int world_finish( const litter_world* w, int status )
+{
+#ifdef SERE_MPI
+	if ( !w->mpi )
+	{
+		return status;
+	}
+	int worst = status;
+	MPI_Allreduce( &status, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD );
+	MPI_Finalize();
+	return worst;
+#else
+	(void) w;
+	return status;
+#endif
+}
+
+/* Out of memory after MPI started: the other ranks would wait for this one forever. */
+static int world_abort( const litter_world* w )
+{
+#ifdef SERE_MPI
+	if ( w->mpi )
+	{
+		MPI_Abort( MPI_COMM_WORLD, 1 );
+	}
+#else
+	(void) w;
+#endif
+	return 1;
+}
+
+static void world_barrier( const litter_world* w )
+{
+#ifdef SERE_MPI
+	if ( w->mpi )
+	{
+		MPI_Barrier( MPI_COMM_WORLD );
+	}
+#else
+	(void) w;
+#endif
+}
+
+/* Rank 0 gets every rank's results (each rank's leaves in the order of order[] that owner[]
+ * gives it) and every rank's drying wall time; the other ranks keep their own. Its return also
+ * tells rank 0 that every leaf file is written, as each rank sends only after writing its own. */
+static int world_gather( const litter_world* w, litter_result* results, const long* order, const int* owner,
+						 long leaves, double wall_ms, double* rank_wall_ms )
+{
+	rank_wall_ms[0] = wall_ms;
+	if ( w->size == 1 )
+	{
+		return 0;
+	}
+#ifdef SERE_MPI
+	long mine = 0;
+	for ( long k = 0; k < leaves; ++k )
+	{
+		mine += owner[order[k]] == w->rank;
+	}
+	litter_result* packed = malloc( sizeof( litter_result ) * (size_t) ( mine > 0 ? mine : 1 ) );
+	int* counts = malloc( sizeof( int ) * (size_t) w->size );
+	int* displs = malloc( sizeof( int ) * (size_t) w->size );
+	litter_result* all = w->rank == 0 ? malloc( sizeof( litter_result ) * (size_t) leaves ) : NULL;
+	if ( packed == NULL || counts == NULL || displs == NULL || ( w->rank == 0 && all == NULL ) )
+	{
+		return -1;
+	}
+	long at = 0;
+	for ( long k = 0; k < leaves; ++k )
+	{
+		if ( owner[order[k]] == w->rank )
+		{
+			packed[at++] = results[order[k]];
+		}
+	}
+	for ( int r = 0; r < w->size; ++r )
+	{
+		counts[r] = 0;
+	}
+	for ( long k = 0; k < leaves; ++k )
+	{
+		counts[owner[k]] += (int) sizeof( litter_result );
+	}
+	for ( int r = 0, sum = 0; r < w->size; sum += counts[r], ++r )
+	{
+		displs[r] = sum;
+	}
+	MPI_Gatherv( packed, (int) ( sizeof( litter_result ) * (size_t) mine ), MPI_BYTE, all, counts, displs, MPI_BYTE, 0,
+				 MPI_COMM_WORLD );
+	MPI_Gather( &wall_ms, 1, MPI_DOUBLE, rank_wall_ms, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD );
+	if ( w->rank == 0 )
+	{
+		/* each rank's block holds its leaves in the order it was given them */
+		for ( int r = 0; r < w->size; ++r )
+		{
+			long next = displs[r] / (long) sizeof( litter_result );
+			for ( long k = 0; k < leaves; ++k )
+			{
+				if ( owner[order[k]] == r )
+				{
+					results[order[k]] = all[next++];
+				}
+			}
+		}
+	}
+	free( all ), free( displs ), free( counts ), free( packed );
+#else
+	/* one process holds every result already */
+	(void) results, (void) order, (void) owner, (void) leaves;
+#endif
+	return 0;
+}
+
+/* A leaf and what it costs, for dealing out. */
+typedef struct litter_cost
+{
+	long cost, index;
+} litter_cost;
+
+/* Falling cost, ties by index: the order in which the leaves are dealt out. */
+static int by_cost( const void* a, const void* b )
+{
+	const litter_cost *x = a, *y = b;
+	return x->cost != y->cost ? ( x->cost < y->cost ) - ( x->cost > y->cost )
+							  : ( x->index > y->index ) - ( x->index < y->index );
+}
+
+/* Deals the leaves to the ranks, statically and the same on every rank: the costliest first,
+ * each to the least loaded rank (ties to the lowest rank), so that the ranks finish together
+ * without talking to each other. order[] gets the dealing order, owner[] each leaf's rank. */
+static long leaf_cost( const litter_options* o, long index )
+{
+	int s = draw_leaf( o, index ).species;
+	long frames = species_dry_frames[s] < o->frames ? species_dry_frames[s] : o->frames;
+	return lrint( 1000.0 * species_ms_per_frame[s] * (double) frames );
+}
+
+static int share_leaves( const litter_options* o, int ranks, long* order, int* owner )
+{
+	long leaves = o->leaves;
+	long* load = calloc( (size_t) ranks, sizeof( long ) );
+	litter_cost* costs = malloc( sizeof( litter_cost ) * (size_t) leaves );
+	if ( load == NULL || costs == NULL )
+	{
+		free( load ), free( costs );
+		return -1;
+	}
+	for ( long i = 0; i < leaves; ++i )
+	{
+		costs[i] = ( litter_cost ){ leaf_cost( o, i ), i };
+	}
+	qsort( costs, (size_t) leaves, sizeof( litter_cost ), by_cost );
+	for ( long k = 0; k < leaves; ++k )
+	{
+		int least = 0;
+		for ( int r = 1; r < ranks; ++r )
+		{
+			least = load[r] < load[least] ? r : least;
+		}
+		order[k] = costs[k].index;
+		owner[costs[k].index] = least;
+		load[least] += costs[k].cost;
+	}
+	free( costs ), free( load );
+	return 0;
+}
+
 static void litter_help( void )
 {
 	printf( "usage: sere litter --leaves N --seed S --out DIR [options]\n\n"
-			"Dries N leaves lying on the ground (gravity_z = -9.8, ground at z = 0), each as sere run dries it,\n"
-			"until it is desiccated or F frames. Each leaf's species and preset (maple/maple-red,\n"
-			"maple/maple-green, plane/plane-tree, wisteria, grass), size, turn about z and place on the ground\n"
-			"come from S and the leaf's index alone. Writes, in DIR:\n"
+			"Dries N leaves lying on the ground (gravity_z = -9.8, ground at z = 0), each as sere run --until-dry\n"
+			"dries it: until a layer has run dry (desiccated), or F frames. Each leaf's species and preset\n"
+			"(maple/maple-red, maple/maple-green, plane/plane-tree, wisteria, grass), size, turn about z and place\n"
+			"on the ground come from S and the leaf's index alone. Writes, in DIR:\n"
 			"  leaves/leaf_NNNNN.ply  each leaf's final triangle layer in the scene, as soon as it is done\n"
 			"                         (x, y, z, color, relative_water per vertex)\n"
 			"  litter.ply             every leaf in index order, one mesh\n"
 			"  litter.glb             the same as glTF 2.0 binary (positions, normals, colors, indices)\n"
 			"  litter.png             the scene from an oblique camera, with the ground and shadows\n"
-			"  summary.json           per leaf: index, species, preset, points, frames, ms, status; totals\n\n"
+			"  summary.json           per leaf: index, species, preset, points, frames, desiccated, ms, status;\n"
+			"                         totals\n\n"
 			"A rerun into the same DIR with the same options keeps the leaves already written and gives the\n"
 			"same litter.ply. A leaf that fails costs no other: it is reported (stderr, summary.json) and the\n"
-			"command exits 1.\n\n"
+			"command exits 1. A leaf takes up to 5,000 frames to dry (the red maple; the plane tree about 400), about\n"
+			"1 to 3.5 ms a frame at 600 points on one core.\n\n"
 			"options:\n"
 			"  --leaves N    number of leaves (required)\n"
 			"  --seed S      the scene's seed, a whole number >= 0 (default 1)\n"
 			"  --out DIR     output directory (default out/litter)\n"
 			"  --points P    triangle-layer points per leaf (default 600; the grass needs 390 for its outline and\n"
 			"                veins, the plane tree 187: fewer fail those leaves, naming a count that builds)\n"
-			"  --frames F    at most F frames per leaf (default 400)\n"
-			"  --threads T   leaves dried at once, threads bound to cores with hwloc (default: one per core)\n" );
+			"  --frames F    at most F frames per leaf, dry or not (default %d, twice what the slowest\n"
+			"                species needs to dry; a leaf the default cap stops wet is reported on stderr)\n"
+			"  --preset P    every leaf of this preset (maple-red, maple-green, plane-tree, wisteria, grass) instead\n"
+			"                of a drawn one; the other draws stay the same\n"
+			"  --threads T   leaves dried at once, threads bound to cores with hwloc (default: one per core)\n"
+			"  --progress S  a line on stderr at most every S seconds with the leaves done and the time left\n"
+			"                (default 60; 0: after every leaf)\n",
+			LITTER_FRAME_CAP );
+#ifdef SERE_MPI
+	printf( "\nBuilt with MPI: under mpirun -np K the ranks share the leaves (dealt out by cost, the same every run)\n"
+			"and rank 0 assembles the scene, the same as one process's. --threads is then per rank (default: the\n"
+			"cores over the ranks on the machine); summary.json gives each leaf's rank and each rank's ms.\n" );
+#endif
 }
 
 static const char* ply_vertex_properties = "property float x\nproperty float y\nproperty float z\n"
@@ -181,10 +431,12 @@ static void ply_faces( FILE* f, const litter_mesh* m, int32_t base )
 
 /* The comment that ties a leaf file to the run options; frames and ms are what the summary
  * reports for a leaf kept from an earlier run. */
-static void leaf_comment( char* out, size_t size, const litter_options* o, long index, long frames, double ms )
+static void leaf_comment( char* out, size_t size, const litter_options* o, long index, long frames, int desiccated,
+						  double ms )
 {
-	snprintf( out, size, "sere litter seed %ld leaf %ld points %ld frames_max %ld frames %ld ms %.3f", o->seed, index,
-			  o->points, o->frames, frames, ms );
+	snprintf( out, size, "sere litter seed %ld leaf %ld preset %s points %ld frames_max %ld frames %ld dry %d ms %.3f",
+			  o->seed, index, preset_names[draw_leaf( o, index ).species], o->points, o->frames, frames, desiccated,
+			  ms );
 }
 
 static void leaf_path( char* out, size_t size, const litter_options* o, long index )
@@ -208,15 +460,18 @@ static int read_leaf( const litter_options* o, long index, litter_mesh* m, litte
 	head[got] = '\0';
 	char* end = strstr( head, "end_header\n" );
 	long seed, leaf, points, frames_max, frames;
+	int desiccated;
+	char preset[32];
 	double ms;
 	int32_t vertices, triangles;
 	struct stat info;
 	if ( end == NULL || fstat( fileno( f ), &info ) != 0 ||
 		 sscanf( head,
-				 "ply\nformat binary_little_endian 1.0\ncomment sere litter seed %ld leaf %ld points %ld frames_max "
-				 "%ld frames %ld ms %lf\nelement vertex %d",
-				 &seed, &leaf, &points, &frames_max, &frames, &ms, &vertices ) != 7 ||
-		 seed != o->seed || leaf != index || points != o->points || frames_max != o->frames || vertices < 3 )
+				 "ply\nformat binary_little_endian 1.0\ncomment sere litter seed %ld leaf %ld preset %31s points %ld "
+				 "frames_max %ld frames %ld dry %d ms %lf\nelement vertex %d",
+				 &seed, &leaf, preset, &points, &frames_max, &frames, &desiccated, &ms, &vertices ) != 9 ||
+		 seed != o->seed || leaf != index || strcmp( preset, preset_names[draw_leaf( o, index ).species] ) != 0 ||
+		 points != o->points || frames_max != o->frames || vertices < 3 )
 	{
 		fclose( f );
 		return -1;
@@ -229,7 +484,7 @@ static int read_leaf( const litter_options* o, long index, litter_mesh* m, litte
 		fclose( f );
 		return -1;
 	}
-	leaf_comment( comment, sizeof( comment ), o, index, frames, ms );
+	leaf_comment( comment, sizeof( comment ), o, index, frames, desiccated, ms );
 	/* every header byte as this command writes it, and exactly the body it announces */
 	if ( (size_t) ply_header( expected, sizeof( expected ), comment, vertices, triangles ) != header ||
 		 memcmp( expected, head, header ) != 0 ||
@@ -239,6 +494,7 @@ static int read_leaf( const litter_options* o, long index, litter_mesh* m, litte
 		return -1;
 	}
 	r->vertices = vertices, r->triangles = triangles, r->frames = frames, r->ms = ms;
+	r->desiccated = desiccated;
 	int failed = 0;
 	if ( m != NULL )
 	{
@@ -280,7 +536,7 @@ static int leaf_fail( litter_result* r, const char* text )
  * and writes its file; 0, or -1 with the reason in r->error. */
 static int dry_leaf( const litter_options* o, long index, litter_result* r )
 {
-	litter_draw d = draw_leaf( o->seed, index, o->leaves );
+	litter_draw d = draw_leaf( o, index );
 	char err[4400], path[4200], name[128];
 	snprintf( name, sizeof( name ), "leaf_%05ld.ply", index );
 	char leaves_dir[4200];
@@ -328,16 +584,15 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 		shaping.max_iterations = 2000;
 		status = sere_leaf_shape_initial( sim, (float) params.crease, (float) params.curl, &shaping );
 	}
+	/* sere run --until-dry's rule: on until a layer ran dry (Sec. 6), or the cap */
 	long frame = 0;
-	while ( status == SERE_OK && frame < o->frames )
+	int desiccated = 0;
+	while ( status == SERE_OK && frame < o->frames && !desiccated )
 	{
 		sere_leaf_stats stats;
 		status = sere_leaf_step( sim, &leaf, &stats );
 		frame += status == SERE_OK;
-		if ( status == SERE_OK && stats.desiccated )
-		{
-			break;
-		}
+		desiccated = status == SERE_OK && stats.desiccated;
 	}
 	int32_t n = model.triangle_particles;
 	litter_mesh m = { 0 };
@@ -381,11 +636,12 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	sere_model_destroy( &model );
 	r->ms = 1000.0 * ( sere_now() - start );
 	r->frames = frame;
+	r->desiccated = desiccated;
 	r->vertices = m.vertices, r->triangles = m.triangles;
 
 	leaf_path( path, sizeof( path ), o, index );
 	char comment[256], header[2048];
-	leaf_comment( comment, sizeof( comment ), o, index, frame, r->ms );
+	leaf_comment( comment, sizeof( comment ), o, index, frame, desiccated, r->ms );
 	ply_header( header, sizeof( header ), comment, m.vertices, m.triangles );
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
@@ -452,8 +708,8 @@ static int mesh_append( litter_mesh* scene, const litter_mesh* leaf )
 static int write_scene_ply( const char* path, const litter_options* o, const litter_mesh* scene )
 {
 	char comment[256], header[2048];
-	snprintf( comment, sizeof( comment ), "sere litter seed %ld leaves %ld points %ld frames_max %ld", o->seed,
-			  o->leaves, o->points, o->frames );
+	snprintf( comment, sizeof( comment ), "sere litter seed %ld leaves %ld preset %s points %ld frames_max %ld",
+			  o->seed, o->leaves, o->species >= 0 ? preset_names[o->species] : "drawn", o->points, o->frames );
 	ply_header( header, sizeof( header ), comment, scene->vertices, scene->triangles );
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
@@ -467,8 +723,16 @@ static int write_scene_ply( const char* path, const litter_options* o, const lit
 	return sere_atomic_commit( &file );
 }
 
-static int write_summary( const char* path, const litter_options* o, const litter_result* results, int bound,
-						  double seconds, const litter_mesh* scene )
+/* Where rank 0's time went, in seconds from the common start (the barrier after the deal). */
+typedef struct litter_times
+{
+	double wall;   /* up to the summary: everything but the summary itself */
+	double gather; /* from the slowest rank's end of drying to every result on rank 0 */
+	double scene;  /* the leaf files read back into one scene; litter.ply, .glb and .png written */
+} litter_times;
+
+static int write_summary( const char* path, const litter_options* o, const litter_result* results, int bound, int ranks,
+						  const double* rank_wall_ms, const litter_times* times, const litter_mesh* scene )
 {
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
@@ -476,15 +740,16 @@ static int write_summary( const char* path, const litter_options* o, const litte
 	{
 		return -1;
 	}
-	long dried = 0, resumed = 0, failed = 0;
+	long dried = 0, resumed = 0, failed = 0, desiccated = 0;
 	double ms = 0.0;
-	fprintf( f, "{\n  \"seed\": %ld,\n  \"points\": %ld,\n  \"frames_max\": %ld,\n  \"threads\": %d,\n", o->seed,
-			 o->points, o->frames, bound );
+	fprintf( f,
+			 "{\n  \"seed\": %ld,\n  \"points\": %ld,\n  \"frames_max\": %ld,\n  \"ranks\": %d,\n  \"threads\": %d,\n",
+			 o->seed, o->points, o->frames, ranks, bound );
 	fprintf( f, "  \"leaves\": [\n" );
 	for ( long i = 0; i < o->leaves; ++i )
 	{
 		const litter_result* r = results + i;
-		litter_draw d = draw_leaf( o->seed, i, o->leaves );
+		litter_draw d = draw_leaf( o, i );
 		char status[6 * sizeof( r->error ) + 16];
 		if ( r->state == LITTER_FAILED )
 		{
@@ -496,25 +761,91 @@ static int write_summary( const char* path, const litter_options* o, const litte
 			snprintf( status, sizeof( status ), "%s", r->state == LITTER_DRIED ? "dried" : "resumed" );
 		}
 		dried += r->state == LITTER_DRIED, resumed += r->state == LITTER_RESUMED, failed += r->state == LITTER_FAILED;
+		desiccated += r->state != LITTER_FAILED && r->desiccated;
 		ms += r->state == LITTER_FAILED ? 0.0 : r->ms;
 		fprintf( f,
 				 "    {\"index\": %ld, \"species\": \"%s\", \"preset\": \"%s\", \"scale\": %.6g, "
 				 "\"angle\": %.6g, \"x\": %.6g, \"y\": %.6g, \"points\": %d, \"triangles\": %d, \"frames\": %ld, "
-				 "\"ms\": %.3f, \"status\": \"%s\"}%s\n",
+				 "\"desiccated\": %s, \"ms\": %.3f, \"rank\": %d, \"status\": \"%s\"}%s\n",
 				 i, species_names[d.species], preset_names[d.species], d.scale, d.angle, d.x, d.y, r->vertices,
-				 r->triangles, r->frames, r->state == LITTER_FAILED ? 0.0 : r->ms, status,
-				 i + 1 < o->leaves ? "," : "" );
+				 r->triangles, r->frames, r->state != LITTER_FAILED && r->desiccated ? "true" : "false",
+				 r->state == LITTER_FAILED ? 0.0 : r->ms, r->rank, status, i + 1 < o->leaves ? "," : "" );
+	}
+	/* per rank: the ms of the leaves it dried now (resumed ones cost it nothing) and the wall
+	 * time of its drying, whose spread says how evenly the leaves were dealt */
+	fprintf( f, "  ],\n  \"ranks_ms\": [\n" );
+	for ( int k = 0; k < ranks; ++k )
+	{
+		long count = 0;
+		double leaf_ms = 0.0;
+		for ( long i = 0; i < o->leaves; ++i )
+		{
+			count += results[i].rank == k;
+			leaf_ms += results[i].rank == k && results[i].state == LITTER_DRIED ? results[i].ms : 0.0;
+		}
+		fprintf( f, "    {\"rank\": %d, \"leaves\": %ld, \"leaf_ms\": %.3f, \"wall_ms\": %.3f}%s\n", k, count, leaf_ms,
+				 rank_wall_ms[k], k + 1 < ranks ? "," : "" );
 	}
 	fprintf( f,
 			 "  ],\n  \"totals\": {\"leaves\": %ld, \"dried\": %ld, \"resumed\": %ld, \"failed\": %ld, "
-			 "\"vertices\": %d, \"triangles\": %d, \"leaf_ms\": %.3f, \"wall_seconds\": %.3f}\n}\n",
-			 o->leaves, dried, resumed, failed, scene->vertices, scene->triangles, ms, seconds );
+			 "\"desiccated\": %ld, \"vertices\": %d, \"triangles\": %d, \"leaf_ms\": %.3f, \"wall_seconds\": %.3f, "
+			 "\"gather_seconds\": %.3f, \"scene_seconds\": %.3f}\n}\n",
+			 o->leaves, dried, resumed, failed, desiccated, scene->vertices, scene->triangles, ms, times->wall,
+			 times->gather, times->scene );
 	return sere_atomic_commit( &file );
+}
+
+/* --preset P: every leaf of that species; 0, or -1 with one line on stderr. */
+static int parse_preset( const char* text, int* species )
+{
+	for ( int s = 0; s < species_count; ++s )
+	{
+		if ( strcmp( text, preset_names[s] ) == 0 )
+		{
+			*species = s;
+			return 0;
+		}
+	}
+	fprintf( stderr, "sere litter: --preset takes maple-red, maple-green, plane-tree, wisteria or grass, not '%s'\n",
+			 text );
+	return -1;
+}
+
+/* Rank 0's progress through its share: the other ranks' shares cost about as much (dealt by
+ * cost), so its share stands for the run's. */
+typedef struct litter_progress
+{
+	double start, last;
+	long leaves, done;
+	long cost, cost_done;
+} litter_progress;
+
+/* A leaf of rank 0 is done: a line on stderr when --progress seconds have passed since the last,
+ * with the time left estimated from the cost still to dry. */
+static void progress_leaf( litter_progress* p, const litter_options* o, const litter_world* w, long cost )
+{
+	p->done += 1;
+	p->cost_done += cost;
+	double now = sere_now();
+	if ( now - p->last < (double) o->progress || p->done == p->leaves )
+	{
+		return;
+	}
+	p->last = now;
+	double minutes = ( now - p->start ) / 60.0;
+	double left = p->cost_done > 0 ? minutes * (double) ( p->cost - p->cost_done ) / (double) p->cost_done : 0.0;
+	char ranks[64] = "";
+	if ( w->size > 1 )
+	{
+		snprintf( ranks, sizeof( ranks ), " on rank 0 of %d", w->size );
+	}
+	fprintf( stderr, "sere litter: %ld of %ld leaves%s done, %.1f min, about %.1f min left\n", p->done, p->leaves,
+			 ranks, minutes, left );
 }
 
 int sere_cmd_litter( int argc, char** argv )
 {
-	litter_options o = { "out/litter", -1, 1, 600, 400 };
+	litter_options o = { "out/litter", -1, 1, 600, LITTER_FRAME_CAP, -1, 0, 60 };
 	long threads = 0;
 	for ( int i = 1; i < argc; ++i )
 	{
@@ -524,7 +855,8 @@ int sere_cmd_litter( int argc, char** argv )
 			litter_help();
 			return 0;
 		}
-		static const char* const valued[] = { "--leaves", "--seed", "--out", "--points", "--frames", "--threads" };
+		static const char* const valued[] = { "--leaves", "--seed",	  "--out",	   "--points",
+											  "--frames", "--preset", "--threads", "--progress" };
 		int takes_value = 0;
 		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
 		{
@@ -542,17 +874,20 @@ int sere_cmd_litter( int argc, char** argv )
 			return 2;
 		}
 		const char* v = argv[++i];
-		int bad = strcmp( a, "--leaves" ) == 0	  ? sere_parse_long( "litter", a, v, 1, 99999, &o.leaves )
-				  : strcmp( a, "--seed" ) == 0	  ? sere_parse_long( "litter", a, v, 0, LONG_MAX, &o.seed )
-				  : strcmp( a, "--points" ) == 0  ? sere_parse_long( "litter", a, v, 10, 10000000, &o.points )
-				  : strcmp( a, "--frames" ) == 0  ? sere_parse_long( "litter", a, v, 1, 100000000, &o.frames )
-				  : strcmp( a, "--threads" ) == 0 ? sere_parse_long( "litter", a, v, 0, 256, &threads )
-												  : sere_parse_dir( "litter", a, v );
+		int bad = strcmp( a, "--leaves" ) == 0	   ? sere_parse_long( "litter", a, v, 1, 99999, &o.leaves )
+				  : strcmp( a, "--seed" ) == 0	   ? sere_parse_long( "litter", a, v, 0, LONG_MAX, &o.seed )
+				  : strcmp( a, "--points" ) == 0   ? sere_parse_long( "litter", a, v, 10, 10000000, &o.points )
+				  : strcmp( a, "--frames" ) == 0   ? sere_parse_long( "litter", a, v, 1, 100000000, &o.frames )
+				  : strcmp( a, "--threads" ) == 0  ? sere_parse_long( "litter", a, v, 0, 256, &threads )
+				  : strcmp( a, "--progress" ) == 0 ? sere_parse_long( "litter", a, v, 0, 86400, &o.progress )
+				  : strcmp( a, "--preset" ) == 0   ? parse_preset( v, &o.species )
+												   : sere_parse_dir( "litter", a, v );
 		if ( bad != 0 )
 		{
 			return 2;
 		}
 		o.out = strcmp( a, "--out" ) == 0 ? v : o.out;
+		o.frames_given |= strcmp( a, "--frames" ) == 0;
 	}
 	if ( o.leaves < 0 )
 	{
@@ -572,36 +907,90 @@ int sere_cmd_litter( int argc, char** argv )
 		fprintf( stderr, "sere litter: %s\n", err );
 		return 1;
 	}
-	litter_result* results = calloc( (size_t) o.leaves, sizeof( litter_result ) );
-	if ( results == NULL )
+	litter_world w;
+	if ( world_init( &w ) != 0 )
 	{
-		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		fprintf( stderr, "sere litter: MPI did not start\n" );
 		return 1;
 	}
-	int bound = sere_topo_bind( (int) threads, NULL );
+	litter_result* results = calloc( (size_t) o.leaves, sizeof( litter_result ) );
+	long* order = malloc( sizeof( long ) * (size_t) o.leaves );
+	int* owner = malloc( sizeof( int ) * (size_t) o.leaves );
+	double* rank_wall_ms = malloc( sizeof( double ) * (size_t) w.size );
+	if ( results == NULL || order == NULL || owner == NULL || rank_wall_ms == NULL ||
+		 share_leaves( &o, w.size, order, owner ) != 0 )
+	{
+		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		free( rank_wall_ms ), free( owner ), free( order ), free( results );
+		return world_abort( &w );
+	}
+	/* the ranks on this machine share its cores, each its own run of them, unless told */
+	int per_rank = sere_topo_cores() / w.local_size;
+	int team = threads > 0 ? (int) threads : per_rank > 0 ? per_rank : 1;
+	int bound = sere_topo_bind_from( team, w.local_rank * team, NULL );
 	/* one leaf per thread: the kernels' own regions then run on one thread each (their results
 	 * do not depend on the count), and a small leaf is not cut into slivers of work */
 	omp_set_max_active_levels( 1 );
+	world_barrier( &w );
 	double start = sere_now();
-#pragma omp parallel for schedule( dynamic, 1 ) num_threads( bound )
+	litter_progress progress = { start, start, 0, 0, 0, 0 };
 	for ( long i = 0; i < o.leaves; ++i )
 	{
+		progress.leaves += owner[i] == w.rank;
+		progress.cost += owner[i] == w.rank ? leaf_cost( &o, i ) : 0;
+	}
+	/* this rank's leaves in dealing order, costliest first, so the cheap ones fill in at the end */
+#pragma omp parallel for schedule( dynamic, 1 ) num_threads( bound )
+	for ( long k = 0; k < o.leaves; ++k )
+	{
+		long i = order[k];
+		if ( owner[i] != w.rank )
+		{
+			continue;
+		}
 		litter_result* r = results + i;
+		r->rank = w.rank;
 		if ( read_leaf( &o, i, NULL, r ) == 0 )
 		{
 			r->state = LITTER_RESUMED;
 		}
 		else if ( dry_leaf( &o, i, r ) != 0 )
 		{
-			litter_draw d = draw_leaf( o.seed, i, o.leaves );
+			litter_draw d = draw_leaf( &o, i );
 			fprintf( stderr, "sere litter: leaf %ld (%s, %s) failed: %s\n", i, species_names[d.species],
 					 preset_names[d.species], r->error );
 		}
+		if ( w.rank == 0 )
+		{
+#pragma omp critical( litter_progress )
+			progress_leaf( &progress, &o, &w, leaf_cost( &o, i ) );
+		}
+	}
+	long failed = 0;
+	for ( long i = 0; i < o.leaves; ++i )
+	{
+		failed += owner[i] == w.rank && results[i].state == LITTER_FAILED;
+	}
+	if ( world_gather( &w, results, order, owner, o.leaves, 1000.0 * ( sere_now() - start ), rank_wall_ms ) != 0 )
+	{
+		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
+		return world_abort( &w );
+	}
+	double gathered = sere_now() - start, slowest = 0.0;
+	for ( int r = 0; w.rank == 0 && r < w.size; ++r )
+	{
+		slowest = fmax( slowest, rank_wall_ms[r] / 1000.0 );
+	}
+	free( order ), free( owner );
+	if ( w.rank != 0 )
+	{
+		free( rank_wall_ms ), free( results );
+		return world_finish( &w, failed > 0 );
 	}
 	/* The scene from the leaf files alone, in index order: a resumed run reads exactly the bytes
-	 * an uninterrupted one does. */
+	 * an uninterrupted one does, and so does a run on any number of ranks. */
 	litter_mesh scene = { 0 };
-	long failed = 0;
+	failed = 0;
 	for ( long i = 0; i < o.leaves; ++i )
 	{
 		litter_result* r = results + i;
@@ -617,8 +1006,18 @@ int sere_cmd_litter( int argc, char** argv )
 		mesh_free( &leaf );
 		failed += r->state == LITTER_FAILED;
 	}
-	double seconds = sere_now() - start;
 	int status = failed > 0;
+	long wet = 0;
+	for ( long i = 0; i < o.leaves; ++i )
+	{
+		wet += results[i].state != LITTER_FAILED && !results[i].desiccated;
+	}
+	if ( wet > 0 && !o.frames_given )
+	{
+		/* a chosen --frames stops leaves early on purpose; the default cap should not */
+		fprintf( stderr, "sere litter: %ld lea%s reached the %ld-frame cap before drying (--frames F raises it)\n", wet,
+				 wet == 1 ? "f" : "ves", o.frames );
+	}
 	snprintf( path, sizeof( path ), "%s/litter.ply", o.out );
 	if ( write_scene_ply( path, &o, &scene ) != 0 )
 	{
@@ -668,17 +1067,20 @@ int sere_cmd_litter( int argc, char** argv )
 			status = 1;
 		}
 	}
+	double seconds = sere_now() - start;
+	litter_times times = { seconds, gathered - slowest, seconds - gathered };
 	snprintf( path, sizeof( path ), "%s/summary.json", o.out );
-	if ( write_summary( path, &o, results, bound, seconds, &scene ) != 0 )
+	if ( write_summary( path, &o, results, bound, w.size, rank_wall_ms, &times, &scene ) != 0 )
 	{
 		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
 		status = 1;
 	}
-	printf( "litter: %ld leaves (%ld failed), %d vertices, %d triangles, %.2f s on %d thread%s\n", o.leaves, failed,
-			scene.vertices, scene.triangles, seconds, bound, bound == 1 ? "" : "s" );
+	printf( "litter: %ld leaves (%ld failed), %d vertices, %d triangles, %.2f s on %d rank%s of %d thread%s\n",
+			o.leaves, failed, scene.vertices, scene.triangles, seconds, w.size, w.size == 1 ? "" : "s", bound,
+			bound == 1 ? "" : "s" );
 	printf( "  %s/litter.ply, %s/litter.glb, %s/litter.png, %s/summary.json, leaves in %s/leaves\n", o.out, o.out,
 			o.out, o.out, o.out );
 	mesh_free( &scene );
-	free( results );
-	return status;
+	free( rank_wall_ms ), free( results );
+	return world_finish( &w, status );
 }

@@ -32,6 +32,11 @@ int sere_topo_cores( void )
 
 int sere_topo_bind( int threads, FILE* log )
 {
+	return sere_topo_bind_from( threads, 0, log );
+}
+
+int sere_topo_bind_from( int threads, int first_core, FILE* log )
+{
 	hwloc_topology_t topology = load_topology();
 	int cores = topology ? hwloc_get_nbobjs_by_type( topology, HWLOC_OBJ_CORE ) : 0;
 	if ( threads <= 0 )
@@ -56,7 +61,8 @@ int sere_topo_bind( int threads, FILE* log )
 #pragma omp parallel num_threads( threads )
 	{
 		int id = omp_get_thread_num();
-		hwloc_obj_t core = hwloc_get_obj_by_type( topology, HWLOC_OBJ_CORE, (unsigned) ( id % cores ) );
+		hwloc_obj_t core =
+			hwloc_get_obj_by_type( topology, HWLOC_OBJ_CORE, (unsigned) ( ( first_core + id ) % cores ) );
 		if ( core != NULL && core->cpuset != NULL && id < 256 )
 		{
 			hwloc_cpuset_t set = hwloc_bitmap_dup( core->cpuset );
@@ -70,7 +76,7 @@ int sere_topo_bind( int threads, FILE* log )
 	{
 		for ( int id = 0; id < threads && id < 256; ++id )
 		{
-			fprintf( log, "thread %d -> core %d (PU %d)%s\n", id, id % cores, pu_of[id],
+			fprintf( log, "thread %d -> core %d (PU %d)%s\n", id, ( first_core + id ) % cores, pu_of[id],
 					 bound[id] ? "" : " [binding refused]" );
 		}
 	}

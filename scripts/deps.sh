@@ -5,7 +5,8 @@
 # `make examples-check` adds cmake.
 set -euo pipefail
 need=(gcc g++ make pkg-config libgomp1 libhwloc-dev libbenchmark-dev libcriterion-dev
-      libeigen3-dev libembree-dev libpng-dev libcairo2-dev python3-vtk9 libassimp-dev libhypre-dev "$@")
+      libeigen3-dev libembree-dev libpng-dev libcairo2-dev python3-vtk9 libassimp-dev libhypre-dev libopenmpi-dev
+      openmpi-bin "$@")
 missing=()
 for p in "${need[@]}"; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")

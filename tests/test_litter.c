@@ -1,5 +1,5 @@
 /* sere litter as a user meets it (issue #21): the scene depends on the seed alone, not on the
- * thread count; a rerun after a crash redoes only the missing leaves and gives the same scene;
+ * thread count nor on the MPI ranks; a rerun after a crash redoes only the missing leaves and gives the same scene;
  * one leaf's failure costs no other; a real glTF reader (assimp) opens litter.glb. Small leaves (400 points, 20 frames)
  * keep it to seconds; SERE_BIN names the binary under test. */
 #define _DEFAULT_SOURCE
@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 /* Seed 6 draws wisteria, plane tree, maple and grass; 400 points are enough for every
@@ -186,6 +187,88 @@ Test( litter, failed_leaf_is_reported_and_costs_no_other )
 	remove_tree( dir );
 }
 
+/* Without --frames a leaf dries to the end, as sere run --until-dry does: the plane tree's
+ * first layer runs dry within 400 frames (seconds at 400 points), far under the cap. An explicit
+ * --frames stops it wet, and says nothing of it on stderr: the user chose it. */
+Test( litter, dries_to_the_end_unless_frames_says_otherwise )
+{
+	char dir[64], err[4096], path[160];
+	make_dir( dir, sizeof( dir ), "dry" );
+	char args[512];
+	snprintf( args, sizeof( args ), "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --out %s", dir );
+	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
+	cr_expect_eq( err[0], '\0', "nothing on stderr: %s", err );
+	snprintf( path, sizeof( path ), "%s/summary.json", dir );
+	long size;
+	char* summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	const char* at = strstr( summary, "\"frames\": " );
+	long frames = -1;
+	cr_assert( at != NULL && sscanf( at, "\"frames\": %ld", &frames ) == 1, "%s", summary );
+	cr_expect( frames > 30 && frames < 10000, "dried at frame %ld", frames );
+	cr_expect_not_null( strstr( at, "\"desiccated\": true" ), "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"frames_max\": 10000" ), "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"desiccated\": 1" ), "%s", summary );
+	free( summary );
+	remove_tree( dir );
+
+	make_dir( dir, sizeof( dir ), "wet" );
+	snprintf( args, sizeof( args ), "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --frames 30 --out %s",
+			  dir );
+	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
+	cr_expect_eq( err[0], '\0', "nothing on stderr: %s", err );
+	snprintf( path, sizeof( path ), "%s/summary.json", dir );
+	summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	cr_expect_not_null( strstr( summary, "\"frames\": 30, \"desiccated\": false" ), "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"desiccated\": 0" ), "%s", summary );
+	free( summary );
+	remove_tree( dir );
+}
+
+/* --preset makes every leaf one species and leaves the other draws alone: a later run without
+ * it reuses exactly the leaf that was drawn that species (seed 6's leaf 1 is a plane tree) and
+ * dries the others again, whose files hold another species. */
+Test( litter, preset_sets_every_leaf_and_is_part_of_the_leaf_file )
+{
+	char dir[64], err[4096], path[160];
+	make_dir( dir, sizeof( dir ), "preset" );
+	cr_assert_eq( litter( dir, "--threads 2 --preset plane-tree", err, sizeof( err ) ), 0, "%s", err );
+	snprintf( path, sizeof( path ), "%s/summary.json", dir );
+	long size;
+	char* summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	cr_expect_eq( count_of( summary, "\"preset\": \"plane-tree\"" ), 4, "%s", summary );
+	free( summary );
+	cr_assert_eq( litter( dir, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	summary = read_all( path, &size );
+	cr_assert_not_null( summary );
+	cr_expect_eq( count_of( summary, "\"preset\": \"plane-tree\"" ), 1, "%s", summary );
+	cr_expect_not_null( strstr( summary, "\"index\": 1, \"species\": \"plane\"" ), "%s", summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"resumed\"" ), 1, "%s", summary );
+	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 3, "%s", summary );
+	free( summary );
+	remove_tree( dir );
+}
+
+/* --progress 0: a line after every leaf but the last (whose end the summary line reports),
+ * counting up, with an estimate of the time left. */
+Test( litter, progress_lines_on_stderr )
+{
+	char dir[64], err[4096];
+	make_dir( dir, sizeof( dir ), "progress" );
+	cr_assert_eq( litter( dir, "--threads 1 --progress 0", err, sizeof( err ) ), 0, "%s", err );
+	cr_expect_eq( count_of( err, "\n" ), 3, "%s", err );
+	for ( int done = 1; done <= 3; ++done )
+	{
+		char line[64];
+		snprintf( line, sizeof( line ), "sere litter: %d of 4 leaves done, ", done );
+		cr_expect_not_null( strstr( err, line ), "no '%s' in: %s", line, err );
+	}
+	cr_expect_eq( count_of( err, " min left\n" ), 3, "%s", err );
+	remove_tree( dir );
+}
+
 static void expect_error( const char* args, const char* phrase )
 {
 	char err[4096];
@@ -204,6 +287,8 @@ Test( litter, bad_options_one_clear_line )
 	expect_error( "litter --leaves 2 --points", "--points needs a value" );
 	expect_error( "litter --leaves 2 --colour red", "unknown option '--colour'" );
 	expect_error( "litter --leaves 2 maple", "unexpected argument 'maple'" );
+	expect_error( "litter --leaves 2 --preset oak", "--preset takes maple-red, maple-green" );
+	expect_error( "litter --leaves 2 --progress -1", "--progress takes" );
 }
 
 Test( litter, glb_opens_in_assimp_with_the_ply_counts )
@@ -254,4 +339,73 @@ Test( litter, glb_opens_in_assimp_with_the_ply_counts )
 	}
 	aiReleaseImport( scene );
 	remove_tree( dir );
+}
+
+/* Runs a shell command with stdout discarded and stderr captured into err; its exit status. */
+static int shell( const char* command, char* err, size_t err_size )
+{
+	char full[2048];
+	snprintf( full, sizeof( full ), "%s 2>&1 >/dev/null", command );
+	err[0] = '\0';
+	FILE* pipe = popen( full, "r" );
+	cr_assert_not_null( pipe, "cannot run %s", full );
+	size_t used = fread( err, 1, err_size - 1, pipe );
+	err[used] = '\0';
+	int status = pclose( pipe );
+	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+}
+
+/* The ranks share the leaves but each leaf is still drawn from the seed and its index alone, and
+ * rank 0 assembles the scene from the files in index order: one, two and three ranks (three
+ * dealt 2, 2 and 1 of 5 leaves) and a run without mpirun give the same bytes. */
+Test( litter, same_scene_on_one_two_and_three_ranks )
+{
+	char err[4096], command[1024];
+	snprintf( command, sizeof( command ), "%s litter --help", sere_test_bin() );
+	FILE* help = popen( command, "r" );
+	cr_assert_not_null( help );
+	size_t used = fread( err, 1, sizeof( err ) - 1, help );
+	err[used] = '\0';
+	pclose( help );
+	if ( strstr( err, "Built with MPI" ) == NULL )
+	{
+		cr_skip( "%s was built without MPI (no Open MPI development files)", sere_test_bin() );
+	}
+	if ( system( "command -v mpirun >/dev/null 2>&1" ) != 0 )
+	{
+		cr_skip( "no mpirun on the PATH" );
+	}
+	char plain[64], path[160], other[160];
+	make_dir( plain, sizeof( plain ), "plain" );
+	snprintf( command, sizeof( command ), "%s litter --leaves 5 --seed 6 --points 400 --frames 20 --out %s",
+			  sere_test_bin(), plain );
+	cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%s", err );
+	snprintf( path, sizeof( path ), "%s/litter.ply", plain );
+	for ( int ranks = 1; ranks <= 3; ++ranks )
+	{
+		char dir[64];
+		make_dir( dir, sizeof( dir ), "mpi" );
+		snprintf( command, sizeof( command ),
+				  "mpirun --allow-run-as-root --oversubscribe -np %d %s litter --leaves 5 --seed 6 --points 400 "
+				  "--frames 20 --threads 1 --out %s",
+				  ranks, sere_test_bin(), dir );
+		cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%d ranks: %s", ranks, err );
+		snprintf( other, sizeof( other ), "%s/litter.ply", dir );
+		expect_same_file( path, other );
+		/* every rank dried its share: the summary names each rank */
+		snprintf( other, sizeof( other ), "%s/summary.json", dir );
+		long size;
+		char* summary = read_all( other, &size );
+		cr_assert_not_null( summary );
+		for ( int r = 0; r < ranks; ++r )
+		{
+			char rank[32];
+			snprintf( rank, sizeof( rank ), "\"rank\": %d, \"status\"", r );
+			cr_expect_not_null( strstr( summary, rank ), "%d ranks, no leaf on rank %d: %s", ranks, r, summary );
+		}
+		cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 5, "%s", summary );
+		free( summary );
+		remove_tree( dir );
+	}
+	remove_tree( plain );
 }
