@@ -51,6 +51,7 @@ typedef struct litter_draw
 {
 	int species;
 	double scale, angle, x, y;
+	uint32_t sample_seed; /* the interior points' seed: each leaf its own mesh, so its own dried shape */
 } litter_draw;
 
 /* What the leaf files must say about the run that wrote them to be reused. */
@@ -134,6 +135,7 @@ static litter_draw draw_leaf( const litter_options* o, long index )
 	double side = 1.5 * sqrt( (double) o->leaves );
 	d.x = side * ( sere_splitmix_unit( &state ) - 0.5 );
 	d.y = side * ( sere_splitmix_unit( &state ) - 0.5 );
+	d.sample_seed = (uint32_t) ( sere_splitmix64( &state ) >> 32 );
 	return d;
 }
 
@@ -554,6 +556,7 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	/* the litter lies on the ground whatever the preset says: under gravity, on z = 0 */
 	params.gravity[0] = 0.0, params.gravity[1] = 0.0, params.gravity[2] = -9.8;
 	params.ground = 0.0;
+	params.seed = (double) d.sample_seed;
 	char relative[64];
 	snprintf( relative, sizeof( relative ), "leaves/%s.leaf", species_names[d.species] );
 	if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )

@@ -251,6 +251,29 @@ Test( litter, preset_sets_every_leaf_and_is_part_of_the_leaf_file )
 	remove_tree( dir );
 }
 
+/* Each leaf is its own simulation: two leaves of one preset sample their interior points with
+ * different seeds, so their meshes (the face lists, the tail of each binary PLY, which placement
+ * does not touch) differ. */
+Test( litter, leaves_of_one_preset_are_different_meshes )
+{
+	char dir[64], err[4096], a[160], b[160];
+	make_dir( dir, sizeof( dir ), "unique" );
+	cr_assert_eq( litter( dir, "--threads 2 --preset maple-red", err, sizeof( err ) ), 0, "%s", err );
+	snprintf( a, sizeof( a ), "%s/leaves/leaf_00000.ply", dir );
+	snprintf( b, sizeof( b ), "%s/leaves/leaf_00001.ply", dir );
+	long size_a = -1, size_b = -1;
+	char* data_a = read_all( a, &size_a );
+	char* data_b = read_all( b, &size_b );
+	cr_assert( data_a != NULL && data_b != NULL );
+	/* 13 bytes a triangle (a count byte and three int32): the last 100 triangles */
+	const long tail = 1300;
+	cr_assert( size_a > tail && size_b > tail );
+	cr_expect_neq( memcmp( data_a + size_a - tail, data_b + size_b - tail, (size_t) tail ), 0,
+				   "two maple-red leaves have the same triangles: one simulation repeated" );
+	free( data_a ), free( data_b );
+	remove_tree( dir );
+}
+
 /* --progress 0: a line after every leaf but the last (whose end the summary line reports),
  * counting up, with an estimate of the time left. */
 Test( litter, progress_lines_on_stderr )
