@@ -987,8 +987,8 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 		int32_t n = (int32_t) o->features;
 		r->parametric = malloc( 6 * (size_t) n * sizeof( double ) );
 		if ( r->parametric == NULL ||
-			 sere_leaf_skeleton_parametric( o->length, o->width, n, r->parametric, r->parametric + 2 * n,
-											r->parametric + 4 * n ) != SERE_OK )
+			 sere_leaf_skeleton_generate( o->length, o->width, n, r->parametric, r->parametric + 2 * n,
+										  r->parametric + 4 * n ) != SERE_OK )
 		{
 			fprintf( stderr, "sere wilt: cannot make the parametric leaf (length %g, width %g, %d feature points)\n",
 					 o->length, o->width, n );
@@ -1035,7 +1035,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 										   (float) ( file->vein_bend[k] * PI / 180.0 ),
 										   follow ? leaf.mid_count : p->count, follow ? leaf.mid_xy : p->xy };
 		}
-		status = sere_skeleton_build( veins, file->vein_count, &r->skeleton, &check );
+		status = sere_skeleton_create( veins, file->vein_count, &r->skeleton, &check );
 		if ( status != SERE_OK )
 		{
 			skeleton_where( file, &check, 1, where, sizeof( where ) );
@@ -1045,7 +1045,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 	}
 	else
 	{
-		status = sere_venation_generate( &leaf, &o->venation, &r->skeleton, &check );
+		status = sere_skeleton_generate( &leaf, &o->venation, &r->skeleton, &check );
 		if ( status != SERE_OK )
 		{
 			fprintf( stderr, "sere wilt: %s: cannot generate the venation: %s\n", file ? file->path : "parametric leaf",
@@ -1187,8 +1187,8 @@ int sere_cmd_wilt( int argc, char** argv )
 	if ( sere_bvh_create( plant->tri, plant->triangle_count, plant->vertex_count, plant->x, plant->y, plant->z,
 						  &r.check_bvh ) == SERE_OK )
 	{
-		intersections =
-			sere_mesh_intersections( r.check_bvh, plant->tri, plant->triangle_count, plant->x, plant->y, plant->z );
+		intersections = sere_mesh_count_intersections( r.check_bvh, plant->tri, plant->triangle_count, plant->x,
+													   plant->y, plant->z );
 	}
 	double deepest = 0.0;
 	for ( int32_t j = 0; j < plant->joints.joint_count; ++j )
