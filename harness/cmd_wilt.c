@@ -2,6 +2,7 @@
  * skeleton file or parametric leaf → blade mesh → banding → frames of wilting, written as PLY, VTK
  * and PNG. */
 #define _POSIX_C_SOURCE 200809L
+#include "cmd_wilt_shared.h"
 #include "commands.h"
 #include "io.h"
 #include "params.h"
@@ -9,16 +10,12 @@
 #include "subdivide.h"
 #include "topo.h"
 
-#include <cairo.h>
 #include <errno.h>
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#define PI		  3.14159265358979323846
-#define MAX_VEINS 256
 
 static void wilt_help( void )
 {
@@ -90,566 +87,6 @@ static int parse_pair( const char* option, const char* text, char separator, dou
 	fprintf( stderr, "sere wilt: %s takes two numbers 'A%cB' from %g to %g, not '%s'\n", option, separator, lo, hi,
 			 text );
 	return -1;
-}
-
-/* ------------------------------------------------------------------------------------------- */
-/* Skeleton files. */
-
-typedef struct point_list
-{
-	int32_t count, capacity;
-	double* xy;
-	int32_t* line; /* file line of each point, for messages */
-} point_list;
-
-typedef struct skeleton_file
-{
-	char path[4096];
-	char name[64];
-	point_list curve[3]; /* left, right, midvein */
-	int32_t curve_line[3];
-	int32_t vein_count;
-	point_list vein[MAX_VEINS];
-	int32_t vein_line[MAX_VEINS];
-	int32_t vein_parent[MAX_VEINS];
-	int32_t vein_segments[MAX_VEINS];
-	double vein_bend[MAX_VEINS];
-} skeleton_file;
-
-static const char* const curve_names[3] = { "left boundary curve", "right boundary curve", "midvein" };
-
-static void skeleton_file_free( skeleton_file* s )
-{
-	for ( int k = 0; k < 3; ++k )
-	{
-		free( s->curve[k].xy );
-		free( s->curve[k].line );
-	}
-	for ( int32_t k = 0; k < s->vein_count; ++k )
-	{
-		free( s->vein[k].xy );
-		free( s->vein[k].line );
-	}
-}
-
-static int point_push( point_list* p, double x, double y, int32_t line )
-{
-	if ( p->count == p->capacity )
-	{
-		int32_t capacity = p->capacity > 0 ? 2 * p->capacity : 16;
-		double* xy = realloc( p->xy, 2 * (size_t) capacity * sizeof( double ) );
-		if ( xy == NULL )
-		{
-			return -1;
-		}
-		p->xy = xy;
-		int32_t* lines = realloc( p->line, (size_t) capacity * sizeof( int32_t ) );
-		if ( lines == NULL )
-		{
-			return -1;
-		}
-		p->line = lines;
-		p->capacity = capacity;
-	}
-	p->xy[2 * p->count] = x;
-	p->xy[2 * p->count + 1] = y;
-	p->line[p->count++] = line;
-	return 0;
-}
-
-/* Finds NAME as a path or as data/skeletons/NAME.skel. */
-static int skeleton_locate( const char* name, char* path, size_t size )
-{
-	FILE* f = fopen( name, "r" );
-	if ( f != NULL )
-	{
-		fclose( f );
-		snprintf( path, size, "%s", name );
-		return 0;
-	}
-	char relative[512];
-	snprintf( relative, sizeof( relative ), "skeletons/%s.skel", name );
-	return sere_data_path( relative, path, size );
-}
-
-/* A 'vein PARENT SEGMENTS BEND_DEGREES' line: opens the vein's block. */
-static int skeleton_vein_line( skeleton_file* s, const char* rest, int32_t number, point_list** block, char* err,
-							   size_t err_size )
-{
-	long parent, segments;
-	double bend;
-	char extra[8];
-	if ( sscanf( rest, " %ld %ld %lf %7s", &parent, &segments, &bend, extra ) != 3 || !isfinite( bend ) )
-	{
-		snprintf( err, err_size, "%s:%d: 'vein' takes PARENT SEGMENTS BEND_DEGREES, e.g. 'vein 0 6 60'", s->path,
-				  number );
-		return -1;
-	}
-	if ( s->vein_count == MAX_VEINS )
-	{
-		snprintf( err, err_size, "%s:%d: more than %d veins", s->path, number, MAX_VEINS );
-		return -1;
-	}
-	int32_t k = s->vein_count++;
-	s->vein_line[k] = number;
-	s->vein_parent[k] = parent < -1 || parent > MAX_VEINS ? MAX_VEINS : (int32_t) parent;
-	s->vein_segments[k] = segments < 0 || segments > 1000000 ? -1 : (int32_t) segments;
-	s->vein_bend[k] = bend;
-	*block = s->vein + k;
-	return 0;
-}
-
-/* An 'x y' line: a point of the open block. */
-static int skeleton_point_line( skeleton_file* s, const char* word, const char* rest, int32_t number, point_list* block,
-								char* err, size_t err_size )
-{
-	char* end;
-	double x = strtod( word, &end );
-	if ( *end != '\0' )
-	{
-		snprintf( err, err_size,
-				  "%s:%d: unknown keyword '%s' (expected name, left, right, midvein, vein, or an 'x y' point)", s->path,
-				  number, word );
-		return -1;
-	}
-	double y;
-	char extra[8];
-	if ( sscanf( rest, " %lf %7s", &y, extra ) != 1 || !isfinite( x ) || !isfinite( y ) )
-	{
-		snprintf( err, err_size, "%s:%d: a point is two finite numbers 'x y'", s->path, number );
-		return -1;
-	}
-	if ( block == NULL )
-	{
-		snprintf( err, err_size, "%s:%d: point outside a left, right, midvein or vein block", s->path, number );
-		return -1;
-	}
-	if ( point_push( block, x, y, number ) != 0 )
-	{
-		snprintf( err, err_size, "%s: out of memory", s->path );
-		return -1;
-	}
-	return 0;
-}
-
-/* One line of a skeleton file (comment already cut): a keyword that opens a block or names the
- * leaf, or a point of the open *block. */
-static int skeleton_line( skeleton_file* s, const char* text, int32_t number, point_list** block, char* err,
-						  size_t err_size )
-{
-	char word[64];
-	int used = 0;
-	if ( sscanf( text, " %63s%n", word, &used ) != 1 )
-	{
-		return 0;
-	}
-	const char* rest = text + used;
-	char extra[8];
-	int curve = strcmp( word, "left" ) == 0		 ? 0
-				: strcmp( word, "right" ) == 0	 ? 1
-				: strcmp( word, "midvein" ) == 0 ? 2
-												 : -1;
-	if ( curve >= 0 )
-	{
-		int status = 0;
-		if ( sscanf( rest, " %7s", extra ) == 1 )
-		{
-			snprintf( err, err_size, "%s:%d: '%s' takes no value; its points follow on their own lines", s->path,
-					  number, word );
-			status = -1;
-		}
-		else if ( s->curve_line[curve] != 0 )
-		{
-			snprintf( err, err_size, "%s:%d: second '%s' block (the first is on line %d)", s->path, number, word,
-					  s->curve_line[curve] );
-			status = -1;
-		}
-		s->curve_line[curve] = number;
-		*block = s->curve + curve;
-		return status;
-	}
-	if ( strcmp( word, "name" ) == 0 )
-	{
-		char value[64];
-		*block = NULL;
-		if ( sscanf( rest, " %63s %7s", value, extra ) != 1 )
-		{
-			snprintf( err, err_size, "%s:%d: 'name' takes one word", s->path, number );
-			return -1;
-		}
-		snprintf( s->name, sizeof( s->name ), "%s", value );
-		return 0;
-	}
-	if ( strcmp( word, "vein" ) == 0 )
-	{
-		return skeleton_vein_line( s, rest, number, block, err, err_size );
-	}
-	return skeleton_point_line( s, word, rest, number, *block, err, err_size );
-}
-
-/* Every curve block is present with at least 2 points. */
-static int skeleton_curves_complete( const skeleton_file* s, char* err, size_t err_size )
-{
-	static const char* const keyword[3] = { "left", "right", "midvein" };
-	for ( int k = 0; k < 3; ++k )
-	{
-		if ( s->curve_line[k] == 0 )
-		{
-			snprintf( err, err_size, "%s: no '%s' block (the %s)", s->path, keyword[k], curve_names[k] );
-			return -1;
-		}
-		if ( s->curve[k].count < 2 )
-		{
-			/* build_leaf measures the leaf from the midvein's first and last points */
-			snprintf( err, err_size, "%s:%d: the '%s' block has %d point%s; the %s needs at least 2", s->path,
-					  s->curve_line[k], keyword[k], s->curve[k].count, s->curve[k].count == 1 ? "" : "s",
-					  curve_names[k] );
-			return -1;
-		}
-	}
-	return 0;
-}
-
-static int skeleton_load( const char* name, skeleton_file* s, char* err, size_t err_size )
-{
-	memset( s, 0, sizeof( *s ) );
-	if ( skeleton_locate( name, s->path, sizeof( s->path ) ) != 0 )
-	{
-		snprintf( err, err_size, "cannot find skeleton '%s' (a file path, or a name in data/skeletons)", name );
-		return -1;
-	}
-	FILE* f = fopen( s->path, "r" );
-	if ( f == NULL )
-	{
-		snprintf( err, err_size, "%s: %s", s->path, strerror( errno ) );
-		return -1;
-	}
-	snprintf( s->name, sizeof( s->name ), "%s", name );
-	char text[1024];
-	int32_t number = 0;
-	point_list* block = NULL;
-	int status = 0;
-	while ( status == 0 && fgets( text, sizeof( text ), f ) != NULL )
-	{
-		++number;
-		if ( strchr( text, '\n' ) == NULL && !feof( f ) )
-		{
-			snprintf( err, err_size, "%s:%d: line longer than %zu characters", s->path, number, sizeof( text ) - 2 );
-			status = -1;
-			break;
-		}
-		char* hash = strchr( text, '#' );
-		if ( hash != NULL )
-		{
-			*hash = '\0';
-		}
-		status = skeleton_line( s, text, number, &block, err, err_size );
-	}
-	if ( status == 0 && ferror( f ) )
-	{
-		snprintf( err, err_size, "%s: %s", s->path, strerror( errno ) );
-		status = -1;
-	}
-	fclose( f );
-	if ( status == 0 )
-	{
-		status = skeleton_curves_complete( s, err, err_size );
-	}
-	if ( status != 0 )
-	{
-		skeleton_file_free( s );
-	}
-	return status;
-}
-
-/* "FILE:LINE: " for a problem the kernels found, located by curve or vein and point. */
-static void skeleton_where( const skeleton_file* s, const sere_skeleton_check* check, int veins, char* out,
-							size_t size )
-{
-	if ( s == NULL )
-	{
-		snprintf( out, size, "parametric leaf: " );
-		return;
-	}
-	int32_t line = 0;
-	const char* what = "";
-	char label[64] = "";
-	if ( veins && check->vein >= 0 && check->vein < s->vein_count )
-	{
-		const point_list* p = s->vein + check->vein;
-		line = check->point >= 0 && check->point < p->count ? p->line[check->point] : s->vein_line[check->vein];
-		snprintf( label, sizeof( label ), "vein %d", check->vein );
-		what = label;
-	}
-	else if ( !veins && check->vein >= 0 && check->vein < 3 )
-	{
-		const point_list* p = s->curve + check->vein;
-		line = check->point >= 0 && check->point < p->count ? p->line[check->point] : s->curve_line[check->vein];
-		what = curve_names[check->vein];
-	}
-	if ( line > 0 )
-	{
-		snprintf( out, size, "%s:%d: %s: ", s->path, line, what );
-	}
-	else
-	{
-		snprintf( out, size, "%s: ", s->path );
-	}
-}
-
-/* ------------------------------------------------------------------------------------------- */
-/* Pictures: a shaded orthographic view drawn back to front. */
-
-typedef struct camera
-{
-	double right[3], up[3], toward[3]; /* toward: from the scene to the eye */
-	double scale, u0, v0;			   /* screen = ((p·right − u0) · scale, (v0 − p·up) · scale) */
-	int width, height;
-} camera;
-
-static double dot3( const double* a, const double* b )
-{
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/* Fits the view to the rest plant and to its mirror image below each leaf's base, the room that
- * drooping leaves reach. */
-static void camera_fit( camera* c, double azimuth, double elevation, int width, int height, const sere_plant* plant )
-{
-	double ca = cos( azimuth ), sa = sin( azimuth ), ce = cos( elevation ), se = sin( elevation );
-	double toward[3] = { ce * ca, ce * sa, se };
-	double right[3] = { -sa, ca, 0.0 };
-	double up[3] = { -se * ca, -se * sa, ce };
-	memcpy( c->toward, toward, sizeof( toward ) );
-	memcpy( c->right, right, sizeof( right ) );
-	memcpy( c->up, up, sizeof( up ) );
-	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
-	for ( int32_t k = 0; k < plant->leaf_count; ++k )
-	{
-		double root = plant->joints.z[plant->joint_first[k]];
-		for ( int32_t i = plant->vertex_first[k]; i < plant->vertex_first[k + 1]; ++i )
-		{
-			for ( int mirror = 0; mirror < 2; ++mirror )
-			{
-				double z = mirror ? 2.0 * root - plant->rz[i] - 0.2 * fabs( plant->rz[i] - root ) : plant->rz[i];
-				double p[3] = { plant->rx[i], plant->ry[i], z };
-				double u = dot3( p, right ), v = dot3( p, up );
-				umin = fmin( umin, u );
-				umax = fmax( umax, u );
-				vmin = fmin( vmin, v );
-				vmax = fmax( vmax, v );
-			}
-		}
-	}
-	double span = fmax( ( umax - umin ) / width, ( vmax - vmin ) / ( height - 40 ) );
-	c->scale = 1.0 / ( 1.1 * fmax( span, 1e-9 ) );
-	c->u0 = 0.5 * ( umin + umax ) - 0.5 * width / c->scale;
-	c->v0 = 0.5 * ( vmin + vmax ) + 0.5 * ( height - 30 ) / c->scale;
-	c->width = width;
-	c->height = height;
-}
-
-static void camera_project( const camera* c, const double p[3], double* sx, double* sy )
-{
-	*sx = ( dot3( p, c->right ) - c->u0 ) * c->scale;
-	*sy = 30.0 + ( c->v0 - dot3( p, c->up ) ) * c->scale;
-}
-
-typedef struct depth_item
-{
-	float depth;
-	int32_t triangle;
-} depth_item;
-
-static int depth_order( const void* a, const void* b )
-{
-	const depth_item* p = a;
-	const depth_item* q = b;
-	if ( p->depth != q->depth )
-	{
-		return p->depth < q->depth ? -1 : 1;
-	}
-	return ( p->triangle > q->triangle ) - ( p->triangle < q->triangle );
-}
-
-static cairo_status_t write_stream( void* closure, const unsigned char* data, unsigned int length )
-{
-	return fwrite( data, 1, length, (FILE*) closure ) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
-}
-
-/* The plant as it stands: stem and petioles, then leaves back to front, Lambert-shaded on both
- * sides, green turning yellow-brown with each leaf's wilting parameter. A bar at the top left
- * shows how far the run has gone, with one swatch per leaf (bottom leaf first) in its colour; no
- * text, so no font machinery. */
-/* Stem from the lowest leaf base to the top, petioles from the stem to each leaf base. */
-static void draw_stem( cairo_t* cr, const camera* c, const sere_plant* plant, const float* stem_top )
-{
-	cairo_set_source_rgb( cr, 0.35, 0.42, 0.18 );
-	cairo_set_line_cap( cr, CAIRO_LINE_CAP_ROUND );
-	double bottom[3] = { 0.0, 0.0, stem_top[3] }, top[3] = { 0.0, 0.0, stem_top[2] };
-	double sx, sy;
-	cairo_set_line_width( cr, fmax( 2.0, 0.012 * c->scale * ( stem_top[2] - stem_top[3] + 1.0 ) ) );
-	camera_project( c, bottom, &sx, &sy );
-	cairo_move_to( cr, sx, sy );
-	camera_project( c, top, &sx, &sy );
-	cairo_line_to( cr, sx, sy );
-	cairo_stroke( cr );
-	cairo_set_line_width( cr, 2.0 );
-	for ( int32_t k = 0; k < plant->leaf_count; ++k )
-	{
-		int32_t root = plant->joint_first[k];
-		double base[3] = { plant->joints.x[root], plant->joints.y[root], plant->joints.z[root] };
-		double node[3] = { 0.0, 0.0, base[2] - 0.3 * stem_top[4] };
-		camera_project( c, node, &sx, &sy );
-		cairo_move_to( cr, sx, sy );
-		camera_project( c, base, &sx, &sy );
-		cairo_line_to( cr, sx, sy );
-		cairo_stroke( cr );
-	}
-}
-
-/* The triangles far to near (painter's order) by the depth of their corners' sum. */
-static void sort_by_depth( const camera* c, const sere_plant* plant, depth_item* order )
-{
-	for ( int32_t t = 0; t < plant->triangle_count; ++t )
-	{
-		const int32_t* v = plant->tri + 3 * t;
-		double d = 0.0;
-		for ( int k = 0; k < 3; ++k )
-		{
-			double p[3] = { plant->x[v[k]], plant->y[v[k]], plant->z[v[k]] };
-			d += dot3( p, c->toward );
-		}
-		order[t].depth = (float) d;
-		order[t].triangle = t;
-	}
-	qsort( order, (size_t) plant->triangle_count, sizeof( depth_item ), depth_order );
-}
-
-/* One triangle filled in its leaf's colour (greener to browner with the leaf's wilting), shaded
- * two-sided by the light direction. */
-static void draw_triangle( cairo_t* cr, const camera* c, const sere_plant* plant, int32_t t, int32_t leaf,
-						   const double light[3] )
-{
-	const int32_t* v = plant->tri + 3 * t;
-	double p[3][3];
-	for ( int k = 0; k < 3; ++k )
-	{
-		p[k][0] = plant->x[v[k]];
-		p[k][1] = plant->y[v[k]];
-		p[k][2] = plant->z[v[k]];
-	}
-	double e1[3] = { p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2] };
-	double e2[3] = { p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2] };
-	double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
-	double nl = sqrt( dot3( n, n ) );
-	double shade = nl > 0.0 ? 0.3 + 0.7 * fabs( dot3( n, light ) ) / nl : 0.3;
-	double w = 0.85 * plant->leaf_t[leaf];
-	double rgb[3] = { ( 0.20 + 0.42 * w ) * shade, ( 0.52 - 0.04 * w ) * shade, ( 0.16 + 0.02 * w ) * shade };
-	cairo_set_source_rgb( cr, rgb[0], rgb[1], rgb[2] );
-	for ( int k = 0; k < 3; ++k )
-	{
-		double sx, sy;
-		camera_project( c, p[k], &sx, &sy );
-		if ( k == 0 )
-		{
-			cairo_move_to( cr, sx, sy );
-		}
-		else
-		{
-			cairo_line_to( cr, sx, sy );
-		}
-	}
-	cairo_close_path( cr );
-	/* The thin stroke in the fill colour hides the antialiasing seams between triangles. */
-	cairo_fill_preserve( cr );
-	cairo_stroke( cr );
-}
-
-/* The leaves, far to near, lit from above the camera and a little to its left. */
-static void draw_leaves( cairo_t* cr, const camera* c, const sere_plant* plant, depth_item* order )
-{
-	double light[3];
-	for ( int a = 0; a < 3; ++a )
-	{
-		light[a] = c->toward[a] + 0.8 * c->up[a] - 0.3 * c->right[a];
-	}
-	double ll = sqrt( dot3( light, light ) );
-	for ( int a = 0; a < 3; ++a )
-	{
-		light[a] /= ll;
-	}
-	sort_by_depth( c, plant, order );
-	cairo_set_line_width( cr, 0.6 );
-	cairo_set_line_join( cr, CAIRO_LINE_JOIN_ROUND );
-	int32_t leaf = 0;
-	for ( int32_t o = 0; o < plant->triangle_count; ++o )
-	{
-		int32_t t = order[o].triangle;
-		while ( leaf > 0 && t < plant->triangle_first[leaf] )
-		{
-			--leaf;
-		}
-		while ( t >= plant->triangle_first[leaf + 1] )
-		{
-			++leaf;
-		}
-		draw_triangle( cr, c, plant, t, leaf, light );
-	}
-}
-
-/* The progress bar and one swatch per leaf in its current colour. */
-static void draw_progress( cairo_t* cr, const sere_plant* plant, double progress )
-{
-	cairo_set_source_rgb( cr, 0.75, 0.78, 0.8 );
-	cairo_rectangle( cr, 12.0, 10.0, 160.0, 6.0 );
-	cairo_fill( cr );
-	cairo_set_source_rgb( cr, 0.3, 0.32, 0.35 );
-	cairo_rectangle( cr, 12.0, 10.0, 160.0 * progress, 6.0 );
-	cairo_fill( cr );
-	double swatch = fmin( 10.0, 160.0 / plant->leaf_count );
-	for ( int32_t k = 0; k < plant->leaf_count; ++k )
-	{
-		double w = 0.85 * plant->leaf_t[k];
-		cairo_set_source_rgb( cr, 0.20 + 0.42 * w, 0.52 - 0.04 * w, 0.16 + 0.02 * w );
-		cairo_rectangle( cr, 12.0 + k * swatch, 20.0, 0.8 * swatch, 6.0 );
-		cairo_fill( cr );
-	}
-}
-
-static int render_png( const char* path, const camera* c, const sere_plant* plant, const float* stem_top,
-					   depth_item* order, double progress )
-{
-	cairo_surface_t* surface = cairo_image_surface_create( CAIRO_FORMAT_RGB24, c->width, c->height );
-	cairo_t* cr = cairo_create( surface );
-	cairo_pattern_t* sky = cairo_pattern_create_linear( 0, 0, 0, c->height );
-	cairo_pattern_add_color_stop_rgb( sky, 0.0, 0.86, 0.91, 0.97 );
-	cairo_pattern_add_color_stop_rgb( sky, 1.0, 0.99, 0.99, 0.97 );
-	cairo_set_source( cr, sky );
-	cairo_paint( cr );
-	cairo_pattern_destroy( sky );
-	draw_stem( cr, c, plant, stem_top );
-	draw_leaves( cr, c, plant, order );
-	draw_progress( cr, plant, progress );
-	cairo_surface_flush( surface );
-
-	sere_atomic_file file;
-	FILE* out = sere_atomic_open( &file, path );
-	int result = -1;
-	if ( out != NULL )
-	{
-		if ( cairo_surface_write_to_png_stream( surface, write_stream, out ) == CAIRO_STATUS_SUCCESS )
-		{
-			result = sere_atomic_commit( &file );
-		}
-		else
-		{
-			sere_atomic_abort( &file );
-		}
-	}
-	cairo_destroy( cr );
-	cairo_surface_destroy( surface );
-	return result;
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -968,7 +405,7 @@ static void wilt_run_free( wilt_run* r )
 {
 	if ( r->have_file )
 	{
-		skeleton_file_free( &r->file );
+		wilt_skeleton_free( &r->file );
 	}
 	free( r->parametric );
 	sere_tri_mesh_destroy( &r->blade );
@@ -1036,7 +473,8 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 	if ( o->png )
 	{
 		snprintf( path, sizeof( path ), "%s/frame_%04lld.png", o->out, (long long) frame );
-		if ( render_png( path, cam, p, stem, r->order, o->frames > 1 ? (double) frame / ( o->frames - 1 ) : 1.0 ) != 0 )
+		if ( wilt_render_png( path, cam, p, stem, r->order,
+							  o->frames > 1 ? (double) frame / ( o->frames - 1 ) : 1.0 ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -1053,7 +491,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 	sere_leaf_skeleton leaf;
 	if ( o->skeleton != NULL )
 	{
-		if ( skeleton_load( o->skeleton, &r->file, err, sizeof( err ) ) != 0 )
+		if ( wilt_skeleton_load( o->skeleton, &r->file, err, sizeof( err ) ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: %s\n", err );
 			return 1;
@@ -1086,7 +524,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 	{
 		if ( check.problem != SERE_SKELETON_OK )
 		{
-			skeleton_where( file, &check, 0, where, sizeof( where ) );
+			wilt_skeleton_where( file, &check, 0, where, sizeof( where ) );
 			fprintf( stderr, "sere wilt: %s%s\n", where, sere_skeleton_problem_text( check.problem ) );
 		}
 		else
@@ -1118,7 +556,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 		status = sere_skeleton_create( veins, file->vein_count, &r->skeleton, &check );
 		if ( status != SERE_OK )
 		{
-			skeleton_where( file, &check, 1, where, sizeof( where ) );
+			wilt_skeleton_where( file, &check, 1, where, sizeof( where ) );
 			fprintf( stderr, "sere wilt: %s%s\n", where, sere_skeleton_problem_text( check.problem ) );
 			return 1;
 		}
@@ -1209,7 +647,8 @@ static int run_frames( const wilt_options* o, wilt_run* r, const float stem[5], 
 		return 1;
 	}
 	camera cam;
-	camera_fit( &cam, o->view[0] * PI / 180.0, o->view[1] * PI / 180.0, (int) o->size[0], (int) o->size[1], plant );
+	wilt_camera_fit( &cam, o->view[0] * PI / 180.0, o->view[1] * PI / 180.0, (int) o->size[0], (int) o->size[1],
+					 plant );
 	sere_progress progress;
 	sere_progress_begin( &progress, "wilt", o->frames );
 	int failed = 0;
