@@ -44,7 +44,7 @@ struct Plant
 	Plant()
 	{
 		double l[18], r[18], m[18];
-		check( sere_leaf_skeleton_parametric( 10.0, 6.0, 9, l, r, m ), "leaf skeleton" );
+		check( sere_leaf_skeleton_generate( 10.0, 6.0, 9, l, r, m ), "leaf skeleton" );
 		sere_leaf_skeleton leaf = { 9, 9, 9, l, r, m };
 		// The lattice spacing that gives about kLeafVertices after one 1→4 pass (which
 		// roughly quadruples the count), refined once from a first guess.
@@ -59,7 +59,7 @@ struct Plant
 			spacing *= std::sqrt( (double) mesh.vertex_count / kLeafVertices );
 		}
 		sere_venation_params vp = sere_venation_params_default();
-		check( sere_venation_generate( &leaf, &vp, &skeleton, nullptr ), "venation" );
+		check( sere_skeleton_generate( &leaf, &vp, &skeleton, nullptr ), "venation" );
 		sere_leaf_template t = { &mesh, &skeleton };
 		std::vector<sere_leaf_placement> leaves( kLeaves );
 		for ( int k = 0; k < kLeaves; ++k )
@@ -102,7 +102,7 @@ sere_joint_frames& posed()
 	static sere_joint_frames frames = [] {
 		Plant& p = plant();
 		sere_joint_frames f;
-		check( sere_joint_frames_alloc( &f, p.plant->joints.joint_count ), "frames" );
+		check( sere_joint_frames_create( &f, p.plant->joints.joint_count ), "frames" );
 		for ( int32_t k = 0; k < p.plant->leaf_count; ++k )
 		{
 			int32_t first = p.plant->joint_first[k];
@@ -123,7 +123,7 @@ void BM_skeleton_skin( benchmark::State& state )
 	sere_plant* s = p.plant;
 	for ( auto _ : state )
 	{
-		sere_skin( &f, s->joint, s->ox, s->oy, s->oz, s->vertex_count, s->tx, s->ty, s->tz );
+		sere_joint_frames_skin( &f, s->joint, s->ox, s->oy, s->oz, s->vertex_count, s->tx, s->ty, s->tz );
 		benchmark::ClobberMemory();
 	}
 	rate( state, "vertices/s", s->vertex_count );
@@ -190,8 +190,8 @@ void BM_skeleton_band_leaf( benchmark::State& state )
 	std::vector<int32_t> joint( (size_t) p.mesh.vertex_count );
 	for ( auto _ : state )
 	{
-		check( sere_band( grid, nullptr, nullptr, nullptr, p.mesh.x, p.mesh.y, p.mesh.z, p.mesh.vertex_count,
-						  joint.data(), nullptr, nullptr, nullptr ),
+		check( sere_joint_grid_band( grid, nullptr, nullptr, nullptr, p.mesh.x, p.mesh.y, p.mesh.z, p.mesh.vertex_count,
+									 joint.data(), nullptr, nullptr, nullptr ),
 			   "band" );
 		benchmark::ClobberMemory();
 	}
@@ -223,8 +223,8 @@ void BM_skeleton_band_plant( benchmark::State& state )
 	std::vector<int32_t> joint( (size_t) s->vertex_count );
 	for ( auto _ : state )
 	{
-		check( sere_band( grid, nullptr, nullptr, nullptr, s->rx, s->ry, s->rz, s->vertex_count, joint.data(), nullptr,
-						  nullptr, nullptr ),
+		check( sere_joint_grid_band( grid, nullptr, nullptr, nullptr, s->rx, s->ry, s->rz, s->vertex_count,
+									 joint.data(), nullptr, nullptr, nullptr ),
 			   "band" );
 		benchmark::ClobberMemory();
 	}
@@ -328,7 +328,7 @@ void BM_skeleton_band_plant_embree( benchmark::State& state )
 	rtcReleaseDevice( device );
 }
 
-// Forward kinematics of every leaf (Sec. 6, Eq. 1 with the droop and angle limits): sequential
+// Forward kinematics of every leaf (Sec. 6, Lu Eq. 1 with the droop and angle limits): sequential
 // per leaf, leaves in parallel.
 void BM_skeleton_pose( benchmark::State& state )
 {
@@ -338,7 +338,7 @@ void BM_skeleton_pose( benchmark::State& state )
 	sere_wilt_params params = p.params;
 	params.droop_max = 3.0f;
 	sere_joint_frames f;
-	check( sere_joint_frames_alloc( &f, s->joints.joint_count ), "frames" );
+	check( sere_joint_frames_create( &f, s->joints.joint_count ), "frames" );
 	for ( auto _ : state )
 	{
 #pragma omp parallel for schedule( dynamic, 1 )

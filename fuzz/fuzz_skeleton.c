@@ -1,10 +1,11 @@
-/* sere fuzz — the venation skeleton reader of `sere wilt` (harness/cmd_wilt.c, skeleton_load;
- * data/skeletons/cucumber.skel describes the format).
+/* sere fuzz — the venation skeleton reader of `sere wilt` (harness/cmd_wilt_skelfile.c,
+ * wilt_skeleton_load; data/skeletons/cucumber.skel describes the format).
  *
- * The reader is static, so this file compiles cmd_wilt.c itself (the library's copy is then not
- * linked). Every input goes the way `sere wilt FILE` takes it up to the first frame: the
- * command's default options, then build_leaf (the file, the leaf skeleton's checks, the blade
- * mesh, one subdivision, the venation skeleton from the file's veins or generated). */
+ * build_leaf and the options are static, so this file compiles cmd_wilt.c itself (the library's
+ * copy is then not linked; the reader comes from the library). Every input goes the way
+ * `sere wilt FILE` takes it up to the first frame: the command's default options, then
+ * build_leaf (the file, the leaf skeleton's checks, the blade mesh, one subdivision, the
+ * venation skeleton from the file's veins or generated). */
 #define _GNU_SOURCE
 #include "fuzz.h"
 

@@ -2,7 +2,7 @@
  * (two boundary curves and a midvein, Sec. 4.1) gives the blade mesh; a venation skeleton (a
  * midvein and secondary veins cut into segments, Sec. 4.2) drives it: every mesh vertex is
  * banded to its nearest joint (Sec. 5.2), each joint turns its segment toward the downward
- * vector (Sec. 6, Eq. 1) with children following, and the mesh follows its joints. A plant
+ * vector (Sec. 6, Lu Eq. 1) with children following, and the mesh follows its joints. A plant
  * holds several leaves that start wilting from the lowest to the highest (Sec. 7). */
 #pragma once
 
@@ -63,8 +63,8 @@ typedef struct sere_leaf_skeleton
  * symmetric boundary curves of the given total width, each with feature_count points (>= 3)
  * written to left_xy, right_xy and mid_xy (2 * feature_count doubles each). The half-width
  * profile is ovate: widest at a third of the length, rounded at the base, pointed at the tip. */
-sere_status sere_leaf_skeleton_parametric( double length, double width, int32_t feature_count, double* left_xy,
-										   double* right_xy, double* mid_xy );
+sere_status sere_leaf_skeleton_generate( double length, double width, int32_t feature_count, double* left_xy,
+										 double* right_xy, double* mid_xy );
 
 /* Checks a leaf skeleton and reports the first problem; SERE_ERR_GEOMETRY or
  * SERE_ERR_NONFINITE when it is not usable. spacing is the sampling interval of
@@ -112,8 +112,8 @@ typedef struct sere_skeleton
 
 /* Builds a venation skeleton from vein polylines in leaf coordinates (z = 0). check may be
  * NULL. On success the caller frees with sere_skeleton_destroy. */
-sere_status sere_skeleton_build( const sere_vein_spec* veins, int32_t vein_count, sere_skeleton* skeleton,
-								 sere_skeleton_check* check );
+sere_status sere_skeleton_create( const sere_vein_spec* veins, int32_t vein_count, sere_skeleton* skeleton,
+								  sere_skeleton_check* check );
 void sere_skeleton_destroy( sere_skeleton* skeleton );
 
 /* Generated venation (Sec. 4.2 done automatically): the midvein follows the leaf skeleton's
@@ -132,7 +132,7 @@ typedef struct sere_venation_params
 
 sere_venation_params sere_venation_params_default( void );
 
-sere_status sere_venation_generate( const sere_leaf_skeleton* leaf, const sere_venation_params* params,
+sere_status sere_skeleton_generate( const sere_leaf_skeleton* leaf, const sere_venation_params* params,
 									sere_skeleton* skeleton, sere_skeleton_check* check );
 
 /* Sec. 5.2, banding: a uniform grid over the joints answers "which joint is nearest" exactly
@@ -148,9 +148,9 @@ int32_t sere_joint_grid_nearest( const sere_joint_grid* grid, float x, float y, 
 /* Bands every vertex to its nearest joint (in parallel) and, when ox is not NULL, stores the
  * vertex's offset from that joint at rest: the rigid binding of Sec. 6, in which a vertex keeps
  * its offset in the joint's frame. jx, jy, jz are the joint positions the grid was made from. */
-sere_status sere_band( const sere_joint_grid* grid, const float* jx, const float* jy, const float* jz, const float* x,
-					   const float* y, const float* z, int32_t vertex_count, int32_t* joint, float* ox, float* oy,
-					   float* oz );
+sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, const float* jy, const float* jz,
+								  const float* x, const float* y, const float* z, int32_t vertex_count, int32_t* joint,
+								  float* ox, float* oy, float* oz );
 
 /* Sec. 6 limits and Sec. 7 timing of the wilt. */
 typedef struct sere_wilt_params
@@ -178,7 +178,7 @@ typedef struct sere_joint_frames
 	double* work;
 } sere_joint_frames;
 
-sere_status sere_joint_frames_alloc( sere_joint_frames* frames, int32_t joint_count );
+sere_status sere_joint_frames_create( sere_joint_frames* frames, int32_t joint_count );
 void sere_joint_frames_destroy( sere_joint_frames* frames );
 
 typedef struct sere_pose_stats
@@ -189,7 +189,7 @@ typedef struct sere_pose_stats
 	int32_t down_limited;  /* segments that reached straight down */
 } sere_pose_stats;
 
-/* Sec. 6, Eq. 1: poses the joints [first, first + count) of one leaf (a root and its subtree)
+/* Sec. 6, Lu Eq. 1: poses the joints [first, first + count) of one leaf (a root and its subtree)
  * for wilting parameter t ∈ [0, 1], from rest, sequentially from the root. Joint i's target
  * angle is bend_i · clamp((t − spread · delay_i) / (1 − spread), 0, 1); its segment turns by
  * that angle about n = u × d (u the segment as its ancestors left it, d = −z), its subtree
@@ -202,8 +202,8 @@ sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, in
 
 /* The mesh follows its joints (Sec. 6): x = p_j + R_j o for every vertex, in parallel. Fastest
  * when vertices of one joint are adjacent (runs share one transform); correct in any order. */
-void sere_skin( const sere_joint_frames* frames, const int32_t* joint, const float* ox, const float* oy,
-				const float* oz, int32_t vertex_count, float* x, float* y, float* z );
+void sere_joint_frames_skin( const sere_joint_frames* frames, const int32_t* joint, const float* ox, const float* oy,
+							 const float* oz, int32_t vertex_count, float* x, float* y, float* z );
 
 /* Sec. 6, piercing. A workspace over one triangle mesh: its BVH and per-vertex flags, made once.
  * rigid_group (copied; may be NULL) names, per vertex, a group the caller moves rigidly, such as
@@ -230,7 +230,7 @@ typedef struct sere_pierce_stats
  * that would pass through a triangle not incident to the vertex (at the previous positions) is
  * shortened to stop `margin` before it. Moving vertices independently can still fold triangles
  * through each other, so the result is then searched for intersecting triangle pairs (as
- * sere_mesh_intersections counts them) and the vertices of each pair are pulled halfway back to
+ * sere_mesh_count_intersections counts them) and the vertices of each pair are pulled halfway back to
  * their previous positions, four times at most and then all the way, round after round until
  * none remain; after 32 rounds every move is undone. The mesh therefore never intersects itself
  * when it did not before. Deterministic for any thread count: every decision is a per-vertex
@@ -245,8 +245,8 @@ const sere_bvh* sere_pierce_bvh( const sere_pierce* pierce );
 /* Pairs of triangles that intersect: triangles sharing an edge are skipped, triangles sharing
  * one corner are tested with their opposite edges, others with all six edges (segment against
  * triangle, in double). bvh must be refit to x, y, z. */
-int64_t sere_mesh_intersections( const sere_bvh* bvh, const int32_t* tri, int32_t triangle_count, const float* x,
-								 const float* y, const float* z );
+int64_t sere_mesh_count_intersections( const sere_bvh* bvh, const int32_t* tri, int32_t triangle_count, const float* x,
+									   const float* y, const float* z );
 
 /* A leaf kind: its blade mesh and its venation skeleton in leaf coordinates. */
 typedef struct sere_leaf_template

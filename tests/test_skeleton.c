@@ -23,7 +23,7 @@ static double unit_random( uint64_t* state )
 	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
 }
 
-/* Half-width of the parametric blade (sere_leaf_skeleton_parametric) at x, with optional lobes
+/* Half-width of the parametric blade (sere_leaf_skeleton_generate) at x, with optional lobes
  * that make the outline concave. */
 static double half_width( double x, double length, double width, double lobes )
 {
@@ -97,7 +97,7 @@ static void grid_leaf( sere_tri_mesh* mesh, double length, double width, double 
 
 static void parametric_leaf( double* l, double* r, double* m, sere_leaf_skeleton* leaf )
 {
-	cr_assert_eq( sere_leaf_skeleton_parametric( 10.0, 6.0, 9, l, r, m ), SERE_OK );
+	cr_assert_eq( sere_leaf_skeleton_generate( 10.0, 6.0, 9, l, r, m ), SERE_OK );
 	*leaf = ( sere_leaf_skeleton ){ 9, 9, 9, l, r, m };
 }
 
@@ -108,7 +108,7 @@ static void generated_skeleton( sere_skeleton* s, const sere_venation_params* pa
 	parametric_leaf( l, r, m, &leaf );
 	sere_venation_params p = params != NULL ? *params : sere_venation_params_default();
 	sere_skeleton_check check;
-	cr_assert_eq( sere_venation_generate( &leaf, &p, s, &check ), SERE_OK, "%s",
+	cr_assert_eq( sere_skeleton_generate( &leaf, &p, s, &check ), SERE_OK, "%s",
 				  sere_skeleton_problem_text( check.problem ) );
 }
 
@@ -363,7 +363,7 @@ Test( skeleton, build_cuts_veins_into_equal_segments )
 	sere_vein_spec veins[3] = { { -1, 10, 1.0f, 2, mid }, { 0, 6, 0.5f, 3, side }, { 1, 2, 0.5f, 2, far } };
 	sere_skeleton s;
 	sere_skeleton_check check;
-	cr_assert_eq( sere_skeleton_build( veins, 3, &s, &check ), SERE_OK );
+	cr_assert_eq( sere_skeleton_create( veins, 3, &s, &check ), SERE_OK );
 	cr_expect_eq( s.joint_count, 1 + 10 + 6 + 2 );
 	cr_expect_eq( s.vein_count, 3 );
 	cr_expect_eq( s.parent[0], -1 );
@@ -444,8 +444,8 @@ Test( skeleton, bad_skeletons_name_the_problem )
 	{
 		sere_vein_spec veins[2] = { { -1, 10, 1.0f, 2, mid }, cases[k].second };
 		check.problem = SERE_SKELETON_OK;
-		cr_expect_eq( sere_skeleton_build( cases[k].count ? veins : NULL, cases[k].count, &s, &check ), cases[k].status,
-					  "case %zu", k );
+		cr_expect_eq( sere_skeleton_create( cases[k].count ? veins : NULL, cases[k].count, &s, &check ),
+					  cases[k].status, "case %zu", k );
 		cr_expect_eq( check.problem, cases[k].problem, "case %zu: %s", k, sere_skeleton_problem_text( check.problem ) );
 		cr_expect_eq( check.vein, cases[k].vein, "case %zu", k );
 		cr_expect_null( s.x, "case %zu leaves nothing allocated", k );
@@ -453,7 +453,7 @@ Test( skeleton, bad_skeletons_name_the_problem )
 	}
 	/* The midvein itself must have parent -1. */
 	sere_vein_spec bad_mid[1] = { { 0, 10, 1.0f, 2, mid } };
-	cr_expect_eq( sere_skeleton_build( bad_mid, 1, &s, &check ), SERE_ERR_GEOMETRY );
+	cr_expect_eq( sere_skeleton_create( bad_mid, 1, &s, &check ), SERE_ERR_GEOMETRY );
 	cr_expect_eq( check.problem, SERE_SKELETON_BAD_PARENT );
 	cr_expect_eq( check.vein, 0 );
 }
@@ -510,9 +510,9 @@ Test( skeleton, bad_leaf_skeletons_name_the_problem )
 	cr_expect_eq( check.problem, SERE_SKELETON_FEW_POINTS );
 	cr_expect_eq( check.vein, 0 );
 
-	cr_expect_eq( sere_leaf_skeleton_parametric( 10.0, -1.0, 9, l, r, m ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_leaf_skeleton_parametric( NAN, 1.0, 9, l, r, m ), SERE_ERR_NONFINITE );
-	cr_expect_eq( sere_leaf_skeleton_parametric( 10.0, 1.0, 2, l, r, m ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_leaf_skeleton_generate( 10.0, -1.0, 9, l, r, m ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_leaf_skeleton_generate( NAN, 1.0, 9, l, r, m ), SERE_ERR_NONFINITE );
+	cr_expect_eq( sere_leaf_skeleton_generate( 10.0, 1.0, 2, l, r, m ), SERE_ERR_ARGUMENT );
 }
 
 Test( skeleton, generated_venation_matches_the_seed_counts )
@@ -554,7 +554,7 @@ static void expect_grid_matches_brute_force( const float* jx, const float* jy, c
 	cr_assert_eq( sere_joint_grid_create( jx, jy, jz, joints, &grid ), SERE_OK );
 	int32_t* fast = malloc( (size_t) n * sizeof( int32_t ) );
 	int32_t* slow = malloc( (size_t) n * sizeof( int32_t ) );
-	cr_assert_eq( sere_band( grid, NULL, NULL, NULL, x, y, z, n, fast, NULL, NULL, NULL ), SERE_OK );
+	cr_assert_eq( sere_joint_grid_band( grid, NULL, NULL, NULL, x, y, z, n, fast, NULL, NULL, NULL ), SERE_OK );
 	sere_skeleton_ref_band( jx, jy, jz, joints, x, y, z, n, slow );
 	for ( int32_t i = 0; i < n; ++i )
 	{
@@ -656,7 +656,8 @@ Test( skeleton, banding_rejects_bad_input )
 	cr_expect_eq( sere_joint_grid_create( j, j, j, 0, &grid ), SERE_ERR_ARGUMENT );
 	cr_assert_eq( sere_joint_grid_create( j, j, j, 2, &grid ), SERE_OK );
 	int32_t out[3];
-	cr_expect_eq( sere_band( grid, NULL, NULL, NULL, j, j, j, 3, out, NULL, NULL, NULL ), SERE_ERR_NONFINITE );
+	cr_expect_eq( sere_joint_grid_band( grid, NULL, NULL, NULL, j, j, j, 3, out, NULL, NULL, NULL ),
+				  SERE_ERR_NONFINITE );
 	sere_joint_grid_destroy( grid );
 }
 
@@ -689,7 +690,7 @@ Test( skeleton, rotations_keep_segment_lengths_and_match_the_reference )
 	sere_skeleton s;
 	generated_skeleton( &s, &vp );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_alloc( &f, s.joint_count ), SERE_OK );
+	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
 	double* rx = malloc( (size_t) s.joint_count * 3 * sizeof( double ) );
 	double *ry = rx + s.joint_count, *rz = ry + s.joint_count;
 	sere_wilt_params limited = sere_wilt_params_default();
@@ -758,9 +759,9 @@ Test( skeleton, wilting_turns_down_tips_first_and_not_past_straight_down )
 	double mid[] = { 0, 0, 10, 0 };
 	sere_vein_spec vein = { -1, 10, (float) ( 3.14159265358979323846 ), 2, mid };
 	sere_skeleton s;
-	cr_assert_eq( sere_skeleton_build( &vein, 1, &s, NULL ), SERE_OK );
+	cr_assert_eq( sere_skeleton_create( &vein, 1, &s, NULL ), SERE_OK );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_alloc( &f, s.joint_count ), SERE_OK );
+	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
 	sere_wilt_params p = no_limits();
 	p.spread = 0.5f;
 	int32_t tip = s.joint_count - 1;
@@ -837,7 +838,7 @@ Test( skeleton, droop_limit_holds )
 	sere_skeleton s;
 	generated_skeleton( &s, &vp );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_alloc( &f, s.joint_count ), SERE_OK );
+	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
 	sere_wilt_params p = no_limits();
 	cr_assert_eq( sere_skeleton_pose( &s, 0, s.joint_count, 1.0f, &p, &f, NULL ), SERE_OK );
 	double unlimited = deepest_droop( &s, &f );
@@ -873,9 +874,9 @@ Test( skeleton, minimal_angle_limit_holds )
 	sere_vein_spec veins[2] = { { -1, 4, (float) ( 160.0 * DEG ), 2, mid },
 								{ 0, 3, (float) ( 150.0 * DEG ), 2, side } };
 	sere_skeleton s;
-	cr_assert_eq( sere_skeleton_build( veins, 2, &s, NULL ), SERE_OK );
+	cr_assert_eq( sere_skeleton_create( veins, 2, &s, NULL ), SERE_OK );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_alloc( &f, s.joint_count ), SERE_OK );
+	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
 	sere_wilt_params p = no_limits();
 	p.spread = 0.0f;
 	cr_assert_eq( sere_skeleton_pose( &s, 0, s.joint_count, 1.0f, &p, &f, NULL ), SERE_OK );
@@ -901,7 +902,7 @@ Test( skeleton, pose_rejects_bad_input )
 	sere_skeleton s;
 	generated_skeleton( &s, NULL );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_alloc( &f, s.joint_count ), SERE_OK );
+	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
 	sere_wilt_params p = sere_wilt_params_default();
 	cr_expect_eq( sere_skeleton_pose( &s, 0, s.joint_count, NAN, &p, &f, NULL ), SERE_ERR_NONFINITE );
 	cr_expect_eq( sere_skeleton_pose( &s, 1, s.joint_count - 1, 0.5f, &p, &f, NULL ), SERE_ERR_ARGUMENT,
@@ -924,7 +925,7 @@ Test( skeleton, skinning_equals_reference_bitwise )
 	sere_skeleton s;
 	generated_skeleton( &s, NULL );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_alloc( &f, s.joint_count ), SERE_OK );
+	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
 	sere_wilt_params p = sere_wilt_params_default();
 	cr_assert_eq( sere_skeleton_pose( &s, 0, s.joint_count, 0.8f, &p, &f, NULL ), SERE_OK );
 	enum
@@ -941,7 +942,7 @@ Test( skeleton, skinning_equals_reference_bitwise )
 		oy[i] = (float) ( unit_random( &seed ) - 0.5 );
 		oz[i] = (float) ( 0.1 * ( unit_random( &seed ) - 0.5 ) );
 	}
-	sere_skin( &f, joint, ox, oy, oz, N, x, y, z );
+	sere_joint_frames_skin( &f, joint, ox, oy, oz, N, x, y, z );
 	sere_skeleton_ref_skin( &f, joint, ox, oy, oz, N, rx, ry, rz );
 	/* The same operations in the same order without contraction: identical bits. */
 	cr_expect_eq( memcmp( x, rx, sizeof( x ) ), 0 );
@@ -958,7 +959,7 @@ static int64_t count_intersections( const int32_t* tri, int32_t triangles, int32
 {
 	sere_bvh* bvh;
 	cr_assert_eq( sere_bvh_create( tri, triangles, vertices, x, y, z, &bvh ), SERE_OK );
-	int64_t count = sere_mesh_intersections( bvh, tri, triangles, x, y, z );
+	int64_t count = sere_mesh_count_intersections( bvh, tri, triangles, x, y, z );
 	sere_bvh_destroy( bvh );
 	return count;
 }
@@ -1029,7 +1030,7 @@ Test( skeleton, piercing_shortens_moves_through_the_mesh )
 		cr_expect_eq( tx[a + k], x[a + k], "straight down: x unchanged" );
 	}
 	cr_expect_eq( count_intersections( tri, f, n, tx, ty, tz ), 0 );
-	cr_expect_eq( sere_mesh_intersections( sere_pierce_bvh( pierce ), tri, f, tx, ty, tz ), 0,
+	cr_expect_eq( sere_mesh_count_intersections( sere_pierce_bvh( pierce ), tri, f, tx, ty, tz ), 0,
 				  "the workspace BVH is refit to the result" );
 
 	/* An edge swept through a triangle while both its ends pass outside: no vertex pierces, the
@@ -1117,8 +1118,8 @@ Test( skeleton, wilting_never_self_intersects )
 			{
 				cr_assert_eq( sere_plant_frame( plant, frame / 20.0f, &p, NULL ), SERE_OK );
 				cr_assert_eq( sere_bvh_refit( bvh, plant->x, plant->y, plant->z ), SERE_OK );
-				unchecked +=
-					sere_mesh_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y, plant->z );
+				unchecked += sere_mesh_count_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y,
+															plant->z );
 			}
 			cr_assert_gt( unchecked, 0 );
 			p.pierce = 1;
@@ -1130,8 +1131,8 @@ Test( skeleton, wilting_never_self_intersects )
 			cr_assert_eq( sere_plant_frame( plant, frame / 20.0f, &p, &stats ), SERE_OK );
 			cr_assert_eq( sere_bvh_refit( bvh, plant->x, plant->y, plant->z ), SERE_OK );
 			cr_assert_eq(
-				sere_mesh_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y, plant->z ), 0,
-				"lobed %d frame %d", lobed, frame );
+				sere_mesh_count_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y, plant->z ),
+				0, "lobed %d frame %d", lobed, frame );
 			cr_assert_eq( stats.pierce.reverted, 0 );
 		}
 		/* The plant did wilt: every leaf is at t = 1 and its tip far below its rest height. */

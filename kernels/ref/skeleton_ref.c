@@ -86,7 +86,7 @@ void sere_skeleton_ref_pose( const sere_skeleton* s, float t, float spread, doub
 			{
 				continue;
 			}
-			/* Rodrigues about the axis through the parent joint; for k = i this is Eq. 1,
+			/* Rodrigues about the axis through the parent joint; for k = i this is Lu Eq. 1,
 			 * P(φ) = P_p + |u| (cos φ û + sin φ (n × û)), since n ⟂ u. */
 			double v[3] = { x[k] - x[p], y[k] - y[p], z[k] - z[p] };
 			double nv = n_axis[0] * v[0] + n_axis[1] * v[1];

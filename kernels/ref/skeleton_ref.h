@@ -20,7 +20,7 @@ void sere_skeleton_ref_skin( const sere_joint_frames* frames, const int32_t* joi
 
 /* Sec. 6 as the seed tells it, without limits: for each joint in turn (parents first), its
  * current segment u from the parent is turned toward d = −z about n = u × d by
- * min(bend · progress, angle(u, d)) with Eq. 1, and the rotation is passed to every descendant
+ * min(bend · progress, angle(u, d)) with Lu Eq. 1, and the rotation is passed to every descendant
  * by rotating its current position about the parent joint (found by walking parent links, not
  * by subtree ranges). O(joints²); positions in double, written to x, y, z (joint_count each). */
 void sere_skeleton_ref_pose( const sere_skeleton* skeleton, float t, float spread, double* x, double* y, double* z );
