@@ -9,6 +9,7 @@
 #include "io.h"
 #include "leaf.h"
 #include "leafpics.h"
+#include "options.h"
 #include "params.h"
 #include "render.h"
 #include "topo.h"
@@ -29,7 +30,8 @@
 
 /* The shipped leaves that have a preset, the species a litter draws from. */
 static const char* const species_names[] = { "maple", "maple", "plane", "wisteria", "grass" };
-static const char* const preset_names[] = { "maple-red", "maple-green", "plane-tree", "wisteria", "grass" };
+/* NULL-terminated: the choices of --preset */
+static const char* const preset_names[] = { "maple-red", "maple-green", "plane-tree", "wisteria", "grass", NULL };
 enum
 {
 	species_count = sizeof( species_names ) / sizeof( species_names[0] )
@@ -799,21 +801,6 @@ static int write_summary( const char* path, const litter_options* o, const litte
 }
 
 /* --preset P: every leaf of that species; 0, or -1 with one line on stderr. */
-static int parse_preset( const char* text, int* species )
-{
-	for ( int s = 0; s < species_count; ++s )
-	{
-		if ( strcmp( text, preset_names[s] ) == 0 )
-		{
-			*species = s;
-			return 0;
-		}
-	}
-	fprintf( stderr, "sere litter: --preset takes maple-red, maple-green, plane-tree, wisteria or grass, not '%s'\n",
-			 text );
-	return -1;
-}
-
 /* Rank 0's progress through its share: the other ranks' shares cost about as much (dealt by
  * cost), so its share stands for the run's. */
 typedef struct litter_progress
@@ -849,49 +836,31 @@ static void progress_leaf( litter_progress* p, const litter_options* o, const li
 int sere_cmd_litter( int argc, char** argv )
 {
 	litter_options o = { "out/litter", -1, 1, 600, LITTER_FRAME_CAP, -1, 0, 60 };
-	long threads = 0;
-	for ( int i = 1; i < argc; ++i )
+	long long leaves = -1, seed = 1, points = 600, frames = -1, threads = 0, progress_every = 60;
+	const sere_option options[] = {
+		{ "--leaves", SERE_OPTION_COUNT, &leaves, 1, 99999, NULL },
+		{ "--seed", SERE_OPTION_COUNT, &seed, 0, (double) LONG_MAX, NULL },
+		{ "--out", SERE_OPTION_DIR, &o.out, 0, 0, NULL },
+		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
+		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 100000000, NULL },
+		{ "--preset", SERE_OPTION_CHOICE, &o.species, 0, 0, preset_names },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+		{ "--progress", SERE_OPTION_COUNT, &progress_every, 0, 86400, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "litter", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
+							 &parsed ) != SERE_OK )
 	{
-		const char* a = argv[i];
-		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
-		{
-			litter_help();
-			return 0;
-		}
-		static const char* const valued[] = { "--leaves", "--seed",	  "--out",	   "--points",
-											  "--frames", "--preset", "--threads", "--progress" };
-		int takes_value = 0;
-		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
-		{
-			takes_value |= strcmp( a, valued[k] ) == 0;
-		}
-		if ( !takes_value )
-		{
-			fprintf( stderr, "sere litter: %s '%s' (see sere litter --help)\n",
-					 a[0] == '-' ? "unknown option" : "unexpected argument", a );
-			return 2;
-		}
-		if ( i + 1 >= argc )
-		{
-			fprintf( stderr, "sere litter: %s needs a value (see sere litter --help)\n", a );
-			return 2;
-		}
-		const char* v = argv[++i];
-		int bad = strcmp( a, "--leaves" ) == 0	   ? sere_parse_long( "litter", a, v, 1, 99999, &o.leaves )
-				  : strcmp( a, "--seed" ) == 0	   ? sere_parse_long( "litter", a, v, 0, LONG_MAX, &o.seed )
-				  : strcmp( a, "--points" ) == 0   ? sere_parse_long( "litter", a, v, 10, 10000000, &o.points )
-				  : strcmp( a, "--frames" ) == 0   ? sere_parse_long( "litter", a, v, 1, 100000000, &o.frames )
-				  : strcmp( a, "--threads" ) == 0  ? sere_parse_long( "litter", a, v, 0, 256, &threads )
-				  : strcmp( a, "--progress" ) == 0 ? sere_parse_long( "litter", a, v, 0, 86400, &o.progress )
-				  : strcmp( a, "--preset" ) == 0   ? parse_preset( v, &o.species )
-												   : sere_parse_dir( "litter", a, v );
-		if ( bad != 0 )
-		{
-			return 2;
-		}
-		o.out = strcmp( a, "--out" ) == 0 ? v : o.out;
-		o.frames_given |= strcmp( a, "--frames" ) == 0;
+		return 2;
 	}
+	if ( parsed.help )
+	{
+		litter_help();
+		return 0;
+	}
+	o.leaves = (long) leaves, o.seed = (long) seed, o.points = (long) points, o.progress = (long) progress_every;
+	o.frames_given = frames > 0;
+	o.frames = frames > 0 ? (long) frames : o.frames;
 	if ( o.leaves < 0 )
 	{
 		fprintf( stderr, "sere litter: missing --leaves N (see sere litter --help)\n" );

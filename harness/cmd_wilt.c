@@ -5,6 +5,7 @@
 #include "cmd_wilt_shared.h"
 #include "commands.h"
 #include "io.h"
+#include "options.h"
 #include "params.h"
 #include "skeleton.h"
 #include "subdivide.h"
@@ -95,21 +96,21 @@ typedef struct wilt_options
 {
 	const char* skeleton;
 	double length, width;
-	long features;
+	long long features;
 	double spacing; /* 0: length / 25 */
-	long subdivide;
+	long long subdivide;
 	double min_edge;
 	sere_venation_params venation;
 	sere_wilt_params wilt;
-	long leaves;
+	long long leaves;
 	double stagger, internode, elevation;
-	long frames;
+	long long frames;
 	double speed; /* < 0: derived */
 	const char* out;
 	int ply, vtp, png;
-	long every;
+	long long every;
 	double size[2], view[2];
-	long threads;
+	long long threads;
 	int json;
 } wilt_options;
 
@@ -149,150 +150,6 @@ static int parse_format( const char* text, wilt_options* o )
 	return 0;
 }
 
-/* The leaf, venation and wilting options (see wilt_help): 1 when `a` is one of them, with *bad
- * set when its value v is not accepted. */
-static int parse_leaf_value( const char* a, const char* v, wilt_options* o, int* bad )
-{
-	long n = 0;
-	double d = 0.0;
-	if ( strcmp( a, "--length" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 1e-6, 1e6, &o->length );
-	}
-	else if ( strcmp( a, "--width" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 1e-6, 1e6, &o->width );
-	}
-	else if ( strcmp( a, "--features" ) == 0 )
-	{
-		*bad = sere_parse_long( "wilt", a, v, 3, 10000, &o->features );
-	}
-	else if ( strcmp( a, "--spacing" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 1e-9, 1e6, &o->spacing );
-	}
-	else if ( strcmp( a, "--subdivide" ) == 0 )
-	{
-		*bad = sere_parse_long( "wilt", a, v, 0, 8, &o->subdivide );
-	}
-	else if ( strcmp( a, "--min-edge" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 0.0, 1e6, &o->min_edge );
-	}
-	else if ( strcmp( a, "--mid-segments" ) == 0 )
-	{
-		*bad = sere_parse_long( "wilt", a, v, 1, SERE_MAX_SEGMENTS, &n );
-		o->venation.mid_segments = (int32_t) n;
-	}
-	else if ( strcmp( a, "--veins" ) == 0 )
-	{
-		*bad = sere_parse_long( "wilt", a, v, 0, 64, &n );
-		o->venation.secondary_count = (int32_t) n;
-	}
-	else if ( strcmp( a, "--vein-segments" ) == 0 )
-	{
-		*bad = sere_parse_long( "wilt", a, v, 1, SERE_MAX_SEGMENTS, &n );
-		o->venation.secondary_segments = (int32_t) n;
-	}
-	else if ( strcmp( a, "--vein-angle" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 1.0, 179.0, &d );
-		o->venation.angle = (float) ( d * PI / 180.0 );
-	}
-	else if ( strcmp( a, "--mid-bend" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 0.0, 180.0, &d );
-		o->venation.mid_bend = (float) ( d * PI / 180.0 );
-	}
-	else if ( strcmp( a, "--vein-bend" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 0.0, 180.0, &d );
-		o->venation.secondary_bend = (float) ( d * PI / 180.0 );
-	}
-	else if ( strcmp( a, "--droop" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 0.0, 1e6, &d );
-		o->wilt.droop_max = (float) d;
-	}
-	else if ( strcmp( a, "--min-angle" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 0.0, 180.0, &d );
-		o->wilt.min_angle = (float) ( d * PI / 180.0 );
-	}
-	else if ( strcmp( a, "--spread" ) == 0 )
-	{
-		*bad = sere_parse_real( "wilt", a, v, 0.0, 0.99, &d );
-		o->wilt.spread = (float) d;
-	}
-	else
-	{
-		return 0;
-	}
-	return 1;
-}
-
-/* The plant and run options (see wilt_help); the option is known to be one of them or one of
- * parse_leaf_value's. Returns nonzero when the value v is not accepted. */
-static int parse_run_value( const char* a, const char* v, wilt_options* o )
-{
-	int bad = 0;
-	if ( strcmp( a, "--leaves" ) == 0 )
-	{
-		bad = sere_parse_long( "wilt", a, v, 1, 10000, &o->leaves );
-	}
-	else if ( strcmp( a, "--stagger" ) == 0 )
-	{
-		bad = sere_parse_real( "wilt", a, v, 0.0, 100.0, &o->stagger );
-	}
-	else if ( strcmp( a, "--internode" ) == 0 )
-	{
-		bad = sere_parse_real( "wilt", a, v, 0.0, 1e6, &o->internode );
-	}
-	else if ( strcmp( a, "--elevation" ) == 0 )
-	{
-		bad = sere_parse_real( "wilt", a, v, -80.0, 80.0, &o->elevation );
-	}
-	else if ( strcmp( a, "--frames" ) == 0 )
-	{
-		bad = sere_parse_long( "wilt", a, v, 1, 1000000, &o->frames );
-	}
-	else if ( strcmp( a, "--speed" ) == 0 )
-	{
-		bad = sere_parse_real( "wilt", a, v, 0.0, 100.0, &o->speed );
-	}
-	else if ( strcmp( a, "--out" ) == 0 )
-	{
-		o->out = v;
-		bad = sere_parse_dir( "wilt", a, v );
-	}
-	else if ( strcmp( a, "--format" ) == 0 )
-	{
-		bad = parse_format( v, o );
-	}
-	else if ( strcmp( a, "--every" ) == 0 )
-	{
-		bad = sere_parse_long( "wilt", a, v, 1, 1000000, &o->every );
-	}
-	else if ( strcmp( a, "--size" ) == 0 )
-	{
-		bad = parse_pair( a, v, 'x', 64, 8192, &o->size[0], &o->size[1] );
-	}
-	else if ( strcmp( a, "--view" ) == 0 )
-	{
-		bad = parse_pair( a, v, ',', -360.0, 360.0, &o->view[0], &o->view[1] );
-		if ( bad == 0 && fabs( o->view[1] ) > 89.0 )
-		{
-			fprintf( stderr, "sere wilt: --view elevation must lie within +-89 degrees, not '%s'\n", v );
-			bad = -1;
-		}
-	}
-	else
-	{
-		bad = sere_parse_long( "wilt", a, v, 0, 256, &o->threads );
-	}
-	return bad;
-}
-
 static void wilt_defaults( wilt_options* o )
 {
 	memset( o, 0, sizeof( *o ) );
@@ -321,67 +178,75 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 {
 	*done = 0;
 	wilt_defaults( o );
-	for ( int i = 1; i < argc; ++i )
+	/* options stored as given, then turned into the kernels' units below (NAN, -1: not given) */
+	long long mid_segments = -1, veins = -1, vein_segments = -1;
+	double vein_angle = NAN, mid_bend = NAN, vein_bend = NAN, droop = NAN, min_angle = NAN, spread = NAN;
+	const char *format = NULL, *size = NULL, *view = NULL;
+	int no_pierce = 0;
+	const sere_option options[] = {
+		{ "--length", SERE_OPTION_REAL, &o->length, 1e-6, 1e6, NULL },
+		{ "--width", SERE_OPTION_REAL, &o->width, 1e-6, 1e6, NULL },
+		{ "--features", SERE_OPTION_COUNT, &o->features, 3, 10000, NULL },
+		{ "--spacing", SERE_OPTION_REAL, &o->spacing, 1e-9, 1e6, NULL },
+		{ "--subdivide", SERE_OPTION_COUNT, &o->subdivide, 0, 8, NULL },
+		{ "--min-edge", SERE_OPTION_REAL, &o->min_edge, 0.0, 1e6, NULL },
+		{ "--mid-segments", SERE_OPTION_COUNT, &mid_segments, 1, SERE_MAX_SEGMENTS, NULL },
+		{ "--veins", SERE_OPTION_COUNT, &veins, 0, 64, NULL },
+		{ "--vein-segments", SERE_OPTION_COUNT, &vein_segments, 1, SERE_MAX_SEGMENTS, NULL },
+		{ "--vein-angle", SERE_OPTION_REAL, &vein_angle, 1.0, 179.0, NULL },
+		{ "--mid-bend", SERE_OPTION_REAL, &mid_bend, 0.0, 180.0, NULL },
+		{ "--vein-bend", SERE_OPTION_REAL, &vein_bend, 0.0, 180.0, NULL },
+		{ "--droop", SERE_OPTION_REAL, &droop, 0.0, 1e6, NULL },
+		{ "--min-angle", SERE_OPTION_REAL, &min_angle, 0.0, 180.0, NULL },
+		{ "--spread", SERE_OPTION_REAL, &spread, 0.0, 0.99, NULL },
+		{ "--no-pierce", SERE_OPTION_FLAG, &no_pierce, 0, 0, NULL },
+		{ "--leaves", SERE_OPTION_COUNT, &o->leaves, 1, 10000, NULL },
+		{ "--stagger", SERE_OPTION_REAL, &o->stagger, 0.0, 100.0, NULL },
+		{ "--internode", SERE_OPTION_REAL, &o->internode, 0.0, 1e6, NULL },
+		{ "--elevation", SERE_OPTION_REAL, &o->elevation, -80.0, 80.0, NULL },
+		{ "--frames", SERE_OPTION_COUNT, &o->frames, 1, 1000000, NULL },
+		{ "--speed", SERE_OPTION_REAL, &o->speed, 0.0, 100.0, NULL },
+		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
+		{ "--format", SERE_OPTION_TEXT, &format, 0, 0, NULL },
+		{ "--every", SERE_OPTION_COUNT, &o->every, 1, 1000000, NULL },
+		{ "--size", SERE_OPTION_TEXT, &size, 0, 0, NULL },
+		{ "--view", SERE_OPTION_TEXT, &view, 0, 0, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, 256, NULL },
+		{ "--json", SERE_OPTION_FLAG, &o->json, 0, 0, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "wilt", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "SKELETON",
+							 &parsed ) != SERE_OK )
 	{
-		const char* a = argv[i];
-		if ( strcmp( a, "--help" ) == 0 || strcmp( a, "-h" ) == 0 )
-		{
-			wilt_help();
-			*done = 1;
-			return 0;
-		}
-		if ( strcmp( a, "--json" ) == 0 )
-		{
-			o->json = 1;
-			continue;
-		}
-		if ( strcmp( a, "--no-pierce" ) == 0 )
-		{
-			o->wilt.pierce = 0;
-			continue;
-		}
-		if ( a[0] != '-' || strcmp( a, "-" ) == 0 )
-		{
-			if ( o->skeleton != NULL )
-			{
-				fprintf( stderr, "sere wilt: one SKELETON only, got '%s' and '%s'\n", o->skeleton, a );
-				return 2;
-			}
-			o->skeleton = a;
-			continue;
-		}
-		const char* v = i + 1 < argc ? argv[i + 1] : NULL;
-		static const char* const valued[] = {
-			"--length", "--width",		   "--features",   "--spacing",	  "--subdivide", "--min-edge", "--mid-segments",
-			"--veins",	"--vein-segments", "--vein-angle", "--mid-bend",  "--vein-bend", "--droop",	   "--min-angle",
-			"--spread", "--leaves",		   "--stagger",	   "--internode", "--elevation", "--frames",   "--speed",
-			"--out",	"--format",		   "--every",	   "--size",	  "--view",		 "--threads"
-		};
-		int known = 0;
-		for ( size_t k = 0; k < sizeof( valued ) / sizeof( valued[0] ); ++k )
-		{
-			known |= strcmp( a, valued[k] ) == 0;
-		}
-		if ( !known )
-		{
-			fprintf( stderr, "sere wilt: unknown option '%s' (see sere wilt --help)\n", a );
-			return 2;
-		}
-		if ( v == NULL )
-		{
-			fprintf( stderr, "sere wilt: %s needs a value\n", a );
-			return 2;
-		}
-		++i;
-		int bad = 0;
-		if ( !parse_leaf_value( a, v, o, &bad ) )
-		{
-			bad = parse_run_value( a, v, o );
-		}
-		if ( bad )
-		{
-			return 2;
-		}
+		return 2;
+	}
+	if ( parsed.help )
+	{
+		wilt_help();
+		*done = 1;
+		return 0;
+	}
+	o->skeleton = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
+	o->wilt.pierce = no_pierce ? 0 : o->wilt.pierce;
+	o->venation.mid_segments = mid_segments > 0 ? (int32_t) mid_segments : o->venation.mid_segments;
+	o->venation.secondary_count = veins >= 0 ? (int32_t) veins : o->venation.secondary_count;
+	o->venation.secondary_segments = vein_segments > 0 ? (int32_t) vein_segments : o->venation.secondary_segments;
+	o->venation.angle = isnan( vein_angle ) ? o->venation.angle : (float) ( vein_angle * PI / 180.0 );
+	o->venation.mid_bend = isnan( mid_bend ) ? o->venation.mid_bend : (float) ( mid_bend * PI / 180.0 );
+	o->venation.secondary_bend = isnan( vein_bend ) ? o->venation.secondary_bend : (float) ( vein_bend * PI / 180.0 );
+	o->wilt.droop_max = isnan( droop ) ? o->wilt.droop_max : (float) droop;
+	o->wilt.min_angle = isnan( min_angle ) ? o->wilt.min_angle : (float) ( min_angle * PI / 180.0 );
+	o->wilt.spread = isnan( spread ) ? o->wilt.spread : (float) spread;
+	if ( ( format != NULL && parse_format( format, o ) != 0 ) ||
+		 ( size != NULL && parse_pair( "--size", size, 'x', 64, 8192, &o->size[0], &o->size[1] ) != 0 ) ||
+		 ( view != NULL && parse_pair( "--view", view, ',', -360.0, 360.0, &o->view[0], &o->view[1] ) != 0 ) )
+	{
+		return 2;
+	}
+	if ( fabs( o->view[1] ) > 89.0 )
+	{
+		fprintf( stderr, "sere wilt: --view elevation must lie within +-89 degrees, not '%s'\n", view );
+		return 2;
 	}
 	return 0;
 }
@@ -537,7 +402,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 	status = sere_subdivide( &r->blade, (int32_t) o->subdivide, (float) o->min_edge, &r->mesh );
 	if ( status != SERE_OK )
 	{
-		fprintf( stderr, "sere wilt: cannot subdivide the blade %ld times: %s\n", o->subdivide,
+		fprintf( stderr, "sere wilt: cannot subdivide the blade %lld times: %s\n", o->subdivide,
 				 sere_status_text( status ) );
 		return 1;
 	}
@@ -715,28 +580,29 @@ static void print_summary( const wilt_options* o, const wilt_run* r, const wilt_
 		char name_json[6 * sizeof( r->file.name )], out_json[6 * 4096];
 		sere_json_escape( name_json, sizeof( name_json ), name );
 		sere_json_escape( out_json, sizeof( out_json ), o->out );
-		printf( "{\"leaf\": \"%s\", \"leaves\": %d, \"blade_vertices\": %d, \"blade_triangles\": %d, "
-				"\"leaf_vertices\": %d, \"leaf_triangles\": %d, \"joints_per_leaf\": %d, \"veins_per_leaf\": %d, "
-				"\"vertices\": %d, \"triangles\": %d, \"frames\": %ld, \"speed\": %.6g, \"threads\": %d, \"setup_ms\": "
-				"%.3f, \"frame_ms\": %.3f, \"output_ms\": %.3f, \"droop_limited\": %d, \"angle_limited\": %d, "
-				"\"down_limited\": %d, \"pierce_shortened\": %d, \"pulled_back\": %d, \"reverted_frames\": %d, "
-				"\"deepest_joint_droop\": %.6g, \"self_intersections\": %lld, \"out\": %s%s%s}\n",
-				name_json, s->leaves, r->blade.vertex_count, r->blade.triangle_count, r->mesh.vertex_count,
-				r->mesh.triangle_count, r->skeleton.joint_count, r->skeleton.vein_count, plant->vertex_count,
-				plant->triangle_count, o->frames, s->speed, s->threads, 1e3 * s->setup, per_frame,
-				1e3 * s->output / (double) o->frames, total->pose.droop_limited, total->pose.angle_limited,
-				total->pose.down_limited, total->pierce.shortened, total->pierce.pulled_back, total->pierce.reverted,
-				s->deepest, (long long) s->intersections, o->out ? "\"" : "", o->out ? out_json : "null",
-				o->out ? "\"" : "" );
+		printf(
+			"{\"leaf\": \"%s\", \"leaves\": %d, \"blade_vertices\": %d, \"blade_triangles\": %d, "
+			"\"leaf_vertices\": %d, \"leaf_triangles\": %d, \"joints_per_leaf\": %d, \"veins_per_leaf\": %d, "
+			"\"vertices\": %d, \"triangles\": %d, \"frames\": %lld, \"speed\": %.6g, \"threads\": %d, \"setup_ms\": "
+			"%.3f, \"frame_ms\": %.3f, \"output_ms\": %.3f, \"droop_limited\": %d, \"angle_limited\": %d, "
+			"\"down_limited\": %d, \"pierce_shortened\": %d, \"pulled_back\": %d, \"reverted_frames\": %d, "
+			"\"deepest_joint_droop\": %.6g, \"self_intersections\": %lld, \"out\": %s%s%s}\n",
+			name_json, s->leaves, r->blade.vertex_count, r->blade.triangle_count, r->mesh.vertex_count,
+			r->mesh.triangle_count, r->skeleton.joint_count, r->skeleton.vein_count, plant->vertex_count,
+			plant->triangle_count, o->frames, s->speed, s->threads, 1e3 * s->setup, per_frame,
+			1e3 * s->output / (double) o->frames, total->pose.droop_limited, total->pose.angle_limited,
+			total->pose.down_limited, total->pierce.shortened, total->pierce.pulled_back, total->pierce.reverted,
+			s->deepest, (long long) s->intersections, o->out ? "\"" : "", o->out ? out_json : "null",
+			o->out ? "\"" : "" );
 		return;
 	}
-	printf( "leaf            %s: blade %d vertices / %d triangles, after %ld subdivision(s) %d / %d\n", name,
+	printf( "leaf            %s: blade %d vertices / %d triangles, after %lld subdivision(s) %d / %d\n", name,
 			r->blade.vertex_count, r->blade.triangle_count, o->subdivide, r->mesh.vertex_count,
 			r->mesh.triangle_count );
 	printf( "venation        %d veins, %d joints per leaf\n", r->skeleton.vein_count, r->skeleton.joint_count );
 	printf( "plant           %d leaves, %d vertices, %d triangles\n", s->leaves, plant->vertex_count,
 			plant->triangle_count );
-	printf( "run             %ld frames, t += %.4g per frame, %d threads\n", o->frames, s->speed, s->threads );
+	printf( "run             %lld frames, t += %.4g per frame, %d threads\n", o->frames, s->speed, s->threads );
 	printf( "time            setup %.1f ms, %.3f ms per frame (pose, skin%s)%s\n", 1e3 * s->setup, per_frame,
 			o->wilt.pierce ? ", piercing check" : "", o->out ? ", output written separately" : "" );
 	printf( "limits          droop %d, angle %d, straight down %d (joint-frames held back)\n",

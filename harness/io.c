@@ -427,44 +427,6 @@ void sere_progress_end( sere_progress* progress )
 	}
 }
 
-int sere_parse_long( const char* command, const char* option, const char* text, long lo, long hi, long* value )
-{
-	char* end;
-	errno = 0;
-	long v = strtol( text, &end, 10 );
-	if ( *text == '\0' || *end != '\0' || errno != 0 || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere %s: %s takes a whole number from %ld to %ld, not '%s'\n", command, option, lo, hi,
-				 text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
-int sere_parse_real( const char* command, const char* option, const char* text, double lo, double hi, double* value )
-{
-	char* end;
-	double v = strtod( text, &end );
-	if ( *text == '\0' || *end != '\0' || !isfinite( v ) || v < lo || v > hi )
-	{
-		fprintf( stderr, "sere %s: %s takes a number from %g to %g, not '%s'\n", command, option, lo, hi, text );
-		return -1;
-	}
-	*value = v;
-	return 0;
-}
-
-int sere_parse_dir( const char* command, const char* option, const char* text )
-{
-	if ( *text == '\0' )
-	{
-		fprintf( stderr, "sere %s: %s needs a directory name, not an empty string\n", command, option );
-		return -1;
-	}
-	return 0;
-}
-
 int sere_fail( char* err, size_t err_size, const char* format, ... )
 {
 	if ( err != NULL && err_size > 0 )

@@ -1,4 +1,4 @@
-/* sere harness — files that are never half-written, mesh writers, a progress bar and option values. */
+/* sere harness — files that are never half-written, mesh writers and a progress bar. */
 #pragma once
 
 #include <stdint.h>
@@ -94,11 +94,3 @@ void sere_progress_end( sere_progress* progress );
 
 /* Wall-clock seconds from a monotonic clock. */
 double sere_now( void );
-
-/* An option's value: 0 when text is a whole number (or a finite number) in [lo, hi]; otherwise
- * one line "sere COMMAND: OPTION takes ..., not 'TEXT'" on stderr and -1. */
-int sere_parse_long( const char* command, const char* option, const char* text, long lo, long hi, long* value );
-int sere_parse_real( const char* command, const char* option, const char* text, double lo, double hi, double* value );
-/* An output directory option's value: 0 when text names a directory; for an empty text one line
- * "sere COMMAND: OPTION needs a directory name, not an empty string" on stderr and -1. */
-int sere_parse_dir( const char* command, const char* option, const char* text );
