@@ -310,7 +310,7 @@ Test( litter, bad_options_one_clear_line )
 	expect_error( "litter --leaves 2 --points", "--points needs a value" );
 	expect_error( "litter --leaves 2 --colour red", "unknown option '--colour'" );
 	expect_error( "litter --leaves 2 maple", "unexpected argument 'maple'" );
-	expect_error( "litter --leaves 2 --preset oak", "--preset takes maple-red, maple-green" );
+	expect_error( "litter --leaves 2 --preset oak", "--preset takes one of 'maple-red', 'maple-green'" );
 	expect_error( "litter --leaves 2 --progress -1", "--progress takes" );
 }
 
