@@ -66,6 +66,27 @@ static int by_length( const void* left, const void* right )
 	return l->row < r->row ? -1 : l->row > r->row;
 }
 
+/* Row pointers that never decrease and column indices inside the matrix (the caller has checked
+ * row_ptr[0] = 0 and row_ptr[rows] = nnz). */
+static int csr_indices_valid( const sere_csr* a )
+{
+	for ( int32_t i = 0; i < a->rows; ++i )
+	{
+		if ( a->row_ptr[i + 1] < a->row_ptr[i] )
+		{
+			return 0;
+		}
+	}
+	for ( int32_t k = 0; k < a->nnz; ++k )
+	{
+		if ( a->col[k] < 0 || a->col[k] >= a->rows )
+		{
+			return 0;
+		}
+	}
+	return 1;
+}
+
 sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out )
 {
 	if ( a == NULL || out == NULL || a->rows <= 0 || a->nnz < 0 || a->row_ptr == NULL || sigma < LANES ||
@@ -74,19 +95,9 @@ sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out 
 		return SERE_ERR_ARGUMENT;
 	}
 	const int32_t n = a->rows;
-	for ( int32_t i = 0; i < n; ++i )
+	if ( !csr_indices_valid( a ) )
 	{
-		if ( a->row_ptr[i + 1] < a->row_ptr[i] )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
-	}
-	for ( int32_t k = 0; k < a->nnz; ++k )
-	{
-		if ( a->col[k] < 0 || a->col[k] >= n )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
 	sere_sell* s = calloc( 1, sizeof( *s ) );
 	row_length* order = malloc( sizeof( row_length ) * (size_t) n );
@@ -661,19 +672,9 @@ sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 		return SERE_ERR_ARGUMENT;
 	}
 	const int32_t n = a->rows;
-	for ( int32_t i = 0; i < n; ++i )
+	if ( !csr_indices_valid( a ) )
 	{
-		if ( a->row_ptr[i + 1] < a->row_ptr[i] )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
-	}
-	for ( int32_t k = 0; k < a->nnz; ++k )
-	{
-		if ( a->col[k] < 0 || a->col[k] >= n )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
 	sere_sgs* g = calloc( 1, sizeof( *g ) );
 	/* scratch: per row its position, then per color its row count and next position */

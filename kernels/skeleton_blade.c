@@ -1,4 +1,5 @@
 /* sere — The leaf skeleton (Sec. 4.1) and the blade mesh made from it (Sec. 5.1). Seed 003: Lu, Zhao, Guo 2009. */
+#include "geometry.h"
 #include "internal/skeleton_shared.h"
 #include "triangulate.h"
 
@@ -203,7 +204,7 @@ static sere_status join_outline( double* sampled[3], const int32_t sampled_count
 	c->tip = nr - 1;
 	free( sampled[0] );
 	free( sampled[1] );
-	if ( sere_skel_polygon_area( c->outline, n ) < 0.0 )
+	if ( sere_polygon_area( c->outline, n ) < 0.0 )
 	{
 		/* Clockwise: reverse all but the base so the base stays first. */
 		for ( int32_t i = 1, j = n - 1; i < j; ++i, --j )
@@ -223,7 +224,7 @@ static sere_status join_outline( double* sampled[3], const int32_t sampled_count
 static int outline_is_simple( const sere_skel_leaf_curves* c )
 {
 	int32_t n = c->outline_count;
-	if ( !( fabs( sere_skel_polygon_area( c->outline, n ) ) > 1e-12 * c->size * c->size ) )
+	if ( !( fabs( sere_polygon_area( c->outline, n ) ) > 1e-12 * c->size * c->size ) )
 	{
 		return 0;
 	}
@@ -252,7 +253,7 @@ static int midvein_is_inside( const sere_skel_leaf_curves* c )
 	int32_t n = c->outline_count;
 	for ( int32_t i = 1; i + 1 < c->mid_count; ++i )
 	{
-		if ( !sere_skel_inside_polygon( c->mid + 2 * i, c->outline, n ) )
+		if ( !sere_point_in_polygon( c->outline, n, c->mid[2 * i], c->mid[2 * i + 1] ) )
 		{
 			return 0;
 		}
@@ -389,7 +390,7 @@ sere_status sere_blade_create( const sere_leaf_skeleton* leaf, double spacing, s
 		for ( int32_t i = 0; i < (int32_t) columns; ++i )
 		{
 			double p[2] = { lo[0] + ( i + ( ( j & 1 ) ? 0.5 : 0.0 ) ) * spacing, lo[1] + ( j + 0.5 ) * row };
-			if ( sere_skel_inside_polygon( p, c.outline, b ) &&
+			if ( sere_point_in_polygon( c.outline, b, p[0], p[1] ) &&
 				 sere_skel_polyline_distance( p, c.outline, b, 1 ) >= 0.5 * spacing &&
 				 sere_skel_polyline_distance( p, c.mid, c.mid_count, 0 ) >= 0.5 * spacing )
 			{

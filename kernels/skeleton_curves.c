@@ -1,5 +1,6 @@
 /* sere — Skeleton problems, and the curves and plane geometry the leaf skeleton is built from. Seed 003: Lu, Zhao, Guo
  * 2009. */
+#include "geometry.h"
 #include "internal/skeleton_shared.h"
 
 #include <float.h>
@@ -179,15 +180,6 @@ int sere_skel_segments_meet( const double* a, const double* b, const double* c, 
 	return 0;
 }
 
-static double point_segment_distance( const double* p, const double* a, const double* b )
-{
-	double ex = b[0] - a[0], ey = b[1] - a[1];
-	double l2 = ex * ex + ey * ey;
-	double f = l2 > 0.0 ? ( ( p[0] - a[0] ) * ex + ( p[1] - a[1] ) * ey ) / l2 : 0.0;
-	f = f < 0.0 ? 0.0 : ( f > 1.0 ? 1.0 : f );
-	return hypot( p[0] - a[0] - f * ex, p[1] - a[1] - f * ey );
-}
-
 /* Distance from p to a polyline (closed: the last point joins the first). */
 double sere_skel_polyline_distance( const double* p, const double* poly, int32_t n, int closed )
 {
@@ -195,34 +187,8 @@ double sere_skel_polyline_distance( const double* p, const double* poly, int32_t
 	int32_t segments = closed ? n : n - 1;
 	for ( int32_t i = 0; i < segments; ++i )
 	{
-		double d = point_segment_distance( p, poly + 2 * i, poly + 2 * ( ( i + 1 ) % n ) );
+		double d = sere_point_segment_distance( p, poly + 2 * i, poly + 2 * ( ( i + 1 ) % n ) );
 		best = d < best ? d : best;
 	}
 	return best;
-}
-
-/* Crossing number; points on the outline may go either way, callers keep away from it. */
-int sere_skel_inside_polygon( const double* p, const double* poly, int32_t n )
-{
-	int inside = 0;
-	for ( int32_t i = 0, j = n - 1; i < n; j = i++ )
-	{
-		const double* a = poly + 2 * i;
-		const double* b = poly + 2 * j;
-		if ( ( a[1] > p[1] ) != ( b[1] > p[1] ) && p[0] < ( b[0] - a[0] ) * ( p[1] - a[1] ) / ( b[1] - a[1] ) + a[0] )
-		{
-			inside = !inside;
-		}
-	}
-	return inside;
-}
-
-double sere_skel_polygon_area( const double* poly, int32_t n )
-{
-	double twice = 0.0;
-	for ( int32_t i = 0, j = n - 1; i < n; j = i++ )
-	{
-		twice += poly[2 * j] * poly[2 * i + 1] - poly[2 * i] * poly[2 * j + 1];
-	}
-	return 0.5 * twice;
 }

@@ -64,14 +64,8 @@ double sere_skel_polyline_length( const double* p, int32_t n );
 /* `pieces` equal arc-length pieces: writes pieces + 1 points, the ends exactly. */
 void sere_skel_resample( const double* p, int32_t n, int32_t pieces, double* out );
 
-/* Signed area (shoelace): positive counter-clockwise. */
-double sere_skel_polygon_area( const double* poly, int32_t n );
-
 /* Closed segments ab and cd share a point (touching counts). */
 int sere_skel_segments_meet( const double* a, const double* b, const double* c, const double* d );
-
-/* Crossing number; points on the outline may go either way, callers keep away from it. */
-int sere_skel_inside_polygon( const double* p, const double* poly, int32_t n );
 
 /* Distance from p to a polyline (closed: the last point joins the first). */
 double sere_skel_polyline_distance( const double* p, const double* poly, int32_t n, int closed );
