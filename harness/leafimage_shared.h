@@ -133,9 +133,6 @@ void leafimage_simplify_between_kept( const double* xy, int32_t n, double tolera
 /* Distance from p to the closed polygon of n points. */
 double leafimage_outline_distance( const double* xy, int32_t n, const double* p );
 
-/* p inside the closed polygon of n points (crossing number). */
-int leafimage_outline_contains( const double* xy, int32_t n, const double* p );
-
 /* Any PNG (palette, gray, 1-16 bits, with or without alpha or tRNS, interlaced) as 8-bit RGBA. */
 sere_status leafimage_load_png( reader* r );
 

@@ -1,4 +1,5 @@
 /* sere harness — Smoothing and simplification of the traced outline, and the outline in leaf coordinates. */
+#include "geometry.h"
 #include "leafimage_shared.h"
 
 #include <math.h>
@@ -27,14 +28,6 @@ void leafimage_smooth( double* xy, int32_t n, int closed, double* scratch )
 	}
 }
 
-static double segment_distance( const double* p, const double* a, const double* b )
-{
-	double ex = b[0] - a[0], ey = b[1] - a[1], length2 = ex * ex + ey * ey;
-	double t = length2 > 0.0 ? ( ( p[0] - a[0] ) * ex + ( p[1] - a[1] ) * ey ) / length2 : 0.0;
-	t = fmin( 1.0, fmax( 0.0, t ) );
-	return hypot( a[0] + t * ex - p[0], a[1] + t * ey - p[1] );
-}
-
 /* Douglas-Peucker between vertices first and last (both kept), iteratively; stack holds
  * 2 (last - first + 1) ints. */
 static void simplify( const double* xy, int32_t first, int32_t last, double tolerance, uint8_t* keep, int32_t* stack )
@@ -49,7 +42,7 @@ static void simplify( const double* xy, int32_t first, int32_t last, double tole
 		int32_t at = -1;
 		for ( int32_t i = a + 1; i < b; ++i )
 		{
-			double d = segment_distance( xy + 2 * i, xy + 2 * a, xy + 2 * b );
+			double d = sere_point_segment_distance( xy + 2 * i, xy + 2 * a, xy + 2 * b );
 			if ( d > worst )
 			{
 				worst = d, at = i;
@@ -85,23 +78,9 @@ double leafimage_outline_distance( const double* xy, int32_t n, const double* p 
 	double d = INFINITY;
 	for ( int32_t i = 0, j = n - 1; i < n; j = i++ )
 	{
-		d = fmin( d, segment_distance( p, xy + 2 * j, xy + 2 * i ) );
+		d = fmin( d, sere_point_segment_distance( p, xy + 2 * j, xy + 2 * i ) );
 	}
 	return d;
-}
-
-int leafimage_outline_contains( const double* xy, int32_t n, const double* p )
-{
-	int in = 0;
-	for ( int32_t i = 0, j = n - 1; i < n; j = i++ )
-	{
-		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
-		if ( ( yi > p[1] ) != ( yj > p[1] ) && p[0] < xj + ( p[1] - yj ) * ( xi - xj ) / ( yi - yj ) )
-		{
-			in = !in;
-		}
-	}
-	return in;
 }
 
 /* Smooths and simplifies the traced loop (each optional), puts the base where the outline
@@ -155,7 +134,7 @@ static double place_base( const double* loop, int32_t m, double dot_x, double do
 	double best = INFINITY;
 	for ( int32_t i = 0; i < m; ++i )
 	{
-		double d = segment_distance( dot, loop + 2 * i, loop + 2 * ( ( i + 1 ) % m ) );
+		double d = sere_point_segment_distance( dot, loop + 2 * i, loop + 2 * ( ( i + 1 ) % m ) );
 		if ( d < best )
 		{
 			best = d, segment = i;

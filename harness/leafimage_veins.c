@@ -1,4 +1,5 @@
 /* sere harness — Vein placement: the vein skeleton walked from the base into polylines, cut at the margin. */
+#include "geometry.h"
 #include "leafimage_shared.h"
 
 #include <math.h>
@@ -355,7 +356,7 @@ static int cut_at_margin( const outline* o, const double* a, const double* b, do
 	for ( int k = 0; k < 50; ++k )
 	{
 		double mid = 0.5 * ( lo + hi ), p[2] = { a[0] + mid * ( b[0] - a[0] ), a[1] + mid * ( b[1] - a[1] ) };
-		if ( leafimage_outline_contains( o->xy, o->count, p ) &&
+		if ( sere_point_in_polygon( o->xy, o->count, p[0], p[1] ) &&
 			 leafimage_outline_distance( o->xy, o->count, p ) > margin )
 		{
 			lo = mid;
@@ -425,7 +426,7 @@ sere_status leafimage_place_veins( reader* r, veins_work* v, const outline* o, s
 			}
 			const double* px = v->node_xy + 2 * ( vein->first + k );
 			double p[2] = { ( px[0] - o->base_px ) / o->scale, ( o->base_py - px[1] ) / o->scale };
-			int inside = leafimage_outline_contains( o->xy, o->count, p );
+			int inside = sere_point_in_polygon( o->xy, o->count, p[0], p[1] );
 			double d = leafimage_outline_distance( o->xy, o->count, p );
 			if ( leaving && d <= margin )
 			{
@@ -448,7 +449,7 @@ sere_status leafimage_place_veins( reader* r, veins_work* v, const outline* o, s
 			else
 			{
 				cut = 1;
-				if ( !leaving && ( m > 1 || ( leafimage_outline_contains( o->xy, o->count, previous ) &&
+				if ( !leaving && ( m > 1 || ( sere_point_in_polygon( o->xy, o->count, previous[0], previous[1] ) &&
 											  leafimage_outline_distance( o->xy, o->count, previous ) > margin ) ) )
 				{
 					m += cut_at_margin( o, previous, p, margin, out + 2 * m );
