@@ -146,3 +146,33 @@ Test( outhash, season_from_png_silhouette )
 	const uint64_t stored = UINT64_C( 0x7bea5c75c53ab009 );
 	cr_expect_eq( h, stored, "hash 0x%016" PRIx64 ", stored 0x%016" PRIx64, h, stored );
 }
+
+/* `sere run`, Algorithm 1 whole: the frames' meshes of two presets (the green maple creases and
+ * meets the collision pass; the plane tree's stiff Voronoi system takes the SGS-preconditioned
+ * CG), at 1 and 2 threads. Values from the build of this test's commit (after the session's
+ * speed work, which changed the plane tree's CG iterates on purpose). */
+static void expect_run_hash( const char* args, uint64_t expected )
+{
+	const char* frames[] = { "frames/frame_00000.ply", "frames/frame_00020.ply", "frames/frame_00040.ply",
+							 "frames/frame_00040.vtp", "leaf.pvd" };
+	const char* threads[] = { "1", "2" };
+	for ( size_t k = 0; k < 2; ++k )
+	{
+		char dir[64], out[256], line[512];
+		snprintf( line, sizeof( line ), "%s --frames 40 --every 20 --threads %s", args, threads[k] );
+		run_into( "run", line, dir, sizeof( dir ), out, sizeof( out ) );
+		uint64_t h = hash_files( out, frames, sizeof( frames ) / sizeof( frames[0] ) );
+		remove_dir( dir );
+		cr_expect_eq( h, expected, "sere run %s: hash 0x%016" PRIx64 ", stored 0x%016" PRIx64, line, h, expected );
+	}
+}
+
+Test( outhash, run_maple_green )
+{
+	expect_run_hash( "data/leaves/maple.leaf --preset maple-green --points 400", UINT64_C( 0x6d4d1ce450c62997 ) );
+}
+
+Test( outhash, run_plane_tree )
+{
+	expect_run_hash( "data/leaves/plane.leaf --preset plane-tree --points 400", UINT64_C( 0x28f6321ddba7951d ) );
+}
