@@ -59,17 +59,17 @@ struct scene
 {
 	int32_t n = 0;
 	sere_massspring* ms = nullptr;
-	sere_ms_topology topology{};
+	sere_massspring_topology topology{};
 	std::vector<float> inv_m;
-	sere_ms_params params{};
+	sere_massspring_params params{};
 	std::vector<state_t> snapshots; // the states the iterations step from, in turn
 	state_t work;
 };
 
-sere_ms_particles particles( state_t& s, scene& sc )
+sere_massspring_particles particles( state_t& s, scene& sc )
 {
-	return sere_ms_particles{ sc.n,		   s.x.data(),	s.y.data(),	 s.z.data(),
-							  s.vx.data(), s.vy.data(), s.vz.data(), sc.inv_m.data() };
+	return sere_massspring_particles{ sc.n,		   s.x.data(),	s.y.data(),	 s.z.data(),
+									  s.vx.data(), s.vy.data(), s.vz.data(), sc.inv_m.data() };
 }
 
 // The work state back to snapshot k, each thread copying the particles the kernel's static
@@ -132,7 +132,7 @@ scene& maple()
 		gray[i] = m->vein[i] ? 1.0f : static_cast<float>( 0.6 - 0.55 * m->d[i] / dmax );
 	}
 	sc.inv_m.resize( n );
-	if ( sere_ms_mass_from_gray( gray.data(), n, 0.1f, 1.0f, mass.data() ) != SERE_OK )
+	if ( sere_massspring_mass_from_gray( gray.data(), n, 0.1f, 1.0f, mass.data() ) != SERE_OK )
 	{
 		std::abort();
 	}
@@ -159,11 +159,11 @@ scene& maple()
 	{
 		std::abort();
 	}
-	sc.topology = sere_massspring_topology( sc.ms );
-	sc.params = sere_ms_params_default();
+	sc.topology = sere_massspring_get_topology( sc.ms );
+	sc.params = sere_massspring_params_default();
 	sc.params.shrink = 0.05f;
 	sc.params.curl = 0.3f;
-	sere_ms_particles p = particles( s, sc );
+	sere_massspring_particles p = particles( s, sc );
 	for ( int step = 1; step <= run_steps; ++step )
 	{
 		sere_status status = sere_massspring_step( sc.ms, &p, &sc.params, nullptr );
@@ -183,7 +183,7 @@ scene& maple()
 struct tally
 {
 	int64_t sweeps = 0, limited = 0, hit_cap = 0;
-	void add( const sere_ms_report& r )
+	void add( const sere_massspring_report& r )
 	{
 		sweeps += r.sweeps, limited += r.limited, hit_cap += r.hit_cap;
 	}
@@ -205,8 +205,8 @@ void BM_MassSpringStep( benchmark::State& state )
 	const int saved = omp_get_max_threads();
 	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
 	scene& sc = maple();
-	sere_ms_particles p = particles( sc.work, sc );
-	sere_ms_report report{};
+	sere_massspring_particles p = particles( sc.work, sc );
+	sere_massspring_report report{};
 	tally t;
 	size_t k = 0;
 	for ( auto _ : state )
@@ -233,9 +233,9 @@ void BM_MassSpringStep( benchmark::State& state )
 void BM_MassSpringReference( benchmark::State& state )
 {
 	scene& sc = maple();
-	sere_ms_particles p = particles( sc.work, sc );
+	sere_massspring_particles p = particles( sc.work, sc );
 	std::vector<float> fx( sc.n ), fy( sc.n ), fz( sc.n );
-	sere_ms_report report{};
+	sere_massspring_report report{};
 	tally t;
 	size_t k = 0;
 	for ( auto _ : state )

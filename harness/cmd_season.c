@@ -897,14 +897,14 @@ int sere_cmd_season( int argc, char** argv )
 	if ( tree.leaf_count > o.leaves )
 	{
 		fprintf( stderr, "sere season: --leaves %lld is fewer than the tree's %d leaves\n", o.leaves, tree.leaf_count );
-		sere_tree_free( &tree );
+		sere_tree_destroy( &tree );
 		sere_season_leaf_free( &leaf );
 		return 2;
 	}
 	if ( sere_mkdirs( o.out ) != 0 )
 	{
 		fprintf( stderr, "sere season: cannot create %s: %s\n", o.out, strerror( errno ) );
-		sere_tree_free( &tree );
+		sere_tree_destroy( &tree );
 		sere_season_leaf_free( &leaf );
 		return 2;
 	}
@@ -1176,7 +1176,7 @@ int sere_cmd_season( int argc, char** argv )
 
 done:
 	free( states ), free( exact ), free( sampled ), free( P ), free( counts ), free( snapshots ), free( day_table );
-	sere_tree_free( &tree );
+	sere_tree_destroy( &tree );
 	sere_season_leaf_free( &leaf );
 	return rc;
 }

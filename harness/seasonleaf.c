@@ -356,8 +356,8 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, char
 		return failf( err, err_size, status, "leaf: the optimized mesh cannot carry springs (%s)",
 					  sere_status_text( status ) );
 	}
-	sere_ms_particles particles = { n, x, y, z, vx, vy, vz, inv_m };
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_particles particles = { n, x, y, z, vx, vy, vz, inv_m };
+	sere_massspring_params params = sere_massspring_params_default();
 	for ( int32_t level = 1; level < leaf->level_count && status == SERE_OK; ++level )
 	{
 		float share = (float) level / (float) ( leaf->level_count - 1 );
@@ -587,7 +587,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 		leaf->xyz[3 * i] = (float) mesh.x[i];
 		leaf->xyz[3 * i + 1] = (float) mesh.y[i];
 	}
-	status = sere_ms_mass_from_gray( vertex_gray, n, MASS_MIN, MASS_MAX, leaf->mass );
+	status = sere_massspring_mass_from_gray( vertex_gray, n, MASS_MIN, MASS_MAX, leaf->mass );
 	free( vertex_gray );
 	if ( status != SERE_OK )
 	{

@@ -157,7 +157,7 @@ static void normalize( double* v )
 	v[0] /= n, v[1] /= n, v[2] /= n;
 }
 
-void sere_tree_free( sere_tree* tree )
+void sere_tree_destroy( sere_tree* tree )
 {
 	if ( tree == NULL )
 	{

@@ -82,7 +82,7 @@ sere_status sere_lsystem_rewrite( const sere_lsystem_params* params, char** out,
  * non-positive or non-finite length or radius, ratios outside (0, 1], and SERE_ERR_GEOMETRY for
  * unbalanced brackets. On failure nothing is left to free. */
 sere_status sere_tree_grow( const sere_lsystem_params* params, sere_tree* tree );
-void sere_tree_free( sere_tree* tree );
+void sere_tree_destroy( sere_tree* tree );
 
 #ifdef __cplusplus
 }

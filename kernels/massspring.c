@@ -40,9 +40,9 @@ struct sere_massspring
 	float* vrec;
 };
 
-sere_ms_params sere_ms_params_default( void )
+sere_massspring_params sere_massspring_params_default( void )
 {
-	sere_ms_params p;
+	sere_massspring_params p;
 	p.dt = 1e-3f;
 	p.gravity[0] = 0.0f;
 	p.gravity[1] = 0.0f;
@@ -59,7 +59,7 @@ sere_ms_params sere_ms_params_default( void )
 	return p;
 }
 
-sere_status sere_ms_mass_from_gray( const float* gray, int32_t n, float m_min, float m_max, float* mass )
+sere_status sere_massspring_mass_from_gray( const float* gray, int32_t n, float m_min, float m_max, float* mass )
 {
 	if ( n < 0 || ( n > 0 && ( gray == NULL || mass == NULL ) ) || !isfinite( m_min ) || !isfinite( m_max ) ||
 		 !( m_min > 0.0f ) || !( m_min <= m_max ) )
@@ -484,9 +484,9 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 	return SERE_OK;
 }
 
-sere_ms_topology sere_massspring_topology( const sere_massspring* ms )
+sere_massspring_topology sere_massspring_get_topology( const sere_massspring* ms )
 {
-	sere_ms_topology t = { 0 };
+	sere_massspring_topology t = { 0 };
 	if ( ms != NULL )
 	{
 		t.vertex_count = ms->vertex_count;
@@ -503,7 +503,7 @@ sere_ms_topology sere_massspring_topology( const sere_massspring* ms )
 	return t;
 }
 
-static int params_valid( const sere_ms_params* p )
+static int params_valid( const sere_massspring_params* p )
 {
 	return isfinite( p->dt ) && p->dt > 0.0f && isfinite( p->gravity[0] ) && isfinite( p->gravity[1] ) &&
 		   isfinite( p->gravity[2] ) && isfinite( p->stiffness ) && p->stiffness >= 0.0f &&
@@ -537,7 +537,7 @@ static inline int32_t chunk_ends( const int32_t* sa, const int32_t* sb, int32_t 
 }
 
 /* Packs the particles into records (x, y, z, 1/m) and (vx, vy, vz, 0). */
-static void pack( sere_massspring* ms, const sere_ms_particles* p )
+static void pack( sere_massspring* ms, const sere_massspring_particles* p )
 {
 	float* restrict xr = ms->xrec;
 	float* restrict vr = ms->vrec;
@@ -598,7 +598,7 @@ static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, sp
 
 /* Eq. 1: every particle gathers its springs' forces in a fixed order, then a = g + F/m,
  * v ← (1 − drag)(v + a Δt), in the velocity records. */
-static void integrate_velocities( sere_massspring* ms, int32_t count, const sere_ms_params* params )
+static void integrate_velocities( sere_massspring* ms, int32_t count, const sere_massspring_params* params )
 {
 	const int32_t* restrict offsets = ms->incidence_offsets;
 	const int32_t* restrict incidence = ms->incidence;
@@ -740,8 +740,8 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 	*strain_out = strain;
 }
 
-sere_status sere_massspring_step( sere_massspring* ms, sere_ms_particles* p, const sere_ms_params* params,
-								  sere_ms_report* report )
+sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* p,
+								  const sere_massspring_params* params, sere_massspring_report* report )
 {
 	if ( ms == NULL || p == NULL || params == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL ||
 		 p->z == NULL || p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL ||

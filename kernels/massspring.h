@@ -33,7 +33,7 @@
  * lies outside [(1 − τ_c) L, (1 + τ_c) L] the relative velocity along p is changed so that |p|
  * lands on the band; the change is shared by inverse mass. Springs inside the band keep their
  * velocities. Sweeps over all structural springs (Gauss–Seidel; in parallel by particle bands
- * and, inside a band or a cut between bands, by graph coloring, see sere_ms_topology and
+ * and, inside a band or a cut between bands, by graph coloring, see sere_massspring_get_topology and
  * color.h) aim at the band narrowed by the tolerance δ on both sides and repeat until a
  * sweep finds no spring more than δ L off that inner band and a measurement confirms every
  * spring inside the true band, so a converged step keeps every structural spring within τ_c of
@@ -51,15 +51,15 @@ extern "C"
 #endif
 
 /* Particle state in SoA; every array holds at least count entries. */
-typedef struct sere_ms_particles
+typedef struct sere_massspring_particles
 {
 	int32_t count;
 	float *x, *y, *z;
 	float *vx, *vy, *vz;
 	const float* inv_m; /* 1/m, 0 pins a particle */
-} sere_ms_particles;
+} sere_massspring_particles;
 
-typedef struct sere_ms_params
+typedef struct sere_massspring_params
 {
 	float dt;
 	float gravity[3];
@@ -72,12 +72,12 @@ typedef struct sere_ms_params
 	float strain_limit;		/* τ_c of Eq. 2, in (0, 1) */
 	float strain_tolerance; /* δ, in (0, τ_c): the margin the sweeps aim inside the band by */
 	int32_t max_sweeps;		/* cap on strain-limiting sweeps per step, ≥ 1 */
-} sere_ms_params;
+} sere_massspring_params;
 
 /* dt 1e-3, gravity (0, 0, −1), stiffness 40, bend_stiffness 4, damping 0.02, drag 0.01,
  * shrink 0, curl 0, τ_c 0.1 (the seed's value), δ 1e-3, 500 sweeps. Units: the leaf is
  * about 1 long and masses lie in [0.1, 1]. */
-sere_ms_params sere_ms_params_default( void );
+sere_massspring_params sere_massspring_params_default( void );
 
 /* Eq. 3: the seed maps a mask pixel's gray value to a particle mass through its logarithm,
  * "which makes the change of the masses more gentle and smooth compared with the changes of
@@ -86,7 +86,7 @@ sere_ms_params sere_ms_params_default( void );
  * so black gives m_min, white m_max, and the mass rises steeply over the darkest grays and
  * gently over the rest. g outside [0, 1] is clamped. Writes n masses; SERE_ERR_NONFINITE for a
  * NaN gray, SERE_ERR_ARGUMENT unless 0 < m_min ≤ m_max (finite). */
-sere_status sere_ms_mass_from_gray( const float* gray, int32_t n, float m_min, float m_max, float* mass );
+sere_status sere_massspring_mass_from_gray( const float* gray, int32_t n, float m_min, float m_max, float* mass );
 
 typedef struct sere_massspring sere_massspring;
 
@@ -105,7 +105,7 @@ void sere_massspring_destroy( sere_massspring* ms );
  * particles cut by breadth-first level into band_count bands); no two springs of a run share a
  * particle. Limiting the runs one after another in index order is what a sweep does, so a
  * serial twin reproduces it. */
-typedef struct sere_ms_topology
+typedef struct sere_massspring_topology
 {
 	int32_t vertex_count;
 	int32_t structural_count;
@@ -117,25 +117,25 @@ typedef struct sere_ms_topology
 	int32_t band_count;			/* particle bands */
 	int32_t run_count;			/* (2 band_count − 1) color_count runs, some empty */
 	const int32_t* run_offsets; /* run_count + 1 entries */
-} sere_ms_topology;
+} sere_massspring_topology;
 
-sere_ms_topology sere_massspring_topology( const sere_massspring* ms );
+sere_massspring_topology sere_massspring_get_topology( const sere_massspring* ms );
 
-typedef struct sere_ms_report
+typedef struct sere_massspring_report
 {
 	int32_t sweeps;	  /* strain-limiting sweeps run */
 	int32_t limited;  /* structural springs the first sweep corrected */
 	float max_strain; /* max | |x_b − x_a| / L − 1 | over structural springs after the step */
 	int hit_cap;	  /* the sweeps stopped at max_sweeps, not at the tolerance */
-} sere_ms_report;
+} sere_massspring_report;
 
 /* Advances the particles by one step of params->dt. SERE_ERR_ARGUMENT for a particle count other
  * than the mesh's, a parameter out of range or a negative inverse mass; SERE_ERR_NONFINITE for a
  * NaN or infinite position, velocity or inverse mass on entry (nothing is changed then);
  * SERE_ERR_NO_CONVERGE when the sweeps hit the cap: the step is still taken and the report says
  * how far off the band the springs are. report may be NULL. */
-sere_status sere_massspring_step( sere_massspring* ms, sere_ms_particles* particles, const sere_ms_params* params,
-								  sere_ms_report* report );
+sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* particles,
+								  const sere_massspring_params* params, sere_massspring_report* report );
 
 #ifdef __cplusplus
 }

@@ -81,9 +81,9 @@ static void sheet_free( sheet* s )
 	free( s->tri );
 }
 
-static sere_ms_particles sheet_particles( sheet* s )
+static sere_massspring_particles sheet_particles( sheet* s )
 {
-	return ( sere_ms_particles ){ s->vertex_count, s->x, s->y, s->z, s->vx, s->vy, s->vz, s->inv_m };
+	return ( sere_massspring_particles ){ s->vertex_count, s->x, s->y, s->z, s->vx, s->vy, s->vz, s->inv_m };
 }
 
 static sere_massspring* sheet_springs( const sheet* s )
@@ -97,7 +97,7 @@ static sere_massspring* sheet_springs( const sheet* s )
 /* max | |x_b − x_a| / L − 1 | over the structural springs, computed here in double. */
 static double max_strain( const sere_massspring* ms, const sheet* s, float shrink )
 {
-	sere_ms_topology t = sere_massspring_topology( ms );
+	sere_massspring_topology t = sere_massspring_get_topology( ms );
 	double worst = 0.0;
 	for ( int32_t k = 0; k < t.structural_count; ++k )
 	{
@@ -117,7 +117,7 @@ Test( massspring, mass_from_gray_is_logarithmic )
 	{
 		gray[g] = (float) g / 255.0f;
 	}
-	cr_assert_eq( sere_ms_mass_from_gray( gray, 256, 0.1f, 1.0f, mass ), SERE_OK );
+	cr_assert_eq( sere_massspring_mass_from_gray( gray, 256, 0.1f, 1.0f, mass ), SERE_OK );
 	/* Black and white are the ends of the range (float rounding of m_min + (m_max − m_min)·1). */
 	cr_expect_eq( mass[0], 0.1f );
 	cr_expect_float_eq( mass[255], 1.0f, 1e-6f );
@@ -127,26 +127,26 @@ Test( massspring, mass_from_gray_is_logarithmic )
 	}
 	/* Eq. 3 as documented: mid gray G = 127.5 gives 0.1 + 0.9 ln(128.5)/ln(256). */
 	float mid = 0.5f, m;
-	cr_assert_eq( sere_ms_mass_from_gray( &mid, 1, 0.1f, 1.0f, &m ), SERE_OK );
+	cr_assert_eq( sere_massspring_mass_from_gray( &mid, 1, 0.1f, 1.0f, &m ), SERE_OK );
 	cr_expect_float_eq( m, (float) ( 0.1 + 0.9 * log( 128.5 ) / log( 256.0 ) ), 1e-6f );
 	/* Logarithmic: the darkest tenth of the gray range covers more than half of the masses. */
 	cr_expect( mass[26] - mass[0] > 0.5f * ( mass[255] - mass[0] ) );
 	/* Out-of-range grays are clamped; NaN and a bad mass range are refused. */
 	float odd[2] = { -3.0f, 7.0f }, om[2];
-	cr_assert_eq( sere_ms_mass_from_gray( odd, 2, 0.1f, 1.0f, om ), SERE_OK );
+	cr_assert_eq( sere_massspring_mass_from_gray( odd, 2, 0.1f, 1.0f, om ), SERE_OK );
 	cr_expect_eq( om[0], 0.1f );
 	cr_expect_eq( om[1], mass[255] );
 	float nan_gray = NAN;
-	cr_expect_eq( sere_ms_mass_from_gray( &nan_gray, 1, 0.1f, 1.0f, &m ), SERE_ERR_NONFINITE );
-	cr_expect_eq( sere_ms_mass_from_gray( gray, 1, 0.0f, 1.0f, &m ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_ms_mass_from_gray( gray, 1, 2.0f, 1.0f, &m ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_massspring_mass_from_gray( &nan_gray, 1, 0.1f, 1.0f, &m ), SERE_ERR_NONFINITE );
+	cr_expect_eq( sere_massspring_mass_from_gray( gray, 1, 0.0f, 1.0f, &m ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_massspring_mass_from_gray( gray, 1, 2.0f, 1.0f, &m ), SERE_ERR_ARGUMENT );
 }
 
 Test( massspring, springs_of_a_mesh )
 {
 	sheet s = sheet_make( 9, 0.0f );
 	sere_massspring* ms = sheet_springs( &s );
-	sere_ms_topology t = sere_massspring_topology( ms );
+	sere_massspring_topology t = sere_massspring_get_topology( ms );
 	/* A disk: V − E + F = 1, so E = V + F − 1; every edge off the 4n boundary edges is a hinge. */
 	const int32_t edges = s.vertex_count + s.triangle_count - 1;
 	cr_expect_eq( t.structural_count, edges );
@@ -209,7 +209,7 @@ Test( massspring, springs_of_a_mesh )
  * springs near the pins stretch past 10%; with it no spring leaves the band after any step. */
 Test( massspring, strain_limit_holds_every_step, .timeout = 60 )
 {
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_params params = sere_massspring_params_default();
 	params.gravity[2] = -30.0f;
 	double unlimited = 0.0;
 	for ( int pass = 0; pass < 2; ++pass )
@@ -220,12 +220,12 @@ Test( massspring, strain_limit_holds_every_step, .timeout = 60 )
 			s.inv_m[i] = 0.0f;
 		}
 		sere_massspring* ms = sheet_springs( &s );
-		sere_ms_particles p = sheet_particles( &s );
+		sere_massspring_particles p = sheet_particles( &s );
 		params.strain_limit = pass == 0 ? 0.9f : 0.1f;
 		int32_t limited_steps = 0;
 		for ( int step = 0; step < 250; ++step )
 		{
-			sere_ms_report report;
+			sere_massspring_report report;
 			cr_assert_eq( sere_massspring_step( ms, &p, &params, &report ), SERE_OK, "step %d", step );
 			double strain = max_strain( ms, &s, 0.0f );
 			if ( pass == 0 )
@@ -261,14 +261,14 @@ Test( massspring, compressed_springs_return_to_the_band )
 		s.y[v] *= 0.8f;
 	}
 	cr_assert( max_strain( ms, &s, 0.0f ) > 0.19 );
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_params params = sere_massspring_params_default();
 	params.gravity[2] = 0.0f;
-	sere_ms_particles p = sheet_particles( &s );
-	sere_ms_report report;
+	sere_massspring_particles p = sheet_particles( &s );
+	sere_massspring_report report;
 	cr_assert_eq( sere_massspring_step( ms, &p, &params, &report ), SERE_OK );
 	/* Nearly all springs need the limit (a few are pulled back by their neighbours' corrections
 	 * before the sweep reaches them). */
-	cr_expect( report.limited > 9 * sere_massspring_topology( ms ).structural_count / 10, "limited %d",
+	cr_expect( report.limited > 9 * sere_massspring_get_topology( ms ).structural_count / 10, "limited %d",
 			   report.limited );
 	cr_expect( max_strain( ms, &s, 0.0f ) <= 0.1 + 1e-5 );
 	sere_massspring_destroy( ms );
@@ -303,7 +303,7 @@ static void side_displacements( const sheet* s, const sheet* rest, double* left,
  * sheet whose left half is painted dark and right half white. */
 Test( massspring, darker_regions_move_more )
 {
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_params params = sere_massspring_params_default();
 	params.gravity[2] = 0.0f;
 	params.shrink = 0.03f;
 	params.curl = 0.15f;
@@ -317,13 +317,13 @@ Test( massspring, darker_regions_move_more )
 		{
 			gray[v] = painted && s.x[v] < 0.0f ? 0.02f : 1.0f;
 		}
-		cr_assert_eq( sere_ms_mass_from_gray( gray, s.vertex_count, 0.1f, 1.0f, mass ), SERE_OK );
+		cr_assert_eq( sere_massspring_mass_from_gray( gray, s.vertex_count, 0.1f, 1.0f, mass ), SERE_OK );
 		for ( int32_t v = 0; v < s.vertex_count; ++v )
 		{
 			s.inv_m[v] = 1.0f / mass[v];
 		}
 		sere_massspring* ms = sheet_springs( &s );
-		sere_ms_particles p = sheet_particles( &s );
+		sere_massspring_particles p = sheet_particles( &s );
 		for ( int step = 0; step < 150; ++step )
 		{
 			cr_assert_eq( sere_massspring_step( ms, &p, &params, NULL ), SERE_OK );
@@ -359,17 +359,17 @@ static void match_twin( int32_t n )
 		s.inv_m[v] = r.inv_m[v] = 1.0f / ( 0.2f + 0.8f * (float) ( v % 7 ) / 6.0f );
 	}
 	sere_massspring* ms = sheet_springs( &s );
-	sere_ms_topology t = sere_massspring_topology( ms );
+	sere_massspring_topology t = sere_massspring_get_topology( ms );
 	float* scratch = malloc( 3 * (size_t) s.vertex_count * sizeof( float ) );
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_params params = sere_massspring_params_default();
 	params.gravity[2] = -12.0f;
 	params.curl = 0.05f;
-	sere_ms_particles p = sheet_particles( &s ), q = sheet_particles( &r );
+	sere_massspring_particles p = sheet_particles( &s ), q = sheet_particles( &r );
 	double worst = 0.0;
 	int32_t limited = 0;
 	for ( int step = 0; step < 120; ++step )
 	{
-		sere_ms_report a, b;
+		sere_massspring_report a, b;
 		cr_assert_eq( sere_massspring_step( ms, &p, &params, &a ), SERE_OK );
 		cr_assert_eq( sere_massspring_step_ref( &t, &q, &params, scratch, scratch + s.vertex_count,
 												scratch + 2 * s.vertex_count, &b ),
@@ -408,7 +408,7 @@ Test( massspring, one_and_two_threads_bitwise_equal )
 	for ( int size = 0; size < 2; ++size )
 	{
 		sheet s[3];
-		sere_ms_params params = sere_ms_params_default();
+		sere_massspring_params params = sere_massspring_params_default();
 		params.gravity[2] = -20.0f;
 		params.curl = 0.1f;
 		for ( int k = 0; k < 3; ++k )
@@ -418,9 +418,9 @@ Test( massspring, one_and_two_threads_bitwise_equal )
 			sere_massspring* ms = sheet_springs( &s[k] );
 			if ( size == 1 )
 			{
-				cr_expect_gt( sere_massspring_topology( ms ).band_count, 2 );
+				cr_expect_gt( sere_massspring_get_topology( ms ).band_count, 2 );
 			}
-			sere_ms_particles p = sheet_particles( &s[k] );
+			sere_massspring_particles p = sheet_particles( &s[k] );
 			omp_set_num_threads( k + 1 );
 			for ( int step = 0; step < 60; ++step )
 			{
@@ -456,10 +456,10 @@ Test( massspring, sweep_cap_is_reported )
 	{
 		s.x[v] *= 0.7f;
 	}
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_params params = sere_massspring_params_default();
 	params.max_sweeps = 1;
-	sere_ms_particles p = sheet_particles( &s );
-	sere_ms_report report;
+	sere_massspring_particles p = sheet_particles( &s );
+	sere_massspring_report report;
 	cr_expect_eq( sere_massspring_step( ms, &p, &params, &report ), SERE_ERR_NO_CONVERGE );
 	cr_expect_eq( report.hit_cap, 1 );
 	cr_expect_eq( report.sweeps, 1 );
@@ -494,8 +494,8 @@ Test( massspring, bad_steps_change_nothing )
 {
 	sheet s = sheet_make( 6, 0.02f );
 	sere_massspring* ms = sheet_springs( &s );
-	sere_ms_particles p = sheet_particles( &s );
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_particles p = sheet_particles( &s );
+	sere_massspring_params params = sere_massspring_params_default();
 	size_t bytes = (size_t) s.vertex_count * sizeof( float );
 	float* before = malloc( bytes );
 	memcpy( before, s.z, bytes );
@@ -508,7 +508,7 @@ Test( massspring, bad_steps_change_nothing )
 	s.inv_m[3] = 1.0f;
 	cr_expect_eq( memcmp( before, s.z, bytes ), 0 );
 
-	sere_ms_params bad = params;
+	sere_massspring_params bad = params;
 	bad.dt = 0.0f;
 	cr_expect_eq( sere_massspring_step( ms, &p, &bad, NULL ), SERE_ERR_ARGUMENT );
 	bad = params;
@@ -558,14 +558,14 @@ Test( massspring, same_bits_at_every_simd_width )
 		s.inv_m[v] = v <= s.n ? 0.0f : 1.0f / ( 0.2f + 0.8f * (float) ( v % 7 ) / 6.0f );
 	}
 	sere_massspring* ms = sheet_springs( &s );
-	sere_ms_params params = sere_ms_params_default();
+	sere_massspring_params params = sere_massspring_params_default();
 	params.gravity[2] = -20.0f;
 	params.curl = 0.1f;
-	sere_ms_particles p = sheet_particles( &s );
+	sere_massspring_particles p = sheet_particles( &s );
 	int32_t limited = 0;
 	for ( int step = 0; step < 60; ++step )
 	{
-		sere_ms_report report;
+		sere_massspring_report report;
 		cr_assert_eq( sere_massspring_step( ms, &p, &params, &report ), SERE_OK );
 		limited += report.limited;
 	}

@@ -85,7 +85,7 @@ Test( lsystem, default_tree_is_connected_and_deterministic )
 	sere_tree c;
 	cr_assert_eq( sere_tree_grow( &p, &c ), SERE_OK );
 	cr_expect_neq( memcmp( a.x1, c.x1, sizeof( float ) * (size_t) a.segment_count ), 0, "the seed changes nothing" );
-	sere_tree_free( &a ), sere_tree_free( &b ), sere_tree_free( &c );
+	sere_tree_destroy( &a ), sere_tree_destroy( &b ), sere_tree_destroy( &c );
 }
 
 Test( lsystem, bad_grammars_are_refused )

@@ -2,9 +2,9 @@
 
 #include <math.h>
 
-sere_status sere_massspring_step_ref( const sere_ms_topology* topology, sere_ms_particles* p,
-									  const sere_ms_params* params, float* fx, float* fy, float* fz,
-									  sere_ms_report* report )
+sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, sere_massspring_particles* p,
+									  const sere_massspring_params* params, float* fx, float* fy, float* fz,
+									  sere_massspring_report* report )
 {
 	if ( topology == NULL || p == NULL || params == NULL || fx == NULL || fy == NULL || fz == NULL ||
 		 p->count != topology->vertex_count || !( params->dt > 0.0f ) || params->max_sweeps < 1 )
