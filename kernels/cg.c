@@ -66,6 +66,22 @@ static int by_length( const void* left, const void* right )
 	return l->row < r->row ? -1 : l->row > r->row;
 }
 
+/* The CG step length α = γ / pᵀAp, or why there is none: a non-finite γ or pᵀAp
+ * (SERE_ERR_NONFINITE), or pᵀAp ≤ 0, a matrix that is not SPD (SERE_ERR_NOT_SPD). */
+static sere_status cg_step_length( double pap, double gamma, double* alpha )
+{
+	if ( !isfinite( pap ) || !isfinite( gamma ) )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	if ( !( pap > 0.0 ) )
+	{
+		return SERE_ERR_NOT_SPD;
+	}
+	*alpha = gamma / pap;
+	return SERE_OK;
+}
+
 /* Row pointers that never decrease and column indices inside the matrix (the caller has checked
  * row_ptr[0] = 0 and row_ptr[rows] = nnz). */
 static int csr_indices_valid( const sere_csr* a )
@@ -542,19 +558,13 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 				double gamma = block_sum( partial, blocks, 2 );
 				double beta = my_it == 0 ? 0.0 : gamma / my_gamma_prev;
 				double pap = my_it == 0 ? delta : delta - beta * gamma / my_alpha_prev; /* pᵀAp */
-				if ( !isfinite( pap ) || !isfinite( gamma ) )
+				double alpha;
+				my_status = cg_step_length( pap, gamma, &alpha );
+				if ( my_status != SERE_OK )
 				{
-					my_status = SERE_ERR_NONFINITE;
 					my_done = 1;
 					break;
 				}
-				if ( !( pap > 0.0 ) )
-				{
-					my_status = SERE_ERR_NOT_SPD;
-					my_done = 1;
-					break;
-				}
-				double alpha = gamma / pap;
 				/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
 #pragma omp for schedule( static )
 				for ( int32_t blk = 0; blk < blocks; ++blk )
@@ -1190,19 +1200,13 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 					double gamma = block_sum( partial, blocks, 2 + ( my_it & 1 ) );
 					double beta = my_it == first ? 0.0 : gamma / my_gamma_prev;
 					double pap = my_it == first ? delta : delta - beta * gamma / my_alpha_prev;
-					if ( !isfinite( pap ) || !isfinite( gamma ) )
+					double alpha;
+					my_status = cg_step_length( pap, gamma, &alpha );
+					if ( my_status != SERE_OK )
 					{
-						my_status = SERE_ERR_NONFINITE;
 						my_done = 1;
 						break;
 					}
-					if ( !( pap > 0.0 ) )
-					{
-						my_status = SERE_ERR_NOT_SPD;
-						my_done = 1;
-						break;
-					}
-					double alpha = gamma / pap;
 #pragma omp for schedule( static )
 					for ( int32_t blk = 0; blk < blocks; ++blk )
 					{
