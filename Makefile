@@ -20,7 +20,7 @@ endif
 CC_IS_CLANG  := $(shell $(CC) --version 2>/dev/null | grep -q clang && echo 1)
 CXX_IS_CLANG := $(shell $(CXX) --version 2>/dev/null | grep -q clang && echo 1)
 
-# The version lives in VERSION alone: it becomes sere_version() (-DSERE_VERSION on base.c),
+# The version lives in VERSION alone: it becomes sere_version() (-DSERE_VERSION on core/base.c),
 # the shared library's file name and SONAME (libsere.so.MAJOR), sere.pc and the CMake package.
 VERSION       := $(strip $(shell cat VERSION))
 VERSION_MAJOR := $(word 1,$(subst ., ,$(VERSION)))
@@ -75,8 +75,8 @@ MPI_CFLAGS   := $(shell pkg-config --cflags ompi-c 2>/dev/null)
 MPI_LIBS     := $(shell pkg-config --libs ompi-c 2>/dev/null)
 LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) $(MPI_LIBS) -lm
 
-KERNEL_SRC  := $(sort $(wildcard kernels/*.c kernels/ref/*.c))
-HARNESS_SRC := $(sort $(filter-out harness/main.c,$(wildcard harness/*.c)))
+KERNEL_SRC  := $(sort $(wildcard kernels/*/*.c))
+HARNESS_SRC := $(sort $(filter-out harness/cli/main.c,$(wildcard harness/*/*.c)))
 TEST_SRC    := $(sort $(wildcard tests/*.c))
 BENCH_SRC   := $(sort $(wildcard bench/*.cc))
 TOOL_SRC    := $(sort $(wildcard data/tools/*.c))
@@ -85,7 +85,7 @@ KERNEL_OBJ  := $(KERNEL_SRC:%.c=$(BUILD)/obj/%.o)
 HARNESS_OBJ := $(HARNESS_SRC:%.c=$(BUILD)/obj/%.o)
 TEST_OBJ    := $(TEST_SRC:%.c=$(BUILD)/obj/%.o)
 BENCH_OBJ   := $(BENCH_SRC:%.cc=$(BUILD)/obj/%.o)
-MAIN_OBJ    := $(BUILD)/obj/harness/main.o
+MAIN_OBJ    := $(BUILD)/obj/harness/cli/main.o
 
 LIB_A   := $(BUILD)/libsere.a
 SONAME  := libsere.so.$(VERSION_MAJOR)
@@ -130,7 +130,7 @@ test-asan:
 	SERE_ADAPTIVE_THREADS=0 ASAN_OPTIONS=detect_leaks=1 \
 	OMPI_MCA_mca_base_env_list='ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0' LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 SERE_BIN=build/asan/sere build/asan/sere-tests --jobs 1
 
-# The SIMD lane layer (kernels/internal/simd.h) at its other widths: an AVX2 build (when this
+# The SIMD lane layer (kernels/core/internal/simd.h) at its other widths: an AVX2 build (when this
 # CPU has AVX2) and the portable 4-lane C build run the tests that pin a kernel's bits with a
 # stored hash, so every width is checked to give the bits of the native one.
 WIDTH_TESTS ?= massspring/*
@@ -152,20 +152,20 @@ $(BUILD)/obj/harness/%.o: harness/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(HARNESS_CFLAGS) -c $< -o $@
 
-# The version reaches the code as a define on base.c alone (sere_version()).
-$(BUILD)/obj/kernels/base.o: CFLAGS_ALL += -DSERE_VERSION='"$(VERSION)"'
-$(BUILD)/obj/kernels/base.o: VERSION
+# The version reaches the code as a define on core/base.c alone (sere_version()).
+$(BUILD)/obj/kernels/core/base.o: CFLAGS_ALL += -DSERE_VERSION='"$(VERSION)"'
+$(BUILD)/obj/kernels/core/base.o: VERSION
 
 ifneq ($(MPI_LIBS),)
-$(BUILD)/obj/harness/cmd_litter.o: HARNESS_CFLAGS += -DSERE_MPI $(MPI_CFLAGS)
+$(BUILD)/obj/harness/cli/cmd_litter.o: HARNESS_CFLAGS += -DSERE_MPI $(MPI_CFLAGS)
 endif
 
 # The commit reaches main.c (sere --version) and machine.c (the machine facts of every result);
 # the stamp changes only when the commit does, so both are rebuilt then and only then.
 COMMIT_STAMP := $(BUILD)/gen/commit
 $(shell mkdir -p $(BUILD)/gen && { [ "$$(cat $(COMMIT_STAMP) 2>/dev/null)" = "$(GIT_COMMIT)" ] || echo "$(GIT_COMMIT)" > $(COMMIT_STAMP); })
-$(MAIN_OBJ) $(BUILD)/obj/harness/machine.o: HARNESS_CFLAGS += -DSERE_GIT_COMMIT='"$(GIT_COMMIT)"'
-$(MAIN_OBJ) $(BUILD)/obj/harness/machine.o: $(COMMIT_STAMP)
+$(MAIN_OBJ) $(BUILD)/obj/harness/common/machine.o: HARNESS_CFLAGS += -DSERE_GIT_COMMIT='"$(GIT_COMMIT)"'
+$(MAIN_OBJ) $(BUILD)/obj/harness/common/machine.o: $(COMMIT_STAMP)
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
@@ -211,21 +211,25 @@ $(BENCHX): $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A)
 # ../share/sere beside its own binary, sere.pc and the CMake package locate themselves):
 #   bin/sere, lib/libsere.{a,so.VERSION} with the symlinks libsere.so.MAJOR and libsere.so,
 #   lib/pkgconfig/sere.pc, lib/cmake/sere/sereConfig{,Version}.cmake,
-#   include/sere/*.h (the public headers), include/sere/ref/*.h (the reference twins),
+#   include/sere/sere.h and include/sere/ROOM/*.h (the public headers, in their rooms: core, mesh,
+#   solve, drying, season, wilt), include/sere/ref/*.h (the reference twins),
 #   share/sere/{presets,leaves,seasons,masks,skeletons}.
 # Every directory install creates is listed in share/sere/installed-dirs, so that uninstall
 # removes exactly what install put there: the files below, then those directories if empty.
 DEST          := $(DESTDIR)$(PREFIX)
-PUBLIC_H      := $(sort $(wildcard kernels/*.h))
+# A room's internal/ headers are private to the room: not installed.
+PUBLIC_H      := kernels/sere.h $(sort $(filter-out kernels/ref/%,$(wildcard kernels/*/*.h)))
+PUBLIC_ROOMS  := $(sort $(patsubst kernels/%/,%,$(dir $(filter-out kernels/sere.h,$(PUBLIC_H)))))
 REF_H         := $(sort $(wildcard kernels/ref/*.h))
 DATA_SUBDIRS  := presets leaves seasons masks skeletons
 DATA_FILES    := $(sort $(shell cd data && find $(DATA_SUBDIRS) -type f 2>/dev/null))
 DATA_DIRS     := $(sort $(shell cd data && find $(DATA_SUBDIRS) -type d 2>/dev/null))
-INSTALL_DIRS  := bin lib lib/pkgconfig lib/cmake lib/cmake/sere include include/sere include/sere/ref share \
+INSTALL_DIRS  := bin lib lib/pkgconfig lib/cmake lib/cmake/sere include include/sere include/sere/ref \
+	$(addprefix include/sere/,$(PUBLIC_ROOMS)) share \
 	share/sere $(addprefix share/sere/,$(DATA_DIRS))
 INSTALL_FILES := bin/sere lib/libsere.a lib/libsere.so.$(VERSION) lib/$(SONAME) lib/libsere.so \
 	lib/pkgconfig/sere.pc lib/cmake/sere/sereConfig.cmake lib/cmake/sere/sereConfigVersion.cmake \
-	$(addprefix include/sere/,$(notdir $(PUBLIC_H))) $(addprefix include/sere/ref/,$(notdir $(REF_H))) \
+	$(patsubst kernels/%,include/sere/%,$(PUBLIC_H)) $(addprefix include/sere/ref/,$(notdir $(REF_H))) \
 	$(addprefix share/sere/,$(DATA_FILES)) share/sere/installed-dirs
 SUBST         := sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@VERSION_MAJOR@|$(VERSION_MAJOR)|g'
 
@@ -242,7 +246,8 @@ install: all
 	$(SUBST) scripts/sere.pc.in > $(DEST)/lib/pkgconfig/sere.pc
 	$(SUBST) cmake/sereConfig.cmake.in > $(DEST)/lib/cmake/sere/sereConfig.cmake
 	$(SUBST) cmake/sereConfigVersion.cmake.in > $(DEST)/lib/cmake/sere/sereConfigVersion.cmake
-	install -m 644 $(PUBLIC_H) $(DEST)/include/sere/
+	@for h in $(PUBLIC_H); do echo "install -m 644 $$h $(DEST)/include/sere/$${h#kernels/}"; \
+		install -m 644 "$$h" "$(DEST)/include/sere/$${h#kernels/}" || exit 1; done
 	install -m 644 $(REF_H) $(DEST)/include/sere/ref/
 	@for f in $(DATA_FILES); do echo "install -m 644 data/$$f $(DEST)/share/sere/$$f"; \
 		install -m 644 "data/$$f" "$(DEST)/share/sere/$$f" || exit 1; done
@@ -257,11 +262,12 @@ uninstall:
 		[ "$$d" = . ] && d=""; rmdir "$(DEST)/$$d" 2>/dev/null && echo "rmdir $(DEST)/$$d"; \
 	done; true
 
-# The headers as a user gets them: each compiles alone as C17 and as C++17 with every warning
+# The layering of the rooms (scripts/layer-check.sh), then the headers as a user gets them: each compiles alone as C17 and as C++17 with every warning
 # an error, and sere.h includes every public header.
 header-check:
+	@bash scripts/layer-check.sh
 	@for h in $(filter-out kernels/sere.h,$(PUBLIC_H)); do \
-		grep -q "^#include \"$$(basename $$h)\"" kernels/sere.h || { echo "kernels/sere.h does not include $$(basename $$h)" >&2; exit 1; }; \
+		grep -q "^#include \"$${h#kernels/}\"" kernels/sere.h || { echo "kernels/sere.h does not include $${h#kernels/}" >&2; exit 1; }; \
 	done
 	@mkdir -p $(BUILD)/header-check
 	@for h in $(PUBLIC_H) $(REF_H); do \
@@ -291,11 +297,11 @@ examples-check: header-check
 	@echo "examples-check: the three examples pass through pkg-config and CMake; uninstall removed every file"
 
 format:
-	clang-format -i $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC) \
+	clang-format -i $(KERNEL_SRC) $(wildcard kernels/*.h kernels/*/*.h kernels/*/internal/*.h) $(HARNESS_SRC) harness/cli/main.c $(wildcard harness/*/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC) \
 		$(wildcard examples/*.c)
 
 format-check:
-	clang-format --dry-run -Werror $(KERNEL_SRC) $(wildcard kernels/*.h kernels/ref/*.h) harness/*.c $(wildcard harness/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC) \
+	clang-format --dry-run -Werror $(KERNEL_SRC) $(wildcard kernels/*.h kernels/*/*.h kernels/*/internal/*.h) $(HARNESS_SRC) harness/cli/main.c $(wildcard harness/*/*.h) $(TEST_SRC) $(wildcard tests/*.h) $(BENCH_SRC) $(wildcard bench/*.h) $(TOOL_SRC) \
 		$(wildcard examples/*.c)
 
 clean:
@@ -341,7 +347,7 @@ $(FUZZ_LIB): $(FUZZ_LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-# fuzz_chain and fuzz_png also reach two static readers of harness/seasonleaf.c through the shim.
+# fuzz_chain and fuzz_png also reach two static readers of harness/read/seasonleaf.c through the shim.
 $(FUZZ_BUILD)/fuzz_chain $(FUZZ_BUILD)/fuzz_png: $(FUZZ_SHIM)
 # fuzz_png recomputes chunk CRCs with zlib's crc32.
 $(FUZZ_BUILD)/fuzz_png: FUZZ_LIBS := -lz

@@ -13,13 +13,13 @@
 // "vs_1_thread": its time over the median of the threads:1 rows of the same kernel and busy
 // state measured before it in this process (run with --benchmark_repetitions and quote the
 // medians). The goal of the issue: vs_1_thread <= 1.3 with busy:1.
-#include "bvh.h"
-#include "cg.h"
-#include "collide.h"
+#include "common/params.h"
+#include "drying/leaf.h"
 #include "fixture.h"
-#include "leaf.h"
-#include "params.h"
-#include "pbd.h"
+#include "solve/bvh.h"
+#include "solve/cg.h"
+#include "solve/collide.h"
+#include "solve/pbd.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -84,7 +84,7 @@ class Hog
 			}
 		}
 		// Let it reach its CPU and spin for a while: the kernels measure the load at most every
-		// 0.25 s (kernels/internal/team.h), so these rows time the steady state of a machine that
+		// 0.25 s (kernels/core/internal/team.h), so these rows time the steady state of a machine that
 		// stays busy, not the first call after the load came.
 		const struct timespec settle = { 0, 600 * 1000 * 1000 };
 		nanosleep( &settle, nullptr );

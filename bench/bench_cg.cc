@@ -1,9 +1,9 @@
 // Osmotic flow systems of the Table 1 maple (T and V layers): our SpMV (CSR and SELL-C-sigma) and
 // Jacobi PCG at 1 and 2 threads beside Eigen 3.4's ConjugateGradient with a diagonal
 // preconditioner, same matrix, same tolerance (relative residual 1e-8), in one binary.
-#include "cg.h"
+#include "drying/osmosis.h"
 #include "fixture.h"
-#include "osmosis.h"
+#include "solve/cg.h"
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>

@@ -1,4 +1,4 @@
-// Self-collision (Sec. 5.3, Eq. 14): BVH refit and build, the proximity queries (vertex–triangle
+// Self-collision (Sec. 5.3, Jeong Eq. 14): BVH refit and build, the proximity queries (vertex–triangle
 // per vertex, edge–edge per vertex's edges), the push-out response and the Voronoi restore, on the
 // Table 1 maple (bench/fixture.h: 4680 triangle-layer vertices, 8517 triangles, the leaf about 1
 // across) flat; dried (the maple after
@@ -10,13 +10,13 @@
 // (sere_sim_params_default; the maple-green preset keeps it) times the triangle layer's
 // shrinkage (sere_leaf_thickness_scale, 1 but for the dried leaf).
 
-#include "build.h"
-#include "bvh.h"
-#include "collide.h"
+#include "common/params.h"
+#include "drying/leaf.h"
 #include "fixture.h"
-#include "leaf.h"
-#include "params.h"
+#include "read/build.h"
 #include "ref/collide_ref.h"
+#include "solve/bvh.h"
+#include "solve/collide.h"
 
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
@@ -378,7 +378,7 @@ void BM_collide_respond( benchmark::State& state, Shape shape )
 }
 
 // rounds rounds of refit (rebuild when degraded), detect and respond (sere_collide_resolve),
-// then, when restore is set, the Voronoi restore of Eq. 14; the scene is reset between
+// then, when restore is set, the Voronoi restore of Jeong Eq. 14; the scene is reset between
 // iterations outside the timed region. Unless listed, the candidate list is dropped there too, so
 // every detection searches the tree (a frame after the motion outgrew the list); listed keeps it,
 // so every detection but the first is served by it (a frame moving less than the list's skin).
@@ -428,7 +428,7 @@ void BM_collide_pass_listed( benchmark::State& state, Shape shape )
 	collide_loop( state, shape, 1, false, true );
 }
 
-// The paper's Collisions column: the pass with range(1) rounds, then Eq. 14.
+// The paper's Collisions column: the pass with range(1) rounds, then Jeong Eq. 14.
 void BM_collide_frame( benchmark::State& state, Shape shape )
 {
 	collide_loop( state, shape, (int32_t) state.range( 1 ), true );

@@ -1,4 +1,4 @@
-// One day of the seed-002 Markov chain of leaf states (kernels/markov.h, Sec. 5, Eq. 5-6) on a
+// One day of the seed-002 Markov chain of leaf states (kernels/season/markov.h, Sec. 5, Tang Eq. 5-6) on a
 // tree of 10^6 leaves: sere_markov_advance at 1 and 2 threads (it parallelizes inside: an OpenMP
 // static schedule over blocks of 2048 leaves, each block a vectorized stepping loop then a
 // histogram) and, separately, sere_markov_day_prepare, the once-a-day cost of turning the day's
@@ -24,7 +24,7 @@
 // leaves/s), 2 threads 1.22 ms (813-822M leaves/s), 1.96x. 0.84 GB/s at 1 thread: compute-bound,
 // about 2.4 ns a leaf for the counter-based random number (three 64-bit multiplies), seven
 // threshold compares and the histogram. A day's tables cost 0.3 us.
-#include "markov.h"
+#include "season/markov.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -57,7 +57,7 @@ enum
 	STATES
 };
 
-// P_ii at the corners wet-cold, wet-warm, dry-cold, dry-warm (Eq. 5).
+// P_ii at the corners wet-cold, wet-warm, dry-cold, dry-warm (Tang Eq. 5).
 const double stay[STATES * 4] = {
 	0.955, 0.9995, 0.935, 0.998, // green, level 0
 	0.93,  0.99,   0.91,  0.985, // yellow, level 1
@@ -69,7 +69,7 @@ const double stay[STATES * 4] = {
 	1.0,   1.0,	   1.0,	  1.0,	 // fallen: absorbing
 };
 
-// g_ij at the same corners (Eq. 6): yellow comes with wet weather, red with dry.
+// g_ij at the same corners (Tang Eq. 6): yellow comes with wet weather, red with dry.
 const sere_markov_transition transitions[] = {
 	{ GREEN0, YELLOW1, { 0.8, 0.7, 0.3, 0.4 } },   { GREEN0, RED1, { 0.2, 0.3, 0.7, 0.6 } },
 	{ YELLOW1, YELLOW2, { 0.8, 0.8, 0.6, 0.6 } },  { YELLOW1, BROWN2, { 0.2, 0.2, 0.4, 0.4 } },
@@ -162,7 +162,7 @@ void BM_MarkovAdvance( benchmark::State& state )
 	omp_set_num_threads( saved );
 }
 
-// The day's sampling tables from the weather (Eq. 5-6 for every state, then 256 x 8 thresholds
+// The day's sampling tables from the weather (Tang Eq. 5-6 for every state, then 256 x 8 thresholds
 // and targets): once a day for the whole tree.
 void BM_MarkovDayPrepare( benchmark::State& state )
 {

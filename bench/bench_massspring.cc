@@ -1,13 +1,13 @@
-// One step of the seed-002 mass-spring model (kernels/massspring.h) on the triangle layer of the
+// One step of the seed-002 mass-spring model (kernels/season/massspring.h) on the triangle layer of the
 // Table 1 maple: its 4680 T particles and 8517 triangles give 13196 structural springs (the edges,
 // 10 colors) and 12355 flexion springs (one per interior edge). The optimized kernel at 1 and 2
 // threads beside the scalar reference twin (kernels/ref/massspring_ref.h) on the same mesh,
 // springs and states, in one binary. Goal: a drying step costs a small multiple of one pass over
 // the springs, and 2 threads beat 1.
 //
-// Scene, as harness/seasonleaf.c makes the season leaves: the maple scaled to length 1 (the units
+// Scene, as harness/read/seasonleaf.c makes the season leaves: the maple scaled to length 1 (the units
 // of massspring.h), a rest shape cupped by z = 0.25 r² about the centroid, masses in [0.1, 1] from
-// Eq. 3 on a gray pattern (veins white, the blade darkening with the distance from the base), the
+// Tang Eq. 3 on a gray pattern (veins white, the blade darkening with the distance from the base), the
 // base particle and its ring of neighbours pinned, gravity −z, shrink 0.05 and curl 0.3 (the most
 // withered level). From rest the blade curls and sags and the strain limit starts acting at step
 // 8; a setup run of 400 steps keeps a snapshot every 20 steps.
@@ -31,8 +31,8 @@
 // profile puts a third of the step in the limiter sweeps and a fifth in the per-particle gather
 // of the spring forces.
 #include "fixture.h"
-#include "massspring.h"
 #include "ref/massspring_ref.h"
+#include "season/massspring.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -119,7 +119,7 @@ scene& maple()
 		s.y[i] = static_cast<float>( dy );
 		s.z[i] = rest_cup * static_cast<float>( dx * dx + dy * dy );
 	}
-	// Eq. 3 masses: veins white (heaviest), the blade from light gray at the base to dark at the
+	// Tang Eq. 3 masses: veins white (heaviest), the blade from light gray at the base to dark at the
 	// far edge, so the tips deform most (Sec. 4.2).
 	double dmax = 0.0;
 	for ( int32_t i = 0; i < n; ++i )

@@ -1,7 +1,7 @@
 // Model building (Sec. 3): sampling + constrained Delaunay + relaxation + double layer, on the
 // Table 1 maple's exact counts. Counter: triangle-layer points per second.
-#include "leafload.h"
-#include "model.h"
+#include "drying/model.h"
+#include "read/leafload.h"
 
 #include <benchmark/benchmark.h>
 

@@ -8,7 +8,7 @@
 // its sweeps. A call costs its sweeps plus a fixed part (the entry check for NaN and negative
 // masses, packing the caller's positions into records and back, the parallel region); the
 // sweeps:1 rows carry all of that fixed part, the sweeps:200 rows almost none. The real
-// workload (kernels/leaf.c) asks for up to 200 sweeps per frame in one call (10 per call when
+// workload (kernels/drying/leaf.c) asks for up to 200 sweeps per frame in one call (10 per call when
 // the stall stop is on), so the sweeps:20 and sweeps:200 rows are the ones that matter; the
 // colored solver and its floor run the same calls, so their ratio at equal threads and sweeps
 // is the ratio of arithmetic plus memory to memory alone. On this 2-core shared machine the
@@ -21,8 +21,8 @@
 // data (the reference only on degenerate springs), so the cost does not depend on the state,
 // and the frustrated double layer stays bounded.
 #include "fixture.h"
-#include "pbd.h"
 #include "ref/pbd_ref.h"
+#include "solve/pbd.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>

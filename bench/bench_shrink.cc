@@ -1,4 +1,4 @@
-// Spring rest lengths from water loss (Eq. 11-12, kernels/shrink.h) on the Table 1 maple's 51102
+// Spring rest lengths from water loss (Jeong Eq. 11-12, kernels/drying/shrink.h) on the Table 1 maple's 51102
 // springs, at 1 and 2 threads, beside the formula as written with libm's pow, one spring at a
 // time, on the same springs and masses. The masses are those of the maple after 400 frames of
 // Algorithm 1 with maple-green (the collision benchmarks' dried state), so v_rel spans what a
@@ -11,9 +11,9 @@
 // exponent stopped using an int64 -> double conversion, which AVX2 lacks and which had kept the
 // whole loop scalar, a driver timing the kernel on the maple (best of 300 calls) saw 2034 / 1019
 // us, against 356 / 233 us after.
+#include "drying/layers.h"
+#include "drying/shrink.h"
 #include "fixture.h"
-#include "layers.h"
-#include "shrink.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -60,7 +60,7 @@ void BM_Shrink( benchmark::State& state )
 		benchmark::Counter( static_cast<double>( m.s.count ) * state.iterations(), benchmark::Counter::kIsRate );
 }
 
-// Eq. 11-12 and the stop rules as shrink.h states them, with std::pow: the baseline the SIMD
+// Jeong Eq. 11-12 and the stop rules as shrink.h states them, with std::pow: the baseline the SIMD
 // exp/log pair replaces.
 void BM_ShrinkLibm( benchmark::State& state )
 {

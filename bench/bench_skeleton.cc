@@ -1,9 +1,9 @@
 // Venation skeleton wilting (seed 003): skinning, banding and forward kinematics at 1 and 2
 // threads, their reference twins, Eigen (skinning) and Embree (nearest joint) as peers, and one
 // frame of a plant of 100 leaves × about 5,000 vertices with and without the piercing check.
+#include "mesh/subdivide.h"
 #include "ref/skeleton_ref.h"
-#include "skeleton.h"
-#include "subdivide.h"
+#include "wilt/skeleton.h"
 
 #include <Eigen/Dense>
 #include <benchmark/benchmark.h>

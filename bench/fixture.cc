@@ -1,8 +1,8 @@
 #include "fixture.h"
 
-#include "build.h"
-#include "leaf.h"
-#include "leafload.h"
+#include "drying/leaf.h"
+#include "read/build.h"
+#include "read/leafload.h"
 
 #include <cstdio>
 #include <cstdlib>

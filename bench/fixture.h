@@ -3,7 +3,7 @@
 // wisteria 12750/50436).
 #pragma once
 
-#include "model.h"
+#include "drying/model.h"
 
 enum sere_bench_leaf
 {

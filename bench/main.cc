@@ -1,13 +1,13 @@
 // sere-bench: every kernel's benchmarks in one binary, so a ratio (ours / reference / peer)
 // can be read from one run. Each bench/*.cc registers its own benchmarks.
-#include "machine.h"
+#include "common/machine.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include <string>
 
-// The machine facts of sere's results (harness/machine.h) in the report's context, so a saved
+// The machine facts of sere's results (harness/common/machine.h) in the report's context, so a saved
 // benchmark JSON says what it was measured on. Each benchmark sets its own thread count (its
 // threads argument); "threads" here is OpenMP's default, the most any of them may use, and the
 // bench does not bind threads (sere table1 and sere run do), so "binding" reads "unbound"

@@ -1,5 +1,6 @@
-/* A 2D Poisson problem solved with sere's conjugate gradient (cg.h): the start of any solver
- * that hands sere its own sparse SPD matrix.
+/* A 2D Poisson problem solved with sere's conjugate gradient (solve/cg.h): the start of any
+ * solver that hands sere its own sparse SPD matrix. It includes only the CG's header, by its
+ * room, as a program that wants one kernel does.
  *
  * −Δu = f on the unit square with u = 0 on the boundary, on an N×N grid of interior points and
  * the 5-point stencil (h = 1/(N+1)). With f = 2 [x(1−x) + y(1−y)] the solution is
@@ -9,7 +10,7 @@
  * solver) and the error against u, and exits non-zero when a check fails.
  *
  *   cc poisson.c $(pkg-config --cflags --libs sere) -o poisson && ./poisson */
-#include <sere.h>
+#include <solve/cg.h>
 
 #include <math.h>
 #include <stdio.h>

@@ -1,6 +1,6 @@
 /* sere fuzz — the season readers: the Markov chain file and the weather schedule
- * (harness/cmd_season.c, read_chain and read_schedule) and the key points file
- * (harness/seasonleaf.c, read_keys, through seasonleaf_shim.c).
+ * (harness/cli/cmd_season.c, read_chain and read_schedule) and the key points file
+ * (harness/read/seasonleaf.c, read_keys, through seasonleaf_shim.c).
  *
  * The readers are static, so this file compiles cmd_season.c itself (the library's copy is then
  * not linked). Every input is given to all three readers, so the seeds of each format (chains,
@@ -10,7 +10,7 @@
 #define _GNU_SOURCE
 #include "fuzz.h"
 
-#include "../harness/cmd_season.c"
+#include "../harness/cli/cmd_season.c"
 #include "seasonleaf_shim.h"
 
 int LLVMFuzzerInitialize( int* argc, char*** argv )

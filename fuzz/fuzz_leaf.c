@@ -1,4 +1,4 @@
-/* sere fuzz — the .leaf reader (harness/leaffile.c, data/leaves/FORMAT.md).
+/* sere fuzz — the .leaf reader (harness/read/leaffile.c, data/leaves/FORMAT.md).
  *
  * Every input is read with sere_leaf_read. A rejected input must come back with one line in err
  * and nothing to free. An accepted one must be a valid shape, and must survive the round trip
@@ -6,7 +6,7 @@
 #define _GNU_SOURCE
 #include "fuzz.h"
 
-#include "leaffile.h"
+#include "read/leaffile.h"
 
 #include <string.h>
 

@@ -1,5 +1,5 @@
-/* sere fuzz — the image readers: the PNG leaf (harness/leafimage.c: sere_leaf_from_png_mapped,
- * sere_silhouette_from_png, sere_png_read_gray) and the PGM mask map (harness/seasonleaf.c,
+/* sere fuzz — the image readers: the PNG leaf (harness/read/leafimage.c: sere_leaf_from_png_mapped,
+ * sere_silhouette_from_png, sere_png_read_gray) and the PGM mask map (harness/read/seasonleaf.c,
  * read_pgm, through seasonleaf_shim.c).
  *
  * Every input is given to all four. A rejected input must come back with a message and nothing
@@ -12,7 +12,7 @@
 #define _GNU_SOURCE
 #include "fuzz.h"
 
-#include "leafimage.h"
+#include "read/leafimage.h"
 #include "seasonleaf_shim.h"
 
 #include <math.h>

@@ -1,4 +1,4 @@
-/* sere fuzz — preset files and --set key=value (harness/params.c).
+/* sere fuzz — preset files and --set key=value (harness/common/params.c).
  *
  * Every input is read three ways: as a preset file (sere_params_load_preset), whole as one
  * --set argument (sere_params_set), and line by line as a list of --set arguments
@@ -7,7 +7,7 @@
 #define _GNU_SOURCE
 #include "fuzz.h"
 
-#include "params.h"
+#include "common/params.h"
 
 #include <string.h>
 

@@ -1,4 +1,4 @@
-/* sere fuzz — the venation skeleton reader of `sere wilt` (harness/cmd_wilt_skelfile.c,
+/* sere fuzz — the venation skeleton reader of `sere wilt` (harness/cli/cmd_wilt_skelfile.c,
  * wilt_skeleton_load; data/skeletons/cucumber.skel describes the format).
  *
  * build_leaf and the options are static, so this file compiles cmd_wilt.c itself (the library's
@@ -9,7 +9,7 @@
 #define _GNU_SOURCE
 #include "fuzz.h"
 
-#include "../harness/cmd_wilt.c"
+#include "../harness/cli/cmd_wilt.c"
 
 int LLVMFuzzerInitialize( int* argc, char*** argv )
 {

@@ -1,7 +1,7 @@
-/* sere fuzz — harness/seasonleaf.c compiled as it is, with its two static readers (key points,
+/* sere fuzz — harness/read/seasonleaf.c compiled as it is, with its two static readers (key points,
  * PGM masks) exported under fuzz_ names. The fuzz targets that link this file get the whole of
  * seasonleaf.c from here rather than from the library, so the readers stay unchanged. */
-#include "../harness/seasonleaf.c"
+#include "../harness/read/seasonleaf.c"
 
 #include "seasonleaf_shim.h"
 

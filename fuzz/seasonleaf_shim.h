@@ -1,7 +1,7 @@
-/* sere fuzz — the two static readers of harness/seasonleaf.c, reachable from a fuzz target. */
+/* sere fuzz — the two static readers of harness/read/seasonleaf.c, reachable from a fuzz target. */
 #pragma once
 
-#include "base.h"
+#include "core/base.h"
 
 #include <stddef.h>
 

@@ -2,7 +2,7 @@
  * pipeline, so each kernel can be tested alone. */
 #pragma once
 
-#include "layers.h"
+#include "drying/layers.h"
 
 #include <stddef.h>
 

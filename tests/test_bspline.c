@@ -1,7 +1,7 @@
 /* The closed B-spline of seed 002 (Sec. 3, Fig. 1a): it runs through every key point, is C²
  * at every joint (the closing one included), a circle's key points give a curve of length 2πr,
  * the samples lie at equal arc length starting at key point 0, and bad key points are refused. */
-#include "bspline.h"
+#include "mesh/bspline.h"
 
 #include <criterion/criterion.h>
 #include <float.h>

@@ -1,5 +1,5 @@
-#include "bvh.h"
 #include "fixture.h"
+#include "solve/bvh.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,10 +1,10 @@
 /* The multicolor symmetric Gauss–Seidel preconditioner (cg.h: sere_sgs) and the CG it drives
  * (sere_cg_solve_sgs): against a dense reference, its invariants (coloring, symmetry), the
  * tolerance, thread-count determinism, and the osmosis's choice between it and Jacobi. */
-#include "cg.h"
+#include "drying/model.h"
+#include "drying/osmosis.h"
 #include "fixture.h"
-#include "model.h"
-#include "osmosis.h"
+#include "solve/cg.h"
 
 #include <criterion/criterion.h>
 #include <float.h>

@@ -1,8 +1,8 @@
-#include "bvh.h"
-#include "collide.h"
 #include "fixture.h"
-#include "measure.h"
+#include "mesh/measure.h"
 #include "ref/collide_ref.h"
+#include "solve/bvh.h"
+#include "solve/collide.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -992,7 +992,7 @@ Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 	collide_sheet_free( &s );
 }
 
-/* Eq. 14 in both modes: ĥ measured before the collision pass (Algorithm 1 line 14), or the rest
+/* Jeong Eq. 14 in both modes: ĥ measured before the collision pass (Algorithm 1 line 14), or the rest
  * thickness h. */
 Test( collide, voronoi_restore_eq14 )
 {
@@ -1062,7 +1062,7 @@ Test( collide, voronoi_restore_eq14 )
 			/* position: centroid + h n in float against double, coordinates ≤ 1.5 and |h| ≤ 0.06:
 			 * a few ulps of the coordinates (2e-7) */
 			cr_assert( fabs( s.x[i] - dx[i] ) < 1e-6 && fabs( s.y[i] - dy[i] ) < 1e-6 && fabs( s.z[i] - dz[i] ) < 1e-6,
-					   "mode %d: particle %d off Eq. 14", m, t );
+					   "mode %d: particle %d off Jeong Eq. 14", m, t );
 			/* velocity: the corner mean, three additions and a division in float */
 			cr_assert( fabs( s.vx[i] - dvx[i] ) < 1e-6 && fabs( s.vy[i] - dvy[i] ) < 1e-6 &&
 						   fabs( s.vz[i] - dvz[i] ) < 1e-6,
@@ -1281,7 +1281,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	free( start );
 	s.vz[0] = INFINITY;
 
-	/* Eq. 14 with a NaN thickness or velocity writes nothing */
+	/* Jeong Eq. 14 with a NaN thickness or velocity writes nothing */
 	float* h = malloc( sizeof( float ) * (size_t) f );
 	for ( int32_t t = 0; t < f; ++t )
 	{
@@ -1463,7 +1463,7 @@ static void conserving_sheet( collide_sheet* s, uint64_t seed )
 	}
 }
 
-/* Eq. 14 only where the collision response moved a corner and left the Voronoi particle on the
+/* Jeong Eq. 14 only where the collision response moved a corner and left the Voronoi particle on the
  * wrong side of its triangle (Sec. 5.3): those are put back on the normal line at h with the
  * velocity change Δx/Δt, every other Voronoi particle stays bit for bit. */
 Test( collide, restore_moved_applies_eq14_only_where_collisions_moved )

@@ -1,10 +1,10 @@
 /* Self-collision on the shipped leaves (the issue's case): random smooth deformations and a
  * crumple of real leaf meshes; the BVH must find exactly the brute-force pair sets, vertex–triangle
  * and edge–edge. */
-#include "collide.h"
-#include "leafload.h"
-#include "model.h"
+#include "drying/model.h"
+#include "read/leafload.h"
 #include "ref/collide_ref.h"
+#include "solve/collide.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

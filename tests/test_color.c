@@ -1,5 +1,5 @@
 /* Constraint coloring for parallel Gauss–Seidel (Sec. 5.2). */
-#include "color.h"
+#include "solve/color.h"
 
 #include <criterion/criterion.h>
 #include <stdlib.h>

@@ -1,13 +1,13 @@
 /* The drying physics as a user looks at it (docs/DESIGN.md, "Checking the physics"): every preset
  * dried to the end on its own leaf at a small size, frame by frame converged, without
  * crossings, drift or flying, shrunk as real leaves shrink. */
-#include "build.h"
+#include "common/params.h"
+#include "common/watch.h"
+#include "drying/leaf.h"
 #include "fixture.h"
-#include "leaf.h"
-#include "leafload.h"
-#include "measure.h"
-#include "params.h"
-#include "watch.h"
+#include "mesh/measure.h"
+#include "read/build.h"
+#include "read/leafload.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -209,7 +209,7 @@ Test( drying, every_preset_shrinks_like_a_leaf_without_crossings, .disabled = SE
 		cr_expect_geq( run.converged, 0.9 * run.frames, "%s: %d of %d frames converged", presets[k][0], run.converged,
 					   run.frames );
 		/* Item 2 for the presets without gravity or ground (their gap is never measured): the
-		 * collision response and Eq. 14 move no centre of mass. The issue allows 0.01 L; the runs
+		 * collision response and Jeong Eq. 14 move no centre of mass. The issue allows 0.01 L; the runs
 		 * move 3e-5 (maple-green) to 5e-3 (grass), and restoring every Voronoi particle whose
 		 * triangle a contact touched moved the green maple's by 9e-3: 6e-3 tells them apart. */
 		if ( run.gap_max == -INFINITY )
@@ -217,7 +217,7 @@ Test( drying, every_preset_shrinks_like_a_leaf_without_crossings, .disabled = SE
 			cr_expect_lt( run.mass_drift_max, 6e-3, "%s: the centre of mass moved %g leaf lengths", presets[k][0],
 						  run.mass_drift_max );
 		}
-		/* Item 5, the morphologies of Fig. 17 measured (kernels/measure.h) */
+		/* Item 5, the morphologies of Fig. 17 measured (kernels/mesh/measure.h) */
 		if ( strcmp( presets[k][0], "maple-red" ) == 0 )
 		{
 			cr_expect_gt( run.dry.margin_lift, 0.0, "maple-red: the margin must curl up, lift %g",

@@ -1,5 +1,5 @@
-/* The shared plane geometry (kernels/geometry.c): cases whose answers are exact in binary. */
-#include "geometry.h"
+/* The shared plane geometry (kernels/core/geometry.c): cases whose answers are exact in binary. */
+#include "core/geometry.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

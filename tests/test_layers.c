@@ -1,5 +1,5 @@
+#include "drying/layers.h"
 #include "fixture.h"
-#include "layers.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -110,7 +110,7 @@ Test( layers, tau_and_masses )
 	sere_model model;
 	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &params, &model ), SERE_OK );
 	int32_t n = model.triangle_particles;
-	/* Eq. 1: τ = 1 at the base and 0 at the farthest particle; Eq. 2 maps it onto [m_min, m_max]. */
+	/* Jeong Eq. 1: τ = 1 at the base and 0 at the farthest particle; Jeong Eq. 2 maps it onto [m_min, m_max]. */
 	cr_expect_float_eq( model.p.tau[model.base], 1.0f, 0.0f );
 	cr_expect_eq( model.d[model.base], 0.0 );
 	float tau_min = 1.0f;

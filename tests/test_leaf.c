@@ -1,6 +1,6 @@
-#include "leaf.h"
-#include "leafload.h"
-#include "model.h"
+#include "drying/leaf.h"
+#include "drying/model.h"
+#include "read/leafload.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,5 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
-#include "leaffile.h"
+#include "read/leaffile.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,7 +1,7 @@
 #define _POSIX_C_SOURCE 200809L
-#include "leafimage.h"
-#include "leafload.h"
-#include "model.h"
+#include "drying/model.h"
+#include "read/leafimage.h"
+#include "read/leafload.h"
 
 #include <cairo.h>
 #include <criterion/criterion.h>

@@ -1,14 +1,14 @@
-/* The machine facts every result carries (harness/machine.h): the JSON member is valid JSON
+/* The machine facts every result carries (harness/common/machine.h): the JSON member is valid JSON
  * (checked by a strict RFC 8259 parser below, not by looking for braces), has every field, and
  * says what the library and the caller say: the SIMD path of sere_simd_path(), the version of
  * sere_version(), the thread count passed, the cores sere_topo_bind bound the threads to.
  * `sere table1 --json` carries the same object. SERE_BIN names the binary under test. */
 #define _DEFAULT_SOURCE
-#include "base.h"
+#include "common/io.h"
+#include "common/machine.h"
+#include "common/topo.h"
+#include "core/base.h"
 #include "fixture.h"
-#include "io.h"
-#include "machine.h"
-#include "topo.h"
 
 #include <criterion/criterion.h>
 #include <hwloc.h>

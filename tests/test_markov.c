@@ -1,8 +1,8 @@
-/* The Markov chain of leaf states (seed 002, Sec. 5, Eq. 5–6): rows are probability
+/* The Markov chain of leaf states (seed 002, Sec. 5, Tang Eq. 5–6): rows are probability
  * distributions for every temperature and humidity, the corners give the user's constants, the
  * sampled population follows the exact distribution (chi-square), and the counter-based
  * generator makes the result independent of threads and of how the leaves are split. */
-#include "markov.h"
+#include "season/markov.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -137,7 +137,7 @@ Test( markov, corners_are_the_users_constants )
 {
 	sere_markov_chain c = seasonal_chain();
 	double P[STATES * STATES];
-	/* Wet and cold: T at the cold corner, H at the wet corner (Eq. 5–6). */
+	/* Wet and cold: T at the cold corner, H at the wet corner (Tang Eq. 5–6). */
 	cr_assert_eq( sere_markov_matrix( &c, 0.0, 90.0, P ), SERE_OK );
 	cr_assert_float_eq( P[0 * STATES + 0], 0.90, 1e-15 );
 	cr_assert_float_eq( P[0 * STATES + 1], 0.10, 1e-15 );

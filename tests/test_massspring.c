@@ -1,9 +1,9 @@
-/* The improved mass-spring model of seed 002 (Sec. 4): masses from the mask by Eq. 3, the
- * strain limit of Eq. 2 holding after every step, dark (light) regions deforming more than
+/* The improved mass-spring model of seed 002 (Sec. 4): masses from the mask by Tang Eq. 3, the
+ * strain limit of Tang Eq. 2 holding after every step, dark (light) regions deforming more than
  * bright (heavy) ones under the same forces (Fig. 3–6), agreement with the scalar reference twin,
  * 1 and 2 threads bitwise equal, and bad input refused. */
-#include "massspring.h"
 #include "ref/massspring_ref.h"
+#include "season/massspring.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -125,7 +125,7 @@ Test( massspring, mass_from_gray_is_logarithmic )
 	{
 		cr_expect( mass[g] > mass[g - 1], "mass must rise with the gray value (%d)", g );
 	}
-	/* Eq. 3 as documented: mid gray G = 127.5 gives 0.1 + 0.9 ln(128.5)/ln(256). */
+	/* Tang Eq. 3 as documented: mid gray G = 127.5 gives 0.1 + 0.9 ln(128.5)/ln(256). */
 	float mid = 0.5f, m;
 	cr_assert_eq( sere_massspring_mass_from_gray( &mid, 1, 0.1f, 1.0f, &m ), SERE_OK );
 	cr_expect_float_eq( m, (float) ( 0.1 + 0.9 * log( 128.5 ) / log( 256.0 ) ), 1e-6f );
@@ -545,7 +545,7 @@ static uint64_t fnv1a( uint64_t h, const void* data, size_t bytes )
 	return h;
 }
 
-/* The step is written once over the SIMD lane layer (kernels/internal/simd.h), built at
+/* The step is written once over the SIMD lane layer (kernels/core/internal/simd.h), built at
  * 16 lanes (AVX-512), 8 (AVX2) or 4 (portable C). Lane-wise IEEE arithmetic without FMA gives
  * every width the same bits, and the same bits the three hand-written bodies gave before the
  * layer: the hash below was taken from those (commit 9b87f30, AVX-512 build) and CI checks it

@@ -1,5 +1,5 @@
 #include "fixture.h"
-#include "measure.h"
+#include "mesh/measure.h"
 #include "ref/measure_ref.h"
 
 #include <criterion/criterion.h>

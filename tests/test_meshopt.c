@@ -3,9 +3,9 @@
  * vertices stay bitwise where they were and the border stays exactly the outline; every
  * triangle stays counter-clockwise; the smallest angle grows and interior edges come near the
  * target h; the area is the polygon's; two runs give the same arrays; bad meshes are refused. */
-#include "bspline.h"
-#include "meshopt.h"
-#include "triangulate.h"
+#include "mesh/bspline.h"
+#include "mesh/meshopt.h"
+#include "mesh/triangulate.h"
 
 #include <criterion/criterion.h>
 #include <float.h>

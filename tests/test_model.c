@@ -1,7 +1,7 @@
-#include "geometry.h"
-#include "leafload.h"
-#include "model.h"
-#include "sample.h"
+#include "core/geometry.h"
+#include "drying/model.h"
+#include "mesh/sample.h"
+#include "read/leafload.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

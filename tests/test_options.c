@@ -1,6 +1,6 @@
-/* The one command-line parser (harness/options.c): every kind of option stores what it should,
+/* The one command-line parser (harness/cli/options.c): every kind of option stores what it should,
  * bad values are refused with the message users see, lists keep their order, --help stops. */
-#include "options.h"
+#include "cli/options.h"
 
 #include <criterion/criterion.h>
 #include <criterion/redirect.h>

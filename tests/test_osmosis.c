@@ -1,9 +1,9 @@
-#include "cg.h"
+#include "drying/model.h"
+#include "drying/osmosis.h"
 #include "fixture.h"
-#include "leafload.h"
-#include "model.h"
-#include "osmosis.h"
+#include "read/leafload.h"
 #include "ref/osmosis_ref.h"
+#include "solve/cg.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -102,14 +102,14 @@ Test( osmosis, matches_literal_eq9 )
 	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
 									 &params, &report ),
 				  SERE_OK );
-	/* w = M c turns the paper's nonsymmetric Eq. 9 into the SPD form with the same solution;
+	/* w = M c turns the paper's nonsymmetric Jeong Eq. 9 into the SPD form with the same solution;
 	 * CG to 1e-14 and a pivoted dense solve agree to 1e-10 relative (the issue's bar). */
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		cr_assert( w_ref[i] > 0.0 );
 		cr_assert_leq( fabs( model.p.w[i] - w_ref[i] ), 1e-10 * fabs( w_ref[i] ), "particle %d: %.17g vs %.17g", i,
 					   model.p.w[i], w_ref[i] );
-		cr_assert_eq( model.p.m[i], model.p.M[i] + model.p.w[i] ); /* Eq. 10 */
+		cr_assert_eq( model.p.m[i], model.p.M[i] + model.p.w[i] ); /* Jeong Eq. 10 */
 	}
 	free( w_ref );
 	sere_osmosis_destroy( o );

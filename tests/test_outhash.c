@@ -131,7 +131,7 @@ Test( outhash, wilt_generated_venation )
 }
 
 /* `sere season` with its key points and mask map read from the auxiliary image: the PNG reader,
- * segmentation, tracing, smoothing and simplification of harness/leafimage.c feed the leaf. */
+ * segmentation, tracing, smoothing and simplification of harness/read/leafimage.c feed the leaf. */
 Test( outhash, season_from_png_silhouette )
 {
 	char dir[64], out[256];

@@ -1,7 +1,7 @@
-/* Colored PBD (Sec. 5.2, Eq. 13) on meshes built here: a cloth patch (structural and shear
+/* Colored PBD (Sec. 5.2, Jeong Eq. 13) on meshes built here: a cloth patch (structural and shear
  * springs) and a small triangle–Voronoi double layer, so the kernel is tested alone. */
-#include "pbd.h"
 #include "ref/pbd_ref.h"
+#include "solve/pbd.h"
 
 #include <criterion/criterion.h>
 #include <float.h>
@@ -464,7 +464,7 @@ Test( pbd, deterministic_across_threads )
 	}
 }
 
-/* One spring's projection (Eq. 13) with the kernel's operations in the kernel's order (an
+/* One spring's projection (Jeong Eq. 13) with the kernel's operations in the kernel's order (an
  * explicit multiply, then the add: the build contracts nothing), moving m's positions; returns
  * the spring's |C/l| (|C + α̃λ|/l with compliance) before the move. */
 static float replay_spring( test_mesh* m, int32_t s, float rest, float k, float alpha, float* lambda )

@@ -1,6 +1,6 @@
 #define _POSIX_C_SOURCE 200809L
-#include "leafpics.h"
-#include "render.h"
+#include "render/leafpics.h"
+#include "render/render.h"
 
 #include <cairo.h>
 #include <criterion/criterion.h>

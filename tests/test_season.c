@@ -2,8 +2,8 @@
  * with its deformation levels, and `sere season` as a user meets it (outputs, determinism across
  * thread counts, the sampled distribution against the exact one, bad input). */
 #define _DEFAULT_SOURCE
-#include "lsystem.h"
-#include "seasonleaf.h"
+#include "read/seasonleaf.h"
+#include "season/lsystem.h"
 
 #include "fixture.h"
 
@@ -145,7 +145,7 @@ Test( seasonleaf, maple_from_key_points_and_mask, .timeout = 60 )
 	cr_expect( extent > 0.97 && extent < 1.03, "extent %g", extent );
 	cr_expect( area > 0.1, "area %g", area );
 	/* the maple mask is dark (gray 20/255) at the lobe corners and the petiole, bright elsewhere
-	 * (Fig. 3b); Eq. 3's logarithm maps 20/255 to 0.59 and white to 1. No vertex samples the
+	 * (Fig. 3b); Tang Eq. 3's logarithm maps 20/255 to 0.59 and white to 1. No vertex samples the
 	 * black outside the painted leaf (that would give 0.1). Near the petiole the blade is
 	 * lighter than on average. */
 	cr_expect( lo > 0.5 && lo < 0.7 && hi > 0.9, "masses %g..%g", lo, hi );

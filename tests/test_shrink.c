@@ -1,6 +1,6 @@
-/* Spring rest lengths from masses (Sec. 5.1, Eq. 11–12). */
-#include "layers.h"
-#include "shrink.h"
+/* Spring rest lengths from masses (Sec. 5.1, Jeong Eq. 11–12). */
+#include "drying/layers.h"
+#include "drying/shrink.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -28,7 +28,7 @@ static int64_t ulps( float u, float v )
 Test( shrink, eq12_by_hand )
 {
 	/* Three springs, each between two particles of mass 0.6 and initial mass 1:
-	 * v_rel = (0.6 + 0.6)/(1 + 1) = 0.6 (Eq. 11), so 1 − v_rel = 0.4. */
+	 * v_rel = (0.6 + 0.6)/(1 + 1) = 0.6 (Jeong Eq. 11), so 1 − v_rel = 0.4. */
 	int32_t a[3] = { 0, 2, 4 }, b[3] = { 1, 3, 5 };
 	uint8_t kind[3] = { SERE_SPRING_T, SERE_SPRING_V, SERE_SPRING_L };
 	float rest0[3] = { 2.0f, 2.0f, 2.0f }, rest[3];

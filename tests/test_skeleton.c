@@ -1,9 +1,9 @@
 /* Tests of the venation skeleton kernels (seed 003: Lu, Zhao, Guo 2009): subdivision, leaf and
  * venation skeletons, banding against brute force, forward kinematics with its limits, skinning
  * against the reference, piercing, the plant, determinism. */
+#include "mesh/subdivide.h"
 #include "ref/skeleton_ref.h"
-#include "skeleton.h"
-#include "subdivide.h"
+#include "wilt/skeleton.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,6 +1,6 @@
-#include "leafload.h"
-#include "sample.h"
-#include "triangulate.h"
+#include "mesh/sample.h"
+#include "mesh/triangulate.h"
+#include "read/leafload.h"
 
 #include <criterion/criterion.h>
 #include <math.h>

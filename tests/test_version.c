@@ -2,7 +2,7 @@
  * sere_simd_path() names the path the compiler flags chose, and `sere --version` prints both
  * (with the commit) and exits 0. Run from the repository root, as make test does. */
 #define _DEFAULT_SOURCE
-#include "base.h"
+#include "core/base.h"
 #include "fixture.h"
 
 #include <criterion/criterion.h>

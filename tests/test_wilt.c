@@ -25,7 +25,7 @@ static const char* wilt_binary( void )
 	{
 		cr_skip_test( "SERE_BIN is not set (make test sets it to the built sere)" );
 	}
-	/* Until harness/main.c routes `sere wilt` to sere_cmd_wilt there is nothing to test. */
+	/* Until harness/cli/main.c routes `sere wilt` to sere_cmd_wilt there is nothing to test. */
 	char command[1024];
 	snprintf( command, sizeof( command ), "'%s' wilt --help >/dev/null 2>&1", bin );
 	int raw = system( command );

@@ -3,7 +3,8 @@
  *
  * Build and run from the repository root (no Make needed); the argument is the output folder:
  *   gcc -std=c17 -O2 -Wall -Wextra -Wpedantic -Werror -Ikernels -Iharness data/tools/leafgen.c \
- *       harness/leaffile.c harness/io.c kernels/shape.c -lm -o /tmp/leafgen && /tmp/leafgen data/leaves
+ *       harness/read/leaffile.c harness/common/io.c kernels/mesh/shape.c -lm -o /tmp/leafgen && /tmp/leafgen
+ * data/leaves
  *
  * Deterministic: no random numbers, so the committed files are reproduced byte for byte.
  *
@@ -21,8 +22,8 @@
  *
  * The three Table 1 leaves are tuned so that perimeter^2 / area suits their point counts: a
  * sampler that puts B of N points on the outline at the interior spacing s needs
- * P^2/A = 4 B^2 / (sqrt(3) (2N - B - 2)) (kernels/sample.c); the program prints both. */
-#include "leaffile.h"
+ * P^2/A = 4 B^2 / (sqrt(3) (2N - B - 2)) (kernels/mesh/sample.c); the program prints both. */
+#include "read/leaffile.h"
 
 #include <math.h>
 #include <stdio.h>

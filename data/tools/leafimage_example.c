@@ -1,5 +1,5 @@
 /* Draws data/leaves/example_aux.png, the paper's auxiliary image (Sec. 3.1, Fig. 3b) for a simple
- * ovate leaf in the colors harness/leafimage.h reads: a green blade on white, red veins (a
+ * ovate leaf in the colors harness/read/leafimage.h reads: a green blade on white, red veins (a
  * midvein, three pairs of secondaries, one tertiary) and a blue base dot touching the margin.
  *
  * The blade's right half is the curve x(s) = c L (s - s^3), y(s) = L s^2 for s in [0, 1] (x from

@@ -1,6 +1,6 @@
-#include "collide_ref.h"
+#include "ref/collide_ref.h"
 
-#include "collide.h"
+#include "solve/collide.h"
 
 #include <math.h>
 #include <stdlib.h>

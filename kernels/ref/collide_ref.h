@@ -1,8 +1,8 @@
-/* sere — reference twins of the self-collision kernels (Sec. 5.3, Eq. 14): plain scalar loops
+/* sere — reference twins of the self-collision kernels (Sec. 5.3, Jeong Eq. 14): plain scalar loops
  * that tests and benches compare the optimized kernels with. */
 #pragma once
 
-#include "base.h"
+#include "core/base.h"
 
 #ifdef __cplusplus
 extern "C"
@@ -39,7 +39,7 @@ double sere_collide_ref_segment_distance2( const double p0[3], const double p1[3
  * the plane projection when it falls inside the triangle, else the nearest of the three edges. */
 double sere_collide_ref_distance2( const double p[3], const double a[3], const double b[3], const double c[3] );
 
-/* Algorithm 1 line 14 and Eq. 14 transcribed in double: ĥ_t = (x_t^V − x_a)·n and
+/* Algorithm 1 line 14 and Jeong Eq. 14 transcribed in double: ĥ_t = (x_t^V − x_a)·n and
  * x_t^V = (x_a + x_b + x_c)/3 + h_t n, v_t^V = (v_a + v_b + v_c)/3, for Voronoi particle
  * voronoi_first + t. */
 void sere_collide_ref_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,

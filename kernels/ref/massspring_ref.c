@@ -1,4 +1,4 @@
-#include "massspring_ref.h"
+#include "ref/massspring_ref.h"
 
 #include <math.h>
 
@@ -44,7 +44,7 @@ sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, 
 		fz[b] -= f * nz;
 	}
 
-	/* Eq. 1, explicit Euler for the velocities. */
+	/* Tang Eq. 1, explicit Euler for the velocities. */
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		if ( p->inv_m[i] > 0.0f )
@@ -62,7 +62,7 @@ sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, 
 		}
 	}
 
-	/* Eq. 2: the relative position after the step must stay within τ_c of the natural length.
+	/* Tang Eq. 2: the relative position after the step must stay within τ_c of the natural length.
 	 * Each violating spring is moved onto the band narrowed by the tolerance δ; sweeps repeat
 	 * until one finds nothing more than δ off it and every spring is inside the true band. */
 	const float tau = params->strain_limit, delta = params->strain_tolerance;

@@ -1,11 +1,11 @@
 /* sere — reference twin of massspring.c: a plain scalar transcription of Sec. 4 of seed 002.
  * Each step: F_i = m_i g plus every spring's force added to its two ends in spring order;
- * a = F/m, v ← (1 − drag)(v + a Δt) (Eq. 1); Eq. 2 applied spring by spring in index order,
+ * a = F/m, v ← (1 − drag)(v + a Δt) (Tang Eq. 1); Tang Eq. 2 applied spring by spring in index order,
  * sweep after sweep, until no spring is off the band by more than the tolerance; x ← x + v Δt.
  * Same law, parameters and report as sere_massspring_step; used by tests and benches. */
 #pragma once
 
-#include "massspring.h"
+#include "season/massspring.h"
 
 #ifdef __cplusplus
 extern "C"

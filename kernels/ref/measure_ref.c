@@ -1,6 +1,6 @@
-#include "measure_ref.h"
+#include "ref/measure_ref.h"
 
-#include "measure.h"
+#include "mesh/measure.h"
 
 #include <math.h>
 

@@ -2,7 +2,7 @@
  * optimized kernels of measure.h with. */
 #pragma once
 
-#include "base.h"
+#include "core/base.h"
 
 #ifdef __cplusplus
 extern "C"

@@ -1,4 +1,4 @@
-#include "osmosis_ref.h"
+#include "ref/osmosis_ref.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -21,13 +21,13 @@ sere_status sere_osmosis_ref_step( int32_t first, int32_t count, const int32_t* 
 	{
 		double dx = (double) x[b[s]] - x[a[s]], dy = (double) y[b[s]] - y[a[s]], dz = (double) z[b[s]] - z[a[s]];
 		double l = sqrt( dx * dx + dy * dy + dz * dz );
-		E[a[s] - first] += l; /* Eq. 3: E = Σ |l_ij| */
+		E[a[s] - first] += l; /* Jeong Eq. 3: E = Σ |l_ij| */
 		E[b[s] - first] += l;
 	}
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		A[(size_t) i * n + i] = 1.0;
-		rhs[i] = w[first + i] + water_rate * dt; /* Eq. 9 right-hand side, w_loss signed */
+		rhs[i] = w[first + i] + water_rate * dt; /* Jeong Eq. 9 right-hand side, w_loss signed */
 	}
 	for ( int32_t s = 0; s < spring_count; ++s )
 	{
@@ -39,7 +39,7 @@ sere_status sere_osmosis_ref_step( int32_t first, int32_t count, const int32_t* 
 			int32_t i = gi - first, j = gj - first;
 			double t = 0.5 * ( (double) tau[gi] + (double) tau[gj] );
 			double lambda = lambda_min * ( 1.0 - t ) + lambda_max * t;
-			/* Eq. 8: L°(w_i) = 2/E_i Σ λ_ij (M_i w_j − M_j w_i) / (|l_ij| (M_i + M_j)) */
+			/* Jeong Eq. 8: L°(w_i) = 2/E_i Σ λ_ij (M_i w_j − M_j w_i) / (|l_ij| (M_i + M_j)) */
 			double weight = 2.0 / E[i] * lambda / ( l * ( M[gi] + M[gj] ) );
 			A[(size_t) i * n + j] -= dt * weight * M[gi];
 			A[(size_t) i * n + i] += dt * weight * M[gj];

@@ -1,15 +1,15 @@
-/* sere reference twin — Eq. 9 assembled literally (nonsymmetric) and solved densely. For
+/* sere reference twin — Jeong Eq. 9 assembled literally (nonsymmetric) and solved densely. For
  * tests on small layers only. */
 #pragma once
 
-#include "base.h"
+#include "core/base.h"
 
 #ifdef __cplusplus
 extern "C"
 {
 #endif
 
-/* (I − Δt L°) w' = w + water_rate Δt with L° of Eq. 8 (row weight 2/E_i), by Gaussian
+/* (I − Δt L°) w' = w + water_rate Δt with L° of Jeong Eq. 8 (row weight 2/E_i), by Gaussian
  * elimination with partial pivoting; writes w' (not clamped) into w_out for the layer's
  * particles [first, first + count). */
 sere_status sere_osmosis_ref_step( int32_t first, int32_t count, const int32_t* a, const int32_t* b,

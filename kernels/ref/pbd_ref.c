@@ -1,4 +1,4 @@
-#include "pbd_ref.h"
+#include "ref/pbd_ref.h"
 
 #include <math.h>
 
@@ -16,7 +16,7 @@ int32_t sere_pbd_ref_project( sere_ref_particle* particles, const sere_ref_sprin
 			sere_ref_particle* pb = particles + springs[s].b;
 			float dx = pb->x - pa->x, dy = pb->y - pa->y, dz = pb->z - pa->z;
 			float length = sqrtf( dx * dx + dy * dy + dz * dz );
-			float c = length - springs[s].rest; /* Eq. 13 */
+			float c = length - springs[s].rest; /* Jeong Eq. 13 */
 			worst = fmaxf( worst, fabsf( c ) / springs[s].rest );
 			float w = pa->inv_m + pb->inv_m;
 			if ( w <= 0.0f || length <= 0.0f )

@@ -2,7 +2,7 @@
  * array-of-structs particle layout, written the straightforward way (the baseline). */
 #pragma once
 
-#include "base.h"
+#include "core/base.h"
 
 #ifdef __cplusplus
 extern "C"

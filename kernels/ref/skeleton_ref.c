@@ -1,4 +1,4 @@
-#include "skeleton_ref.h"
+#include "ref/skeleton_ref.h"
 
 #include <math.h>
 

@@ -2,7 +2,7 @@
  * benches compare the optimized kernels with. */
 #pragma once
 
-#include "skeleton.h"
+#include "wilt/skeleton.h"
 
 #ifdef __cplusplus
 extern "C"

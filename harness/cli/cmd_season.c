@@ -1,0 +1,1185 @@
+/* sere season — seasonal leaves on a tree (seed 002, Tang, Wu & Fan 2013): the leaf from key
+ * points and a mask map with its mass-spring deformation levels, a tree from an L-system, and
+ * the Markov chain of leaf states stepped once a day under a temperature/humidity schedule. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli/commands.h"
+#include "cli/options.h"
+#include "common/io.h"
+#include "common/params.h"
+#include "common/topo.h"
+#include "read/seasonleaf.h"
+#include "render/render.h"
+#include "season/lsystem.h"
+#include "season/markov.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_STATES	   SERE_MARKOV_MAX_STATES
+#define MAX_TRANSITION 512
+#define MAX_SCHEDULE   4096
+#define MAX_DAYS	   100000
+#define NAME_SIZE	   32
+#define PI			   3.14159265358979323846
+/* Leaf length in tree units (the first branch segment is 1 long). */
+#define LEAF_SIZE 0.34f
+/* Sides of the prism drawn for a branch segment. */
+#define BRANCH_SIDES 6
+
+/* ------------------------------------------------------------------------------------------- */
+/* The chain file (data/seasons/maple.chain describes the format). */
+
+typedef struct chain_file
+{
+	int32_t state_count;
+	char name[MAX_STATES][NAME_SIZE];
+	uint8_t rgb[MAX_STATES][3];
+	int32_t level[MAX_STATES];
+	int fallen[MAX_STATES];
+	double stay[4 * MAX_STATES];
+	int32_t transition_count;
+	sere_markov_transition transitions[MAX_TRANSITION];
+	int32_t initial;
+	int have_corners;
+	sere_markov_chain chain;
+} chain_file;
+
+static int fail_line( const char* path, int line, const char* format, ... ) __attribute__( ( format( printf, 3, 4 ) ) );
+
+static int fail_line( const char* path, int line, const char* format, ... )
+{
+	char what[512];
+	va_list args;
+	va_start( args, format );
+	vsnprintf( what, sizeof( what ), format, args );
+	va_end( args );
+	if ( line > 0 )
+	{
+		fprintf( stderr, "sere season: %s:%d: %s\n", path, line, what );
+	}
+	else
+	{
+		fprintf( stderr, "sere season: %s: %s\n", path, what );
+	}
+	return -1;
+}
+
+static int find_state( const chain_file* c, const char* name )
+{
+	for ( int32_t s = 0; s < c->state_count; ++s )
+	{
+		if ( strcmp( c->name[s], name ) == 0 )
+		{
+			return s;
+		}
+	}
+	return -1;
+}
+
+/* Splits a line into at most max words (comments after '#' dropped); returns the count. */
+static int split_words( char* line, char** words, int max )
+{
+	char* hash = strchr( line, '#' );
+	if ( hash != NULL )
+	{
+		*hash = '\0';
+	}
+	int n = 0;
+	for ( char *save = NULL, *w = strtok_r( line, " \t\r\n", &save ); w != NULL;
+		  w = strtok_r( NULL, " \t\r\n", &save ) )
+	{
+		if ( n == max )
+		{
+			return max + 1;
+		}
+		words[n++] = w;
+	}
+	return n;
+}
+
+static int number( const char* text, double* value )
+{
+	char* end;
+	errno = 0;
+	*value = strtod( text, &end );
+	return *text != '\0' && *end == '\0' && errno == 0 && isfinite( *value );
+}
+
+/* The next line of f, of any length, into *text (getline's buffer); 1, or 0 at the end, or -1
+ * after printing "PATH:LINE: ..." for a NUL byte or "PATH: cannot read: ..." for an error. */
+static int next_line( FILE* f, const char* path, int line, char** text, size_t* capacity )
+{
+	errno = 0;
+	ssize_t got = getline( text, capacity, f );
+	if ( got < 0 )
+	{
+		return ferror( f ) ? fail_line( path, 0, "cannot read: %s", strerror( errno != 0 ? errno : EIO ) ) : 0;
+	}
+	if ( memchr( *text, '\0', (size_t) got ) != NULL )
+	{
+		return fail_line( path, line, "a NUL byte (this is not a text file)" );
+	}
+	return 1;
+}
+
+static int probability_list( char** words, double* out, const char* path, int line, const char* what )
+{
+	for ( int k = 0; k < 4; ++k )
+	{
+		if ( !number( words[k], &out[k] ) || out[k] < 0.0 || out[k] > 1.0 )
+		{
+			return fail_line( path, line, "%s: '%s' is not a probability in [0, 1]", what, words[k] );
+		}
+	}
+	return 0;
+}
+
+static int read_chain( const char* path, chain_file* c )
+{
+	memset( c, 0, sizeof( *c ) );
+	c->initial = -1;
+	FILE* f = fopen( path, "r" );
+	if ( f == NULL )
+	{
+		return fail_line( path, 0, "cannot open: %s", strerror( errno ) );
+	}
+	char* text = NULL;
+	size_t capacity = 0;
+	int line = 0, bad = 0, more;
+	while ( !bad && ( more = next_line( f, path, line + 1, &text, &capacity ) ) != 0 )
+	{
+		line += 1;
+		if ( more < 0 )
+		{
+			bad = -1;
+			break;
+		}
+		char* w[16];
+		int n = split_words( text, w, 15 );
+		if ( n == 0 )
+		{
+			continue;
+		}
+		if ( strcmp( w[0], "corners" ) == 0 )
+		{
+			double v[4];
+			if ( n != 5 || !number( w[1], &v[0] ) || !number( w[2], &v[1] ) || !number( w[3], &v[2] ) ||
+				 !number( w[4], &v[3] ) )
+			{
+				bad = fail_line( path, line, "expected 'corners COLD WARM DRY WET' (four numbers)" );
+			}
+			else if ( !( v[0] < v[1] ) || !( v[2] < v[3] ) )
+			{
+				bad = fail_line( path, line, "corners need COLD < WARM and DRY < WET" );
+			}
+			else
+			{
+				c->chain.cold = v[0], c->chain.warm = v[1], c->chain.dry = v[2], c->chain.wet = v[3];
+				c->have_corners = 1;
+			}
+		}
+		else if ( strcmp( w[0], "state" ) == 0 )
+		{
+			int fallen = n == 11 && strcmp( w[6], "fallen" ) == 0;
+			double rgb[3], level;
+			if ( n != 10 && !fallen )
+			{
+				bad = fail_line( path, line,
+								 "expected 'state NAME R G B LEVEL [fallen] STAY_WC STAY_WW STAY_DC STAY_DW'" );
+			}
+			else if ( c->state_count == MAX_STATES )
+			{
+				bad = fail_line( path, line, "more than %d states", MAX_STATES );
+			}
+			else if ( strlen( w[1] ) >= NAME_SIZE || find_state( c, w[1] ) >= 0 )
+			{
+				bad = fail_line( path, line, "state name '%s' is %s", w[1],
+								 strlen( w[1] ) >= NAME_SIZE ? "too long" : "used twice" );
+			}
+			else if ( !number( w[2], &rgb[0] ) || !number( w[3], &rgb[1] ) || !number( w[4], &rgb[2] ) || rgb[0] < 0 ||
+					  rgb[0] > 255 || rgb[1] < 0 || rgb[1] > 255 || rgb[2] < 0 || rgb[2] > 255 )
+			{
+				bad = fail_line( path, line, "state '%s': the color needs three values in 0..255", w[1] );
+			}
+			else if ( !number( w[5], &level ) || level < 0 || level > 63 || level != floor( level ) )
+			{
+				bad = fail_line( path, line, "state '%s': LEVEL '%s' is not a whole number in 0..63", w[1], w[5] );
+			}
+			else if ( probability_list( w + ( fallen ? 7 : 6 ), c->stay + 4 * c->state_count, path, line, w[1] ) == 0 )
+			{
+				int32_t s = c->state_count++;
+				snprintf( c->name[s], NAME_SIZE, "%s", w[1] );
+				for ( int k = 0; k < 3; ++k )
+				{
+					c->rgb[s][k] = (uint8_t) lround( rgb[k] );
+				}
+				c->level[s] = (int32_t) level;
+				c->fallen[s] = fallen;
+			}
+			else
+			{
+				bad = -1;
+			}
+		}
+		else if ( strcmp( w[0], "transition" ) == 0 )
+		{
+			int from = n == 7 ? find_state( c, w[1] ) : -1, to = n == 7 ? find_state( c, w[2] ) : -1;
+			if ( n != 7 )
+			{
+				bad = fail_line( path, line, "expected 'transition FROM TO G_WC G_WW G_DC G_DW'" );
+			}
+			else if ( from < 0 || to < 0 )
+			{
+				bad = fail_line( path, line, "unknown state '%s' (states are declared before their transitions)",
+								 from < 0 ? w[1] : w[2] );
+			}
+			else if ( c->transition_count == MAX_TRANSITION )
+			{
+				bad = fail_line( path, line, "more than %d transitions", MAX_TRANSITION );
+			}
+			else
+			{
+				sere_markov_transition* t = &c->transitions[c->transition_count];
+				t->from = from, t->to = to;
+				bad = probability_list( w + 3, t->weight, path, line, "transition" );
+				c->transition_count += bad == 0;
+			}
+		}
+		else if ( strcmp( w[0], "initial" ) == 0 )
+		{
+			c->initial = n == 2 ? find_state( c, w[1] ) : -1;
+			if ( c->initial < 0 )
+			{
+				bad = fail_line( path, line, "expected 'initial NAME' with a declared state" );
+			}
+		}
+		else
+		{
+			bad = fail_line( path, line, "unknown keyword '%s' (corners, state, transition, initial)", w[0] );
+		}
+	}
+	free( text );
+	fclose( f );
+	if ( bad )
+	{
+		return -1;
+	}
+	if ( c->state_count == 0 || !c->have_corners || c->initial < 0 )
+	{
+		return fail_line( path, 0, "missing %s",
+						  c->state_count == 0 ? "states"
+						  : !c->have_corners  ? "'corners'"
+											  : "'initial'" );
+	}
+	c->chain.state_count = c->state_count;
+	c->chain.stay = c->stay;
+	c->chain.transition_count = c->transition_count;
+	c->chain.transitions = c->transitions;
+	sere_status status = sere_markov_validate( &c->chain );
+	if ( status != SERE_OK )
+	{
+		return fail_line( path, 0,
+						  "not a usable chain (%s): a transition from a state to itself, one given twice, or more than "
+						  "%d successors of a state",
+						  sere_status_text( status ), SERE_MARKOV_MAX_OUTCOMES - 1 );
+	}
+	return 0;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* The schedule: days with temperature and humidity, linear in between; labels name seasons. */
+
+typedef struct schedule
+{
+	int32_t count;
+	int32_t day[MAX_SCHEDULE];
+	double temperature[MAX_SCHEDULE];
+	double humidity[MAX_SCHEDULE];
+	char label[MAX_SCHEDULE][NAME_SIZE];
+} schedule;
+
+static int read_schedule( const char* path, schedule* s )
+{
+	memset( s, 0, sizeof( *s ) );
+	FILE* f = fopen( path, "r" );
+	if ( f == NULL )
+	{
+		return fail_line( path, 0, "cannot open: %s", strerror( errno ) );
+	}
+	char* text = NULL;
+	size_t capacity = 0;
+	int line = 0, bad = 0, more;
+	while ( !bad && ( more = next_line( f, path, line + 1, &text, &capacity ) ) != 0 )
+	{
+		line += 1;
+		if ( more < 0 )
+		{
+			bad = -1;
+			break;
+		}
+		char* w[8];
+		int n = split_words( text, w, 5 );
+		if ( n == 0 )
+		{
+			continue;
+		}
+		double day, t, h;
+		if ( n < 3 || n > 4 || !number( w[0], &day ) || !number( w[1], &t ) || !number( w[2], &h ) )
+		{
+			bad = fail_line( path, line, "expected 'DAY TEMPERATURE HUMIDITY [LABEL]'" );
+		}
+		else if ( day != floor( day ) || day < 0 || day > MAX_DAYS || ( s->count > 0 && day <= s->day[s->count - 1] ) ||
+				  ( s->count == 0 && day != 0 ) )
+		{
+			bad = fail_line( path, line, "day %s: days are whole numbers from 0 (the first line) to %d, increasing",
+							 w[0], MAX_DAYS );
+		}
+		else if ( t < -90.0 || t > 70.0 )
+		{
+			bad = fail_line( path, line, "temperature %s deg C is outside [-90, 70]", w[1] );
+		}
+		else if ( h < 0.0 || h > 1.0 )
+		{
+			bad = fail_line( path, line, "humidity %s is outside [0, 1] (relative humidity as a fraction)", w[2] );
+		}
+		else if ( s->count == MAX_SCHEDULE )
+		{
+			bad = fail_line( path, line, "more than %d lines", MAX_SCHEDULE );
+		}
+		else if ( n == 4 && strlen( w[3] ) >= NAME_SIZE )
+		{
+			bad = fail_line( path, line, "label '%s' is longer than %d characters", w[3], NAME_SIZE - 1 );
+		}
+		else
+		{
+			s->day[s->count] = (int32_t) day;
+			s->temperature[s->count] = t;
+			s->humidity[s->count] = h;
+			snprintf( s->label[s->count], NAME_SIZE, "%s", n == 4 ? w[3] : "" );
+			s->count += 1;
+		}
+	}
+	free( text );
+	fclose( f );
+	if ( !bad && s->count < 2 )
+	{
+		bad = fail_line( path, 0, "a schedule needs at least two days" );
+	}
+	return bad ? -1 : 0;
+}
+
+static void weather( const schedule* s, int32_t day, double* t, double* h )
+{
+	int32_t k = 0;
+	while ( k + 1 < s->count && s->day[k + 1] <= day )
+	{
+		k += 1;
+	}
+	if ( k + 1 == s->count )
+	{
+		*t = s->temperature[k], *h = s->humidity[k];
+		return;
+	}
+	double a = (double) ( day - s->day[k] ) / (double) ( s->day[k + 1] - s->day[k] );
+	*t = s->temperature[k] + a * ( s->temperature[k + 1] - s->temperature[k] );
+	*h = s->humidity[k] + a * ( s->humidity[k + 1] - s->humidity[k] );
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Options. */
+
+typedef struct options
+{
+	const char* chain;
+	const char* schedule;
+	const char* keys;
+	const char* silhouette;
+	const char* mask;
+	const char* out;
+	long long days;
+	double temperature, humidity;
+	int have_weather;
+	long long leaves;
+	long long seed;
+	long long threads;
+	long long iterations;
+	long long optimize;
+	long long samples;
+	long long steps;
+	long long size;
+	int pictures;
+} options;
+
+static void season_help( void )
+{
+	printf(
+		"usage: sere season [options]\n\n"
+		"Seasonal changes of a tree's leaves (Tang, Wu & Fan 2013). The leaf: key points on its edge, a closed\n"
+		"B-spline through them, Delaunay triangulation and mesh optimization, masses from a grayscale mask map\n"
+		"(Tang Eq. 3) and deformation levels by the mass-spring model. The tree: an L-system. The leaves: a Markov\n"
+		"chain of (texture, deformation) states stepped once a day, with probabilities from the day's\n"
+		"temperature and humidity (Tang Eq. 5-6), for a population of leaves of which the tree shows the first.\n\n"
+		"chain and weather:\n"
+		"  --chain FILE        states and transitions (default data/seasons/maple.chain; the format is in it)\n"
+		"  --schedule FILE     DAY TEMPERATURE HUMIDITY [LABEL] lines (default data/seasons/temperate.schedule)\n"
+		"  --days N --temperature T --humidity H\n"
+		"                      constant weather for N days instead of a schedule (pictures on day 0 and N)\n"
+		"  --leaves N          leaves stepped per day (default 1000000; the tree shows the first of them)\n"
+		"  --seed S            random seed (default 1); results depend on it, never on --threads\n"
+		"leaf:\n"
+		"  --keys FILE         key points (default data/seasons/maple.keys) or\n"
+		"  --silhouette PNG    a leaf silhouette on white to take them from\n"
+		"  --mask FILE         grayscale mask map, PGM or PNG, in the key points' pixel frame\n"
+		"                      (default data/masks/maple.pgm)\n"
+		"  --samples N         outline samples of the tree's leaf mesh (default 48)\n"
+		"  --optimize N        mesh optimization iterations (default 160, the seed's)\n"
+		"  --steps N           mass-spring steps per deformation level (default 400)\n"
+		"tree and output:\n"
+		"  --iterations N      L-system rewriting steps (default 6: about 1100 leaves)\n"
+		"  --out DIR           output directory (default out/season)\n"
+		"  --size PX           picture size (default 900)\n"
+		"  --no-pictures       CSV, PLY and summary only\n"
+		"  --threads T         OpenMP threads, 0 = one per core (default 0)\n\n"
+		"writes distribution.csv (exact and sampled share of every state per day), distribution.png,\n"
+		"tree_LABEL.ply and season_LABEL.png per labeled day, seasons.png (all of them), leaf_levels.png and\n"
+		"summary.json.\n" );
+}
+
+/* 0 to run, 1 for --help, 2 for bad input. */
+static int parse_options( int argc, char** argv, options* o )
+{
+	*o = ( options ){ .chain = "seasons/maple.chain",
+					  .schedule = NULL,
+					  .keys = NULL,
+					  .mask = "masks/maple.pgm",
+					  .out = "out/season",
+					  .days = -1,
+					  .temperature = NAN,
+					  .humidity = NAN,
+					  .leaves = 1000000,
+					  .seed = 1,
+					  .iterations = 6,
+					  .optimize = 160,
+					  .samples = 48,
+					  .steps = 400,
+					  .size = 900,
+					  .pictures = 1 };
+	int no_pictures = 0;
+	const sere_option table[] = {
+		{ "--chain", SERE_OPTION_TEXT, &o->chain, 0, 0, NULL },
+		{ "--schedule", SERE_OPTION_TEXT, &o->schedule, 0, 0, NULL },
+		{ "--keys", SERE_OPTION_TEXT, &o->keys, 0, 0, NULL },
+		{ "--silhouette", SERE_OPTION_TEXT, &o->silhouette, 0, 0, NULL },
+		{ "--mask", SERE_OPTION_TEXT, &o->mask, 0, 0, NULL },
+		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
+		{ "--days", SERE_OPTION_COUNT, &o->days, 1, MAX_DAYS, NULL },
+		{ "--temperature", SERE_OPTION_REAL, &o->temperature, -90.0, 70.0, NULL },
+		{ "--humidity", SERE_OPTION_REAL, &o->humidity, 0.0, 1.0, NULL },
+		{ "--leaves", SERE_OPTION_COUNT, &o->leaves, 1, 1000000000, NULL },
+		{ "--seed", SERE_OPTION_COUNT, &o->seed, 0, 2147483647, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, 256, NULL },
+		{ "--iterations", SERE_OPTION_COUNT, &o->iterations, 0, 9, NULL },
+		{ "--samples", SERE_OPTION_COUNT, &o->samples, 8, 2000, NULL },
+		{ "--optimize", SERE_OPTION_COUNT, &o->optimize, 0, 10000, NULL },
+		{ "--steps", SERE_OPTION_COUNT, &o->steps, 0, 100000, NULL },
+		{ "--size", SERE_OPTION_COUNT, &o->size, 200, 4000, NULL },
+		{ "--no-pictures", SERE_OPTION_FLAG, &no_pictures, 0, 0, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "season", argc, argv, table, sizeof( table ) / sizeof( table[0] ), 0, NULL, &parsed ) !=
+		 SERE_OK )
+	{
+		return 2;
+	}
+	if ( parsed.help )
+	{
+		season_help();
+		return 1;
+	}
+	o->pictures = !no_pictures;
+	int constant = o->days > 0 || isfinite( o->temperature ) || isfinite( o->humidity );
+	if ( constant && ( o->days < 0 || !isfinite( o->temperature ) || !isfinite( o->humidity ) ) )
+	{
+		fprintf( stderr, "sere season: constant weather needs all of --days, --temperature and --humidity\n" );
+		return 2;
+	}
+	if ( constant && o->schedule != NULL )
+	{
+		fprintf( stderr, "sere season: give --schedule or constant weather (--days ...), not both\n" );
+		return 2;
+	}
+	if ( o->keys != NULL && o->silhouette != NULL )
+	{
+		fprintf( stderr, "sere season: give --keys or --silhouette, not both\n" );
+		return 2;
+	}
+	o->have_weather = constant;
+	if ( !constant && o->schedule == NULL )
+	{
+		o->schedule = "seasons/temperate.schedule";
+	}
+	if ( o->keys == NULL && o->silhouette == NULL )
+	{
+		o->keys = "seasons/maple.keys";
+	}
+	return 0;
+}
+
+static const char* data_file( const char* path, char* buffer, size_t size )
+{
+	FILE* f = fopen( path, "r" );
+	if ( f != NULL )
+	{
+		fclose( f );
+		return path;
+	}
+	return path[0] != '/' && sere_data_path( path, buffer, size ) == 0 ? buffer : path;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* The tree as one colored triangle mesh: prisms for the branches, the leaves' level meshes
+ * placed in their frames, fallen leaves scattered under the crown. */
+
+typedef struct scene
+{
+	int32_t vertex_count, triangle_count;
+	float *x, *y, *z;
+	uint8_t* rgb;
+	float* state; /* per vertex: the leaf's state, −1 on branches */
+	int32_t* tri;
+} scene;
+
+static void scene_free( scene* s )
+{
+	free( s->x ), free( s->y ), free( s->z ), free( s->rgb ), free( s->state ), free( s->tri );
+	memset( s, 0, sizeof( *s ) );
+}
+
+static uint64_t hash64( uint64_t z )
+{
+	z = ( z ^ ( z >> 30 ) ) * 0xBF58476D1CE4E5B9ull;
+	z = ( z ^ ( z >> 27 ) ) * 0x94D049BB133111EBull;
+	return z ^ ( z >> 31 );
+}
+
+static double unit_random( uint64_t seed, uint64_t i )
+{
+	return (double) ( hash64( seed ^ hash64( i ) ) >> 11 ) / 9007199254740992.0;
+}
+
+static int build_scene( const sere_tree* tree, const sere_season_leaf* leaf, const chain_file* c, const uint8_t* states,
+						double crown, uint64_t seed, scene* s )
+{
+	const int32_t nv = leaf->vertex_count, nt = leaf->triangle_count;
+	const int64_t vertices = (int64_t) tree->segment_count * 2 * BRANCH_SIDES + (int64_t) tree->leaf_count * nv;
+	const int64_t triangles = (int64_t) tree->segment_count * 2 * BRANCH_SIDES + (int64_t) tree->leaf_count * nt;
+	if ( vertices > INT32_MAX / 4 || triangles > INT32_MAX / 4 )
+	{
+		fprintf( stderr, "sere season: the tree is too large to draw (%lld vertices)\n", (long long) vertices );
+		return -1;
+	}
+	s->x = malloc( sizeof( float ) * (size_t) vertices );
+	s->y = malloc( sizeof( float ) * (size_t) vertices );
+	s->z = malloc( sizeof( float ) * (size_t) vertices );
+	s->rgb = malloc( 3 * (size_t) vertices );
+	s->state = malloc( sizeof( float ) * (size_t) vertices );
+	s->tri = malloc( sizeof( int32_t ) * 3 * (size_t) triangles );
+	if ( s->x == NULL || s->y == NULL || s->z == NULL || s->rgb == NULL || s->state == NULL || s->tri == NULL )
+	{
+		scene_free( s );
+		fprintf( stderr, "sere season: out of memory for the tree's mesh\n" );
+		return -1;
+	}
+	int32_t v = 0, t = 0;
+	for ( int32_t k = 0; k < tree->segment_count; ++k )
+	{
+		double a[3] = { tree->x0[k], tree->y0[k], tree->z0[k] }, b[3] = { tree->x1[k], tree->y1[k], tree->z1[k] };
+		double d[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+		double len = sqrt( d[0] * d[0] + d[1] * d[1] + d[2] * d[2] );
+		d[0] /= len, d[1] /= len, d[2] /= len;
+		double e[3] = { fabs( d[2] ) < 0.9 ? 0.0 : 1.0, 0.0, fabs( d[2] ) < 0.9 ? 1.0 : 0.0 };
+		double p[3] = { d[1] * e[2] - d[2] * e[1], d[2] * e[0] - d[0] * e[2], d[0] * e[1] - d[1] * e[0] };
+		double pn = sqrt( p[0] * p[0] + p[1] * p[1] + p[2] * p[2] );
+		p[0] /= pn, p[1] /= pn, p[2] /= pn;
+		double q[3] = { d[1] * p[2] - d[2] * p[1], d[2] * p[0] - d[0] * p[2], d[0] * p[1] - d[1] * p[0] };
+		for ( int side = 0; side < BRANCH_SIDES; ++side )
+		{
+			double angle = 2.0 * PI * side / BRANCH_SIDES, cs = cos( angle ), sn = sin( angle );
+			for ( int end = 0; end < 2; ++end )
+			{
+				double r = end == 0 ? tree->r0[k] : tree->r1[k];
+				const double* o = end == 0 ? a : b;
+				int32_t i = v + 2 * side + end;
+				s->x[i] = (float) ( o[0] + r * ( cs * p[0] + sn * q[0] ) );
+				s->y[i] = (float) ( o[1] + r * ( cs * p[1] + sn * q[1] ) );
+				s->z[i] = (float) ( o[2] + r * ( cs * p[2] + sn * q[2] ) );
+				s->rgb[3 * i] = 92, s->rgb[3 * i + 1] = 70, s->rgb[3 * i + 2] = 52;
+				s->state[i] = -1.0f;
+			}
+			int32_t a0 = v + 2 * side, a1 = a0 + 1, b0 = v + 2 * ( ( side + 1 ) % BRANCH_SIDES ), b1 = b0 + 1;
+			int32_t* tr = s->tri + 3 * t;
+			tr[0] = a0, tr[1] = b0, tr[2] = b1, tr[3] = a0, tr[4] = b1, tr[5] = a1;
+			t += 2;
+		}
+		v += 2 * BRANCH_SIDES;
+	}
+	for ( int32_t k = 0; k < tree->leaf_count; ++k )
+	{
+		const int32_t st = states[k];
+		const float* shape = leaf->xyz + 3 * (size_t) nv * (size_t) c->level[st];
+		double origin[3], dir[3], nrm[3];
+		if ( c->fallen[st] )
+		{
+			/* on the ground under the crown, blade up, at a place and turn of its own */
+			double r = crown * sqrt( unit_random( seed, 2 * (uint64_t) k ) ),
+				   phi = 2.0 * PI * unit_random( seed, 2 * (uint64_t) k + 1 );
+			double yaw = 2.0 * PI * unit_random( seed ^ 0x5eedu, (uint64_t) k );
+			origin[0] = r * cos( phi ), origin[1] = r * sin( phi ), origin[2] = 0.02;
+			dir[0] = cos( yaw ), dir[1] = sin( yaw ), dir[2] = 0.0;
+			nrm[0] = 0.0, nrm[1] = 0.0, nrm[2] = 1.0;
+		}
+		else
+		{
+			origin[0] = tree->leaf_x[k], origin[1] = tree->leaf_y[k], origin[2] = tree->leaf_z[k];
+			dir[0] = tree->leaf_dirx[k], dir[1] = tree->leaf_diry[k], dir[2] = tree->leaf_dirz[k];
+			nrm[0] = tree->leaf_nx[k], nrm[1] = tree->leaf_ny[k], nrm[2] = tree->leaf_nz[k];
+		}
+		/* leaf frame: x across the blade = dir × nrm, y along it = dir, z its face normal */
+		double side[3] = { dir[1] * nrm[2] - dir[2] * nrm[1], dir[2] * nrm[0] - dir[0] * nrm[2],
+						   dir[0] * nrm[1] - dir[1] * nrm[0] };
+		for ( int32_t i = 0; i < nv; ++i )
+		{
+			double lx = LEAF_SIZE * shape[3 * i], ly = LEAF_SIZE * shape[3 * i + 1], lz = LEAF_SIZE * shape[3 * i + 2];
+			int32_t w = v + i;
+			s->x[w] = (float) ( origin[0] + lx * side[0] + ly * dir[0] + lz * nrm[0] );
+			s->y[w] = (float) ( origin[1] + lx * side[1] + ly * dir[1] + lz * nrm[1] );
+			s->z[w] = (float) ( origin[2] + lx * side[2] + ly * dir[2] + lz * nrm[2] );
+			memcpy( s->rgb + 3 * (size_t) w, c->rgb[st], 3 );
+			s->state[w] = (float) st;
+		}
+		for ( int32_t j = 0; j < 3 * nt; ++j )
+		{
+			s->tri[3 * (size_t) t + j] = v + leaf->tri[j];
+		}
+		v += nv;
+		t += nt;
+	}
+	s->vertex_count = v;
+	s->triangle_count = t;
+	return 0;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Pictures. */
+
+typedef struct season_pictures
+{
+	const sere_tree* tree;
+	const sere_season_leaf* leaf;
+	const chain_file* chain;
+	const uint8_t* snapshots; /* label_count × tree leaves */
+	const int32_t* label_day;
+	char ( *label )[NAME_SIZE];
+	int32_t label_count;
+	double crown;
+	uint64_t seed;
+	sere_render_view view; /* fitted once on the first season, shared by all */
+} season_pictures;
+
+static int draw_season( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
+						size_t caption_size, char* err, size_t err_size )
+{
+	season_pictures* p = user;
+	scene s = { 0 };
+	if ( build_scene( p->tree, p->leaf, p->chain, p->snapshots + (size_t) index * (size_t) p->tree->leaf_count,
+					  p->crown, p->seed, &s ) != 0 )
+	{
+		snprintf( err, err_size, "cannot build the tree's mesh" );
+		return -1;
+	}
+	cairo_save( cr );
+	cairo_rectangle( cr, x, y, w, h );
+	cairo_set_source_rgb( cr, 0.93, 0.95, 0.97 );
+	cairo_fill( cr );
+	cairo_restore( cr );
+	sere_render_mesh mesh = {
+		s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, NULL, s.rgb, { 0.5f, 0.5f, 0.5f }
+	};
+	int rc = sere_render_mesh_draw( cr, x, y, w, h, &mesh, &p->view, NULL, err, err_size );
+	scene_free( &s );
+	snprintf( caption, caption_size, "day %d: %s", p->label_day[index], p->label[index] );
+	return rc;
+}
+
+static int write_season_png( season_pictures* p, int index, const char* path, int size, char* err, size_t err_size )
+{
+	sere_render_canvas canvas;
+	if ( sere_render_canvas_create( &canvas, size, size, err, err_size ) != 0 )
+	{
+		return -1;
+	}
+	char caption[128];
+	int rc = draw_season( p, index, canvas.cr, 0, 0, size, size, caption, sizeof( caption ), err, err_size );
+	if ( rc == 0 )
+	{
+		sere_render_text( canvas.cr, 16, 32, 20, 1, 0, caption );
+		rc = sere_render_canvas_write_png( &canvas, path, err, err_size );
+	}
+	sere_render_canvas_destroy( &canvas );
+	return rc;
+}
+
+typedef struct level_pictures
+{
+	const sere_season_leaf* leaf;
+	sere_render_view view;
+} level_pictures;
+
+static int draw_level( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
+					   size_t caption_size, char* err, size_t err_size )
+{
+	level_pictures* p = user;
+	const int32_t n = p->leaf->vertex_count;
+	float* xyz = malloc( sizeof( float ) * 3 * (size_t) n );
+	if ( xyz == NULL )
+	{
+		snprintf( err, err_size, "out of memory" );
+		return -1;
+	}
+	const float* src = p->leaf->xyz + 3 * (size_t) n * (size_t) index;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		xyz[i] = src[3 * i], xyz[n + i] = src[3 * i + 1];
+		xyz[2 * (size_t) n + i] = src[3 * i + 2];
+	}
+	float* mass_rgb = malloc( sizeof( float ) * 3 * (size_t) n );
+	if ( mass_rgb == NULL )
+	{
+		free( xyz );
+		snprintf( err, err_size, "out of memory" );
+		return -1;
+	}
+	float lo = p->leaf->mass[0], hi = p->leaf->mass[0];
+	for ( int32_t i = 1; i < n; ++i )
+	{
+		lo = fminf( lo, p->leaf->mass[i] ), hi = fmaxf( hi, p->leaf->mass[i] );
+	}
+	sere_render_colormap_values( p->leaf->mass, n, lo, hi > lo ? hi : lo + 1.0f, mass_rgb );
+	sere_render_mesh mesh = { xyz,	xyz + n, xyz + 2 * (size_t) n, n, p->leaf->tri, p->leaf->triangle_count, mass_rgb,
+							  NULL, { 0 } };
+	sere_render_style style = { 1, 0, 0.0, NULL, 0 };
+	int rc = sere_render_mesh_draw( cr, x, y, w, h, &mesh, &p->view, &style, err, err_size );
+	snprintf( caption, caption_size, "deformation level %d", index );
+	free( xyz );
+	free( mass_rgb );
+	return rc;
+}
+
+static int write_distribution_png( const char* path, const chain_file* c, const double* exact, const double* sampled,
+								   int32_t days, char* err, size_t err_size )
+{
+	const int32_t S = c->state_count, n = days + 1;
+	double* x = malloc( sizeof( double ) * (size_t) n );
+	sere_render_series* series = malloc( sizeof( sere_render_series ) * 2 * (size_t) S );
+	char( *names )[NAME_SIZE + 16] = malloc( sizeof( *names ) * 2 * (size_t) S );
+	double* columns = malloc( sizeof( double ) * 2 * (size_t) S * (size_t) n );
+	if ( x == NULL || series == NULL || names == NULL || columns == NULL )
+	{
+		free( x ), free( series ), free( names ), free( columns );
+		snprintf( err, err_size, "out of memory" );
+		return -1;
+	}
+	for ( int32_t d = 0; d < n; ++d )
+	{
+		x[d] = d;
+	}
+	for ( int32_t st = 0; st < S; ++st )
+	{
+		for ( int k = 0; k < 2; ++k )
+		{
+			double* col = columns + ( 2 * (size_t) st + k ) * (size_t) n;
+			for ( int32_t d = 0; d < n; ++d )
+			{
+				col[d] = ( k == 0 ? exact : sampled )[(size_t) d * S + st];
+			}
+			sere_render_series* e = &series[2 * st + k];
+			snprintf( names[2 * st + k], sizeof( names[0] ), "%s%s", c->name[st], k == 0 ? " (exact)" : "" );
+			e->name = names[2 * st + k];
+			e->x = x;
+			e->y = col;
+			e->count = n;
+			for ( int j = 0; j < 3; ++j )
+			{
+				e->rgb[j] = c->rgb[st][j] / 255.0f * 0.85f;
+			}
+			e->dashed = k == 0;
+		}
+	}
+	sere_render_axes axes = {
+		"Leaf states: exact distribution (dashed) and the sampled population", "day", "share of leaves", 1, 0.0, 1.0
+	};
+	int rc = sere_render_plot( path, 1100, 620, &axes, series, 2 * S, err, err_size );
+	free( x ), free( series ), free( names ), free( columns );
+	return rc;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+int sere_cmd_season( int argc, char** argv )
+{
+	options o;
+	int parsed = parse_options( argc, argv, &o );
+	if ( parsed != 0 )
+	{
+		return parsed == 1 ? 0 : 2;
+	}
+	char path_buffer[4096];
+	static chain_file chain;
+	static schedule plan;
+	if ( read_chain( data_file( o.chain, path_buffer, sizeof( path_buffer ) ), &chain ) != 0 )
+	{
+		return 2;
+	}
+	if ( o.have_weather )
+	{
+		memset( &plan, 0, sizeof( plan ) );
+		plan.count = 2;
+		plan.day[1] = (int32_t) o.days;
+		plan.temperature[0] = plan.temperature[1] = o.temperature;
+		plan.humidity[0] = plan.humidity[1] = o.humidity;
+		snprintf( plan.label[0], NAME_SIZE, "start" );
+		snprintf( plan.label[1], NAME_SIZE, "end" );
+	}
+	else if ( read_schedule( data_file( o.schedule, path_buffer, sizeof( path_buffer ) ), &plan ) != 0 )
+	{
+		return 2;
+	}
+	const int32_t days = plan.day[plan.count - 1];
+	int threads = sere_topo_bind( (int) o.threads, NULL );
+
+	int32_t levels = 1;
+	for ( int32_t s = 0; s < chain.state_count; ++s )
+	{
+		levels = chain.level[s] + 1 > levels ? chain.level[s] + 1 : levels;
+	}
+	sere_season_leaf_options lo = sere_season_leaf_options_default();
+	lo.keys_path = o.silhouette != NULL ? NULL : o.keys;
+	lo.silhouette_path = o.silhouette;
+	lo.mask_path = o.mask;
+	lo.outline_samples = (int32_t) o.samples;
+	lo.levels = levels;
+	lo.steps_per_level = (int32_t) o.steps;
+	lo.meshopt_iterations = (int32_t) o.optimize;
+	sere_season_leaf leaf;
+	char err[1024];
+	double t0 = sere_now();
+	if ( sere_season_leaf_build( &lo, &leaf, err, sizeof( err ) ) != SERE_OK )
+	{
+		fprintf( stderr, "sere season: %s\n", err );
+		return 2;
+	}
+	const double leaf_seconds = sere_now() - t0;
+
+	sere_lsystem_params lp = sere_lsystem_params_default();
+	lp.iterations = (int32_t) o.iterations;
+	lp.seed = (uint64_t) o.seed;
+	sere_tree tree;
+	sere_status status = sere_tree_grow( &lp, &tree );
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "sere season: the L-system tree cannot grow (%s)\n", sere_status_text( status ) );
+		sere_season_leaf_free( &leaf );
+		return 2;
+	}
+	if ( tree.leaf_count > o.leaves )
+	{
+		fprintf( stderr, "sere season: --leaves %lld is fewer than the tree's %d leaves\n", o.leaves, tree.leaf_count );
+		sere_tree_destroy( &tree );
+		sere_season_leaf_free( &leaf );
+		return 2;
+	}
+	if ( sere_mkdirs( o.out ) != 0 )
+	{
+		fprintf( stderr, "sere season: cannot create %s: %s\n", o.out, strerror( errno ) );
+		sere_tree_destroy( &tree );
+		sere_season_leaf_free( &leaf );
+		return 2;
+	}
+
+	const int32_t S = chain.state_count;
+	const int64_t N = o.leaves;
+	int32_t label_count = 0;
+	static int32_t label_day[MAX_SCHEDULE];
+	static char label[MAX_SCHEDULE][NAME_SIZE];
+	for ( int32_t k = 0; k < plan.count; ++k )
+	{
+		if ( plan.label[k][0] != '\0' )
+		{
+			label_day[label_count] = plan.day[k];
+			snprintf( label[label_count], NAME_SIZE, "%s", plan.label[k] );
+			label_count += 1;
+		}
+	}
+	uint8_t* states = malloc( (size_t) N );
+	double* exact = malloc( sizeof( double ) * (size_t) S * ( (size_t) days + 1 ) );
+	double* sampled = malloc( sizeof( double ) * (size_t) S * ( (size_t) days + 1 ) );
+	double* P = malloc( sizeof( double ) * (size_t) S * (size_t) S );
+	int64_t* counts = malloc( sizeof( int64_t ) * (size_t) S );
+	uint8_t* snapshots = malloc( (size_t) ( label_count > 0 ? label_count : 1 ) * (size_t) tree.leaf_count + 1 );
+	sere_markov_day* day_table = malloc( sizeof( sere_markov_day ) );
+	int rc = 0;
+	if ( states == NULL || exact == NULL || sampled == NULL || P == NULL || counts == NULL || snapshots == NULL ||
+		 day_table == NULL )
+	{
+		fprintf( stderr, "sere season: out of memory for %lld leaves\n", o.leaves );
+		rc = 1;
+		goto done;
+	}
+	memset( states, chain.initial, (size_t) N );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		exact[s] = sampled[s] = s == chain.initial;
+	}
+	double step_seconds = 0.0;
+	sere_progress progress;
+	sere_progress_begin( &progress, "days", days );
+	int32_t next_label = 0;
+	for ( int32_t d = 0; d <= days; ++d )
+	{
+		while ( next_label < label_count && label_day[next_label] == d )
+		{
+			memcpy( snapshots + (size_t) next_label * (size_t) tree.leaf_count, states, (size_t) tree.leaf_count );
+			next_label += 1;
+		}
+		if ( d == days )
+		{
+			break;
+		}
+		double temperature, humidity;
+		weather( &plan, d, &temperature, &humidity );
+		if ( sere_markov_matrix( &chain.chain, temperature, humidity, P ) != SERE_OK ||
+			 sere_markov_day_prepare( &chain.chain, temperature, humidity, day_table ) != SERE_OK )
+		{
+			fprintf( stderr, "sere season: day %d: no transition matrix for %g deg C, humidity %g\n", d, temperature,
+					 humidity );
+			rc = 1;
+			goto done;
+		}
+		sere_markov_propagate( P, S, exact + (size_t) d * S, exact + (size_t) ( d + 1 ) * S );
+		double t1 = sere_now();
+		status = sere_markov_advance( day_table, states, N, 0, (uint64_t) o.seed, d, counts );
+		step_seconds += sere_now() - t1;
+		if ( status != SERE_OK )
+		{
+			fprintf( stderr, "sere season: day %d: stepping the leaves failed (%s)\n", d, sere_status_text( status ) );
+			rc = 1;
+			goto done;
+		}
+		for ( int32_t s = 0; s < S; ++s )
+		{
+			sampled[(size_t) ( d + 1 ) * S + s] = (double) counts[s] / (double) N;
+		}
+		sere_progress_update( &progress, d + 1 );
+	}
+	sere_progress_end( &progress );
+
+	/* distribution.csv */
+	char path[4096];
+	snprintf( path, sizeof( path ), "%s/distribution.csv", o.out );
+	sere_atomic_file csv;
+	FILE* f = sere_atomic_open( &csv, path );
+	if ( f == NULL )
+	{
+		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
+		rc = 1;
+		goto done;
+	}
+	fprintf( f, "day,temperature,humidity" );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		fprintf( f, ",exact_%s", chain.name[s] );
+	}
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		fprintf( f, ",sampled_%s", chain.name[s] );
+	}
+	fprintf( f, "\n" );
+	double worst = 0.0;
+	for ( int32_t d = 0; d <= days; ++d )
+	{
+		double temperature, humidity;
+		weather( &plan, d, &temperature, &humidity );
+		fprintf( f, "%d,%.4g,%.4g", d, temperature, humidity );
+		for ( int k = 0; k < 2; ++k )
+		{
+			for ( int32_t s = 0; s < S; ++s )
+			{
+				fprintf( f, ",%.8f", ( k == 0 ? exact : sampled )[(size_t) d * S + s] );
+			}
+		}
+		fprintf( f, "\n" );
+		for ( int32_t s = 0; s < S; ++s )
+		{
+			worst = fmax( worst, fabs( exact[(size_t) d * S + s] - sampled[(size_t) d * S + s] ) );
+		}
+	}
+	if ( sere_atomic_commit( &csv ) != 0 )
+	{
+		fprintf( stderr, "sere season: cannot write %s\n", path );
+		rc = 1;
+		goto done;
+	}
+
+	/* the tree on every labeled day: PLY, and the pictures */
+	double crown = 0.0;
+	for ( int32_t k = 0; k < tree.leaf_count; ++k )
+	{
+		crown = fmax( crown, hypot( tree.leaf_x[k], tree.leaf_y[k] ) );
+	}
+	int64_t tree_vertices = 0, tree_triangles = 0;
+	for ( int32_t k = 0; k < label_count; ++k )
+	{
+		scene s = { 0 };
+		if ( build_scene( &tree, &leaf, &chain, snapshots + (size_t) k * (size_t) tree.leaf_count, crown,
+						  (uint64_t) o.seed, &s ) != 0 )
+		{
+			rc = 1;
+			goto done;
+		}
+		sere_vertex_property property = { "state", s.state };
+		snprintf( path, sizeof( path ), "%s/tree_%.31s.ply", o.out, label[k] );
+		int written =
+			sere_write_ply( path, s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, s.rgb, &property, 1 );
+		tree_vertices = s.vertex_count, tree_triangles = s.triangle_count;
+		scene_free( &s );
+		if ( written != 0 )
+		{
+			fprintf( stderr, "sere season: cannot write %s\n", path );
+			rc = 1;
+			goto done;
+		}
+	}
+	if ( o.pictures )
+	{
+		season_pictures pictures = {
+			&tree, &leaf,		&chain, snapshots,		   label_day,
+			label, label_count, crown,	(uint64_t) o.seed, { -35.0, 12.0, { 0, 0, 0 }, 0.0, 24.0 }
+		};
+		/* fit the view on the summer tree, with the ground under the crown in the picture */
+		scene s = { 0 };
+		if ( label_count > 0 && build_scene( &tree, &leaf, &chain, snapshots, crown, (uint64_t) o.seed, &s ) == 0 )
+		{
+			sere_render_mesh mesh = { s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, NULL, s.rgb, { 0 } };
+			sere_render_fit_view( &mesh, (double) o.size, (double) o.size, &pictures.view, err, sizeof( err ) );
+			scene_free( &s );
+		}
+		for ( int32_t k = 0; k < label_count && rc == 0; ++k )
+		{
+			snprintf( path, sizeof( path ), "%s/season_%.31s.png", o.out, label[k] );
+			if ( write_season_png( &pictures, k, path, (int) o.size, err, sizeof( err ) ) != 0 )
+			{
+				fprintf( stderr, "sere season: %s\n", err );
+				rc = 1;
+			}
+		}
+		pictures.view.scale *= 400.0 / (double) o.size;
+		sere_render_sheet sheet = { "Seasons of a maple (seed 002): Markov chain of leaf states over an L-system tree",
+									label_count < 4 ? label_count : 3,
+									label_count,
+									400,
+									400,
+									draw_season,
+									&pictures };
+		snprintf( path, sizeof( path ), "%s/seasons.png", o.out );
+		if ( rc == 0 && label_count > 0 && sere_render_contact_sheet( path, &sheet, err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere season: %s\n", err );
+			rc = 1;
+		}
+		level_pictures lv = { &leaf, { -30.0, 35.0, { 0, 0, 0 }, 0.0, 12.0 } };
+		sere_render_sheet levels_sheet = {
+			"The leaf's deformation levels (mass-spring model; color: mass by Tang Eq. 3, "
+			"dark blue lightest, yellow heaviest)",
+			leaf.level_count,
+			leaf.level_count,
+			320,
+			320,
+			draw_level,
+			&lv
+		};
+		snprintf( path, sizeof( path ), "%s/leaf_levels.png", o.out );
+		if ( rc == 0 && sere_render_contact_sheet( path, &levels_sheet, err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere season: %s\n", err );
+			rc = 1;
+		}
+		snprintf( path, sizeof( path ), "%s/distribution.png", o.out );
+		if ( rc == 0 && write_distribution_png( path, &chain, exact, sampled, days, err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere season: %s\n", err );
+			rc = 1;
+		}
+		if ( rc != 0 )
+		{
+			goto done;
+		}
+	}
+
+	snprintf( path, sizeof( path ), "%s/summary.json", o.out );
+	sere_atomic_file json;
+	f = sere_atomic_open( &json, path );
+	if ( f == NULL )
+	{
+		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
+		rc = 1;
+		goto done;
+	}
+	fprintf( f, "{\n  \"leaves\": %lld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %lld,\n", o.leaves, days,
+			 threads, o.seed );
+	fprintf( f,
+			 "  \"leaf\": { \"vertices\": %d, \"triangles\": %d, \"levels\": %d, \"build_s\": %.4f },\n"
+			 "  \"tree\": { \"segments\": %d, \"leaves\": %d, \"vertices\": %lld, \"triangles\": %lld },\n",
+			 leaf.vertex_count, leaf.triangle_count, leaf.level_count, leaf_seconds, tree.segment_count,
+			 tree.leaf_count, (long long) tree_vertices, (long long) tree_triangles );
+	fprintf( f, "  \"markov_ms_per_day\": %.5f,\n  \"leaves_per_second\": %.6g,\n", 1e3 * step_seconds / days,
+			 (double) N * days / step_seconds );
+	fprintf( f, "  \"max_abs_sampled_minus_exact\": %.3g,\n  \"final\": {", worst );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		char name_json[6 * NAME_SIZE];
+		fprintf( f, "%s\n    \"%s\": { \"exact\": %.6f, \"sampled\": %.6f }", s > 0 ? "," : "",
+				 sere_json_escape( name_json, sizeof( name_json ), chain.name[s] ), exact[(size_t) days * S + s],
+				 sampled[(size_t) days * S + s] );
+	}
+	fprintf( f, "\n  }\n}\n" );
+	if ( sere_atomic_commit( &json ) != 0 )
+	{
+		fprintf( stderr, "sere season: cannot write %s\n", path );
+		rc = 1;
+		goto done;
+	}
+	printf( "leaf     %d vertices, %d triangles after %lld optimization iterations, %d deformation levels (%.2f s)\n",
+			leaf.vertex_count, leaf.triangle_count, o.optimize, leaf.level_count, leaf_seconds );
+	printf( "tree     %d branch segments, %d leaves (L-system, %lld iterations)\n", tree.segment_count, tree.leaf_count,
+			o.iterations );
+	printf( "chain    %d states, %lld leaves, %d days, %d threads: %.3f ms per day (%.3g leaves/s)\n", S, o.leaves,
+			days, threads, 1e3 * step_seconds / days, (double) N * days / step_seconds );
+	printf( "day %-4d", days );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		printf( " %s %.3f", chain.name[s], sampled[(size_t) days * S + s] );
+	}
+	printf( "\n         largest |sampled - exact| share over all days and states: %.2g\n", worst );
+	printf( "wrote    %s/{distribution.csv,summary.json,tree_*.ply%s}\n", o.out,
+			o.pictures ? ",season_*.png,seasons.png,leaf_levels.png,distribution.png" : "" );
+
+done:
+	free( states ), free( exact ), free( sampled ), free( P ), free( counts ), free( snapshots ), free( day_table );
+	sere_tree_destroy( &tree );
+	sere_season_leaf_free( &leaf );
+	return rc;
+}

@@ -1,0 +1,164 @@
+#include "cli/commands.h"
+#include "cli/options.h"
+#include "common/machine.h"
+#include "common/topo.h"
+#include "drying/leaf.h"
+#include "read/build.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Table 1 of the paper (Core i5 2.67 GHz, one thread, C++), ms per frame. */
+typedef struct table1_row
+{
+	const char* leaf;
+	const char* path;
+	const char* preset;
+	long long particles, springs;
+	double osmosis, dynamics, collisions, total;
+} table1_row;
+
+static const table1_row rows[3] = {
+	{ "maple", "data/leaves/maple.leaf", "maple-green", 13197, 51102, 155.65, 1157.19, 24.28, 1337.03 },
+	{ "plane tree", "data/leaves/plane.leaf", "plane-tree", 15069, 59550, 81.69, 1492.01, 29.03, 1602.73 },
+	{ "wisteria", "data/leaves/wisteria.leaf", "wisteria", 12750, 50436, 16.26, 1499.41, 23.16, 1538.83 },
+};
+
+int sere_cmd_table1( int argc, char** argv )
+{
+	long long frames = 20, threads = 0;
+	int json = 0;
+	sere_option_list sets = { .count = 0 };
+	const sere_option options[] = {
+		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+	};
+	sere_options_result parsed;
+	if ( sere_options_parse( "table1", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
+							 &parsed ) != SERE_OK )
+	{
+		return 2;
+	}
+	if ( parsed.help )
+	{
+		printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
+				"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
+				"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
+				"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
+				"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
+				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
+				"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
+				"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
+		return 0;
+	}
+	int bound = sere_topo_bind( (int) threads, NULL );
+	if ( json )
+	{
+		printf( "{\n" );
+		sere_machine_json( stdout, "  ", bound );
+		printf( ",\n  \"leaves\": [" );
+	}
+	else
+	{
+		printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames)\n",
+				bound, frames );
+		sere_machine machine;
+		char binding[1024];
+		sere_machine_read( &machine, bound );
+		sere_machine_binding_text( &machine, binding, sizeof( binding ) );
+		printf( "ours: %s, %s, threads %s%s, sere %s (commit %s), %s\n\n", machine.cpu, machine.simd,
+				machine.bound ? "on cores " : "", binding, machine.version, machine.commit, machine.compiler );
+		printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %s\n", "leaf", "particles", "springs",
+				"osmotic flow", "dynamics", "collisions", "total", "ratio", "PBD cap hits" );
+	}
+	for ( int k = 0; k < 3; ++k )
+	{
+		const table1_row* row = rows + k;
+		char err[1024], name[128];
+		sere_sim_params params = sere_sim_params_default();
+		if ( sere_params_apply( &params, row->preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere table1: %s\n", err );
+			return 1;
+		}
+		sere_model model;
+		sere_build_report report;
+		if ( sere_harness_build( row->path, row->particles, row->springs, 0, &params, &model, &report, name,
+								 sizeof( name ), err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere table1: %s\n", err );
+			return 1;
+		}
+		sere_leaf_sim* sim;
+		sere_status status = sere_leaf_create( &model, &sim );
+		sere_leaf_params leaf = sere_run_leaf_params( &params );
+		double osmosis = 0, dynamics = 0, collisions = 0, total = 0;
+		long long cap_hits = 0, stalls = 0;
+		sere_leaf_stats stats;
+		for ( long long f = 0; f < frames && status == SERE_OK; ++f )
+		{
+			status = sere_leaf_step( sim, &leaf, &stats );
+			osmosis += stats.osmosis_ms, dynamics += stats.dynamics_ms;
+			collisions += stats.collisions_ms, total += stats.total_ms;
+			cap_hits += stats.pbd_hit_cap;
+			stalls += stats.pbd_stalled;
+		}
+		if ( status != SERE_OK )
+		{
+			fprintf( stderr, "sere table1: %s: %s\n", row->leaf, sere_status_text( status ) );
+			return 1;
+		}
+		osmosis /= frames, dynamics /= frames, collisions /= frames, total /= frames;
+		if ( json )
+		{
+			printf(
+				"%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
+				"\"collisions_ms\": %.4f, \"total_ms\": %.4f, \"paper_osmosis_ms\": %.2f, \"paper_dynamics_ms\": %.2f, "
+				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
+				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, \"frames\": "
+				"%lld, "
+				"\"threads\": %d}",
+				k ? ", " : "", row->leaf, model.p.count, model.s.count, osmosis, dynamics, collisions, total,
+				row->osmosis, row->dynamics, row->collisions, row->total, params.strain_tolerance,
+				(int) params.max_iterations, cap_hits, params.pbd_stall, stalls, params.compliance, frames, bound );
+		}
+		else
+		{
+			printf(
+				"%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld",
+				row->leaf, model.p.count, model.s.count, osmosis, row->osmosis, dynamics, row->dynamics, collisions,
+				row->collisions, total, row->total, row->total / total, cap_hits, frames );
+			if ( params.pbd_stall > 0.0 )
+			{
+				printf( ", stalled %lld/%lld", stalls, frames );
+			}
+			printf( "\n" );
+		}
+		sere_leaf_destroy( sim );
+		sere_model_destroy( &model );
+	}
+	if ( json )
+	{
+		printf( "]\n}\n" );
+	}
+	else
+	{
+		printf( "\neach cell: ours / paper. A frame's projection stops when its residual is below the preset's\n"
+				"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
+				"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
+				"paper's Table 1)." );
+		if ( sets.count > 0 )
+		{
+			printf( " Overrides:" );
+			for ( int k = 0; k < sets.count; ++k )
+			{
+				printf( " %s", sets.items[k] );
+			}
+		}
+		printf( "\n" );
+	}
+	return 0;
+}

@@ -1,0 +1,31 @@
+#include "cli/commands.h"
+#include "cli/options.h"
+#include "common/topo.h"
+
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int sere_cmd_topo( int argc, char** argv )
+{
+	long long threads = 0;
+	const sere_option options[] = { { "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL } };
+	sere_options_result parsed;
+	if ( sere_options_parse( "topo", argc, argv, options, 1, 0, NULL, &parsed ) != SERE_OK )
+	{
+		return 2;
+	}
+	if ( parsed.help )
+	{
+		printf( "usage: sere topo [--threads T]\n\n"
+				"Prints the machine topology as hwloc sees it and how sere binds its OpenMP threads:\n"
+				"thread i runs on core i (one PU of it). T = 0 (default) uses one thread per core.\n" );
+		return 0;
+	}
+	sere_topo_print( stdout );
+	printf( "\nphysical cores: %d\nbinding:\n", sere_topo_cores() );
+	sere_topo_bind( (int) threads, stdout );
+	printf( "OpenMP threads: %d\n", omp_get_max_threads() );
+	return 0;
+}

@@ -1,0 +1,23 @@
+/* sere harness — one entry point for leaves: a .leaf file or an auxiliary PNG (Fig. 3a-b). */
+#pragma once
+
+#include "read/leaffile.h"
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
+typedef struct sere_leaf
+{
+	sere_leaf_file file;
+} sere_leaf;
+
+/* Reads PATH by its extension (.png: an auxiliary image, see leafimage.h; anything else: a
+ * .leaf file); 0 on success, else -1 with one line in err. */
+int sere_leaf_load( const char* path, sere_leaf* leaf, char* err, size_t err_size );
+void sere_leaf_free( sere_leaf* leaf );
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,75 @@
+#include "core/base.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* The Makefile passes the VERSION file's contents; there is no second copy to fall out of step. */
+#ifndef SERE_VERSION
+#error "SERE_VERSION is not defined: build libsere with its Makefile (it passes -DSERE_VERSION from VERSION)"
+#endif
+
+const char* sere_version( void )
+{
+	return SERE_VERSION;
+}
+
+const char* sere_simd_path( void )
+{
+#if defined( __AVX512F__ )
+	return "AVX-512";
+#elif defined( __AVX2__ )
+	return "AVX2";
+#elif defined( __AVX__ )
+	return "AVX";
+#else
+	return "scalar";
+#endif
+}
+
+const char* sere_status_text( sere_status status )
+{
+	switch ( status )
+	{
+		case SERE_OK:
+			return "ok";
+		case SERE_ERR_ARGUMENT:
+			return "invalid argument";
+		case SERE_ERR_MEMORY:
+			return "out of memory";
+		case SERE_ERR_NONFINITE:
+			return "NaN or infinity in the input";
+		case SERE_ERR_GEOMETRY:
+			return "degenerate or invalid geometry";
+		case SERE_ERR_COUNTS:
+			return "no triangulation gives these particle and spring counts";
+		case SERE_ERR_NOT_SPD:
+			return "matrix is not symmetric positive definite";
+		case SERE_ERR_NO_CONVERGE:
+			return "iteration cap reached before the tolerance";
+		case SERE_ERR_CAPACITY:
+			return "workspace too small for the input";
+		case SERE_STATUS_COUNT:
+			break;
+	}
+	return "unknown status";
+}
+
+void* sere_alloc( size_t bytes )
+{
+	if ( bytes == 0 )
+	{
+		return NULL;
+	}
+	size_t rounded = ( bytes + SERE_ALIGN - 1 ) & ~(size_t) ( SERE_ALIGN - 1 );
+	void* memory = aligned_alloc( SERE_ALIGN, rounded );
+	if ( memory != NULL )
+	{
+		memset( memory, 0, rounded );
+	}
+	return memory;
+}
+
+void sere_free( void* memory )
+{
+	free( memory );
+}

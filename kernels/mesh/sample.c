@@ -1,0 +1,627 @@
+#include "mesh/sample.h"
+
+#include "core/geometry.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Squared distance from (px, py) to the segment a–b. */
+static double segment_distance2( double px, double py, double ax, double ay, double bx, double by )
+{
+	const double p[2] = { px, py }, a[2] = { ax, ay }, b[2] = { bx, by };
+	double dx, dy;
+	sere_segment_offset( p, a, b, &dx, &dy );
+	return dx * dx + dy * dy;
+}
+
+/* A growable point list. */
+typedef struct point_list
+{
+	double* x;
+	double* y;
+	uint8_t* vein;
+	int32_t count, capacity;
+} point_list;
+
+static int point_push( point_list* list, double x, double y, uint8_t vein )
+{
+	if ( list->count == list->capacity )
+	{
+		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 256;
+		double* nx = realloc( list->x, sizeof( double ) * (size_t) capacity );
+		if ( nx != NULL )
+		{
+			list->x = nx;
+		}
+		double* ny = realloc( list->y, sizeof( double ) * (size_t) capacity );
+		if ( ny != NULL )
+		{
+			list->y = ny;
+		}
+		uint8_t* nv = realloc( list->vein, (size_t) capacity );
+		if ( nv != NULL )
+		{
+			list->vein = nv;
+		}
+		if ( nx == NULL || ny == NULL || nv == NULL )
+		{
+			return -1;
+		}
+		list->capacity = capacity;
+	}
+	list->x[list->count] = x;
+	list->y[list->count] = y;
+	list->vein[list->count] = vein;
+	return list->count++;
+}
+
+typedef struct segment_list
+{
+	int32_t* pairs;
+	int32_t count, capacity;
+} segment_list;
+
+static int segment_push( segment_list* list, int32_t a, int32_t b )
+{
+	if ( list->count == list->capacity )
+	{
+		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 256;
+		int32_t* pairs = realloc( list->pairs, sizeof( int32_t ) * 2 * (size_t) capacity );
+		if ( pairs == NULL )
+		{
+			return -1;
+		}
+		list->pairs = pairs;
+		list->capacity = capacity;
+	}
+	list->pairs[2 * list->count] = a;
+	list->pairs[2 * list->count + 1] = b;
+	list->count += 1;
+	return 0;
+}
+
+/* Cumulative arc length of a polyline of count points. */
+static double* arc_lengths( const double* xy, int32_t count, int closed )
+{
+	double* s = malloc( sizeof( double ) * (size_t) ( count + 1 ) );
+	if ( s == NULL )
+	{
+		return NULL;
+	}
+	s[0] = 0.0;
+	int32_t edges = closed ? count : count - 1;
+	for ( int32_t i = 0; i < edges; ++i )
+	{
+		int32_t j = ( i + 1 ) % count;
+		s[i + 1] = s[i] + hypot( xy[2 * j] - xy[2 * i], xy[2 * j + 1] - xy[2 * i + 1] );
+	}
+	return s;
+}
+
+/* The point at arc length a along a polyline with cumulative lengths s over its edges. */
+static void point_at( const double* xy, const double* s, int32_t count, int32_t edges, double a, double* px,
+					  double* py )
+{
+	int32_t lo = 0, hi = edges;
+	while ( hi - lo > 1 )
+	{
+		int32_t mid = ( lo + hi ) / 2;
+		if ( s[mid] <= a )
+		{
+			lo = mid;
+		}
+		else
+		{
+			hi = mid;
+		}
+	}
+	int32_t j = ( lo + 1 ) % count;
+	double length = s[lo + 1] - s[lo];
+	double t = length > 0.0 ? ( a - s[lo] ) / length : 0.0;
+	t = fmin( 1.0, fmax( 0.0, t ) );
+	*px = xy[2 * lo] + t * ( xy[2 * j] - xy[2 * lo] );
+	*py = xy[2 * lo + 1] + t * ( xy[2 * j + 1] - xy[2 * lo + 1] );
+}
+
+/* Arc length of the point of a polyline closest to (px, py). */
+static double project_on( const double* xy, const double* s, int32_t count, int32_t edges, double px, double py )
+{
+	double best = INFINITY, best_a = 0.0;
+	for ( int32_t i = 0; i < edges; ++i )
+	{
+		int32_t j = ( i + 1 ) % count;
+		double ex = xy[2 * j] - xy[2 * i], ey = xy[2 * j + 1] - xy[2 * i + 1];
+		double length2 = ex * ex + ey * ey;
+		double t = length2 > 0.0 ? ( ( px - xy[2 * i] ) * ex + ( py - xy[2 * i + 1] ) * ey ) / length2 : 0.0;
+		t = fmin( 1.0, fmax( 0.0, t ) );
+		double dx = xy[2 * i] + t * ex - px, dy = xy[2 * i + 1] + t * ey - py;
+		double d2 = dx * dx + dy * dy;
+		if ( d2 < best )
+		{
+			best = d2;
+			best_a = s[i] + t * ( s[i + 1] - s[i] );
+		}
+	}
+	return best_a;
+}
+
+/* A uniform grid of cell lists over the leaf's bounding box, for nearest-point and
+ * nearest-segment queries during the interior fill. */
+typedef struct grid
+{
+	double x0, y0, cell;
+	int32_t nx, ny;
+	int32_t* head; /* nx * ny */
+	int32_t* next; /* per item */
+	int32_t capacity;
+} grid;
+
+static int grid_init( grid* g, double x0, double y0, double x1, double y1, double cell, int32_t capacity )
+{
+	g->x0 = x0;
+	g->y0 = y0;
+	g->cell = cell;
+	g->nx = (int32_t) ceil( ( x1 - x0 ) / cell ) + 1;
+	g->ny = (int32_t) ceil( ( y1 - y0 ) / cell ) + 1;
+	g->head = malloc( sizeof( int32_t ) * (size_t) g->nx * (size_t) g->ny );
+	g->next = malloc( sizeof( int32_t ) * (size_t) capacity );
+	g->capacity = capacity;
+	if ( g->head == NULL || g->next == NULL )
+	{
+		return -1;
+	}
+	for ( int32_t i = 0; i < g->nx * g->ny; ++i )
+	{
+		g->head[i] = -1;
+	}
+	return 0;
+}
+
+static void grid_free( grid* g )
+{
+	free( g->head );
+	free( g->next );
+}
+
+static int32_t grid_cell( const grid* g, double x, double y )
+{
+	int32_t i = (int32_t) floor( ( x - g->x0 ) / g->cell );
+	int32_t j = (int32_t) floor( ( y - g->y0 ) / g->cell );
+	i = i < 0 ? 0 : ( i >= g->nx ? g->nx - 1 : i );
+	j = j < 0 ? 0 : ( j >= g->ny ? g->ny - 1 : j );
+	return j * g->nx + i;
+}
+
+static void grid_insert( grid* g, int32_t cell, int32_t item )
+{
+	g->next[item] = g->head[cell];
+	g->head[cell] = item;
+}
+
+/* Squared distance from (x, y) to the nearest point of the list within radius cells. */
+static double nearest_point2( const grid* g, const point_list* points, double x, double y, int32_t radius )
+{
+	int32_t cell = grid_cell( g, x, y );
+	int32_t ci = cell % g->nx, cj = cell / g->nx;
+	double best = INFINITY;
+	for ( int32_t j = cj - radius; j <= cj + radius; ++j )
+	{
+		for ( int32_t i = ci - radius; i <= ci + radius; ++i )
+		{
+			if ( i < 0 || j < 0 || i >= g->nx || j >= g->ny )
+			{
+				continue;
+			}
+			for ( int32_t k = g->head[j * g->nx + i]; k >= 0; k = g->next[k] )
+			{
+				double dx = points->x[k] - x, dy = points->y[k] - y;
+				best = fmin( best, dx * dx + dy * dy );
+			}
+		}
+	}
+	return best;
+}
+
+static double nearest_segment2( const grid* g, const double* sx, const double* sy, double x, double y )
+{
+	int32_t cell = grid_cell( g, x, y );
+	int32_t ci = cell % g->nx, cj = cell / g->nx;
+	double best = INFINITY;
+	for ( int32_t j = cj - 1; j <= cj + 1; ++j )
+	{
+		for ( int32_t i = ci - 1; i <= ci + 1; ++i )
+		{
+			if ( i < 0 || j < 0 || i >= g->nx || j >= g->ny )
+			{
+				continue;
+			}
+			for ( int32_t k = g->head[j * g->nx + i]; k >= 0; k = g->next[k] )
+			{
+				best = fmin( best, segment_distance2( x, y, sx[2 * k], sy[2 * k], sx[2 * k + 1], sy[2 * k + 1] ) );
+			}
+		}
+	}
+	return best;
+}
+
+typedef struct anchor
+{
+	double a;	   /* arc length on the vein */
+	int32_t child; /* the vein branching here, or -1 for the end points */
+	int32_t vertex;
+} anchor;
+
+static int compare_anchor( const void* pa, const void* pb )
+{
+	const anchor* a = pa;
+	const anchor* b = pb;
+	if ( a->a != b->a )
+	{
+		return a->a < b->a ? -1 : 1;
+	}
+	return ( a->child > b->child ) - ( a->child < b->child );
+}
+
+static sere_status place_veins( const sere_leaf_shape* shape, double spacing, point_list* points,
+								segment_list* segments )
+{
+	int32_t veins = shape->vein_count;
+	if ( veins == 0 )
+	{
+		return SERE_OK;
+	}
+	sere_status status = SERE_OK;
+	double** lengths = calloc( (size_t) veins, sizeof( double* ) );
+	double* branch_at = malloc( sizeof( double ) * (size_t) veins );
+	int32_t* start_vertex = malloc( sizeof( int32_t ) * (size_t) veins );
+	anchor* anchors = malloc( sizeof( anchor ) * ( (size_t) veins + 2 ) );
+	if ( !lengths || !branch_at || !start_vertex || !anchors )
+	{
+		status = SERE_ERR_MEMORY;
+		goto done;
+	}
+	for ( int32_t v = 0; v < veins; ++v )
+	{
+		const sere_vein* vein = shape->veins + v;
+		lengths[v] = arc_lengths( shape->vein_xy + 2 * vein->first, vein->count, 0 );
+		if ( lengths[v] == NULL )
+		{
+			status = SERE_ERR_MEMORY;
+			goto done;
+		}
+		start_vertex[v] = vein->parent < 0 ? 0 : -1;
+	}
+	for ( int32_t v = 0; v < veins; ++v )
+	{
+		const sere_vein* vein = shape->veins + v;
+		if ( vein->parent >= 0 )
+		{
+			const sere_vein* parent = shape->veins + vein->parent;
+			const double* xy = shape->vein_xy + 2 * vein->first;
+			branch_at[v] = project_on( shape->vein_xy + 2 * parent->first, lengths[vein->parent], parent->count,
+									   parent->count - 1, xy[0], xy[1] );
+		}
+	}
+	/* Parents come before their children (the shape validator checks parent < index). */
+	for ( int32_t v = 0; v < veins; ++v )
+	{
+		const sere_vein* vein = shape->veins + v;
+		const double* xy = shape->vein_xy + 2 * vein->first;
+		const double* s = lengths[v];
+		double total = s[vein->count - 1];
+		int32_t count = 0;
+		anchors[count++] = ( anchor ){ 0.0, -1, start_vertex[v] };
+		for ( int32_t c = v + 1; c < veins; ++c )
+		{
+			if ( shape->veins[c].parent == v )
+			{
+				anchors[count++] = ( anchor ){ fmin( branch_at[c], total ), c, -1 };
+			}
+		}
+		anchors[count++] = ( anchor ){ total, -1, -1 };
+		qsort( anchors + 1, (size_t) ( count - 2 ), sizeof( anchor ), compare_anchor );
+		if ( start_vertex[v] < 0 )
+		{
+			status = SERE_ERR_GEOMETRY;
+			goto done;
+		}
+		int32_t previous = start_vertex[v];
+		double previous_a = 0.0;
+		for ( int32_t k = 1; k < count; ++k )
+		{
+			double a = anchors[k].a;
+			/* Branches closer than half a spacing to the previous anchor share its vertex. */
+			if ( a - previous_a < 0.5 * spacing && k < count - 1 )
+			{
+				start_vertex[anchors[k].child] = previous;
+				continue;
+			}
+			if ( k == count - 1 && a - previous_a < 0.5 * spacing )
+			{
+				break; /* the vein ends within half a spacing of its last vertex */
+			}
+			int32_t pieces = (int32_t) fmax( 1.0, round( ( a - previous_a ) / spacing ) );
+			for ( int32_t q = 1; q <= pieces; ++q )
+			{
+				double px, py;
+				point_at( xy, s, vein->count, vein->count - 1, previous_a + ( a - previous_a ) * q / pieces, &px, &py );
+				int32_t vertex = point_push( points, px, py, 1 );
+				if ( vertex < 0 || segment_push( segments, previous, vertex ) != 0 )
+				{
+					status = SERE_ERR_MEMORY;
+					goto done;
+				}
+				previous = vertex;
+			}
+			previous_a = a;
+			if ( anchors[k].child >= 0 )
+			{
+				start_vertex[anchors[k].child] = previous;
+			}
+		}
+		/* Children that merged into the vein's end anchor. */
+		for ( int32_t k = 1; k < count; ++k )
+		{
+			if ( anchors[k].child >= 0 && start_vertex[anchors[k].child] < 0 )
+			{
+				start_vertex[anchors[k].child] = previous;
+			}
+		}
+	}
+done:
+	if ( lengths != NULL )
+	{
+		for ( int32_t v = 0; v < veins; ++v )
+		{
+			free( lengths[v] );
+		}
+	}
+	free( lengths );
+	free( branch_at );
+	free( start_vertex );
+	free( anchors );
+	return status;
+}
+
+void sere_samples_destroy( sere_samples* samples )
+{
+	sere_free( samples->x );
+	sere_free( samples->y );
+	sere_free( samples->vein );
+	sere_free( samples->segments );
+	memset( samples, 0, sizeof( *samples ) );
+}
+
+sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_params* params, sere_samples* out )
+{
+	memset( out, 0, sizeof( *out ) );
+	if ( shape == NULL || params == NULL || shape->outline_count < 3 || params->boundary_count < 3 ||
+		 params->point_count < params->boundary_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n_target = params->point_count;
+	const int32_t b = params->boundary_count;
+	const int32_t candidates = params->candidates > 0 ? params->candidates : 24;
+	const double area = fabs( sere_shape_area( shape ) );
+	const double perimeter = sere_shape_perimeter( shape );
+	if ( !( area > 0.0 ) || !isfinite( area ) )
+	{
+		return SERE_ERR_GEOMETRY;
+	}
+	/* F = 2N − B − 2 equilateral triangles of side s tile the area: s² = A / (F √3/4). */
+	const double spacing = sqrt( area / ( ( 2.0 * n_target - b - 2.0 ) * sqrt( 3.0 ) / 4.0 ) );
+	out->spacing = spacing;
+
+	point_list points = { 0 };
+	segment_list segments = { 0 };
+	double* outline_s = NULL;
+	double* seg_x = NULL;
+	double* seg_y = NULL;
+	grid point_grid = { 0 }, segment_grid = { 0 };
+	sere_status status = SERE_OK;
+
+	/* Outline: B points at equal arc length, the base first (it lies on the outline). */
+	outline_s = arc_lengths( shape->outline_xy, shape->outline_count, 1 );
+	if ( outline_s == NULL )
+	{
+		status = SERE_ERR_MEMORY;
+		goto fail;
+	}
+	double base_a = project_on( shape->outline_xy, outline_s, shape->outline_count, shape->outline_count, shape->base_x,
+								shape->base_y );
+	for ( int32_t k = 0; k < b; ++k )
+	{
+		double a = fmod( base_a + perimeter * k / b, perimeter );
+		double px, py;
+		point_at( shape->outline_xy, outline_s, shape->outline_count, shape->outline_count, a, &px, &py );
+		if ( point_push( &points, px, py, k == 0 && shape->vein_count > 0 ) < 0 )
+		{
+			status = SERE_ERR_MEMORY;
+			goto fail;
+		}
+	}
+	status = place_veins( shape, spacing, &points, &segments );
+	if ( status != SERE_OK )
+	{
+		goto fail;
+	}
+	out->vein_point_count = points.count - b;
+	int32_t fill = n_target - points.count;
+	if ( fill < 0 )
+	{
+		status = SERE_ERR_COUNTS;
+		goto fail;
+	}
+
+	/* The resampled outline polygon, for the inside test and segment distances. */
+	double* polygon = malloc( sizeof( double ) * 2 * (size_t) b );
+	if ( polygon == NULL )
+	{
+		status = SERE_ERR_MEMORY;
+		goto fail;
+	}
+	double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+	for ( int32_t k = 0; k < b; ++k )
+	{
+		polygon[2 * k] = points.x[k];
+		polygon[2 * k + 1] = points.y[k];
+		x0 = fmin( x0, points.x[k] ), x1 = fmax( x1, points.x[k] );
+		y0 = fmin( y0, points.y[k] ), y1 = fmax( y1, points.y[k] );
+	}
+	for ( int32_t k = b; k < points.count; ++k )
+	{
+		if ( !sere_point_in_polygon( polygon, b, points.x[k], points.y[k] ) )
+		{
+			free( polygon );
+			status = SERE_ERR_GEOMETRY; /* a vein point outside the resampled outline */
+			goto fail;
+		}
+	}
+
+	/* Constraint segments (outline edges, vein segments) bucketed by the cells they touch. */
+	int32_t segment_count = b + segments.count;
+	seg_x = malloc( sizeof( double ) * 2 * (size_t) segment_count );
+	seg_y = malloc( sizeof( double ) * 2 * (size_t) segment_count );
+	int32_t cells_per_segment = 16;
+	if ( !seg_x || !seg_y || grid_init( &point_grid, x0, y0, x1, y1, spacing, n_target ) != 0 ||
+		 grid_init( &segment_grid, x0, y0, x1, y1, spacing, segment_count * cells_per_segment ) != 0 )
+	{
+		free( polygon );
+		status = SERE_ERR_MEMORY;
+		goto fail;
+	}
+	/* Segment grid entries: item = slot, the segment index recovered as slot / cells_per_segment. */
+	for ( int32_t k = 0; k < segment_count; ++k )
+	{
+		int32_t a = k < b ? k : segments.pairs[2 * ( k - b )];
+		int32_t c = k < b ? ( k + 1 ) % b : segments.pairs[2 * ( k - b ) + 1];
+		seg_x[2 * k] = points.x[a], seg_y[2 * k] = points.y[a];
+		seg_x[2 * k + 1] = points.x[c], seg_y[2 * k + 1] = points.y[c];
+	}
+	double* flat_x = seg_x;
+	double* flat_y = seg_y;
+	/* Store every segment in each cell its bounding box covers (segments are about one
+	 * spacing long, so a few cells each); a larger segment is split into more slots. */
+	int32_t slot = 0;
+	int32_t* slot_segment = malloc( sizeof( int32_t ) * (size_t) segment_count * (size_t) cells_per_segment );
+	if ( slot_segment == NULL )
+	{
+		free( polygon );
+		status = SERE_ERR_MEMORY;
+		goto fail;
+	}
+	for ( int32_t k = 0; k < segment_count; ++k )
+	{
+		int32_t c0 = grid_cell( &segment_grid, fmin( flat_x[2 * k], flat_x[2 * k + 1] ),
+								fmin( flat_y[2 * k], flat_y[2 * k + 1] ) );
+		int32_t c1 = grid_cell( &segment_grid, fmax( flat_x[2 * k], flat_x[2 * k + 1] ),
+								fmax( flat_y[2 * k], flat_y[2 * k + 1] ) );
+		for ( int32_t j = c0 / segment_grid.nx; j <= c1 / segment_grid.nx; ++j )
+		{
+			for ( int32_t i = c0 % segment_grid.nx; i <= c1 % segment_grid.nx; ++i )
+			{
+				if ( slot < segment_grid.capacity )
+				{
+					slot_segment[slot] = k;
+					grid_insert( &segment_grid, j * segment_grid.nx + i, slot++ );
+				}
+			}
+		}
+	}
+	/* Segment coordinates indexed by slot, so the query reads them directly. */
+	double* slot_x = malloc( sizeof( double ) * 2 * (size_t) ( slot > 0 ? slot : 1 ) );
+	double* slot_y = malloc( sizeof( double ) * 2 * (size_t) ( slot > 0 ? slot : 1 ) );
+	if ( slot_x == NULL || slot_y == NULL )
+	{
+		free( polygon ), free( slot_segment ), free( slot_x ), free( slot_y );
+		status = SERE_ERR_MEMORY;
+		goto fail;
+	}
+	for ( int32_t k = 0; k < slot; ++k )
+	{
+		int32_t q = slot_segment[k];
+		slot_x[2 * k] = flat_x[2 * q], slot_x[2 * k + 1] = flat_x[2 * q + 1];
+		slot_y[2 * k] = flat_y[2 * q], slot_y[2 * k + 1] = flat_y[2 * q + 1];
+	}
+	free( slot_segment );
+	for ( int32_t k = 0; k < points.count; ++k )
+	{
+		grid_insert( &point_grid, grid_cell( &point_grid, points.x[k], points.y[k] ), k );
+	}
+
+	/* Mitchell's best candidate: of several uniform candidates inside the outline keep the
+	 * one farthest from every placed point and, weighted, from every constraint segment. */
+	uint64_t state = params->seed ^ 0x5eedull;
+	int32_t attempts_left = fill * candidates * 64 + 1024;
+	for ( int32_t placed = 0; placed < fill; ++placed )
+	{
+		double best_score = -1.0, best_x = 0.0, best_y = 0.0;
+		for ( int32_t c = 0; c < candidates && attempts_left > 0; --attempts_left )
+		{
+			double cx = x0 + ( x1 - x0 ) * sere_splitmix_unit( &state );
+			double cy = y0 + ( y1 - y0 ) * sere_splitmix_unit( &state );
+			if ( !sere_point_in_polygon( polygon, b, cx, cy ) )
+			{
+				continue;
+			}
+			c += 1;
+			double dp = sqrt( nearest_point2( &point_grid, &points, cx, cy, 2 ) );
+			double ds = sqrt( nearest_segment2( &segment_grid, slot_x, slot_y, cx, cy ) );
+			double score = fmin( dp, 1.5 * ds );
+			if ( score > best_score )
+			{
+				best_score = score, best_x = cx, best_y = cy;
+			}
+		}
+		if ( best_score < 0.0 )
+		{
+			free( polygon ), free( slot_x ), free( slot_y );
+			status = SERE_ERR_GEOMETRY; /* no point inside the outline could be found */
+			goto fail;
+		}
+		int32_t k = point_push( &points, best_x, best_y, 0 );
+		if ( k < 0 )
+		{
+			free( polygon ), free( slot_x ), free( slot_y );
+			status = SERE_ERR_MEMORY;
+			goto fail;
+		}
+		grid_insert( &point_grid, grid_cell( &point_grid, best_x, best_y ), k );
+	}
+	free( polygon ), free( slot_x ), free( slot_y );
+
+	out->point_count = points.count;
+	out->boundary_count = b;
+	out->segment_count = segments.count;
+	out->x = sere_alloc( sizeof( double ) * (size_t) points.count );
+	out->y = sere_alloc( sizeof( double ) * (size_t) points.count );
+	out->vein = sere_alloc( (size_t) points.count );
+	out->segments = sere_alloc( sizeof( int32_t ) * 2 * (size_t) ( segments.count > 0 ? segments.count : 1 ) );
+	if ( !out->x || !out->y || !out->vein || !out->segments )
+	{
+		status = SERE_ERR_MEMORY;
+		goto fail;
+	}
+	memcpy( out->x, points.x, sizeof( double ) * (size_t) points.count );
+	memcpy( out->y, points.y, sizeof( double ) * (size_t) points.count );
+	memcpy( out->vein, points.vein, (size_t) points.count );
+	if ( segments.count > 0 )
+	{
+		memcpy( out->segments, segments.pairs, sizeof( int32_t ) * 2 * (size_t) segments.count );
+	}
+	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
+	free( seg_x ), free( seg_y );
+	grid_free( &point_grid );
+	grid_free( &segment_grid );
+	return SERE_OK;
+
+fail:
+	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
+	free( seg_x ), free( seg_y );
+	grid_free( &point_grid );
+	grid_free( &segment_grid );
+	sere_samples_destroy( out );
+	return status;
+}

@@ -1,0 +1,880 @@
+#include "season/massspring.h"
+
+#include "solve/color.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal/simd.h"
+
+struct sere_massspring
+{
+	int32_t vertex_count;
+	int32_t structural_count;
+	int32_t flexion_count;
+	int32_t* a; /* structural springs in sweep order (below), then flexion springs */
+	int32_t* b;
+	float* rest0;
+	int32_t color_count;
+	/* The sweep (Tang Eq. 2) works on bands: the particles cut by breadth-first level into
+	 * band_count ranges, so that a structural spring lies inside one band or joins two
+	 * neighbouring ones. A sweep limits the springs inside the bands (bands in parallel: they
+	 * share no particle, and each band's thread takes its colors in turn with no barrier), then
+	 * the springs joining bands c and c + 1 for even c, then for odd c. The structural springs
+	 * are stored in that order, item by item (bands, even cuts, odd cuts), each item by color:
+	 * run k = item k / color_count, color k % color_count is [run_offsets[k], run_offsets[k+1]). */
+	int32_t band_count;
+	int32_t* run_offsets;
+	/* Particle → springs incidence (CSR), each list in ascending spring order, with the sign
+	 * the spring's force takes at that particle: the fixed gather order makes the sum the same
+	 * for any thread count. */
+	int32_t* incidence_offsets;
+	int32_t* incidence;
+	float* incidence_sign;
+	/* Per-spring force of the current step. */
+	float *fx, *fy, *fz;
+	/* The step works on particle records, (x, y, z, 1/m) and (vx, vy, vz, 0): a SIMD lane
+	 * fetches one spring end with a single 16-byte load instead of one gather per component. */
+	float* xrec;
+	float* vrec;
+};
+
+sere_massspring_params sere_massspring_params_default( void )
+{
+	sere_massspring_params p;
+	p.dt = 1e-3f;
+	p.gravity[0] = 0.0f;
+	p.gravity[1] = 0.0f;
+	p.gravity[2] = -1.0f;
+	p.stiffness = 40.0f;
+	p.bend_stiffness = 4.0f;
+	p.damping = 0.02f;
+	p.drag = 0.01f;
+	p.shrink = 0.0f;
+	p.curl = 0.0f;
+	p.strain_limit = 0.1f;
+	p.strain_tolerance = 1e-3f;
+	p.max_sweeps = 500;
+	return p;
+}
+
+sere_status sere_massspring_mass_from_gray( const float* gray, int32_t n, float m_min, float m_max, float* mass )
+{
+	if ( n < 0 || ( n > 0 && ( gray == NULL || mass == NULL ) ) || !isfinite( m_min ) || !isfinite( m_max ) ||
+		 !( m_min > 0.0f ) || !( m_min <= m_max ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( isnan( gray[i] ) )
+		{
+			return SERE_ERR_NONFINITE;
+		}
+	}
+	const double scale = 1.0 / log( 256.0 );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double g = gray[i] < 0.0f ? 0.0 : ( gray[i] > 1.0f ? 1.0 : (double) gray[i] );
+		double t = log1p( 255.0 * g ) * scale; /* Tang Eq. 3 */
+		mass[i] = (float) ( m_min + ( (double) m_max - m_min ) * t );
+	}
+	return SERE_OK;
+}
+
+void sere_massspring_destroy( sere_massspring* ms )
+{
+	if ( ms == NULL )
+	{
+		return;
+	}
+	sere_free( ms->a );
+	sere_free( ms->b );
+	sere_free( ms->rest0 );
+	sere_free( ms->run_offsets );
+	sere_free( ms->incidence_offsets );
+	sere_free( ms->incidence );
+	sere_free( ms->incidence_sign );
+	sere_free( ms->fx );
+	sere_free( ms->fy );
+	sere_free( ms->fz );
+	sere_free( ms->xrec );
+	sere_free( ms->vrec );
+	free( ms );
+}
+
+/* One triangle side: the undirected edge (lo, hi), the triangle it belongs to and the vertex
+ * opposite it there. */
+typedef struct side
+{
+	int32_t lo, hi, triangle, opposite;
+} side;
+
+static int compare_sides( const void* pa, const void* pb )
+{
+	const side* a = pa;
+	const side* b = pb;
+	if ( a->lo != b->lo )
+	{
+		return a->lo < b->lo ? -1 : 1;
+	}
+	if ( a->hi != b->hi )
+	{
+		return a->hi < b->hi ? -1 : 1;
+	}
+	return ( a->triangle > b->triangle ) - ( a->triangle < b->triangle );
+}
+
+static float distance( const float* x, const float* y, const float* z, int32_t i, int32_t j )
+{
+	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
+	return sqrtf( ( dx * dx + dy * dy ) + dz * dz );
+}
+
+/* Bands hold at least this many particles, so that the springs joining two bands stay a
+ * small share; at most MAX_BANDS of them. The count depends on the mesh only, never on the
+ * thread count, so every thread count limits the springs in the same order. */
+#define BAND_PARTICLES 512
+#define MAX_BANDS	   16
+
+/* Breadth-first levels over the structural springs (each connected piece continues the level
+ * count of the previous one), then bands of whole levels holding about equal shares of the
+ * particles. Fills band_of (per particle) and returns the band count. */
+static int32_t cut_bands( const int32_t* sa, const int32_t* sb, int32_t edges, int32_t n, int32_t* band_of,
+						  int32_t* scratch )
+{
+	int32_t* start = scratch;		   /* n + 1: adjacency offsets */
+	int32_t* adjacent = start + n + 1; /* 2 edges */
+	int32_t* level = adjacent + 2 * (size_t) edges;
+	int32_t* queue = level + n;
+	memset( start, 0, sizeof( int32_t ) * ( (size_t) n + 1 ) );
+	for ( int32_t e = 0; e < edges; ++e )
+	{
+		++start[sa[e] + 1], ++start[sb[e] + 1];
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		start[i + 1] += start[i];
+	}
+	int32_t* fill = queue; /* the queue is not in use yet */
+	memcpy( fill, start, sizeof( int32_t ) * (size_t) n );
+	for ( int32_t e = 0; e < edges; ++e )
+	{
+		adjacent[fill[sa[e]]++] = sb[e];
+		adjacent[fill[sb[e]]++] = sa[e];
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		level[i] = -1;
+	}
+	int32_t head = 0, tail = 0, top = 0;
+	for ( int32_t root = 0; root < n; ++root )
+	{
+		if ( level[root] >= 0 )
+		{
+			continue;
+		}
+		level[root] = top;
+		queue[tail++] = root;
+		while ( head < tail )
+		{
+			int32_t i = queue[head++];
+			top = level[i] > top ? level[i] : top;
+			for ( int32_t k = start[i]; k < start[i + 1]; ++k )
+			{
+				if ( level[adjacent[k]] < 0 )
+				{
+					level[adjacent[k]] = level[i] + 1;
+					queue[tail++] = adjacent[k];
+				}
+			}
+		}
+		top += 1;
+	}
+	/* particles per level, then bands of whole levels */
+	int32_t* per_level = start; /* reuse: top ≤ n levels */
+	memset( per_level, 0, sizeof( int32_t ) * ( (size_t) top + 1 ) );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		++per_level[level[i]];
+	}
+	int32_t bands = n / BAND_PARTICLES;
+	bands = bands < 1 ? 1 : bands > MAX_BANDS ? MAX_BANDS : bands;
+	for ( ;; )
+	{
+		/* level l goes to the band its first particle's rank falls in */
+		int32_t before = 0, used = 0, previous = -1;
+		for ( int32_t l = 0; l < top; ++l )
+		{
+			int32_t band = (int32_t) ( (int64_t) before * bands / n );
+			used += band != previous;
+			previous = band;
+			queue[l] = band;
+			before += per_level[l];
+		}
+		if ( used == bands || bands == 1 )
+		{
+			break;
+		}
+		bands -= 1; /* a level wider than a band's share: fewer, wider bands */
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		band_of[i] = queue[level[i]];
+	}
+	return bands;
+}
+
+/* Stores the structural springs in sweep order (see the struct) and their runs. */
+static sere_status sweep_order( sere_massspring* ms, const int32_t* sa, const int32_t* sb, const float* srest,
+								int32_t edges, int32_t n, const sere_coloring* coloring )
+{
+	int32_t* band_of = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t* scratch = malloc( sizeof( int32_t ) * ( 3 * (size_t) n + 1 + 2 * (size_t) edges ) );
+	if ( band_of == NULL || scratch == NULL )
+	{
+		free( band_of ), free( scratch );
+		return SERE_ERR_MEMORY;
+	}
+	const int32_t bands = cut_bands( sa, sb, edges, n, band_of, scratch );
+	const int32_t colors = coloring->color_count, cuts = bands - 1, items = bands + cuts;
+	/* item rank: bands 0..R−1, then even cuts, then odd cuts */
+	int32_t rank_of_cut[MAX_BANDS];
+	int32_t next = bands;
+	for ( int32_t c = 0; c < cuts; c += 2 )
+	{
+		rank_of_cut[c] = next++;
+	}
+	for ( int32_t c = 1; c < cuts; c += 2 )
+	{
+		rank_of_cut[c] = next++;
+	}
+	ms->band_count = bands;
+	ms->run_offsets = sere_alloc( sizeof( int32_t ) * ( (size_t) items * colors + 1 ) );
+	if ( ms->run_offsets == NULL )
+	{
+		free( band_of ), free( scratch );
+		return SERE_ERR_MEMORY;
+	}
+	/* counting sort by run (item rank, color), stable in the coloring's order */
+	int32_t* offsets = ms->run_offsets;
+	memset( offsets, 0, sizeof( int32_t ) * ( (size_t) items * colors + 1 ) );
+	int32_t* run_of = scratch; /* per position in the coloring's order */
+	for ( int32_t k = 0; k < edges; ++k )
+	{
+		int32_t s = coloring->order[k];
+		int32_t ra = band_of[sa[s]], rb = band_of[sb[s]];
+		int32_t item = ra == rb ? ra : rank_of_cut[ra < rb ? ra : rb];
+		run_of[k] = item * colors + coloring->color[s];
+		++offsets[run_of[k] + 1];
+	}
+	for ( int32_t r = 0; r < items * colors; ++r )
+	{
+		offsets[r + 1] += offsets[r];
+	}
+	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) items * colors );
+	if ( fill == NULL )
+	{
+		free( band_of ), free( scratch );
+		return SERE_ERR_MEMORY;
+	}
+	memcpy( fill, offsets, sizeof( int32_t ) * (size_t) items * colors );
+	for ( int32_t k = 0; k < edges; ++k )
+	{
+		int32_t s = coloring->order[k], at = fill[run_of[k]]++;
+		ms->a[at] = sa[s];
+		ms->b[at] = sb[s];
+		ms->rest0[at] = srest[s];
+	}
+	ms->color_count = colors;
+	free( band_of ), free( scratch ), free( fill );
+	return SERE_OK;
+}
+
+sere_status sere_massspring_create( const float* x, const float* y, const float* z, int32_t vertex_count,
+									const int32_t* tri, int32_t triangle_count, sere_massspring** out )
+{
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*out = NULL;
+	if ( x == NULL || y == NULL || z == NULL || tri == NULL || vertex_count < 3 || triangle_count < 1 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		if ( !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] ) )
+		{
+			return SERE_ERR_NONFINITE;
+		}
+	}
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* v = tri + 3 * t;
+		for ( int k = 0; k < 3; ++k )
+		{
+			if ( v[k] < 0 || v[k] >= vertex_count )
+			{
+				return SERE_ERR_ARGUMENT;
+			}
+		}
+		if ( v[0] == v[1] || v[1] == v[2] || v[2] == v[0] )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
+
+	/* Sec. 4.2, steps 1–3: every pair of adjacent particles joined once. Sorting the triangle
+	 * sides groups each edge's one (boundary) or two (interior) sides together. */
+	side* sides = malloc( 3 * (size_t) triangle_count * sizeof( side ) );
+	if ( sides == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		for ( int k = 0; k < 3; ++k )
+		{
+			int32_t p = tri[3 * t + ( k + 1 ) % 3], q = tri[3 * t + ( k + 2 ) % 3];
+			sides[3 * t + k] = ( side ){ p < q ? p : q, p < q ? q : p, t, tri[3 * t + k] };
+		}
+	}
+	qsort( sides, 3 * (size_t) triangle_count, sizeof( side ), compare_sides );
+
+	int32_t side_count = 3 * triangle_count;
+	int32_t edges = 0, hinges = 0;
+	sere_status status = SERE_OK;
+	for ( int32_t k = 0; k < side_count; )
+	{
+		int32_t run = 1;
+		while ( k + run < side_count && sides[k + run].lo == sides[k].lo && sides[k + run].hi == sides[k].hi )
+		{
+			++run;
+		}
+		if ( run > 2 || ( run == 2 && sides[k].opposite == sides[k + 1].opposite ) )
+		{
+			status = SERE_ERR_GEOMETRY;
+		}
+		edges += 1;
+		hinges += run == 2;
+		k += run;
+	}
+
+	sere_massspring* ms = status == SERE_OK ? calloc( 1, sizeof( sere_massspring ) ) : NULL;
+	int32_t* sa = NULL;
+	int32_t* sb = NULL;
+	float* srest = NULL;
+	sere_coloring coloring = { 0 };
+	if ( status == SERE_OK && ms == NULL )
+	{
+		status = SERE_ERR_MEMORY;
+	}
+	if ( status == SERE_OK )
+	{
+		int32_t total = sere_pad( edges + hinges );
+		ms->vertex_count = vertex_count;
+		ms->structural_count = edges;
+		ms->flexion_count = hinges;
+		ms->a = sere_alloc( (size_t) total * sizeof( int32_t ) );
+		ms->b = sere_alloc( (size_t) total * sizeof( int32_t ) );
+		ms->rest0 = sere_alloc( (size_t) total * sizeof( float ) );
+		ms->fx = sere_alloc( (size_t) total * sizeof( float ) );
+		ms->fy = sere_alloc( (size_t) total * sizeof( float ) );
+		ms->fz = sere_alloc( (size_t) total * sizeof( float ) );
+		ms->incidence_offsets = sere_alloc( (size_t) sere_pad( vertex_count + 1 ) * sizeof( int32_t ) );
+		ms->incidence = sere_alloc( 2 * (size_t) total * sizeof( int32_t ) );
+		ms->incidence_sign = sere_alloc( 2 * (size_t) total * sizeof( float ) );
+		ms->xrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
+		ms->vrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
+		sa = malloc( (size_t) edges * sizeof( int32_t ) );
+		sb = malloc( (size_t) edges * sizeof( int32_t ) );
+		srest = malloc( (size_t) edges * sizeof( float ) );
+		if ( ms->a == NULL || ms->b == NULL || ms->rest0 == NULL || ms->fx == NULL || ms->fy == NULL ||
+			 ms->fz == NULL || ms->incidence_offsets == NULL || ms->incidence == NULL || ms->incidence_sign == NULL ||
+			 ms->xrec == NULL || ms->vrec == NULL || sa == NULL || sb == NULL || srest == NULL )
+		{
+			status = SERE_ERR_MEMORY;
+		}
+	}
+	if ( status == SERE_OK )
+	{
+		int32_t e = 0, h = edges;
+		for ( int32_t k = 0; k < side_count; )
+		{
+			int32_t run =
+				k + 1 < side_count && sides[k + 1].lo == sides[k].lo && sides[k + 1].hi == sides[k].hi ? 2 : 1;
+			sa[e] = sides[k].lo;
+			sb[e] = sides[k].hi;
+			srest[e] = distance( x, y, z, sa[e], sb[e] );
+			if ( !( srest[e] > 0.0f ) )
+			{
+				status = SERE_ERR_GEOMETRY;
+			}
+			++e;
+			if ( run == 2 )
+			{
+				int32_t c = sides[k].opposite, d = sides[k + 1].opposite;
+				ms->a[h] = c < d ? c : d;
+				ms->b[h] = c < d ? d : c;
+				ms->rest0[h] = distance( x, y, z, c, d );
+				if ( !( ms->rest0[h] > 0.0f ) )
+				{
+					status = SERE_ERR_GEOMETRY;
+				}
+				++h;
+			}
+			k += run;
+		}
+	}
+	free( sides );
+	if ( status == SERE_OK )
+	{
+		status = sere_color_springs( sa, sb, edges, vertex_count, &coloring );
+	}
+	if ( status == SERE_OK )
+	{
+		status = sweep_order( ms, sa, sb, srest, edges, vertex_count, &coloring );
+	}
+	if ( status == SERE_OK )
+	{
+
+		int32_t total = edges + hinges;
+		int32_t* offsets = ms->incidence_offsets;
+		for ( int32_t s = 0; s < total; ++s )
+		{
+			++offsets[ms->a[s] + 1];
+			++offsets[ms->b[s] + 1];
+		}
+		for ( int32_t i = 0; i < vertex_count; ++i )
+		{
+			offsets[i + 1] += offsets[i];
+		}
+		int32_t* fill = malloc( (size_t) vertex_count * sizeof( int32_t ) );
+		if ( fill == NULL )
+		{
+			status = SERE_ERR_MEMORY;
+		}
+		else
+		{
+			memcpy( fill, offsets, (size_t) vertex_count * sizeof( int32_t ) );
+			for ( int32_t s = 0; s < total; ++s )
+			{
+				/* The force f of spring s pulls a toward b: +f at a, −f at b. */
+				ms->incidence[fill[ms->a[s]]] = s;
+				ms->incidence_sign[fill[ms->a[s]]++] = 1.0f;
+				ms->incidence[fill[ms->b[s]]] = s;
+				ms->incidence_sign[fill[ms->b[s]]++] = -1.0f;
+			}
+			free( fill );
+		}
+	}
+	sere_coloring_destroy( &coloring );
+	free( sa );
+	free( sb );
+	free( srest );
+	if ( status != SERE_OK )
+	{
+		sere_massspring_destroy( ms );
+		return status;
+	}
+	*out = ms;
+	return SERE_OK;
+}
+
+sere_massspring_topology sere_massspring_get_topology( const sere_massspring* ms )
+{
+	sere_massspring_topology t = { 0 };
+	if ( ms != NULL )
+	{
+		t.vertex_count = ms->vertex_count;
+		t.structural_count = ms->structural_count;
+		t.flexion_count = ms->flexion_count;
+		t.a = ms->a;
+		t.b = ms->b;
+		t.rest0 = ms->rest0;
+		t.color_count = ms->color_count;
+		t.band_count = ms->band_count;
+		t.run_count = ( 2 * ms->band_count - 1 ) * ms->color_count;
+		t.run_offsets = ms->run_offsets;
+	}
+	return t;
+}
+
+static int params_valid( const sere_massspring_params* p )
+{
+	return isfinite( p->dt ) && p->dt > 0.0f && isfinite( p->gravity[0] ) && isfinite( p->gravity[1] ) &&
+		   isfinite( p->gravity[2] ) && isfinite( p->stiffness ) && p->stiffness >= 0.0f &&
+		   isfinite( p->bend_stiffness ) && p->bend_stiffness >= 0.0f && isfinite( p->damping ) && p->damping >= 0.0f &&
+		   p->drag >= 0.0f && p->drag < 1.0f && p->shrink >= 0.0f && p->shrink < 1.0f && p->curl >= 0.0f &&
+		   p->curl < 1.0f && p->strain_limit > 0.0f && p->strain_limit < 1.0f && p->strain_tolerance > 0.0f &&
+		   p->strain_tolerance < p->strain_limit && p->max_sweeps >= 1;
+}
+
+/* The constants of one kind of spring in one step. */
+typedef struct spring_law
+{
+	float keep; /* L = keep · L⁰ */
+	float k;	/* stiffness */
+	float c;	/* damping */
+} spring_law;
+
+/* The spring indices of a chunk of SERE_LANES from [s, s + left); lanes past the end repeat
+ * lane 0, whose particles this chunk owns, so their loads never read a record another thread
+ * writes. */
+static inline int32_t chunk_ends( const int32_t* sa, const int32_t* sb, int32_t s, int32_t left, int32_t* ia,
+								  int32_t* ib )
+{
+	const int32_t lanes = left < SERE_LANES ? left : SERE_LANES;
+	for ( int32_t j = 0; j < SERE_LANES; ++j )
+	{
+		ia[j] = sa[s + ( j < lanes ? j : 0 )];
+		ib[j] = sb[s + ( j < lanes ? j : 0 )];
+	}
+	return lanes;
+}
+
+/* Packs the particles into records (x, y, z, 1/m) and (vx, vy, vz, 0). */
+static void pack( sere_massspring* ms, const sere_massspring_particles* p )
+{
+	float* restrict xr = ms->xrec;
+	float* restrict vr = ms->vrec;
+#pragma omp for schedule( static )
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		xr[4 * i] = p->x[i];
+		xr[4 * i + 1] = p->y[i];
+		xr[4 * i + 2] = p->z[i];
+		xr[4 * i + 3] = p->inv_m[i];
+		vr[4 * i] = p->vx[i];
+		vr[4 * i + 1] = p->vy[i];
+		vr[4 * i + 2] = p->vz[i];
+		vr[4 * i + 3] = 0.0f;
+	}
+}
+
+/* The per-spring forces of springs [first, first + count) (see the header for the law). */
+static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, spring_law law )
+{
+	const int32_t* restrict sa = ms->a;
+	const int32_t* restrict sb = ms->b;
+	const float* restrict rest0 = ms->rest0;
+	const float* restrict xr = ms->xrec;
+	const float* restrict vr = ms->vrec;
+	float* restrict fx = ms->fx;
+	float* restrict fy = ms->fy;
+	float* restrict fz = ms->fz;
+	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
+	const sere_vf keep = sere_vf_splat( law.keep ), k = sere_vf_splat( law.k ), c = sere_vf_splat( law.c );
+	const sere_vf one = sere_vf_splat( 1.0f ), zero = sere_vf_splat( 0.0f );
+#pragma omp for schedule( static )
+	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
+	{
+		const int32_t s = first + SERE_LANES * chunk;
+		int32_t ia[SERE_LANES], ib[SERE_LANES];
+		const int32_t lanes = chunk_ends( sa, sb, s, count - SERE_LANES * chunk, ia, ib );
+		sere_vf ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
+		sere_vf_load_records( xr, ia, &ax, &ay, &az, &aw );
+		sere_vf_load_records( xr, ib, &bx, &by, &bz, &bw );
+		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &unused );
+		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &unused );
+		sere_vf dx = sere_vf_sub( bx, ax ), dy = sere_vf_sub( by, ay ), dz = sere_vf_sub( bz, az );
+		sere_vf len = sere_vf_norm3( dx, dy, dz );
+		sere_vf inv = sere_vf_keep( sere_vf_gt( len, zero ), sere_vf_div( one, len ) );
+		sere_vf nx = sere_vf_mul( dx, inv ), ny = sere_vf_mul( dy, inv ), nz = sere_vf_mul( dz, inv );
+		sere_vf rest = sere_vf_mul( sere_vf_load_first( rest0 + s, lanes, 1.0f ), keep );
+		sere_vf strain = sere_vf_div( sere_vf_sub( len, rest ), rest );
+		sere_vf rvx = sere_vf_sub( bvx, avx ), rvy = sere_vf_sub( bvy, avy ), rvz = sere_vf_sub( bvz, avz );
+		sere_vf along =
+			sere_vf_add( sere_vf_add( sere_vf_mul( rvx, nx ), sere_vf_mul( rvy, ny ) ), sere_vf_mul( rvz, nz ) );
+		sere_vf f = sere_vf_add( sere_vf_mul( k, strain ), sere_vf_mul( c, along ) );
+		sere_vf_store_first( fx + s, lanes, sere_vf_mul( f, nx ) );
+		sere_vf_store_first( fy + s, lanes, sere_vf_mul( f, ny ) );
+		sere_vf_store_first( fz + s, lanes, sere_vf_mul( f, nz ) );
+	}
+}
+
+/* Tang Eq. 1: every particle gathers its springs' forces in a fixed order, then a = g + F/m,
+ * v ← (1 − drag)(v + a Δt), in the velocity records. */
+static void integrate_velocities( sere_massspring* ms, int32_t count, const sere_massspring_params* params )
+{
+	const int32_t* restrict offsets = ms->incidence_offsets;
+	const int32_t* restrict incidence = ms->incidence;
+	const float* restrict sign = ms->incidence_sign;
+	const float* restrict fx = ms->fx;
+	const float* restrict fy = ms->fy;
+	const float* restrict fz = ms->fz;
+	const float* restrict xr = ms->xrec;
+	float* restrict vr = ms->vrec;
+	const float dt = params->dt, keep = 1.0f - params->drag;
+	const float gx = params->gravity[0], gy = params->gravity[1], gz = params->gravity[2];
+#pragma omp for schedule( static )
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+		for ( int32_t e = offsets[i]; e < offsets[i + 1]; ++e )
+		{
+			const int32_t s = incidence[e];
+			sx += sign[e] * fx[s];
+			sy += sign[e] * fy[s];
+			sz += sign[e] * fz[s];
+		}
+		const float w = xr[4 * i + 3];
+		float* v = vr + 4 * i;
+		if ( w > 0.0f )
+		{
+			v[0] = ( v[0] + dt * ( gx + w * sx ) ) * keep;
+			v[1] = ( v[1] + dt * ( gy + w * sy ) ) * keep;
+			v[2] = ( v[2] + dt * ( gz + w * sz ) ) * keep;
+		}
+		else
+		{
+			v[0] = 0.0f;
+			v[1] = 0.0f;
+			v[2] = 0.0f;
+		}
+	}
+}
+
+/* Tang Eq. 2 on one run of structural springs [first, first + count), by the calling thread: no two
+ * of them share a particle, so they are limited at the same time (SERE_LANES to a step of the lane layer). Each spring
+ * off [lo_factor L, hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the
+ * nearer bound. Raises *worst_io to the largest distance off the band (relative to L) this thread found before
+ * correcting and adds the number of its springs that were off to *off_band. */
+static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float keep, float lo_factor, float hi_factor,
+					   float dt, float* worst_io, int32_t* off_band )
+{
+	const int32_t* restrict sa = ms->a;
+	const int32_t* restrict sb = ms->b;
+	const float* restrict rest0 = ms->rest0;
+	const float* restrict xr = ms->xrec;
+	float* restrict vr = ms->vrec;
+	float worst = *worst_io;
+	int32_t n = 0;
+	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
+	const sere_vf vkeep = sere_vf_splat( keep ), vlo = sere_vf_splat( lo_factor ), vhi = sere_vf_splat( hi_factor );
+	const sere_vf vdt = sere_vf_splat( dt ), zero = sere_vf_splat( 0.0f );
+	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
+	{
+		const int32_t s = first + SERE_LANES * chunk;
+		int32_t ia[SERE_LANES], ib[SERE_LANES];
+		const int32_t lanes = chunk_ends( sa, sb, s, count - SERE_LANES * chunk, ia, ib );
+		sere_vf ax, ay, az, wa, bx, by, bz, wb, avx, avy, avz, avw, bvx, bvy, bvz, bvw;
+		sere_vf_load_records( xr, ia, &ax, &ay, &az, &wa );
+		sere_vf_load_records( xr, ib, &bx, &by, &bz, &wb );
+		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &avw );
+		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &bvw );
+		sere_vf px = sere_vf_add( sere_vf_sub( bx, ax ), sere_vf_mul( vdt, sere_vf_sub( bvx, avx ) ) );
+		sere_vf py = sere_vf_add( sere_vf_sub( by, ay ), sere_vf_mul( vdt, sere_vf_sub( bvy, avy ) ) );
+		sere_vf pz = sere_vf_add( sere_vf_sub( bz, az ), sere_vf_mul( vdt, sere_vf_sub( bvz, avz ) ) );
+		sere_vf len = sere_vf_norm3( px, py, pz );
+		sere_vf rest = sere_vf_mul( sere_vf_load_first( rest0 + s, lanes, 1.0f ), vkeep );
+		sere_vf target = sere_vf_min( sere_vf_max( len, sere_vf_mul( rest, vlo ) ), sere_vf_mul( rest, vhi ) );
+		sere_vf off = sere_vf_sub( len, target );
+		sere_vmask violated = sere_vmask_and( sere_vmask_first( lanes ), sere_vf_ne( off, zero ) );
+		const int32_t off_lanes = sere_vmask_count( violated );
+		if ( off_lanes == 0 )
+		{
+			continue;
+		}
+		n += off_lanes;
+		worst = fmaxf( worst, sere_vf_max_where( violated, sere_vf_div( sere_vf_abs( off ), rest ) ) );
+		sere_vf w = sere_vf_add( wa, wb );
+		sere_vmask move = sere_vmask_and( sere_vmask_and( violated, sere_vf_gt( w, zero ) ), sere_vf_gt( len, zero ) );
+		sere_vf scale = sere_vf_keep( move, sere_vf_div( off, sere_vf_mul( sere_vf_mul( len, vdt ), w ) ) );
+		sere_vf sa_ = sere_vf_mul( wa, scale ), sb_ = sere_vf_mul( wb, scale );
+		sere_vf_store_records( vr, ia, lanes, sere_vf_add( avx, sere_vf_mul( sa_, px ) ),
+							   sere_vf_add( avy, sere_vf_mul( sa_, py ) ), sere_vf_add( avz, sere_vf_mul( sa_, pz ) ),
+							   avw );
+		sere_vf_store_records( vr, ib, lanes, sere_vf_sub( bvx, sere_vf_mul( sb_, px ) ),
+							   sere_vf_sub( bvy, sere_vf_mul( sb_, py ) ), sere_vf_sub( bvz, sere_vf_mul( sb_, pz ) ),
+							   bvw );
+	}
+	*worst_io = worst;
+	*off_band += n;
+}
+
+/* This thread's share of the structural springs' extremes after the step, with p = x_ab + v_ab Δt
+ * computed exactly as the position update will compute it: the largest excess of |p|/L beyond
+ * [1 − τ, 1 + τ] (≤ 0 when all are inside) and the largest | |p|/L − 1 |. */
+static void band_measure( const sere_massspring* ms, float keep, float tau, float dt, float* excess_out,
+						  float* strain_out )
+{
+	const int32_t* restrict sa = ms->a;
+	const int32_t* restrict sb = ms->b;
+	const float* restrict rest0 = ms->rest0;
+	const float* restrict xr = ms->xrec;
+	const float* restrict vr = ms->vrec;
+	float excess = -1.0f, strain = 0.0f;
+	const int32_t count = ms->structural_count;
+	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
+	const sere_vf vkeep = sere_vf_splat( keep ), vdt = sere_vf_splat( dt ), one = sere_vf_splat( 1.0f );
+	const sere_vf hi = sere_vf_splat( 1.0f + tau ), lo = sere_vf_splat( 1.0f - tau );
+#pragma omp for schedule( static )
+	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
+	{
+		const int32_t s = SERE_LANES * chunk;
+		int32_t ia[SERE_LANES], ib[SERE_LANES];
+		const int32_t lanes = chunk_ends( sa, sb, s, count - s, ia, ib );
+		const sere_vmask m = sere_vmask_first( lanes );
+		sere_vf ax, ay, az, aw, bx, by, bz, bw, avx, avy, avz, bvx, bvy, bvz, unused;
+		sere_vf_load_records( xr, ia, &ax, &ay, &az, &aw );
+		sere_vf_load_records( xr, ib, &bx, &by, &bz, &bw );
+		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &unused );
+		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &unused );
+		sere_vf px =
+			sere_vf_sub( sere_vf_add( bx, sere_vf_mul( bvx, vdt ) ), sere_vf_add( ax, sere_vf_mul( avx, vdt ) ) );
+		sere_vf py =
+			sere_vf_sub( sere_vf_add( by, sere_vf_mul( bvy, vdt ) ), sere_vf_add( ay, sere_vf_mul( avy, vdt ) ) );
+		sere_vf pz =
+			sere_vf_sub( sere_vf_add( bz, sere_vf_mul( bvz, vdt ) ), sere_vf_add( az, sere_vf_mul( avz, vdt ) ) );
+		sere_vf ratio = sere_vf_div( sere_vf_norm3( px, py, pz ),
+									 sere_vf_mul( sere_vf_load_first( rest0 + s, lanes, 1.0f ), vkeep ) );
+		sere_vf out = sere_vf_max( sere_vf_sub( ratio, hi ), sere_vf_sub( lo, ratio ) );
+		excess = fmaxf( excess, sere_vf_max_where( m, out ) );
+		strain = fmaxf( strain, sere_vf_max_where( m, sere_vf_abs( sere_vf_sub( ratio, one ) ) ) );
+	}
+	*excess_out = excess;
+	*strain_out = strain;
+}
+
+sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* p,
+								  const sere_massspring_params* params, sere_massspring_report* report )
+{
+	if ( ms == NULL || p == NULL || params == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL ||
+		 p->z == NULL || p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL ||
+		 !params_valid( params ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int bad = 0, negative = 0;
+#pragma omp parallel for schedule( static ) reduction( | : bad, negative )
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		bad |= !isfinite( p->x[i] ) | !isfinite( p->y[i] ) | !isfinite( p->z[i] ) | !isfinite( p->vx[i] ) |
+			   !isfinite( p->vy[i] ) | !isfinite( p->vz[i] ) | !isfinite( p->inv_m[i] );
+		negative |= p->inv_m[i] < 0.0f;
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	if ( negative )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+
+	const float keep = 1.0f - params->shrink;
+	const spring_law structural = { keep, params->stiffness, params->damping };
+	const spring_law flexion = { 1.0f - params->curl, params->bend_stiffness, params->damping };
+	const float dt = params->dt, tau = params->strain_limit, tolerance = params->strain_tolerance;
+	/* The sweeps aim at the band narrowed by the tolerance on both sides, so that once no
+	 * spring is off that inner band by more than the tolerance, all are inside the true band. */
+	const float inner_lo = 1.0f - tau + tolerance, inner_hi = 1.0f + tau - tolerance;
+	float sweep_worst = 0.0f, excess = 0.0f, final_strain = 0.0f;
+	int32_t sweeps = 0, limited = 0, sweep_limited = 0;
+	int converged = 0;
+
+#pragma omp parallel
+	{
+		pack( ms, p );
+		spring_forces( ms, 0, ms->structural_count, structural );
+		spring_forces( ms, ms->structural_count, ms->flexion_count, flexion );
+		integrate_velocities( ms, p->count, params );
+
+		for ( int32_t sweep = 0; sweep < params->max_sweeps; ++sweep )
+		{
+#pragma omp single
+			{
+				sweep_worst = 0.0f;
+				sweep_limited = 0;
+				excess = -1.0f;
+				final_strain = 0.0f;
+			}
+			float mine = 0.0f;
+			int32_t mine_limited = 0;
+			/* The bands, then the even cuts, then the odd ones (items [0, R), [R, R + E),
+			 * [R + E, 2R − 1)): within a phase the items share no particle. */
+			const int32_t bands = ms->band_count, colors = ms->color_count, even = bands / 2;
+			const int32_t phase_start[4] = { 0, bands, bands + even, 2 * bands - 1 };
+			for ( int phase = 0; phase < 3; ++phase )
+			{
+#pragma omp for schedule( static )
+				for ( int32_t item = phase_start[phase]; item < phase_start[phase + 1]; ++item )
+				{
+					for ( int32_t c = 0; c < colors; ++c )
+					{
+						const int32_t* run = ms->run_offsets + item * colors + c;
+						limit_run( ms, run[0], run[1] - run[0], keep, inner_lo, inner_hi, dt, &mine, &mine_limited );
+					}
+				}
+			}
+			/* A maximum and an integer sum: the same in any order of the threads. */
+#pragma omp critical( sere_massspring_worst )
+			{
+				sweep_worst = fmaxf( sweep_worst, mine );
+				sweep_limited += mine_limited;
+			}
+#pragma omp barrier
+			/* Every thread reads the same values, so every thread takes the same branches. A
+			 * sweep's corrections can nudge springs it limited earlier, so a quiet sweep is
+			 * confirmed by measuring the true band before stopping. */
+			int done = sweep_worst <= tolerance;
+			if ( done )
+			{
+				float own_excess, own_strain;
+				band_measure( ms, keep, tau, dt, &own_excess, &own_strain );
+#pragma omp critical( sere_massspring_worst )
+				{
+					excess = fmaxf( excess, own_excess );
+					final_strain = fmaxf( final_strain, own_strain );
+				}
+#pragma omp barrier
+				done = excess <= 0.0f;
+			}
+#pragma omp single
+			{
+				sweeps = sweep + 1;
+				if ( sweep == 0 )
+				{
+					limited = sweep_limited;
+				}
+				converged = done;
+			}
+			if ( done )
+			{
+				break;
+			}
+		}
+		if ( !converged )
+		{
+			float own_excess, own_strain;
+			band_measure( ms, keep, tau, dt, &own_excess, &own_strain );
+#pragma omp critical( sere_massspring_worst )
+			final_strain = fmaxf( final_strain, own_strain );
+		}
+
+		const float* restrict vr = ms->vrec;
+#pragma omp for schedule( static )
+		for ( int32_t i = 0; i < p->count; ++i )
+		{
+			p->vx[i] = vr[4 * i];
+			p->vy[i] = vr[4 * i + 1];
+			p->vz[i] = vr[4 * i + 2];
+			p->x[i] = p->x[i] + vr[4 * i] * dt;
+			p->y[i] = p->y[i] + vr[4 * i + 1] * dt;
+			p->z[i] = p->z[i] + vr[4 * i + 2] * dt;
+		}
+	}
+
+	if ( report != NULL )
+	{
+		report->sweeps = sweeps;
+		report->limited = limited;
+		report->max_strain = final_strain;
+		report->hit_cap = !converged;
+	}
+	return converged ? SERE_OK : SERE_ERR_NO_CONVERGE;
+}

@@ -1,0 +1,183 @@
+/* sere — sparse matrices (CSR, SELL-C-σ) and conjugate gradient for any SPD matrix, Jacobi- or
+ * multicolor-SGS-preconditioned. Knows nothing of leaves: another solver can hand it its own
+ * matrix. */
+#pragma once
+
+#include "core/base.h"
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
+/* Compressed sparse rows, the interchange format: row i holds entries [row_ptr[i], row_ptr[i+1])
+ * of col and val. */
+typedef struct sere_csr
+{
+	int32_t rows;
+	int32_t nnz;
+	int32_t* row_ptr;
+	int32_t* col;
+	double* val;
+} sere_csr;
+
+/* y = A x, OpenMP over fixed row blocks (each y_i is one sequential sum: deterministic). */
+void sere_csr_spmv( const sere_csr* a, const double* x, double* y );
+
+/* Dot products sum fixed blocks of SERE_CG_BLOCK entries, then the block sums in block order,
+ * so the result is bitwise the same for any thread count. */
+#define SERE_CG_BLOCK 512
+
+/* SELL-C-σ (Kreutzer et al. 2014): rows are cut into chunks of SERE_SELL_C rows stored column by
+ * column, so one SIMD lane runs one row and a chunk's rows advance together (no per-row loop exit
+ * to mispredict, no chain of dependent adds per row). Inside windows of σ rows the rows are
+ * sorted by decreasing length so that a chunk's rows are about as long and little padding is
+ * stored.
+ *
+ * Each lane takes its row's entries in CSR order and then padding (value 0, the row's last
+ * column), so y_i is the same sequence of operations as the CSR row sum followed by additions of
+ * 0·x_j = ±0 to a sum that is never −0: sere_sell_spmv is bitwise equal to sere_csr_spmv for
+ * finite x.
+ *
+ * The layout depends only on the CSR pattern, which for a simulation is usually fixed while the
+ * values change every step (the osmosis matrix does): build it once with sere_sell_create, then
+ * either copy new values in with sere_sell_update (one pass over the entries) or, cheaper, write
+ * each value where slot says while assembling it (the osmosis does).
+ *
+ * Positions: lane l of chunk c is position c·SERE_SELL_C + l. The CG runs in that order (its
+ * vectors indexed by position, local_col naming columns by position), so a chunk's products are
+ * one contiguous vector store and every vector sweep is contiguous; it permutes b and x in and x
+ * out once per solve. */
+#define SERE_SELL_C 8
+
+typedef struct sere_sell
+{
+	int32_t rows;		/* as the CSR it was built from */
+	int32_t nnz;		/* CSR entries, without padding */
+	int32_t sigma;		/* sorting window, in rows */
+	int32_t chunks;		/* ⌈rows / SERE_SELL_C⌉ */
+	int32_t* chunk_ptr; /* chunk c holds slots [chunk_ptr[c], chunk_ptr[c+1]): its width times SERE_SELL_C */
+	int32_t* row;		/* lane l of chunk c runs row row[c·SERE_SELL_C + l]; −1 past the last row */
+	int32_t* col;		/* per slot, lane fastest */
+	double* val;		/* per slot; 0 in padding */
+	int32_t* slot;		/* per CSR entry k: the slot holding it, val[slot[k]] */
+	int32_t* local_col; /* per slot, the column as a position in the layout's row order (below) */
+	int32_t* diagonal;	/* per position, the slot of the row's diagonal entry; −1 if it has none */
+} sere_sell;
+
+/* Builds the layout and values of a. σ is a multiple of SERE_SELL_C that divides SERE_CG_BLOCK
+ * (8, 16, ..., 512), so that windows never straddle a CG block: a block's positions are then its
+ * own rows, and its sums do not depend on how blocks are shared among threads.
+ * SERE_SELL_SIGMA: on the maple osmosis matrices σ = 8 pads the T layer by 21%, σ = 64 by 4% and
+ * σ = 512 by 0.7%; 64 and 512 time within the machine's noise. SERE_ERR_ARGUMENT for another σ,
+ * an empty matrix, a column out of range, or a row holding its diagonal entry twice (the CG reads
+ * the diagonal from one slot). */
+#define SERE_SELL_SIGMA 64
+sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out );
+void sere_sell_destroy( sere_sell* sell );
+
+/* Copies a's values into sell. a must have the pattern sell was built from: rows and nnz are
+ * checked, and every entry's column against its slot (SERE_ERR_ARGUMENT, values then undefined). */
+sere_status sere_sell_update( sere_sell* sell, const sere_csr* a );
+
+/* y = A x, OpenMP over chunks; bitwise equal to sere_csr_spmv on the CSR sell was built from. */
+void sere_sell_spmv( const sere_sell* a, const double* x, double* y );
+
+typedef struct sere_cg_workspace sere_cg_workspace;
+
+/* Scratch for systems of up to n rows, for sere_cg_solve and sere_cg_solve_sgs; nothing is
+ * allocated per solve. */
+sere_status sere_cg_create( int32_t n, sere_cg_workspace** out );
+void sere_cg_destroy( sere_cg_workspace* workspace );
+
+typedef struct sere_cg_result
+{
+	int32_t iterations;
+	double residual; /* ||b − A x||₂ / ||b||₂ (unpreconditioned, as Eigen reports it) */
+} sere_cg_result;
+
+/* Solves A x = b for SPD A starting from x (warm start). Stops when the relative residual is
+ * at most tolerance or after max_iterations. SERE_ERR_NOT_SPD when a diagonal entry or a
+ * curvature pᵀAp is not positive (indefinite or singular A), SERE_ERR_NONFINITE on NaN/inf,
+ * SERE_ERR_NO_CONVERGE at the cap (x then holds the last iterate). b = 0 gives x = 0.
+ *
+ * The matrix is SELL because the solve is a sequence of products with one matrix: the layout
+ * pays for itself within one solve, and the caller keeps it across solves (sere_sell_update).
+ * The recurrence is Chronopoulos and Gear's: one product per iteration (with the preconditioned
+ * residual, gathering one vector) yields both sums the step needs, so an iteration is two sweeps
+ * and two barriers. Its iterates equal the textbook PCG's in exact arithmetic and differ only by
+ * rounding (tests compare the two). */
+sere_status sere_cg_solve( sere_cg_workspace* workspace, const sere_sell* a, const double* b, double* x,
+						   double tolerance, int32_t max_iterations, sere_cg_result* result );
+
+/* Multicolor symmetric Gauss–Seidel (SGS), the stronger preconditioner for stiff systems (the
+ * plane tree's Voronoi layer at λ = 100, where Jacobi PCG needs about 100 iterations a frame).
+ *
+ * Rows are colored greedily in row order (each takes the smallest color none of its earlier
+ * neighbors holds), so no two rows of one color share an entry. With rows ordered by color,
+ * A = L + D + U, L holding the entries toward earlier colors, and the preconditioner is
+ * M = (D + L) D⁻¹ (D + U), symmetric and positive definite for SPD A. A Gauss–Seidel sweep then
+ * runs color by color, and the rows of a color all at once (in parallel, each row one
+ * sequential sum): the same bits for any thread count.
+ *
+ * Storage: positions are grouped by color, each color padded to whole chunks of SERE_SELL_C
+ * lanes (padding lanes have row −1, diagonal 1 and no entries); a chunk's L and U entries are
+ * two SELL slot ranges (lane fastest, entries in CSR order, padded with 0), columns named by
+ * position. One value array holds L's slots, then U's, then the diagonal per position; slot[k]
+ * says where CSR entry k lives, so a caller that refills values per step writes them there
+ * (or calls sere_sgs_update). */
+#define SERE_SGS_MAX_COLORS 32
+
+typedef struct sere_sgs
+{
+	int32_t rows, nnz;
+	int32_t colors;
+	int32_t chunks;		  /* positions = chunks · SERE_SELL_C */
+	int32_t* color_chunk; /* color c holds chunks [color_chunk[c], color_chunk[c+1]) */
+	int32_t* color;		  /* per row, its color */
+	int32_t* row;		  /* per position, its row; −1 for padding */
+	int32_t* lower_ptr;	  /* per chunk, its L slots [lower_ptr[c], lower_ptr[c+1]) */
+	int32_t* upper_ptr;	  /* per chunk, its U slots, offset by lower_ptr[chunks] into col and val */
+	int32_t* col;		  /* per slot, the column's position */
+	double* val;		  /* L slots, U slots, then the diagonal per position */
+	int32_t* slot;		  /* per CSR entry, its index into val */
+} sere_sgs;
+
+/* Builds the coloring, layout and values of a. SERE_ERR_ARGUMENT for an empty matrix, a column
+ * out of range, a row without its diagonal or with it twice, a pattern that is not symmetric
+ * (two rows of one color would then share an entry), or more than SERE_SGS_MAX_COLORS colors
+ * (a row with more than 31 neighbors can force that). */
+sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out );
+void sere_sgs_destroy( sere_sgs* sgs );
+
+/* Copies a's values (a must have the pattern sgs was built from; rows and nnz are checked). */
+sere_status sere_sgs_update( sere_sgs* sgs, const sere_csr* a );
+
+/* z = M⁻¹ r in the row numbering (a forward then a backward sweep); for tests and callers with
+ * their own Krylov method. SERE_ERR_NOT_SPD for a diagonal entry that is not positive. */
+sere_status sere_sgs_apply( const sere_sgs* sgs, const double* r, double* z );
+
+/* sere_cg_solve preconditioned with M (same arguments, tolerance and result: the relative
+ * residual ||b − A x||₂ / ||b||₂, checked on the true residual before the solve returns).
+ *
+ * Eisenstat's (1981) form: with L̃ = D + L, CG runs on E = L̃⁻¹ A L̃⁻ᵀ (SPD, as L̃ᵀ = D + U)
+ * with D as its preconditioner (u = D r̂: CG on D^½ E D^½ = C⁻¹ A C⁻ᵀ for M = C Cᵀ,
+ * C = L̃ D^−½), for ŷ = L̃ᵀ x and right-hand side L̃⁻¹ b. Since A = L̃ + L̃ᵀ − D,
+ * E u = t + L̃⁻¹ (u − D t) with t = L̃⁻ᵀ u: one backward and one forward sweep, which together
+ * read every entry of A once, the same traffic as the Jacobi PCG's one product. The iterates are
+ * those of PCG on A with M in exact arithmetic. The loop stops on the transformed residual
+ * L̃⁻¹ (b − A x); the true residual is then computed, and if it is still above tolerance (their
+ * ratio is bounded by the norms of L̃ and its inverse) the solve restarts from that x, with the
+ * transformed target halved at each restart, for as long as a restart halves the true residual.
+ * (Below the rounding floor of b − A x, near 1e-14 relative on diffusion-dominated rows, it
+ * stalls: the solve then returns SERE_OK if the recursive residual met its target, as the
+ * Jacobi path, which checks only that one, would, and reports the true residual.)
+ *
+ * SSOR with ω > 1 was measured worse on these systems (plane tree V: 289 iterations at ω = 1,
+ * 332 at 1.4, 488 at 1.8), as usual for multicolor orderings, so M is plain SGS. */
+sere_status sere_cg_solve_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs, const double* b, double* x,
+							   double tolerance, int32_t max_iterations, sere_cg_result* result );
+
+#ifdef __cplusplus
+}
+#endif
