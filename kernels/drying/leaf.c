@@ -234,7 +234,7 @@ static void local_stop( sere_leaf_sim* sim )
 		if ( sim->frozen[i] && p->w[i] > 0.0 )
 		{
 			p->w[i] = sim->w_frame[i];
-			p->m[i] = p->M[i] + p->w[i]; /* Jeong Eq. 10 */
+			p->m[i] = p->M[i] + p->w[i]; /* back to its frame-start mass (Jeong Eq. 10 is osmosis.c's) */
 		}
 	}
 }

@@ -238,8 +238,9 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		o->edge_sum[i] = e;
 	}
 
-	/* Assembly, one row per iteration: every row gathers from its own entries (no atomics, the
-	 * same result for any thread count). */
+	/* Assembly of Jeong Eq. 9, (I − Δt L°) w' = w + r Δt, in c = w/M with row i scaled by E_i/2
+	 * (docs/DESIGN.md §6), one row per iteration: every row gathers from its own entries (no
+	 * atomics, the same result for any thread count). */
 	const double rate_dt = params->water_rate * dt;
 	double offdiag = 0.0;
 #pragma omp parallel for schedule( static ) reduction( max : offdiag )
@@ -259,8 +260,9 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 			int32_t gj = first + o->a.col[k];
 			double mj = M[gj];
 			double t = 0.5 * ( (double) tau[gi] + (double) tau[gj] );
-			double lambda = params->lambda_min * ( 1.0 - t ) + params->lambda_max * t;
-			double kij = lambda * mi * mj / ( o->length[s] * ( mi + mj ) ); /* K_ij of Jeong Eq. 8 in c */
+			double lambda = params->lambda_min * ( 1.0 - t ) + params->lambda_max * t; /* λ_ij of Jeong Eq. 8 */
+			/* Jeong Eq. 6-7 in c: Δw_ij = M_i M_j (c_j − c_i) / (M_i + M_j) over |l_ij| */
+			double kij = lambda * mi * mj / ( o->length[s] * ( mi + mj ) );
 			if ( params->mode == SERE_OSMOSIS_CONSERVATIVE )
 			{
 				kij *= 4.0 / ( ei + o->edge_sum[o->a.col[k]] ); /* symmetric in i and j */
@@ -307,6 +309,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	o->history = o->history < 2 ? o->history + 1 : 2;
 	sere_cg_result result;
 	report->sgs = offdiag > SERE_OSMOSIS_SGS_ABOVE;
+	/* Jeong Eq. 9 solved: SPD after the change of unknown, so preconditioned CG applies. */
 	sere_status status =
 		report->sgs
 			? sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, params->tolerance, params->max_iterations, &result )
