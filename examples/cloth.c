@@ -79,20 +79,40 @@ static int check_coloring( const sere_coloring* coloring, const int32_t* a, cons
 	return bad;
 }
 
-int main( void )
+/* The cloth's particles and arrays (sere's arrays start on a cache line and are padded to
+ * SERE_PAD entries, base.h). */
+typedef struct cloth
+{
+	int32_t n, count;
+	float *x, *y, *z, *vx, *vy, *vz, *px, *py, *pz, *inv_m, *rest;
+	int32_t *a, *b;
+	int32_t pinned[2];
+	float pin_x[2], pin_y[2], pin_z[2];
+} cloth;
+
+static void cloth_free( cloth* c )
+{
+	sere_free( c->x ), sere_free( c->y ), sere_free( c->z ), sere_free( c->vx ), sere_free( c->vy ), sere_free( c->vz );
+	sere_free( c->px ), sere_free( c->py ), sere_free( c->pz ), sere_free( c->inv_m ), sere_free( c->a );
+	sere_free( c->b ), sere_free( c->rest );
+}
+
+/* The folded grid, its two pinned corners and its constraints; 1 when out of memory. */
+static int cloth_make( cloth* c )
 {
 	const int32_t n = N * N;
 	const int32_t capacity = 4 * n; /* (N−1)·N·2 structural + (N−1)²·2 shear < 4 N² */
-	/* sere's arrays start on a cache line and are padded to SERE_PAD entries (base.h). */
 	const size_t fbytes = sizeof( float ) * (size_t) sere_pad( n );
-	float *x = sere_alloc( fbytes ), *y = sere_alloc( fbytes ), *z = sere_alloc( fbytes );
-	float *vx = sere_alloc( fbytes ), *vy = sere_alloc( fbytes ), *vz = sere_alloc( fbytes );
-	float *px = sere_alloc( fbytes ), *py = sere_alloc( fbytes ), *pz = sere_alloc( fbytes );
-	float* inv_m = sere_alloc( fbytes );
-	int32_t* a = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
-	int32_t* b = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
-	float* rest = sere_alloc( sizeof( float ) * (size_t) capacity );
-	if ( !x || !y || !z || !vx || !vy || !vz || !px || !py || !pz || !inv_m || !a || !b || !rest )
+	*c = ( cloth ){ .n = n };
+	c->x = sere_alloc( fbytes ), c->y = sere_alloc( fbytes ), c->z = sere_alloc( fbytes );
+	c->vx = sere_alloc( fbytes ), c->vy = sere_alloc( fbytes ), c->vz = sere_alloc( fbytes );
+	c->px = sere_alloc( fbytes ), c->py = sere_alloc( fbytes ), c->pz = sere_alloc( fbytes );
+	c->inv_m = sere_alloc( fbytes );
+	c->a = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
+	c->b = sere_alloc( sizeof( int32_t ) * (size_t) capacity );
+	c->rest = sere_alloc( sizeof( float ) * (size_t) capacity );
+	if ( !c->x || !c->y || !c->z || !c->vx || !c->vy || !c->vz || !c->px || !c->py || !c->pz || !c->inv_m || !c->a ||
+		 !c->b || !c->rest )
 	{
 		fprintf( stderr, "cloth: out of memory\n" );
 		return 1;
@@ -104,19 +124,21 @@ int main( void )
 			const int32_t p = i * N + j;
 			/* folded like an accordion along the columns: 0.8 of the width, every constraint at
 			 * its rest length (0.8² + 0.6² = 1), so the top edge has slack to sag */
-			x[p] = 0.8f * j * SPACING;
-			y[p] = -i * SPACING;
-			z[p] = ( j % 2 ? -0.3f : 0.3f ) * SPACING;
-			inv_m[p] = 1.0f;
+			c->x[p] = 0.8f * j * SPACING;
+			c->y[p] = -i * SPACING;
+			c->z[p] = ( j % 2 ? -0.3f : 0.3f ) * SPACING;
+			c->inv_m[p] = 1.0f;
 		}
 	}
-	const int32_t pinned[2] = { 0, N - 1 }; /* the top edge's two corners */
-	inv_m[pinned[0]] = inv_m[pinned[1]] = 0.0f;
-	const float pin_x[2] = { x[pinned[0]], x[pinned[1]] }, pin_y[2] = { y[pinned[0]], y[pinned[1]] };
-	const float pin_z[2] = { z[pinned[0]], z[pinned[1]] };
+	c->pinned[0] = 0, c->pinned[1] = N - 1; /* the top edge's two corners */
+	for ( int k = 0; k < 2; ++k )
+	{
+		const int32_t p = c->pinned[k];
+		c->inv_m[p] = 0.0f;
+		c->pin_x[k] = c->x[p], c->pin_y[k] = c->y[p], c->pin_z[k] = c->z[p];
+	}
 
 	/* rest lengths: the flat cloth's (SPACING, and SPACING·√2 for the shear diagonals) */
-	int32_t count = 0;
 	for ( int32_t i = 0; i < N; ++i )
 	{
 		for ( int32_t j = 0; j < N; ++j )
@@ -124,45 +146,38 @@ int main( void )
 			const int32_t p = i * N + j;
 			if ( j + 1 < N )
 			{
-				add( a, b, rest, &count, p, p + 1, SPACING );
+				add( c->a, c->b, c->rest, &c->count, p, p + 1, SPACING );
 			}
 			if ( i + 1 < N )
 			{
-				add( a, b, rest, &count, p, p + N, SPACING );
+				add( c->a, c->b, c->rest, &c->count, p, p + N, SPACING );
 			}
 			if ( i + 1 < N && j + 1 < N )
 			{
-				add( a, b, rest, &count, p, p + N + 1, SPACING * sqrtf( 2.0f ) );
+				add( c->a, c->b, c->rest, &c->count, p, p + N + 1, SPACING * sqrtf( 2.0f ) );
 			}
 		}
 	}
+	return 0;
+}
 
-	/* Coloring on its own (what a solver with its own projection would use) ... */
-	sere_coloring coloring = { 0 };
-	sere_status status = sere_color_springs( a, b, count, n, &coloring );
-	if ( status != SERE_OK )
+/* max |C/l| measured on the cloth's positions, not taken from a report */
+static float cloth_strain( const cloth* c )
+{
+	float strain = 0.0f;
+	for ( int32_t s = 0; s < c->count; ++s )
 	{
-		fprintf( stderr, "cloth: FAIL coloring: %s\n", sere_status_text( status ) );
-		return 1;
+		const int32_t a = c->a[s], b = c->b[s];
+		const float dx = c->x[a] - c->x[b], dy = c->y[a] - c->y[b], dz = c->z[a] - c->z[b];
+		strain = fmaxf( strain, fabsf( sqrtf( dx * dx + dy * dy + dz * dz ) - c->rest[s] ) / c->rest[s] );
 	}
-	int failed = check_coloring( &coloring, a, b, count, n, "sere_color_springs" );
-	printf( "cloth: sere %s (%s), %d particles, %d constraints in %d colors of %d-%d\n", sere_version(),
-			sere_simd_path(), n, count, coloring.color_count, coloring.min_batch, coloring.max_batch );
+	return strain;
+}
 
-	/* ... and the PBD workspace, which colors the constraints the same way for its sweeps. */
-	sere_pbd* pbd = NULL;
-	status = sere_pbd_create( a, b, count, n, &pbd );
-	if ( status == SERE_OK )
-	{
-		status = sere_pbd_set_rest( pbd, rest );
-	}
-	if ( status != SERE_OK )
-	{
-		fprintf( stderr, "cloth: FAIL pbd: %s\n", sere_status_text( status ) );
-		return 1;
-	}
-	failed |= check_coloring( sere_pbd_coloring( pbd ), a, b, count, n, "sere_pbd_create" );
-
+/* FRAMES frames under gravity; 1 when a frame fails to converge or its measured strain is above
+ * the tolerance. */
+static int cloth_fall( cloth* c, sere_pbd* pbd )
+{
 	sere_pbd_params params = sere_pbd_params_default();
 	params.tolerance = TOLERANCE;
 	params.max_iterations = MAX_SWEEPS;
@@ -170,67 +185,105 @@ int main( void )
 	const float gravity[3] = { 0.0f, 0.0f, -9.81f };
 	int32_t most_sweeps = 0, total_sweeps = 0;
 	float worst = 0.0f;
-	for ( int32_t frame = 0; frame < FRAMES && !failed; ++frame )
+	for ( int32_t frame = 0; frame < FRAMES; ++frame )
 	{
-		sere_pbd_predict( n, x, y, z, vx, vy, vz, px, py, pz, inv_m, gravity, params.dt );
+		sere_pbd_predict( c->n, c->x, c->y, c->z, c->vx, c->vy, c->vz, c->px, c->py, c->pz, c->inv_m, gravity,
+						  params.dt );
 		sere_pbd_report report = { 0 };
-		status = sere_pbd_project( pbd, px, py, pz, inv_m, &params, &report );
+		sere_status status = sere_pbd_project( pbd, c->px, c->py, c->pz, c->inv_m, &params, &report );
 		if ( status != SERE_OK || report.hit_cap || !( report.max_strain < TOLERANCE ) )
 		{
 			fprintf( stderr, "cloth: FAIL frame %d: %s, %d sweeps, max |C/l| %g\n", frame, sere_status_text( status ),
 					 report.iterations, report.max_strain );
-			failed = 1;
-			break;
+			return 1;
 		}
-		sere_pbd_finish( n, x, y, z, vx, vy, vz, px, py, pz, params.dt );
-		/* max |C/l| measured here on the positions the frame ends with */
-		float strain = 0.0f;
-		for ( int32_t s = 0; s < count; ++s )
-		{
-			const float dx = x[a[s]] - x[b[s]], dy = y[a[s]] - y[b[s]], dz = z[a[s]] - z[b[s]];
-			strain = fmaxf( strain, fabsf( sqrtf( dx * dx + dy * dy + dz * dz ) - rest[s] ) / rest[s] );
-		}
+		sere_pbd_finish( c->n, c->x, c->y, c->z, c->vx, c->vy, c->vz, c->px, c->py, c->pz, params.dt );
+		const float strain = cloth_strain( c );
 		if ( !( strain < TOLERANCE ) )
 		{
 			fprintf( stderr, "cloth: FAIL frame %d: measured max |C/l| %g, reported %g\n", frame, strain,
 					 report.max_strain );
-			failed = 1;
+			return 1;
 		}
 		worst = fmaxf( worst, strain );
 		most_sweeps = report.iterations > most_sweeps ? report.iterations : most_sweeps;
 		total_sweeps += report.iterations;
 	}
+	printf( "cloth: %d frames, %d sweeps per frame on average, at most %d; worst max |C/l| %.6e < %g\n", FRAMES,
+			total_sweeps / FRAMES, most_sweeps, worst, TOLERANCE );
+	return 0;
+}
 
+/* 1 unless the pinned corners stayed put and the cloth fell by a good part of its length */
+static int cloth_check_hang( const cloth* c )
+{
+	int failed = 0;
 	float lowest = 0.0f;
-	for ( int32_t p = 0; p < n; ++p )
+	for ( int32_t p = 0; p < c->n; ++p )
 	{
-		lowest = fminf( lowest, z[p] );
+		lowest = fminf( lowest, c->z[p] );
 	}
 	for ( int k = 0; k < 2; ++k )
 	{
-		const int32_t p = pinned[k];
-		if ( x[p] != pin_x[k] || y[p] != pin_y[k] || z[p] != pin_z[k] )
+		const int32_t p = c->pinned[k];
+		if ( c->x[p] != c->pin_x[k] || c->y[p] != c->pin_y[k] || c->z[p] != c->pin_z[k] )
 		{
-			fprintf( stderr, "cloth: FAIL pinned corner %d moved to (%g, %g, %g)\n", p, x[p], y[p], z[p] );
+			fprintf( stderr, "cloth: FAIL pinned corner %d moved to (%g, %g, %g)\n", p, c->x[p], c->y[p], c->z[p] );
 			failed = 1;
 		}
 	}
-	/* hanging from its top corners, the cloth drops by a good part of its length */
 	const float length = ( N - 1 ) * SPACING;
 	if ( !( lowest < -0.5f * length ) )
 	{
 		fprintf( stderr, "cloth: FAIL the cloth did not fall (lowest z %g, length %g)\n", lowest, length );
 		failed = 1;
 	}
-	printf( "cloth: %d frames, %d sweeps per frame on average, at most %d; worst max |C/l| %.6e < %g\n", FRAMES,
-			total_sweeps / FRAMES, most_sweeps, worst, TOLERANCE );
 	printf( "cloth: lowest point %.3f m below the pins (cloth %.2f m long)\n", -lowest, length );
+	return failed;
+}
 
+int main( void )
+{
+	cloth c;
+	if ( cloth_make( &c ) )
+	{
+		cloth_free( &c );
+		return 1;
+	}
+
+	/* Coloring on its own (what a solver with its own projection would use) ... */
+	sere_coloring coloring = { 0 };
+	sere_status status = sere_color_springs( c.a, c.b, c.count, c.n, &coloring );
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "cloth: FAIL coloring: %s\n", sere_status_text( status ) );
+		cloth_free( &c );
+		return 1;
+	}
+	int failed = check_coloring( &coloring, c.a, c.b, c.count, c.n, "sere_color_springs" );
+	printf( "cloth: sere %s (%s), %d particles, %d constraints in %d colors of %d-%d\n", sere_version(),
+			sere_simd_path(), c.n, c.count, coloring.color_count, coloring.min_batch, coloring.max_batch );
+
+	/* ... and the PBD workspace, which colors the constraints the same way for its sweeps. */
+	sere_pbd* pbd = NULL;
+	status = sere_pbd_create( c.a, c.b, c.count, c.n, &pbd );
+	if ( status == SERE_OK )
+	{
+		status = sere_pbd_set_rest( pbd, c.rest );
+	}
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "cloth: FAIL pbd: %s\n", sere_status_text( status ) );
+		failed = 1;
+	}
+	else
+	{
+		failed |= check_coloring( sere_pbd_coloring( pbd ), c.a, c.b, c.count, c.n, "sere_pbd_create" );
+		failed = failed || cloth_fall( &c, pbd ) || cloth_check_hang( &c );
+	}
 	sere_pbd_destroy( pbd );
 	sere_coloring_destroy( &coloring );
-	sere_free( x ), sere_free( y ), sere_free( z ), sere_free( vx ), sere_free( vy ), sere_free( vz );
-	sere_free( px ), sere_free( py ), sere_free( pz ), sere_free( inv_m ), sere_free( a ), sere_free( b );
-	sere_free( rest );
+	cloth_free( &c );
 	puts( failed ? "cloth: FAILED" : "cloth: ok" );
 	return failed;
 }

@@ -51,84 +51,87 @@ static int32_t brute_force( const float* x, const float* y, const float* z, cons
 	return pairs;
 }
 
-int main( void )
+/* The two sheets: positions, velocities, inverse masses and triangles. */
+typedef struct sheets
 {
-	const int32_t per_sheet = M * M, n = 2 * per_sheet;
-	const int32_t tris_per_sheet = 2 * ( M - 1 ) * ( M - 1 ), tris = 2 * tris_per_sheet;
-	const size_t fbytes = sizeof( float ) * (size_t) sere_pad( n );
-	float *x = sere_alloc( fbytes ), *y = sere_alloc( fbytes ), *z = sere_alloc( fbytes );
-	float *vx = sere_alloc( fbytes ), *vy = sere_alloc( fbytes ), *vz = sere_alloc( fbytes );
-	float* inv_m = sere_alloc( fbytes );
-	int32_t* tri = sere_alloc( sizeof( int32_t ) * 3 * (size_t) tris );
-	if ( !x || !y || !z || !vx || !vy || !vz || !inv_m || !tri )
+	float *x, *y, *z, *vx, *vy, *vz, *inv_m;
+	int32_t* tri;
+} sheets;
+
+enum
+{
+	PER_SHEET = M * M,
+	VERTICES = 2 * PER_SHEET,
+	TRIS_PER_SHEET = 2 * ( M - 1 ) * ( M - 1 ),
+	TRIANGLES = 2 * TRIS_PER_SHEET
+};
+
+static void sheets_free( sheets* s )
+{
+	sere_free( s->x ), sere_free( s->y ), sere_free( s->z ), sere_free( s->vx ), sere_free( s->vy ), sere_free( s->vz );
+	sere_free( s->inv_m ), sere_free( s->tri );
+}
+
+/* Sheet 0 at z = 0; sheet 1 at z = GAP, shifted by half a cell in x and y. Vertices are
+ * numbered row by row, which keeps neighbours close in the numbering: the detection queries
+ * eight consecutive vertices together, so a solver should number them in a spatially coherent
+ * order (sere's leaves use Morton order). 1 when out of memory. */
+static int sheets_make( sheets* s )
+{
+	const size_t fbytes = sizeof( float ) * (size_t) sere_pad( VERTICES );
+	s->x = sere_alloc( fbytes ), s->y = sere_alloc( fbytes ), s->z = sere_alloc( fbytes );
+	s->vx = sere_alloc( fbytes ), s->vy = sere_alloc( fbytes ), s->vz = sere_alloc( fbytes );
+	s->inv_m = sere_alloc( fbytes );
+	s->tri = sere_alloc( sizeof( int32_t ) * 3 * (size_t) TRIANGLES );
+	if ( !s->x || !s->y || !s->z || !s->vx || !s->vy || !s->vz || !s->inv_m || !s->tri )
 	{
 		fprintf( stderr, "sheets: out of memory\n" );
 		return 1;
 	}
-	/* Sheet 0 at z = 0; sheet 1 at z = GAP, shifted by half a cell in x and y. Vertices are
-	 * numbered row by row, which keeps neighbours close in the numbering: the detection queries
-	 * eight consecutive vertices together, so a solver should number them in a spatially
-	 * coherent order (sere's leaves use Morton order). */
 	int32_t t = 0;
-	for ( int32_t s = 0; s < 2; ++s )
+	for ( int32_t sheet = 0; sheet < 2; ++sheet )
 	{
-		const int32_t base = s * per_sheet;
+		const int32_t base = sheet * PER_SHEET;
 		for ( int32_t i = 0; i < M; ++i )
 		{
 			for ( int32_t j = 0; j < M; ++j )
 			{
 				const int32_t v = base + i * M + j;
-				x[v] = j * CELL + s * 0.5f * CELL;
-				y[v] = i * CELL + s * 0.5f * CELL;
-				z[v] = s * GAP;
-				inv_m[v] = 1.0f;
+				s->x[v] = j * CELL + sheet * 0.5f * CELL;
+				s->y[v] = i * CELL + sheet * 0.5f * CELL;
+				s->z[v] = sheet * GAP;
+				s->vx[v] = s->vy[v] = s->vz[v] = 0.0f;
+				s->inv_m[v] = 1.0f;
 				if ( i + 1 < M && j + 1 < M ) /* counter-clockwise seen from +z */
 				{
 					const int32_t c[4] = { v, v + 1, v + M + 1, v + M };
-					tri[3 * t + 0] = c[0], tri[3 * t + 1] = c[1], tri[3 * t + 2] = c[2], ++t;
-					tri[3 * t + 0] = c[0], tri[3 * t + 1] = c[2], tri[3 * t + 2] = c[3], ++t;
+					int32_t* out = s->tri + 3 * t;
+					out[0] = c[0], out[1] = c[1], out[2] = c[2], out[3] = c[0], out[4] = c[2], out[5] = c[3];
+					t += 2;
 				}
 			}
 		}
 	}
+	return 0;
+}
 
-	sere_bvh* bvh = NULL;
-	sere_collide* collide = NULL;
-	sere_status status = sere_bvh_create( tri, tris, n, x, y, z, &bvh );
-	if ( status == SERE_OK )
-	{
-		status = sere_collide_create( bvh, 0, &collide );
-	}
-	int32_t found = 0;
-	if ( status == SERE_OK )
-	{
-		status = sere_collide_detect( collide, bvh, x, y, z, THICKNESS, &found );
-	}
-	if ( status != SERE_OK )
-	{
-		fprintf( stderr, "sheets: FAIL %s\n", sere_status_text( status ) );
-		return 1;
-	}
-	printf( "sheets: sere %s (%s), 2 sheets of %d vertices and %d triangles, BVH depth %d\n", sere_version(),
-			sere_simd_path(), per_sheet, tris_per_sheet, sere_bvh_depth( bvh ) );
-
-	int failed = 0;
-	/* Detection against brute force. */
+/* The detection's contacts against brute force: 1 when they disagree. */
+static int check_detection( const sheets* s, const sere_collide* collide, int32_t found )
+{
 	float closest = 0.0f;
-	const int32_t expected = brute_force( x, y, z, tri, per_sheet, tris_per_sheet, THICKNESS, &closest );
+	const int32_t expected = brute_force( s->x, s->y, s->z, s->tri, PER_SHEET, TRIS_PER_SHEET, THICKNESS, &closest );
 	int32_t count = 0;
 	const sere_contact* contacts = sere_collide_contacts( collide, &count );
 	float farthest = 0.0f;
 	for ( int32_t k = 0; k < count; ++k )
 	{
-		const int32_t v = contacts[k].vertex, sheet_of_triangle = contacts[k].triangle >= tris_per_sheet;
+		const int32_t v = contacts[k].vertex, sheet_of_triangle = contacts[k].triangle >= TRIS_PER_SHEET;
 		farthest = fmaxf( farthest, contacts[k].distance );
-		if ( ( v >= per_sheet ) == sheet_of_triangle )
+		if ( ( v >= PER_SHEET ) == sheet_of_triangle )
 		{
 			fprintf( stderr, "sheets: FAIL contact %d joins vertex %d to triangle %d of its own sheet\n", k, v,
 					 contacts[k].triangle );
-			failed = 1;
-			break;
+			return 1;
 		}
 	}
 	printf( "sheets: detection found %d contacts (brute force: %d), closest %.4f, farthest %.4f, thickness %.4f\n",
@@ -136,36 +139,45 @@ int main( void )
 	if ( count != found || count != expected || count == 0 || !( farthest < THICKNESS ) )
 	{
 		fprintf( stderr, "sheets: FAIL detection disagrees with brute force\n" );
-		failed = 1;
+		return 1;
 	}
+	return 0;
+}
 
-	/* The pass: refit, then detect and respond, a few rounds to catch contacts the push-out
-	 * itself makes. */
+/* The pass: refit, then detect and respond, a few rounds to catch contacts the push-out itself
+ * makes; 1 when a contact is left or the pair's centre moved. */
+static int check_resolve( sheets* s, sere_collide* collide, sere_bvh* bvh )
+{
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = THICKNESS;
 	params.dt = 1.0f / 60;
 	params.iterations = 32;
 	params.rounds = 4;
-	const sere_collide_state state = { .x = x, .y = y, .z = z, .vx = vx, .vy = vy, .vz = vz, .inv_m = inv_m };
+	const sere_collide_state state = {
+		.x = s->x, .y = s->y, .z = s->z, .vx = s->vx, .vy = s->vy, .vz = s->vz, .inv_m = s->inv_m
+	};
 	sere_collide_stats stats = { 0 };
-	status = sere_collide_resolve( collide, bvh, &state, &params, &stats );
+	sere_status status = sere_collide_resolve( collide, bvh, &state, &params, &stats );
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "sheets: FAIL resolve: %s\n", sere_status_text( status ) );
 		return 1;
 	}
 	const float slack = 2 * SERE_COLLIDE_TOLERANCE * THICKNESS; /* what the solver may leave */
-	const int32_t left = brute_force( x, y, z, tri, per_sheet, tris_per_sheet, THICKNESS - slack, &closest );
+	float closest = 0.0f;
+	const int32_t left =
+		brute_force( s->x, s->y, s->z, s->tri, PER_SHEET, TRIS_PER_SHEET, THICKNESS - slack, &closest );
 	double middle = 0.0;
-	for ( int32_t v = 0; v < n; ++v )
+	for ( int32_t v = 0; v < VERTICES; ++v )
 	{
-		middle += z[v];
+		middle += s->z[v];
 	}
-	middle /= n;
+	middle /= VERTICES;
 	printf( "sheets: %d rounds, %d response iterations, %d unresolved; brute force: %d pairs closer than %.4f, "
 			"closest %.5f\n",
 			stats.rounds, stats.iterations, stats.unresolved, left, THICKNESS - slack, closest );
 	printf( "sheets: mean height %.6f (was %.6f)\n", middle, GAP / 2 );
+	int failed = 0;
 	if ( stats.unresolved != 0 || left != 0 || !( closest >= THICKNESS - slack ) )
 	{
 		fprintf( stderr, "sheets: FAIL contacts left after the pass\n" );
@@ -176,11 +188,44 @@ int main( void )
 		fprintf( stderr, "sheets: FAIL the pass moved the pair's centre (mean height %g)\n", middle );
 		failed = 1;
 	}
+	return failed;
+}
 
+int main( void )
+{
+	sheets s = { 0 };
+	if ( sheets_make( &s ) )
+	{
+		sheets_free( &s );
+		return 1;
+	}
+	sere_bvh* bvh = NULL;
+	sere_collide* collide = NULL;
+	sere_status status = sere_bvh_create( s.tri, TRIANGLES, VERTICES, s.x, s.y, s.z, &bvh );
+	if ( status == SERE_OK )
+	{
+		status = sere_collide_create( bvh, 0, &collide );
+	}
+	int32_t found = 0;
+	if ( status == SERE_OK )
+	{
+		status = sere_collide_detect( collide, bvh, s.x, s.y, s.z, THICKNESS, &found );
+	}
+	int failed = status != SERE_OK;
+	if ( failed )
+	{
+		fprintf( stderr, "sheets: FAIL %s\n", sere_status_text( status ) );
+	}
+	else
+	{
+		printf( "sheets: sere %s (%s), 2 sheets of %d vertices and %d triangles, BVH depth %d\n", sere_version(),
+				sere_simd_path(), PER_SHEET, TRIS_PER_SHEET, sere_bvh_depth( bvh ) );
+		failed |= check_detection( &s, collide, found );
+		failed |= check_resolve( &s, collide, bvh );
+	}
 	sere_collide_destroy( collide );
 	sere_bvh_destroy( bvh );
-	sere_free( x ), sere_free( y ), sere_free( z ), sere_free( vx ), sere_free( vy ), sere_free( vz );
-	sere_free( inv_m ), sere_free( tri );
+	sheets_free( &s );
 	puts( failed ? "sheets: FAILED" : "sheets: ok" );
 	return failed;
 }

@@ -2,20 +2,11 @@
 
 #include <math.h>
 
-sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, sere_massspring_particles* p,
-									  const sere_massspring_params* params, float* fx, float* fy, float* fz,
-									  sere_massspring_report* report )
+/* Forces: gravity, then the springs. */
+static void ref_forces( const sere_massspring_topology* topology, const sere_massspring_particles* p,
+						const sere_massspring_params* params, float* fx, float* fy, float* fz )
 {
-	if ( topology == NULL || p == NULL || params == NULL || fx == NULL || fy == NULL || fz == NULL ||
-		 p->count != topology->vertex_count || !( params->dt > 0.0f ) || params->max_sweeps < 1 )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	const int32_t n = p->count;
-	const float dt = params->dt;
-
-	/* Forces: gravity, then the springs. */
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		float m = p->inv_m[i] > 0.0f ? 1.0f / p->inv_m[i] : 0.0f;
 		fx[i] = m * params->gravity[0];
@@ -43,9 +34,14 @@ sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, 
 		fy[b] -= f * ny;
 		fz[b] -= f * nz;
 	}
+}
 
-	/* Tang Eq. 1, explicit Euler for the velocities. */
-	for ( int32_t i = 0; i < n; ++i )
+/* Tang Eq. 1, explicit Euler for the velocities. */
+static void ref_euler( sere_massspring_particles* p, const sere_massspring_params* params, const float* fx,
+					   const float* fy, const float* fz )
+{
+	const float dt = params->dt;
+	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		if ( p->inv_m[i] > 0.0f )
 		{
@@ -61,78 +57,111 @@ sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, 
 			p->vz[i] = 0.0f;
 		}
 	}
+}
 
-	/* Tang Eq. 2: the relative position after the step must stay within τ_c of the natural length.
-	 * Each violating spring is moved onto the band narrowed by the tolerance δ; sweeps repeat
-	 * until one finds nothing more than δ off it and every spring is inside the true band. */
-	const float tau = params->strain_limit, delta = params->strain_tolerance;
+/* One sweep of Tang Eq. 2 over the structural springs: the relative position after the step
+ * must stay within τ_c of the natural length, and each violating spring is moved onto the band
+ * narrowed by the tolerance δ. Returns the largest correction over the rest length; counts the
+ * springs it limited into *limited. */
+static float ref_limit_sweep( const sere_massspring_topology* topology, sere_massspring_particles* p,
+							  const sere_massspring_params* params, int32_t* limited )
+{
+	const float dt = params->dt, tau = params->strain_limit, delta = params->strain_tolerance;
+	float worst = 0.0f;
+	for ( int32_t s = 0; s < topology->structural_count; ++s )
+	{
+		const int32_t a = topology->a[s], b = topology->b[s];
+		float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
+		float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
+		float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
+		float len = sqrtf( px * px + py * py + pz * pz );
+		float rest = topology->rest0[s] * ( 1.0f - params->shrink );
+		float target = len;
+		if ( len > rest * ( 1.0f + tau - delta ) )
+		{
+			target = rest * ( 1.0f + tau - delta );
+		}
+		if ( len < rest * ( 1.0f - tau + delta ) )
+		{
+			target = rest * ( 1.0f - tau + delta );
+		}
+		if ( target == len )
+		{
+			continue;
+		}
+		worst = fmaxf( worst, fabsf( len - target ) / rest );
+		++*limited;
+		float w = p->inv_m[a] + p->inv_m[b];
+		if ( w > 0.0f && len > 0.0f )
+		{
+			/* Change the relative velocity along p so that |p| becomes the target. */
+			float dv = ( len - target ) / len / dt;
+			p->vx[a] += p->inv_m[a] / w * dv * px;
+			p->vy[a] += p->inv_m[a] / w * dv * py;
+			p->vz[a] += p->inv_m[a] / w * dv * pz;
+			p->vx[b] -= p->inv_m[b] / w * dv * px;
+			p->vy[b] -= p->inv_m[b] / w * dv * py;
+			p->vz[b] -= p->inv_m[b] / w * dv * pz;
+		}
+	}
+	return worst;
+}
+
+/* True when every structural spring's relative position after the step is inside the true
+ * band (1 ± τ_c) of its natural length. */
+static int ref_within_band( const sere_massspring_topology* topology, const sere_massspring_particles* p,
+							const sere_massspring_params* params )
+{
+	const float dt = params->dt, tau = params->strain_limit;
+	int within = 1;
+	for ( int32_t s = 0; s < topology->structural_count; ++s )
+	{
+		const int32_t a = topology->a[s], b = topology->b[s];
+		float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
+		float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
+		float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
+		float ratio = sqrtf( px * px + py * py + pz * pz ) / ( topology->rest0[s] * ( 1.0f - params->shrink ) );
+		if ( ratio > 1.0f + tau || ratio < 1.0f - tau )
+		{
+			within = 0;
+		}
+	}
+	return within;
+}
+
+sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, sere_massspring_particles* p,
+									  const sere_massspring_params* params, float* fx, float* fy, float* fz,
+									  sere_massspring_report* report )
+{
+	if ( topology == NULL || p == NULL || params == NULL || fx == NULL || fy == NULL || fz == NULL ||
+		 p->count != topology->vertex_count || !( params->dt > 0.0f ) || params->max_sweeps < 1 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	ref_forces( topology, p, params, fx, fy, fz );
+	ref_euler( p, params, fx, fy, fz );
+
+	/* Tang Eq. 2: sweeps repeat until one finds nothing more than δ off the narrowed band and
+	 * every spring is inside the true band. Springs limited count from the first sweep. */
 	int32_t sweeps = 0, limited = 0;
 	int converged = 0;
 	while ( sweeps < params->max_sweeps && !converged )
 	{
-		float worst = 0.0f;
-		for ( int32_t s = 0; s < topology->structural_count; ++s )
-		{
-			const int32_t a = topology->a[s], b = topology->b[s];
-			float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
-			float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
-			float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
-			float len = sqrtf( px * px + py * py + pz * pz );
-			float rest = topology->rest0[s] * ( 1.0f - params->shrink );
-			float target = len;
-			if ( len > rest * ( 1.0f + tau - delta ) )
-			{
-				target = rest * ( 1.0f + tau - delta );
-			}
-			if ( len < rest * ( 1.0f - tau + delta ) )
-			{
-				target = rest * ( 1.0f - tau + delta );
-			}
-			if ( target == len )
-			{
-				continue;
-			}
-			worst = fmaxf( worst, fabsf( len - target ) / rest );
-			limited += sweeps == 0;
-			float w = p->inv_m[a] + p->inv_m[b];
-			if ( w > 0.0f && len > 0.0f )
-			{
-				/* Change the relative velocity along p so that |p| becomes the target. */
-				float dv = ( len - target ) / len / dt;
-				p->vx[a] += p->inv_m[a] / w * dv * px;
-				p->vy[a] += p->inv_m[a] / w * dv * py;
-				p->vz[a] += p->inv_m[a] / w * dv * pz;
-				p->vx[b] -= p->inv_m[b] / w * dv * px;
-				p->vy[b] -= p->inv_m[b] / w * dv * py;
-				p->vz[b] -= p->inv_m[b] / w * dv * pz;
-			}
-		}
+		int32_t found = 0;
+		float worst = ref_limit_sweep( topology, p, params, &found );
+		limited += sweeps == 0 ? found : 0;
 		++sweeps;
-		if ( worst <= delta )
-		{
-			converged = 1;
-			for ( int32_t s = 0; s < topology->structural_count; ++s )
-			{
-				const int32_t a = topology->a[s], b = topology->b[s];
-				float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
-				float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
-				float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
-				float ratio = sqrtf( px * px + py * py + pz * pz ) / ( topology->rest0[s] * ( 1.0f - params->shrink ) );
-				if ( ratio > 1.0f + tau || ratio < 1.0f - tau )
-				{
-					converged = 0;
-				}
-			}
-		}
+		converged = worst <= params->strain_tolerance && ref_within_band( topology, p, params );
 	}
 
-	float strain = 0.0f;
-	for ( int32_t i = 0; i < n; ++i )
+	const float dt = params->dt;
+	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		p->x[i] += p->vx[i] * dt;
 		p->y[i] += p->vy[i] * dt;
 		p->z[i] += p->vz[i] * dt;
 	}
+	float strain = 0.0f;
 	for ( int32_t s = 0; s < topology->structural_count; ++s )
 	{
 		const int32_t a = topology->a[s], b = topology->b[s];
