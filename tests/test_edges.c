@@ -63,18 +63,6 @@ static void remove_tree( const char* dir )
 	cr_expect_eq( system( command ), 0 );
 }
 
-/* Runs the binary with stdout captured into out (for --json output). */
-static int run_stdout( const char* args, char* out, size_t out_size )
-{
-	char command[4096];
-	snprintf( command, sizeof( command ), "%s %s 2>/dev/null", sere_test_bin(), args );
-	FILE* pipe = popen( command, "r" );
-	size_t used = fread( out, 1, out_size - 1, pipe );
-	out[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
-}
-
 /* A strict JSON checker (RFC 8259): whole document, one value, UTF-8 left to the producer but
  * no raw control characters in strings and only the defined escapes. */
 static const char* json_value( const char* p );
@@ -218,7 +206,7 @@ Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 	char leaf[512], args[2048], out[16384], path[512];
 	weird_leaf( dir, leaf, sizeof( leaf ) );
 	snprintf( args, sizeof( args ), "model %s --points 300 --json", leaf );
-	cr_assert_eq( run_stdout( args, out, sizeof( out ) ), 0, "sere %s failed", args );
+	cr_assert_eq( sere_test_stdout( args, out, sizeof( out ) ), 0, "sere %s failed", args );
 	cr_expect( json_valid( out ), "sere model --json is not JSON: %s", out );
 	cr_expect_not_null( strstr( out, "\"leaf\": \"we\\\"ird\\\\ \\u0001leaf\\t\\u007f end\xc3\xa9\"" ), "%s", out );
 

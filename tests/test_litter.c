@@ -14,7 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 /* Seed 6 draws wisteria, plane tree, maple and grass; 400 points are enough for every
@@ -364,32 +363,13 @@ Test( litter, glb_opens_in_assimp_with_the_ply_counts )
 	remove_tree( dir );
 }
 
-/* Runs a shell command with stdout discarded and stderr captured into err; its exit status. */
-static int shell( const char* command, char* err, size_t err_size )
-{
-	char full[2048];
-	snprintf( full, sizeof( full ), "%s 2>&1 >/dev/null", command );
-	err[0] = '\0';
-	FILE* pipe = popen( full, "r" );
-	cr_assert_not_null( pipe, "cannot run %s", full );
-	size_t used = fread( err, 1, err_size - 1, pipe );
-	err[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
-}
-
 /* The ranks share the leaves but each leaf is still drawn from the seed and its index alone, and
  * rank 0 assembles the scene from the files in index order: one, two and three ranks (three
  * dealt 2, 2 and 1 of 5 leaves) and a run without mpirun give the same bytes. */
 Test( litter, same_scene_on_one_two_and_three_ranks )
 {
 	char err[4096], command[1024];
-	snprintf( command, sizeof( command ), "%s litter --help", sere_test_bin() );
-	FILE* help = popen( command, "r" );
-	cr_assert_not_null( help );
-	size_t used = fread( err, 1, sizeof( err ) - 1, help );
-	err[used] = '\0';
-	pclose( help );
+	cr_assert_eq( sere_test_stdout( "litter --help", err, sizeof( err ) ), 0, "%s", err );
 	if ( strstr( err, "Built with MPI" ) == NULL )
 	{
 		cr_skip( "%s was built without MPI (no Open MPI development files)", sere_test_bin() );
@@ -400,9 +380,8 @@ Test( litter, same_scene_on_one_two_and_three_ranks )
 	}
 	char plain[64], path[160], other[160];
 	make_dir( plain, sizeof( plain ), "plain" );
-	snprintf( command, sizeof( command ), "%s litter --leaves 5 --seed 6 --points 400 --frames 20 --out %s",
-			  sere_test_bin(), plain );
-	cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%s", err );
+	snprintf( command, sizeof( command ), "litter --leaves 5 --seed 6 --points 400 --frames 20 --out %s", plain );
+	cr_assert_eq( sere_test_run( command, err, sizeof( err ) ), 0, "%s", err );
 	snprintf( path, sizeof( path ), "%s/litter.ply", plain );
 	for ( int ranks = 1; ranks <= 3; ++ranks )
 	{
@@ -410,9 +389,9 @@ Test( litter, same_scene_on_one_two_and_three_ranks )
 		make_dir( dir, sizeof( dir ), "mpi" );
 		snprintf( command, sizeof( command ),
 				  "mpirun --allow-run-as-root --oversubscribe -np %d %s litter --leaves 5 --seed 6 --points 400 "
-				  "--frames 20 --threads 1 --out %s",
+				  "--frames 20 --threads 1 --out %s 2>&1 >/dev/null",
 				  ranks, sere_test_bin(), dir );
-		cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%d ranks: %s", ranks, err );
+		cr_assert_eq( sere_test_shell( command, err, sizeof( err ) ), 0, "%d ranks: %s", ranks, err );
 		snprintf( other, sizeof( other ), "%s/litter.ply", dir );
 		expect_same_file( path, other );
 		/* every rank dried its share: the summary names each rank */
