@@ -340,13 +340,19 @@ void BM_bvh_build( benchmark::State& state, Shape shape )
 	tree_loop( state, shape, sere_bvh_build );
 }
 
-void BM_collide_detect( benchmark::State& state, Shape shape )
+// Detection with the candidate list dropped each iteration, so every one searches the tree; with
+// refit, the tree is refit first, as a frame does.
+void detect_loop( benchmark::State& state, Shape shape, bool refit )
 {
 	Scene& s = threaded_scene( state, shape );
 	int32_t contacts = 0;
 	for ( auto _ : state )
 	{
 		sere_collide_drop_list( s.collide );
+		if ( refit )
+		{
+			sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
+		}
 		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
 		benchmark::ClobberMemory();
 	}
@@ -355,6 +361,11 @@ void BM_collide_detect( benchmark::State& state, Shape shape )
 	int32_t edges = 0;
 	sere_collide_edge_contacts( s.collide, &edges );
 	state.counters["edge_contacts"] = edges;
+}
+
+void BM_collide_detect( benchmark::State& state, Shape shape )
+{
+	detect_loop( state, shape, false );
 }
 
 // Response alone on the contacts of one detection; the positions are reset between iterations
@@ -454,20 +465,7 @@ void BM_collide_restore_voronoi( benchmark::State& state )
 // the edge–edge search, which Embree's does not do).
 void BM_collide_search( benchmark::State& state, Shape shape )
 {
-	Scene& s = threaded_scene( state, shape );
-	int32_t contacts = 0;
-	for ( auto _ : state )
-	{
-		sere_collide_drop_list( s.collide );
-		sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
-		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "queries/s", s.n );
-	state.counters["contacts"] = contacts;
-	int32_t edges = 0;
-	sere_collide_edge_contacts( s.collide, &edges );
-	state.counters["edge_contacts"] = edges;
+	detect_loop( state, shape, true );
 }
 
 void BM_collide_ref_pairs( benchmark::State& state, Shape shape )
