@@ -176,3 +176,10 @@ void sere_test_crumple_point( sere_test_crumple* field, double u, double v, doub
 	out[1] = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 	out[2] = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 }
+
+int sere_test_remove_tree( const char* dir )
+{
+	char command[1100];
+	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
+	return system( command );
+}

@@ -54,3 +54,6 @@ int sere_test_stdout( const char* args, char* out, size_t out_size );
 /* Runs "BIN ARGS" through the shell with stdout discarded and stderr captured into err (NUL
  * terminated, cut at err_size − 1); returns the exit status, 128 when it did not exit. */
 int sere_test_run( const char* args, char* err, size_t err_size );
+
+/* Removes a test's scratch directory and all in it (rm -rf); the shell's status, 0 when done. */
+int sere_test_remove_tree( const char* dir );

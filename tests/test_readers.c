@@ -306,13 +306,6 @@ static void check_series( const char* pvd_path, const char* frames_dir, const ch
 	}
 }
 
-static void remove_tree( const char* dir )
-{
-	char command[1024];
-	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
-	cr_expect_eq( system( command ), 0 );
-}
-
 /* ---- the commands --------------------------------------------------------------------------- */
 
 Test( readers, run_frames_open_in_vtk )
@@ -341,7 +334,7 @@ Test( readers, run_frames_open_in_vtk )
 	snprintf( frames, sizeof( frames ), "%s/frames", dir );
 	/* frames 0 to 3: with fewer than 24 frames every one is written */
 	check_series( path, frames, "frames/", 4, points, triangles, arrays, 4 );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( readers, wilt_frames_open_in_vtk )
@@ -371,5 +364,5 @@ Test( readers, wilt_frames_open_in_vtk )
 	cr_expect( uv->tuples == points && uv->components == 2 && uv->nonfinite == 0 && uv->min >= 0.0 && uv->max <= 1.0,
 			   "%s: texture coordinates %d x %d, %d not finite, in [%g, %g]", path, uv->tuples, uv->components,
 			   uv->nonfinite, uv->min, uv->max );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
