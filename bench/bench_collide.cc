@@ -297,6 +297,14 @@ Scene& scene( Shape shape )
 	return *s;
 }
 
+// The scene on as many threads as the benchmark's first argument.
+Scene& threaded_scene( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	omp_set_num_threads( (int) state.range( 0 ) );
+	return s;
+}
+
 sere_collide_params params( const Scene& s )
 {
 	sere_collide_params p = sere_collide_params_default();
@@ -310,38 +318,41 @@ void rate( benchmark::State& state, const char* name, double per_iteration )
 		benchmark::Counter( per_iteration * (double) state.iterations(), benchmark::Counter::kIsRate );
 }
 
-void BM_bvh_refit( benchmark::State& state, Shape shape )
+// Times one pass over the tree (refit or build) on the scene's positions.
+template <typename Pass> void tree_loop( benchmark::State& state, Shape shape, Pass pass )
 {
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
+	Scene& s = threaded_scene( state, shape );
 	for ( auto _ : state )
 	{
-		sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
+		pass( s.bvh, s.x.data, s.y.data, s.z.data );
 		benchmark::ClobberMemory();
 	}
 	rate( state, "triangles/s", s.f );
+}
+
+void BM_bvh_refit( benchmark::State& state, Shape shape )
+{
+	tree_loop( state, shape, sere_bvh_refit );
 }
 
 void BM_bvh_build( benchmark::State& state, Shape shape )
 {
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
-	for ( auto _ : state )
-	{
-		sere_bvh_build( s.bvh, s.x.data, s.y.data, s.z.data );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "triangles/s", s.f );
+	tree_loop( state, shape, sere_bvh_build );
 }
 
-void BM_collide_detect( benchmark::State& state, Shape shape )
+// Detection with the candidate list dropped each iteration, so every one searches the tree; with
+// refit, the tree is refit first, as a frame does.
+void detect_loop( benchmark::State& state, Shape shape, bool refit )
 {
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
+	Scene& s = threaded_scene( state, shape );
 	int32_t contacts = 0;
 	for ( auto _ : state )
 	{
 		sere_collide_drop_list( s.collide );
+		if ( refit )
+		{
+			sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
+		}
 		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
 		benchmark::ClobberMemory();
 	}
@@ -352,12 +363,16 @@ void BM_collide_detect( benchmark::State& state, Shape shape )
 	state.counters["edge_contacts"] = edges;
 }
 
+void BM_collide_detect( benchmark::State& state, Shape shape )
+{
+	detect_loop( state, shape, false );
+}
+
 // Response alone on the contacts of one detection; the positions are reset between iterations
 // outside the timed region.
 void BM_collide_respond( benchmark::State& state, Shape shape )
 {
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
+	Scene& s = threaded_scene( state, shape );
 	int32_t contacts = 0;
 	sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
 	sere_collide_state st = s.state();
@@ -384,8 +399,7 @@ void BM_collide_respond( benchmark::State& state, Shape shape )
 // so every detection but the first is served by it (a frame moving less than the list's skin).
 void collide_loop( benchmark::State& state, Shape shape, int32_t rounds, bool restore, bool listed = false )
 {
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
+	Scene& s = threaded_scene( state, shape );
 	sere_collide_state st = s.state();
 	sere_collide_params p = params( s );
 	p.rounds = rounds;
@@ -451,21 +465,7 @@ void BM_collide_restore_voronoi( benchmark::State& state )
 // the edge–edge search, which Embree's does not do).
 void BM_collide_search( benchmark::State& state, Shape shape )
 {
-	Scene& s = scene( shape );
-	omp_set_num_threads( (int) state.range( 0 ) );
-	int32_t contacts = 0;
-	for ( auto _ : state )
-	{
-		sere_collide_drop_list( s.collide );
-		sere_bvh_refit( s.bvh, s.x.data, s.y.data, s.z.data );
-		sere_collide_detect( s.collide, s.bvh, s.x.data, s.y.data, s.z.data, s.thickness, &contacts );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "queries/s", s.n );
-	state.counters["contacts"] = contacts;
-	int32_t edges = 0;
-	sere_collide_edge_contacts( s.collide, &edges );
-	state.counters["edge_contacts"] = edges;
+	detect_loop( state, shape, true );
 }
 
 void BM_collide_ref_pairs( benchmark::State& state, Shape shape )

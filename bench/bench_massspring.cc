@@ -200,13 +200,11 @@ void counters( benchmark::State& state, const scene& sc, const tally& t )
 	state.counters["colors"] = sc.topology.color_count;
 }
 
-void BM_MassSpringStep( benchmark::State& state )
+// Times step (a call returning the step's status and filling report) from each snapshot in turn,
+// restored outside the timed region; a step that fails other than by not converging ends the
+// benchmark with its error.
+template <typename Step> void step_loop( benchmark::State& state, scene& sc, sere_massspring_report& report, Step step )
 {
-	const int saved = omp_get_max_threads();
-	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
-	scene& sc = maple();
-	sere_massspring_particles p = particles( sc.work, sc );
-	sere_massspring_report report{};
 	tally t;
 	size_t k = 0;
 	for ( auto _ : state )
@@ -215,7 +213,7 @@ void BM_MassSpringStep( benchmark::State& state )
 		restore( sc, k );
 		k = ( k + 1 ) % sc.snapshots.size();
 		state.ResumeTiming();
-		sere_status status = sere_massspring_step( sc.ms, &p, &sc.params, &report );
+		sere_status status = step();
 		benchmark::ClobberMemory();
 		if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
 		{
@@ -225,6 +223,16 @@ void BM_MassSpringStep( benchmark::State& state )
 		t.add( report );
 	}
 	counters( state, sc, t );
+}
+
+void BM_MassSpringStep( benchmark::State& state )
+{
+	const int saved = omp_get_max_threads();
+	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
+	scene& sc = maple();
+	sere_massspring_particles p = particles( sc.work, sc );
+	sere_massspring_report report{};
+	step_loop( state, sc, report, [&] { return sere_massspring_step( sc.ms, &p, &sc.params, &report ); } );
 	omp_set_num_threads( saved );
 }
 
@@ -236,25 +244,9 @@ void BM_MassSpringReference( benchmark::State& state )
 	sere_massspring_particles p = particles( sc.work, sc );
 	std::vector<float> fx( sc.n ), fy( sc.n ), fz( sc.n );
 	sere_massspring_report report{};
-	tally t;
-	size_t k = 0;
-	for ( auto _ : state )
-	{
-		state.PauseTiming();
-		restore( sc, k );
-		k = ( k + 1 ) % sc.snapshots.size();
-		state.ResumeTiming();
-		sere_status status =
-			sere_massspring_step_ref( &sc.topology, &p, &sc.params, fx.data(), fy.data(), fz.data(), &report );
-		benchmark::ClobberMemory();
-		if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
-		{
-			state.SkipWithError( sere_status_text( status ) );
-			break;
-		}
-		t.add( report );
-	}
-	counters( state, sc, t );
+	step_loop( state, sc, report, [&] {
+		return sere_massspring_step_ref( &sc.topology, &p, &sc.params, fx.data(), fy.data(), fz.data(), &report );
+	} );
 }
 } // namespace
 

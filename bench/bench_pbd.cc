@@ -91,9 +91,9 @@ void per_call( benchmark::internal::Benchmark* b )
 	b->ArgNames( { "threads", "sweeps" } )->ArgsProduct( { { 1, 2 }, { 1, 20, 200 } } );
 }
 
-// One call of sere_pbd_project running exactly `sweeps` sweeps (never converged), copies of
-// the positions into the solver's records and back included.
-void BM_PBDColored( benchmark::State& state )
+// Times project (sere_pbd_project or its Jacobi twin) on the maple with the benchmark's threads
+// and sweeps (its two arguments); the scene, for further counters.
+template <typename Project> scene& project_loop( benchmark::State& state, Project project )
 {
 	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
 	scene& s = maple();
@@ -101,10 +101,18 @@ void BM_PBDColored( benchmark::State& state )
 	sere_pbd_report report;
 	for ( auto _ : state )
 	{
-		sere_pbd_project( s.pbd, s.x.data(), s.y.data(), s.z.data(), s.inv_m.data(), &params, &report );
+		project( s.pbd, s.x.data(), s.y.data(), s.z.data(), s.inv_m.data(), &params, &report );
 		benchmark::ClobberMemory();
 	}
 	rate( state, s.model->s.count, state.range( 1 ) );
+	return s;
+}
+
+// One call of sere_pbd_project running exactly `sweeps` sweeps (never converged), copies of
+// the positions into the solver's records and back included.
+void BM_PBDColored( benchmark::State& state )
+{
+	scene& s = project_loop( state, sere_pbd_project );
 	sere_pbd_info info = sere_pbd_get_info( s.pbd );
 	state.counters["colors"] = info.colors;
 	state.counters["bands"] = info.bands;
@@ -148,16 +156,7 @@ void BM_PBDColoredConverged( benchmark::State& state )
 
 void BM_PBDJacobi( benchmark::State& state )
 {
-	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
-	scene& s = maple();
-	sere_pbd_params params = sweeps( static_cast<int32_t>( state.range( 1 ) ) );
-	sere_pbd_report report;
-	for ( auto _ : state )
-	{
-		sere_pbd_project_jacobi( s.pbd, s.x.data(), s.y.data(), s.z.data(), s.inv_m.data(), &params, &report );
-		benchmark::ClobberMemory();
-	}
-	rate( state, s.model->s.count, state.range( 1 ) );
+	project_loop( state, sere_pbd_project_jacobi );
 }
 
 // The serial baseline; it has no per-call part, so one sweep per iteration is its sweep cost.

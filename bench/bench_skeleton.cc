@@ -115,33 +115,32 @@ sere_joint_frames& posed()
 	return frames;
 }
 
-void BM_skeleton_skin( benchmark::State& state )
+// Times skin (the kernel or its scalar twin) over the posed plant's vertices; the vertex count.
+template <typename Skin> int32_t skin_loop( benchmark::State& state, Skin skin )
 {
-	omp_set_num_threads( (int) state.range( 0 ) );
 	Plant& p = plant();
 	sere_joint_frames& f = posed();
 	sere_plant* s = p.plant;
 	for ( auto _ : state )
 	{
-		sere_joint_frames_skin( &f, s->joint, s->ox, s->oy, s->oz, s->vertex_count, s->tx, s->ty, s->tz );
+		skin( &f, s->joint, s->ox, s->oy, s->oz, s->vertex_count, s->tx, s->ty, s->tz );
 		benchmark::ClobberMemory();
 	}
 	rate( state, "vertices/s", s->vertex_count );
+	return s->vertex_count;
+}
+
+void BM_skeleton_skin( benchmark::State& state )
+{
+	omp_set_num_threads( (int) state.range( 0 ) );
+	int32_t vertices = skin_loop( state, sere_joint_frames_skin );
 	// joint index + offset in, position out: 28 bytes per vertex
-	rate( state, "bytes/s", 28.0 * s->vertex_count );
+	rate( state, "bytes/s", 28.0 * vertices );
 }
 
 void BM_skeleton_skin_ref( benchmark::State& state )
 {
-	Plant& p = plant();
-	sere_joint_frames& f = posed();
-	sere_plant* s = p.plant;
-	for ( auto _ : state )
-	{
-		sere_skeleton_ref_skin( &f, s->joint, s->ox, s->oy, s->oz, s->vertex_count, s->tx, s->ty, s->tz );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "vertices/s", s->vertex_count );
+	skin_loop( state, sere_skeleton_ref_skin );
 }
 
 // The textbook C++ route: a joint as an Eigen affine transform, vertices as Vector3f (AoS).

@@ -114,21 +114,33 @@ const char* sere_test_bin( void )
 	return bin != NULL ? bin : "build/sere";
 }
 
+int sere_test_shell( const char* command, char* out, size_t out_size )
+{
+	out[0] = '\0';
+	FILE* pipe = popen( command, "r" );
+	if ( pipe == NULL )
+	{
+		snprintf( out, out_size, "cannot run %s", command );
+		return 128;
+	}
+	size_t used = fread( out, 1, out_size - 1, pipe );
+	out[used] = '\0';
+	int status = pclose( pipe );
+	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+}
+
 int sere_test_run( const char* args, char* err, size_t err_size )
 {
 	char command[2048];
 	snprintf( command, sizeof( command ), "%s %s 2>&1 >/dev/null", sere_test_bin(), args );
-	err[0] = '\0';
-	FILE* pipe = popen( command, "r" );
-	if ( pipe == NULL )
-	{
-		snprintf( err, err_size, "cannot run %s", command );
-		return 128;
-	}
-	size_t used = fread( err, 1, err_size - 1, pipe );
-	err[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+	return sere_test_shell( command, err, err_size );
+}
+
+int sere_test_stdout( const char* args, char* out, size_t out_size )
+{
+	char command[4096];
+	snprintf( command, sizeof( command ), "%s %s 2>/dev/null", sere_test_bin(), args );
+	return sere_test_shell( command, out, out_size );
 }
 
 void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_t seed )
@@ -163,4 +175,11 @@ void sere_test_crumple_point( sere_test_crumple* field, double u, double v, doub
 	out[0] = (float) ( u + d[0] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 	out[1] = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 	out[2] = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+}
+
+int sere_test_remove_tree( const char* dir )
+{
+	char command[1100];
+	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
+	return system( command );
 }

@@ -42,6 +42,18 @@ void sere_test_crumple_point( sere_test_crumple* field, double u, double v, doub
 /* The sere binary under test: $SERE_BIN (make test sets it), else build/sere. */
 const char* sere_test_bin( void );
 
+/* Runs command through the shell with its stdout captured into out (NUL terminated, cut at
+ * out_size − 1); returns the exit status, 128 when it did not exit or could not start (out then
+ * says so). */
+int sere_test_shell( const char* command, char* out, size_t out_size );
+
+/* Runs "BIN ARGS" through the shell with stdout captured into out and stderr discarded (for
+ * --json and --help output); the exit status as sere_test_shell. */
+int sere_test_stdout( const char* args, char* out, size_t out_size );
+
 /* Runs "BIN ARGS" through the shell with stdout discarded and stderr captured into err (NUL
  * terminated, cut at err_size − 1); returns the exit status, 128 when it did not exit. */
 int sere_test_run( const char* args, char* err, size_t err_size );
+
+/* Removes a test's scratch directory and all in it (rm -rf); the shell's status, 0 when done. */
+int sere_test_remove_tree( const char* dir );

@@ -45,13 +45,18 @@ static void bvh_sheet_free( bvh_sheet* s )
 	sere_free( s->tri );
 }
 
-static double bvh_unit( uint64_t* state )
+/* The tree over the sheet's triangles as they lie now. */
+static sere_bvh* bvh_sheet_tree( const bvh_sheet* s )
 {
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	z ^= z >> 31;
-	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( s->tri, s->triangles, s->n, s->x, s->y, s->z, &bvh ), SERE_OK );
+	return bvh;
+}
+
+static void bvh_sheet_release( bvh_sheet* s, sere_bvh* bvh )
+{
+	sere_bvh_destroy( bvh );
+	bvh_sheet_free( s );
 }
 
 /* Smooth bumps of the given amplitude (wavelength a quarter of the sheet) plus per-vertex noise
@@ -62,10 +67,10 @@ static void bvh_sheet_bump( bvh_sheet* s, double amplitude, double noise, uint64
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
 		double u = s->u[i], v = s->v[i];
-		s->x[i] = (float) ( u + noise * ( bvh_unit( &state ) - 0.5 ) );
-		s->y[i] = (float) ( v + noise * ( bvh_unit( &state ) - 0.5 ) );
+		s->x[i] = (float) ( u + noise * ( sere_test_unit( &state ) - 0.5 ) );
+		s->y[i] = (float) ( v + noise * ( sere_test_unit( &state ) - 0.5 ) );
 		s->z[i] = (float) ( amplitude * sin( 8.0 * BVH_PI * u ) * sin( 8.0 * BVH_PI * v ) +
-							noise * ( bvh_unit( &state ) - 0.5 ) );
+							noise * ( sere_test_unit( &state ) - 0.5 ) );
 	}
 }
 
@@ -101,15 +106,15 @@ static void bvh_check_queries( const sere_bvh* bvh, const bvh_sheet* s, uint64_t
 	for ( int q = 0; q < 400; ++q )
 	{
 		/* half the queries at vertices (the collision use), half anywhere in the bounds */
-		int32_t i = (int32_t) ( bvh_unit( &state ) * s->n );
+		int32_t i = (int32_t) ( sere_test_unit( &state ) * s->n );
 		float p[3] = { s->x[i], s->y[i], s->z[i] };
 		if ( q % 2 )
 		{
-			p[0] += (float) ( 0.2 * ( bvh_unit( &state ) - 0.5 ) );
-			p[1] += (float) ( 0.2 * ( bvh_unit( &state ) - 0.5 ) );
-			p[2] += (float) ( 0.2 * ( bvh_unit( &state ) - 0.5 ) );
+			p[0] += (float) ( 0.2 * ( sere_test_unit( &state ) - 0.5 ) );
+			p[1] += (float) ( 0.2 * ( sere_test_unit( &state ) - 0.5 ) );
+			p[2] += (float) ( 0.2 * ( sere_test_unit( &state ) - 0.5 ) );
 		}
-		float r = (float) ( 3.0 * s->cell * bvh_unit( &state ) * bvh_unit( &state ) );
+		float r = (float) ( 3.0 * s->cell * sere_test_unit( &state ) * sere_test_unit( &state ) );
 		int32_t count = sere_bvh_query( bvh, p[0], p[1], p[2], r, got, s->triangles );
 		float lo[3] = { p[0] - r, p[1] - r, p[2] - r }, hi[3] = { p[0] + r, p[1] + r, p[2] + r };
 		int32_t expected = 0;
@@ -144,8 +149,7 @@ Test( bvh, query_matches_brute_force_after_build_and_refit )
 	bvh_sheet s;
 	bvh_sheet_make( &s, 40, 30, 11 );
 	bvh_sheet_bump( &s, 0.02, 0.3 * s.cell, 5 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	bvh_check_queries( bvh, &s, 1 );
 	/* refit only, after deformations that move triangles far from where the tree put them */
 	bvh_sheet_roll( &s );
@@ -154,8 +158,7 @@ Test( bvh, query_matches_brute_force_after_build_and_refit )
 	bvh_sheet_bump( &s, 0.3, 2.0 * s.cell, 9 );
 	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
 	bvh_check_queries( bvh, &s, 3 );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 typedef struct bvh_group_hits
@@ -180,8 +183,7 @@ Test( bvh, group_query_matches_brute_force )
 	bvh_sheet s;
 	bvh_sheet_make( &s, 40, 30, 12 );
 	bvh_sheet_bump( &s, 0.05, 0.5 * s.cell, 2 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	uint32_t* lanes = calloc( (size_t) s.triangles, sizeof( uint32_t ) );
 	uint64_t state = 9;
 	for ( int g = 0; g < 200; ++g )
@@ -189,11 +191,11 @@ Test( bvh, group_query_matches_brute_force )
 		sere_bvh_group group;
 		group.count = 1 + g % SERE_BVH_WIDTH;
 		/* boxes around nearby vertices (a group's usual shape), one of them NaN now and then */
-		int32_t base = (int32_t) ( bvh_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
+		int32_t base = (int32_t) ( sere_test_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
 		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
 		{
 			int32_t i = base + k;
-			float r = (float) ( 2.0 * s.cell * bvh_unit( &state ) );
+			float r = (float) ( 2.0 * s.cell * sere_test_unit( &state ) );
 			group.lo_x[k] = s.x[i] - r, group.lo_y[k] = s.y[i] - r, group.lo_z[k] = s.z[i] - r;
 			group.hi_x[k] = s.x[i] + r, group.hi_y[k] = s.y[i] + r, group.hi_z[k] = s.z[i] + r;
 		}
@@ -227,8 +229,7 @@ Test( bvh, group_query_matches_brute_force )
 		}
 	}
 	free( lanes );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 typedef struct bvh_visit_log
@@ -257,8 +258,7 @@ Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
 	bvh_sheet s;
 	bvh_sheet_make( &s, 40, 30, 12 );
 	bvh_sheet_bump( &s, 0.05, 0.5 * s.cell, 2 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	int32_t capacity = s.triangles;
 	bvh_visit_log plain = { malloc( sizeof( int32_t ) * (size_t) capacity ),
 							malloc( sizeof( uint32_t ) * (size_t) capacity ), 0, capacity };
@@ -274,11 +274,11 @@ Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
 		}
 		sere_bvh_group group;
 		group.count = 1 + g % SERE_BVH_WIDTH;
-		int32_t base = (int32_t) ( bvh_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
+		int32_t base = (int32_t) ( sere_test_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
 		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
 		{
 			int32_t i = base + k;
-			float r = (float) ( 3.0 * s.cell * bvh_unit( &state ) );
+			float r = (float) ( 3.0 * s.cell * sere_test_unit( &state ) );
 			group.lo_x[k] = s.x[i] - r, group.lo_y[k] = s.y[i] - r, group.lo_z[k] = s.z[i] - r;
 			group.hi_x[k] = s.x[i] + r, group.hi_y[k] = s.y[i] + r, group.hi_z[k] = s.z[i] + r;
 		}
@@ -303,8 +303,7 @@ Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
 		cr_assert_eq( above.count, kept, "group %d: %d visits, %d expected", g, above.count, kept );
 	}
 	free( plain.triangle ), free( plain.lanes ), free( above.triangle ), free( above.lanes );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 /* Refit boxes are exact: a triangle lane is the min/max of its corners, a node lane the union of
@@ -314,8 +313,7 @@ Test( bvh, refit_boxes_exact_and_structure )
 {
 	bvh_sheet s;
 	bvh_sheet_make( &s, 50, 40, 3 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	bvh_sheet_roll( &s );
 	bvh_sheet_bump( &s, 0.1, 0.5 * s.cell, 4 );
 	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
@@ -369,16 +367,14 @@ Test( bvh, refit_boxes_exact_and_structure )
 	/* a 2000-triangle sheet in 8-wide nodes: log8(2000) ≈ 3.7, a sound SAH tree stays shallow */
 	cr_expect_leq( sere_bvh_depth( bvh ), 8 );
 	free( seen );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 Test( bvh, quality_ratio_grows_with_deformation_and_triggers_rebuild )
 {
 	bvh_sheet s;
 	bvh_sheet_make( &s, 40, 40, 8 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	/* the same sums over the same boxes: exactly 1 */
 	cr_assert_eq( sere_bvh_quality_ratio( bvh ), 1.0 );
 	cr_assert( !sere_bvh_needs_rebuild( bvh, SERE_BVH_REBUILD_RATIO ) );
@@ -406,8 +402,7 @@ Test( bvh, quality_ratio_grows_with_deformation_and_triggers_rebuild )
 	cr_assert_eq( sere_bvh_update( bvh, s.x, s.y, s.z, SERE_BVH_REBUILD_RATIO, &rebuilt ), SERE_OK );
 	cr_assert( rebuilt );
 	cr_assert_eq( sere_bvh_quality_ratio( bvh ), 1.0 );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 Test( bvh, quality_ratio_ignores_uniform_shrinking )
@@ -415,8 +410,7 @@ Test( bvh, quality_ratio_ignores_uniform_shrinking )
 	bvh_sheet s;
 	bvh_sheet_make( &s, 30, 30, 2 );
 	bvh_sheet_bump( &s, 0.05, 0.2 * s.cell, 3 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		s.x[i] *= 0.6f, s.y[i] *= 0.6f, s.z[i] *= 0.6f;
@@ -425,16 +419,14 @@ Test( bvh, quality_ratio_ignores_uniform_shrinking )
 	/* a drying leaf shrinking by 40% keeps its tree: areas all scale by 0.36, the ratio moves
 	 * only by float rounding of the scaled coordinates (relative 1e-6 per coordinate) */
 	cr_assert_float_eq( sere_bvh_quality_ratio( bvh ), 1.0, 1e-4 );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 Test( bvh, build_and_refit_identical_with_one_and_two_threads )
 {
 	bvh_sheet s;
 	bvh_sheet_make( &s, 60, 40, 6 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	bvh_sheet_roll( &s );
 	int32_t nodes;
 	const sere_bvh_node* node = sere_bvh_nodes( bvh, &nodes );
@@ -463,16 +455,14 @@ Test( bvh, build_and_refit_identical_with_one_and_two_threads )
 	cr_assert_eq( memcmp( second, node, sizeof( sere_bvh_node ) * (size_t) nodes ), 0 );
 	free( first );
 	free( second );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 Test( bvh, nonfinite_positions_are_refused )
 {
 	bvh_sheet s;
 	bvh_sheet_make( &s, 10, 10, 1 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+	sere_bvh* bvh = bvh_sheet_tree( &s );
 	int32_t nodes;
 	const sere_bvh_node* node = sere_bvh_nodes( bvh, &nodes );
 	sere_bvh_node* before = malloc( sizeof( sere_bvh_node ) * (size_t) nodes );
@@ -493,8 +483,7 @@ Test( bvh, nonfinite_positions_are_refused )
 	int32_t out[4];
 	cr_assert_eq( sere_bvh_query( bvh, NAN, 0.5f, 0.0f, 0.1f, out, 4 ), 0 );
 	free( before );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 Test( bvh, bad_arguments_are_refused )
@@ -542,8 +531,7 @@ Test( bvh, degenerate_meshes )
 	}
 	cr_assert_eq( sere_bvh_quality_ratio( bvh ), 1.0 );
 	free( all );
-	sere_bvh_destroy( bvh );
-	bvh_sheet_free( &s );
+	bvh_sheet_release( &s, bvh );
 }
 
 /* The generation names a build: the candidate list of sere_collide trusts it to say the tree's

@@ -155,8 +155,7 @@ Test( cli, interrupted_run_leaves_complete_outputs )
 	cr_assert_eq( fscanf( pipe, "%d", &tmp_count ), 1 );
 	pclose( pipe );
 	cr_expect_eq( tmp_count, 0 );
-	snprintf( path, sizeof( path ), "rm -rf %s", dir );
-	cr_expect_eq( system( path ), 0 );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( cli, osmosis_dump_is_a_solved_system )
@@ -224,8 +223,7 @@ Test( cli, osmosis_dump_is_a_solved_system )
 	snprintf( path, sizeof( path ), "%s/particles.csv", dir );
 	cr_expect_gt( file_size( path ), 0 );
 	free( ei ), free( ej ), free( ev ), free( vec[0] ), free( vec[1] ), free( ax );
-	snprintf( path, sizeof( path ), "rm -rf %s", dir );
-	cr_expect_eq( system( path ), 0 );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( cli, rerun_replaces_old_frames_only )
@@ -262,6 +260,5 @@ Test( cli, rerun_replaces_old_frames_only )
 	}
 	snprintf( path, sizeof( path ), "%s/frames/frame_00002.ply", dir );
 	cr_expect_gt( file_size( path ), 0, "the new run's last frame is missing" );
-	snprintf( args, sizeof( args ), "rm -rf %s", dir );
-	cr_expect_eq( system( args ), 0 );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }

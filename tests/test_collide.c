@@ -62,6 +62,20 @@ static void collide_sheet_free( collide_sheet* s )
 	free( s->tri );
 }
 
+/* The tree over the sheet's triangles and a collide workspace of the given capacity on it. */
+static void collide_sheet_tree( const collide_sheet* s, int32_t capacity, sere_bvh** bvh, sere_collide** c )
+{
+	cr_assert_eq( sere_bvh_create( s->tri, s->triangles, s->n, s->x, s->y, s->z, bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( *bvh, capacity, c ), SERE_OK );
+}
+
+static void collide_sheet_release( collide_sheet* s, sere_bvh* bvh, sere_collide* c )
+{
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
+	collide_sheet_free( s );
+}
+
 static void collide_sheet_flat( collide_sheet* s )
 {
 	for ( int32_t i = 0; i < s->n; ++i )
@@ -287,9 +301,8 @@ Test( collide, pairs_match_brute_force_on_random_deformations )
 	collide_sheet_make( &s, 36, 24, 5 );
 	float h = 0.3f * s.cell;
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
 	cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "flat", NULL ), 0 );
 	/* noise of 3 cells in every axis: neighbourhoods interpenetrate, many contacts beyond the
 	 * vertices joined by an edge (which do not count) */
@@ -313,9 +326,7 @@ Test( collide, pairs_match_brute_force_on_random_deformations )
 		collide_sheet_flat( &s );
 		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
 	}
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 Test( collide, pairs_match_brute_force_on_u_fold )
@@ -324,9 +335,8 @@ Test( collide, pairs_match_brute_force_on_u_fold )
 	collide_sheet_make( &s, 36, 24, 6 );
 	float h = 0.3f * s.cell;
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
 	/* below the thickness the halves touch everywhere: about every vertex is in contact */
 	collide_sheet_fold( &s, 0.8 * h );
 	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
@@ -359,9 +369,7 @@ Test( collide, pairs_match_brute_force_on_u_fold )
 					   fabs( s.u[edge_contacts[k].b0] - 0.5 ) < 2.0 * s.cell,
 				   "edge contact away from the bend" );
 	}
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 Test( collide, pairs_match_brute_force_on_crumpled_sheet )
@@ -370,9 +378,8 @@ Test( collide, pairs_match_brute_force_on_crumpled_sheet )
 	collide_sheet_make( &s, 36, 24, 7 );
 	float h = 0.3f * s.cell;
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
 	const double amplitudes[] = { 0.05, 0.2, 0.4 };
 	int32_t most = 0, most_edges = 0;
 	for ( int k = 0; k < 3; ++k )
@@ -390,9 +397,7 @@ Test( collide, pairs_match_brute_force_on_crumpled_sheet )
 	}
 	cr_assert_gt( most, 50, "the strongest crumple must fold the sheet onto itself" );
 	cr_assert_gt( most_edges, 50, "the strongest crumple must bring edges across each other" );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 /* A detection served by the candidate list (collide.c, SKIN) must find what a search finds: the
@@ -477,9 +482,8 @@ Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 	float h = 0.3f * s.cell, gap = 1.47f * h, d = 0.24f * h;
 	collide_sheet_fold( &s, gap );
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
 	int32_t before = -1;
 	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
 	cr_assert_eq( sere_collide_list_uses( c ), 0 );
@@ -507,9 +511,7 @@ Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0 );
 	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0 );
 	sere_collide_destroy( fresh );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 /* One vertex over the middle of a triangle, everything else far away: a single contact whose
@@ -522,9 +524,8 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 	collide_sheet_make( &s, 36, 24, 9 );
 	float h = 0.3f * s.cell;
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
 	collide_sheet_fold( &s, 0.8 * h );
 	/* on the upper half, put a corner of every fifth triangle on the midpoint of the other two
 	 * (zero area), or a millionth of a cell beside it (a sliver) */
@@ -560,9 +561,7 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 		on_degenerate += area2 <= 1e-6f * ab2 * ab2;
 	}
 	cr_assert_gt( on_degenerate, 0, "no contact on a collapsed triangle: the fallback was not exercised" );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 Test( collide, single_contact_shared_by_inverse_mass )
@@ -885,9 +884,8 @@ Test( collide, response_separates_u_fold )
 	collide_sheet_make( &s, 36, 24, 8 );
 	float h = 0.3f * s.cell;
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	collide_sheet_tree( &s, 0, &bvh, &c );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = h;
 	params.iterations = 32;
@@ -917,9 +915,7 @@ Test( collide, response_separates_u_fold )
 		}
 		free( before );
 	}
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 /* A sheet crumpled through itself cannot be separated by proximity pushes where it truly
@@ -947,9 +943,8 @@ Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 		mass += 1.0 / s.inv_m[i];
 	}
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	collide_sheet_tree( &s, 0, &bvh, &c );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = h;
 	params.iterations = 16;
@@ -987,9 +982,7 @@ Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 		cr_assert_float_eq( after[k] / mass, moment[k] / mass, 1e-6, "axis %d: the centre of mass moved by %g", k,
 							( after[k] - moment[k] ) / mass );
 	}
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 /* Jeong Eq. 14 in both modes: ĥ measured before the collision pass (Algorithm 1 line 14), or the rest
@@ -1141,9 +1134,7 @@ static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), 
 		memcpy( out + (size_t) k * all, arrays[k], sizeof( float ) * all );
 	}
 	free( h );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 	return out;
 }
 
@@ -1306,9 +1297,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	}
 	free( h );
 	free( saved );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
@@ -1317,9 +1306,8 @@ Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
 	collide_sheet_make( &s, 20, 16, 2 );
 	collide_shape_fold( &s );
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 16, &bvh, &c );
 	float* saved = malloc( sizeof( float ) * (size_t) s.n );
 	memcpy( saved, s.z, sizeof( float ) * (size_t) s.n );
 	sere_collide_params params = sere_collide_params_default();
@@ -1344,9 +1332,7 @@ Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
 	sere_collide_edge_contacts( c, &listed );
 	cr_assert_eq( listed, stats.edge_contacts );
 	free( saved );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 Test( collide, bad_arguments_are_refused )
@@ -1375,9 +1361,7 @@ Test( collide, bad_arguments_are_refused )
 	cr_assert_eq( sere_bvh_create( one, 1, 3, s.x, s.y, s.z, &other ), SERE_OK );
 	cr_assert_eq( sere_collide_detect( c, other, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_ARGUMENT );
 	sere_bvh_destroy( other );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 Test( collide, neighbours_in_the_sheet_are_not_contacts )
@@ -1422,17 +1406,14 @@ Test( collide, neighbours_in_the_sheet_are_not_contacts )
 	}
 	cr_assert_gt( close_edges, s.n / 2 );
 	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
 	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &c ), SERE_OK );
+	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
 	int32_t count = -1;
 	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &count ), SERE_OK );
 	cr_expect_eq( count, 0, "%d contacts between neighbours in a flat sheet", count );
 	sere_collide_edge_contacts( c, &count );
 	cr_expect_eq( count, 0, "%d edge contacts between neighbours in a flat sheet", count );
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( &s );
+	collide_sheet_release( &s, bvh, c );
 }
 
 /* A sheet with Voronoi particles off their places, random velocities and masses in [0.5, 2]. */

@@ -56,25 +56,6 @@ static void write_text( const char* path, const char* text )
 	fclose( f );
 }
 
-static void remove_tree( const char* dir )
-{
-	char command[1024];
-	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
-	cr_expect_eq( system( command ), 0 );
-}
-
-/* Runs the binary with stdout captured into out (for --json output). */
-static int run_stdout( const char* args, char* out, size_t out_size )
-{
-	char command[4096];
-	snprintf( command, sizeof( command ), "%s %s 2>/dev/null", sere_test_bin(), args );
-	FILE* pipe = popen( command, "r" );
-	size_t used = fread( out, 1, out_size - 1, pipe );
-	out[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
-}
-
 /* A strict JSON checker (RFC 8259): whole document, one value, UTF-8 left to the producer but
  * no raw control characters in strings and only the defined escapes. */
 static const char* json_value( const char* p );
@@ -218,7 +199,7 @@ Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 	char leaf[512], args[2048], out[16384], path[512];
 	weird_leaf( dir, leaf, sizeof( leaf ) );
 	snprintf( args, sizeof( args ), "model %s --points 300 --json", leaf );
-	cr_assert_eq( run_stdout( args, out, sizeof( out ) ), 0, "sere %s failed", args );
+	cr_assert_eq( sere_test_stdout( args, out, sizeof( out ) ), 0, "sere %s failed", args );
 	cr_expect( json_valid( out ), "sere model --json is not JSON: %s", out );
 	cr_expect_not_null( strstr( out, "\"leaf\": \"we\\\"ird\\\\ \\u0001leaf\\t\\u007f end\xc3\xa9\"" ), "%s", out );
 
@@ -231,7 +212,7 @@ Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 	cr_expect( json_valid( summary ), "summary.json is not JSON:\n%s", summary );
 	cr_expect_not_null( strstr( summary, "\"status\": \"complete\"" ), "%s", summary );
 	free( summary );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( edges, leaf_name_not_utf8_is_refused )
@@ -246,7 +227,7 @@ Test( edges, leaf_name_not_utf8_is_refused )
 	snprintf( where, sizeof( where ), "%s:1: name is not UTF-8 text (byte 0xE9 at character 4)", path );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
 	expect_one_line( "latin1", err );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 static void expect_seed( const char* dir, const char* preset, const char* expected )
@@ -292,7 +273,7 @@ Test( edges, long_preset_comment_stays_a_comment )
 	snprintf( where, sizeof( where ), "%s:3: stiffness = 2 is out of range", preset );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
 	expect_one_line( "preset", err );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( edges, long_chain_line_keeps_line_numbers )
@@ -329,7 +310,7 @@ Test( edges, long_chain_line_keeps_line_numbers )
 	cr_expect_not_null( strstr( err, "missing.schedule" ), "the chain was not accepted: %s", err );
 	free( text );
 	free( chain );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* ---- silent limits --------------------------------------------------------------------------- */
@@ -355,7 +336,7 @@ Test( edges, more_than_1023_mesh_frames_are_all_written, .timeout = 240 )
 	}
 	cr_expect_eq( listed, 1101, "leaf.pvd lists %d frames", listed );
 	free( pvd );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( edges, too_few_points_names_a_count_that_builds )
@@ -409,7 +390,7 @@ Test( edges, summary_json_directory_is_refused )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	cr_expect_not_null( strstr( err, path ), "the message does not name %s: %s", path, err );
 	expect_one_line( "summary.json", err );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( edges, wilt_out_that_is_a_file )
@@ -424,7 +405,7 @@ Test( edges, wilt_out_that_is_a_file )
 	cr_expect_not_null( strstr( err, "Not a directory" ), "%s", err );
 	cr_expect_null( strstr( err, "Success" ), "%s", err );
 	expect_one_line( "wilt", err );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* PLY files whose size matches their header: vertices of as many floats as the header lists
@@ -536,5 +517,5 @@ Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 	{
 		cr_expect_eq( umount( dir ), 0 );
 	}
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }

@@ -33,20 +33,46 @@ static void small_leaf_layers( sere_model* model, const char* name, int32_t poin
 	sere_leaf_free( &leaf );
 }
 
+/* The drying simulation of a model built by small_leaf or small_leaf_layers. */
+static sere_leaf_sim* small_sim( sere_model* model )
+{
+	sere_leaf_sim* sim;
+	cr_assert_eq( sere_leaf_create( model, &sim ), SERE_OK );
+	return sim;
+}
+
+static void small_sim_free( sere_leaf_sim* sim, sere_model* model )
+{
+	sere_leaf_destroy( sim );
+	sere_model_destroy( model );
+}
+
+/* The default drying parameters with the water loss rates of both layers (Table 2 w_loss^T and
+ * w_loss^V) and the surface shrink σ of Jeong Eq. 12 set. */
+static sere_leaf_params drying_params( double rate_t, double rate_v, double sigma_surf )
+{
+	sere_leaf_params params = sere_leaf_params_default();
+	params.water_rate_t = rate_t;
+	params.water_rate_v = rate_v;
+	params.shrink.sigma_surf = sigma_surf;
+	return params;
+}
+
 static double t_area( const sere_model* model )
 {
+	const float* p[3] = { model->p.x, model->p.y, model->p.z };
 	double area = 0.0;
 	for ( int32_t t = 0; t < model->triangle_count; ++t )
 	{
 		const int32_t* v = model->tri + 3 * t;
-		const float* x = model->p.x;
-		const float* y = model->p.y;
-		const float* z = model->p.z;
-		double ax = x[v[1]] - x[v[0]], ay = y[v[1]] - y[v[0]], az = z[v[1]] - z[v[0]];
-		double bx = x[v[2]] - x[v[0]], by = y[v[2]] - y[v[0]], bz = z[v[2]] - z[v[0]];
-		area +=
-			0.5 * sqrt( ( ay * bz - az * by ) * ( ay * bz - az * by ) + ( az * bx - ax * bz ) * ( az * bx - ax * bz ) +
-						( ax * by - ay * bx ) * ( ax * by - ay * bx ) );
+		double a[3], b[3];
+		for ( int k = 0; k < 3; ++k )
+		{
+			a[k] = p[k][v[1]] - p[k][v[0]];
+			b[k] = p[k][v[2]] - p[k][v[0]];
+		}
+		double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2], cz = a[0] * b[1] - a[1] * b[0];
+		area += 0.5 * sqrt( cx * cx + cy * cy + cz * cz );
 	}
 	return area;
 }
@@ -55,12 +81,8 @@ Test( leaf, end_to_end_dry )
 {
 	sere_model model;
 	small_leaf( &model, "wisteria", 400 );
-	sere_leaf_sim* sim;
-	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-	sere_leaf_params params = sere_leaf_params_default();
-	params.water_rate_t = -0.2;
-	params.water_rate_v = -0.2;
-	params.shrink.sigma_surf = 0.5;
+	sere_leaf_sim* sim = small_sim( &model );
+	sere_leaf_params params = drying_params( -0.2, -0.2, 0.5 );
 	params.shrink.sigma_vein = 0.2;
 	params.pbd.max_iterations = 60;
 	double area0 = t_area( &model );
@@ -82,8 +104,7 @@ Test( leaf, end_to_end_dry )
 	cr_expect_lt( stats.relative_water, 0.9 );
 	/* Shrinking springs pull the blade in: the triangle layer's area falls. */
 	cr_expect_lt( t_area( &model ), 0.97 * area0, "area %g of %g", t_area( &model ), area0 );
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
+	small_sim_free( sim, &model );
 }
 
 /* The collision thickness follows the triangle layer: Σ l / Σ l⁰ over the T springs, 1 exactly
@@ -96,12 +117,8 @@ Test( leaf, collision_thickness_shrinks_with_the_triangle_layer )
 		sere_model model;
 		small_leaf( &model, "maple", 400 );
 		cr_assert_eq( sere_leaf_thickness_scale( &model ), 1.0f );
-		sere_leaf_sim* sim;
-		cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-		sere_leaf_params params = sere_leaf_params_default();
-		params.water_rate_t = -0.5;
-		params.water_rate_v = -0.5;
-		params.shrink.sigma_surf = 1.0;
+		sere_leaf_sim* sim = small_sim( &model );
+		sere_leaf_params params = drying_params( -0.5, -0.5, 1.0 );
 		params.pbd.max_iterations = 20;
 		params.scale_thickness = scale;
 		sere_leaf_stats stats;
@@ -121,8 +138,7 @@ Test( leaf, collision_thickness_shrinks_with_the_triangle_layer )
 		float expected = scale ? params.collide.thickness * shrink : params.collide.thickness;
 		cr_assert_eq( stats.collision_thickness, expected, "scale %d: %g, expected %g", scale,
 					  stats.collision_thickness, expected );
-		sere_leaf_destroy( sim );
-		sere_model_destroy( &model );
+		small_sim_free( sim, &model );
 	}
 }
 
@@ -130,8 +146,7 @@ Test( leaf, desiccated_layer_stops )
 {
 	sere_model model;
 	small_leaf( &model, "hickory", 300 );
-	sere_leaf_sim* sim;
-	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+	sere_leaf_sim* sim = small_sim( &model );
 	sere_leaf_params params = sere_leaf_params_default();
 	params.water_rate_v = -50.0; /* the Voronoi layer dries in a few frames */
 	params.water_rate_t = -0.1;
@@ -155,8 +170,7 @@ Test( leaf, desiccated_layer_stops )
 	cr_expect_eq( stats.water_t, water_t );
 	cr_expect_eq( memcmp( rest, model.s.rest, sizeof( float ) * model.s.count ), 0 );
 	free( rest );
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
+	small_sim_free( sim, &model );
 }
 
 Test( leaf, deterministic_across_threads )
@@ -168,12 +182,8 @@ Test( leaf, deterministic_across_threads )
 		omp_set_num_threads( t + 1 );
 		sere_model model;
 		small_leaf( &model, "maple", 1200 );
-		sere_leaf_sim* sim;
-		cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-		sere_leaf_params params = sere_leaf_params_default();
-		params.water_rate_t = -0.5;
-		params.water_rate_v = -1.0;
-		params.shrink.sigma_surf = 1.5;
+		sere_leaf_sim* sim = small_sim( &model );
+		sere_leaf_params params = drying_params( -0.5, -1.0, 1.5 );
 		params.pbd.max_iterations = 40;
 		sere_leaf_stats stats;
 		for ( int frame = 0; frame < 40; ++frame )
@@ -188,8 +198,7 @@ Test( leaf, deterministic_across_threads )
 		memcpy( final[t] + 3 * count, model.p.vx, sizeof( float ) * count );
 		memcpy( final[t] + 4 * count, model.p.vy, sizeof( float ) * count );
 		memcpy( final[t] + 5 * count, model.p.vz, sizeof( float ) * count );
-		sere_leaf_destroy( sim );
-		sere_model_destroy( &model );
+		small_sim_free( sim, &model );
 	}
 	cr_expect_eq( memcmp( final[0], final[1], sizeof( float ) * 6 * count ), 0 );
 	free( final[0] ), free( final[1] );
@@ -200,8 +209,7 @@ Test( leaf, initial_shaping_creases_along_veins )
 {
 	sere_model model;
 	small_leaf( &model, "hickory", 500 );
-	sere_leaf_sim* sim;
-	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
+	sere_leaf_sim* sim = small_sim( &model );
 	sere_pbd_params pbd = sere_pbd_params_default();
 	pbd.max_iterations = 500;
 	/* h_vein = -0.02: the vein's Voronoi particles lie below; shortening their springs
@@ -223,8 +231,7 @@ Test( leaf, initial_shaping_creases_along_veins )
 		cr_assert_float_eq( model.s.rest0[s], sqrtf( dx * dx + dy * dy + dz * dz ), 1e-6f );
 		cr_assert_eq( model.s.rest[s], model.s.rest0[s] );
 	}
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
+	small_sim_free( sim, &model );
 }
 
 /* Dries a small leaf for some frames with the given stall setting and returns the triangle
@@ -233,12 +240,8 @@ static int stall_run( float stall, int frames, float* xyz, int32_t* iterations, 
 {
 	sere_model model;
 	small_leaf( &model, "wisteria", 300 );
-	sere_leaf_sim* sim;
-	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-	sere_leaf_params params = sere_leaf_params_default();
-	params.water_rate_t = -0.2;
-	params.water_rate_v = -1.0;
-	params.shrink.sigma_surf = 1.0;
+	sere_leaf_sim* sim = small_sim( &model );
+	sere_leaf_params params = drying_params( -0.2, -1.0, 1.0 );
 	params.pbd.max_iterations = 100;
 	params.pbd.compliance = 0.0f; /* the stall rule belongs to the paper's hard constraints */
 	params.pbd_stall = stall;
@@ -259,8 +262,7 @@ static int stall_run( float stall, int frames, float* xyz, int32_t* iterations, 
 	{
 		xyz[3 * i] = model.p.x[i], xyz[3 * i + 1] = model.p.y[i], xyz[3 * i + 2] = model.p.z[i];
 	}
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
+	small_sim_free( sim, &model );
 	return stalled;
 }
 
@@ -351,12 +353,8 @@ static double crease( float sigma_vein )
 {
 	sere_model model;
 	small_leaf_layers( &model, "hickory", 600, 0.01f, 0.01f );
-	sere_leaf_sim* sim;
-	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-	sere_leaf_params params = sere_leaf_params_default();
-	params.water_rate_t = 0.0;
-	params.water_rate_v = -2.0;
-	params.shrink.sigma_surf = 0.0;
+	sere_leaf_sim* sim = small_sim( &model );
+	sere_leaf_params params = drying_params( 0.0, -2.0, 0.0 );
 	params.shrink.sigma_vein = sigma_vein;
 	params.gravity[0] = params.gravity[1] = params.gravity[2] = 0.0f;
 	params.ground = -INFINITY;
@@ -367,8 +365,7 @@ static double crease( float sigma_vein )
 		cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK, "frame %d", frame );
 	}
 	double fold = vein_fold( &model );
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
+	small_sim_free( sim, &model );
 	return fold;
 }
 
@@ -393,12 +390,8 @@ static double dry_maple( float rho, int frames, float* xyz, int32_t* count, int6
 {
 	sere_model model;
 	small_leaf( &model, "maple", 400 );
-	sere_leaf_sim* sim;
-	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-	sere_leaf_params params = sere_leaf_params_default();
-	params.water_rate_t = -0.5;
-	params.water_rate_v = -1.0;
-	params.shrink.sigma_surf = 1.5;
+	sere_leaf_sim* sim = small_sim( &model );
+	sere_leaf_params params = drying_params( -0.5, -1.0, 1.5 );
 	params.pbd.chebyshev_rho = rho;
 	sere_leaf_stats stats;
 	*sweeps = 0;
@@ -418,8 +411,7 @@ static double dry_maple( float rho, int frames, float* xyz, int32_t* count, int6
 		spacing += model.s.rest0[k];
 	}
 	spacing /= model.t_springs;
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
+	small_sim_free( sim, &model );
 	return spacing;
 }
 

@@ -14,25 +14,17 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 /* Seed 6 draws wisteria, plane tree, maple and grass; 400 points are enough for every
  * species' outline and veins (the grass needs 390). */
 #define LITTER_ARGS "--leaves 4 --seed 6 --points 400 --frames 20"
 
-/* A fresh directory under /tmp; the caller removes it with remove_tree. */
+/* A fresh directory under /tmp; the caller removes it with sere_test_remove_tree. */
 static void make_dir( char* dir, size_t size, const char* name )
 {
 	snprintf( dir, size, "/tmp/sere-litter-%s-XXXXXX", name );
 	cr_assert_not_null( mkdtemp( dir ) );
-}
-
-static void remove_tree( const char* dir )
-{
-	char command[600];
-	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
-	cr_expect_eq( system( command ), 0 );
 }
 
 /* The whole file, NUL terminated; *size its length. NULL when it cannot be read. */
@@ -105,8 +97,8 @@ Test( litter, same_scene_on_one_and_two_threads )
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 4, "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"failed\": 0" ), "%s", summary );
 	free( summary );
-	remove_tree( one );
-	remove_tree( two );
+	cr_expect_eq( sere_test_remove_tree( one ), 0 );
+	cr_expect_eq( sere_test_remove_tree( two ), 0 );
 }
 
 Test( litter, rerun_redoes_missing_and_cut_leaves_only )
@@ -147,9 +139,9 @@ Test( litter, rerun_redoes_missing_and_cut_leaves_only )
 	cr_assert_not_null( summary );
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 4, "%s", summary );
 	free( summary );
-	remove_tree( whole );
-	remove_tree( resumed );
-	remove_tree( changed );
+	cr_expect_eq( sere_test_remove_tree( whole ), 0 );
+	cr_expect_eq( sere_test_remove_tree( resumed ), 0 );
+	cr_expect_eq( sere_test_remove_tree( changed ), 0 );
 }
 
 Test( litter, failed_leaf_is_reported_and_costs_no_other )
@@ -184,7 +176,7 @@ Test( litter, failed_leaf_is_reported_and_costs_no_other )
 	snprintf( path, sizeof( path ), "%s/litter.ply", dir );
 	struct stat info;
 	cr_expect( stat( path, &info ) == 0 && info.st_size > 0, "no %s", path );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* Without --frames a leaf dries to the end, as sere run --until-dry does: the plane tree's
@@ -210,7 +202,7 @@ Test( litter, dries_to_the_end_unless_frames_says_otherwise )
 	cr_expect_not_null( strstr( summary, "\"frames_max\": 10000" ), "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"desiccated\": 1" ), "%s", summary );
 	free( summary );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 
 	make_dir( dir, sizeof( dir ), "wet" );
 	snprintf( args, sizeof( args ), "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --frames 30 --out %s",
@@ -223,7 +215,7 @@ Test( litter, dries_to_the_end_unless_frames_says_otherwise )
 	cr_expect_not_null( strstr( summary, "\"frames\": 30, \"desiccated\": false" ), "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"desiccated\": 0" ), "%s", summary );
 	free( summary );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* --preset makes every leaf one species and leaves the other draws alone: a later run without
@@ -248,7 +240,7 @@ Test( litter, preset_sets_every_leaf_and_is_part_of_the_leaf_file )
 	cr_expect_eq( count_of( summary, "\"status\": \"resumed\"" ), 1, "%s", summary );
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 3, "%s", summary );
 	free( summary );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* Each leaf is its own simulation: two leaves of one preset sample their interior points with
@@ -271,7 +263,7 @@ Test( litter, leaves_of_one_preset_are_different_meshes )
 	cr_expect_neq( memcmp( data_a + size_a - tail, data_b + size_b - tail, (size_t) tail ), 0,
 				   "two maple-red leaves have the same triangles: one simulation repeated" );
 	free( data_a ), free( data_b );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* --progress 0: a line after every leaf but the last (whose end the summary line reports),
@@ -289,7 +281,7 @@ Test( litter, progress_lines_on_stderr )
 		cr_expect_not_null( strstr( err, line ), "no '%s' in: %s", line, err );
 	}
 	cr_expect_eq( count_of( err, " min left\n" ), 3, "%s", err );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 static void expect_error( const char* args, const char* phrase )
@@ -361,21 +353,7 @@ Test( litter, glb_opens_in_assimp_with_the_ply_counts )
 		cr_expect_float_eq( sqrt( (double) n.x * n.x + (double) n.y * n.y + (double) n.z * n.z ), 1.0, 1e-5 );
 	}
 	aiReleaseImport( scene );
-	remove_tree( dir );
-}
-
-/* Runs a shell command with stdout discarded and stderr captured into err; its exit status. */
-static int shell( const char* command, char* err, size_t err_size )
-{
-	char full[2048];
-	snprintf( full, sizeof( full ), "%s 2>&1 >/dev/null", command );
-	err[0] = '\0';
-	FILE* pipe = popen( full, "r" );
-	cr_assert_not_null( pipe, "cannot run %s", full );
-	size_t used = fread( err, 1, err_size - 1, pipe );
-	err[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 /* The ranks share the leaves but each leaf is still drawn from the seed and its index alone, and
@@ -384,12 +362,7 @@ static int shell( const char* command, char* err, size_t err_size )
 Test( litter, same_scene_on_one_two_and_three_ranks )
 {
 	char err[4096], command[1024];
-	snprintf( command, sizeof( command ), "%s litter --help", sere_test_bin() );
-	FILE* help = popen( command, "r" );
-	cr_assert_not_null( help );
-	size_t used = fread( err, 1, sizeof( err ) - 1, help );
-	err[used] = '\0';
-	pclose( help );
+	cr_assert_eq( sere_test_stdout( "litter --help", err, sizeof( err ) ), 0, "%s", err );
 	if ( strstr( err, "Built with MPI" ) == NULL )
 	{
 		cr_skip( "%s was built without MPI (no Open MPI development files)", sere_test_bin() );
@@ -400,9 +373,8 @@ Test( litter, same_scene_on_one_two_and_three_ranks )
 	}
 	char plain[64], path[160], other[160];
 	make_dir( plain, sizeof( plain ), "plain" );
-	snprintf( command, sizeof( command ), "%s litter --leaves 5 --seed 6 --points 400 --frames 20 --out %s",
-			  sere_test_bin(), plain );
-	cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%s", err );
+	snprintf( command, sizeof( command ), "litter --leaves 5 --seed 6 --points 400 --frames 20 --out %s", plain );
+	cr_assert_eq( sere_test_run( command, err, sizeof( err ) ), 0, "%s", err );
 	snprintf( path, sizeof( path ), "%s/litter.ply", plain );
 	for ( int ranks = 1; ranks <= 3; ++ranks )
 	{
@@ -410,9 +382,9 @@ Test( litter, same_scene_on_one_two_and_three_ranks )
 		make_dir( dir, sizeof( dir ), "mpi" );
 		snprintf( command, sizeof( command ),
 				  "mpirun --allow-run-as-root --oversubscribe -np %d %s litter --leaves 5 --seed 6 --points 400 "
-				  "--frames 20 --threads 1 --out %s",
+				  "--frames 20 --threads 1 --out %s 2>&1 >/dev/null",
 				  ranks, sere_test_bin(), dir );
-		cr_assert_eq( shell( command, err, sizeof( err ) ), 0, "%d ranks: %s", ranks, err );
+		cr_assert_eq( sere_test_shell( command, err, sizeof( err ) ), 0, "%d ranks: %s", ranks, err );
 		snprintf( other, sizeof( other ), "%s/litter.ply", dir );
 		expect_same_file( path, other );
 		/* every rank dried its share: the summary names each rank */
@@ -428,7 +400,7 @@ Test( litter, same_scene_on_one_two_and_three_ranks )
 		}
 		cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 5, "%s", summary );
 		free( summary );
-		remove_tree( dir );
+		cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 	}
-	remove_tree( plain );
+	cr_expect_eq( sere_test_remove_tree( plain ), 0 );
 }

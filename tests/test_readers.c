@@ -15,7 +15,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 
 /* ---- what the readers say ------------------------------------------------------------------- */
 
@@ -45,13 +44,7 @@ static int run_reader( const char* path, char* out, size_t out_size )
 	char command[4200];
 	snprintf( command, sizeof( command ), "%s tests/read_mesh.py '%s' 2>&1",
 			  python != NULL ? python : "/usr/bin/python3", path );
-	out[0] = '\0';
-	FILE* pipe = popen( command, "r" );
-	cr_assert_not_null( pipe, "cannot run %s", command );
-	size_t used = fread( out, 1, out_size - 1, pipe );
-	out[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
+	return sere_test_shell( command, out, out_size );
 }
 
 /* The reader's line for path, which must start with kind ("mesh" or "pvd"); anything else fails
@@ -150,19 +143,6 @@ static void read_ply_header( const char* path, ply_header* header )
 	}
 	fclose( f );
 	cr_assert( ended, "%s: no end_header", path );
-}
-
-/* Runs "BIN ARGS" with stdout in out (a --json line). */
-static int run_stdout( const char* args, char* out, size_t out_size )
-{
-	char command[4096];
-	snprintf( command, sizeof( command ), "%s %s 2>/dev/null", sere_test_bin(), args );
-	FILE* pipe = popen( command, "r" );
-	cr_assert_not_null( pipe, "cannot run %s", command );
-	size_t used = fread( out, 1, out_size - 1, pipe );
-	out[used] = '\0';
-	int status = pclose( pipe );
-	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
 }
 
 /* The whole-number member key of a JSON object sere printed. */
@@ -326,13 +306,6 @@ static void check_series( const char* pvd_path, const char* frames_dir, const ch
 	}
 }
 
-static void remove_tree( const char* dir )
-{
-	char command[1024];
-	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
-	cr_expect_eq( system( command ), 0 );
-}
-
 /* ---- the commands --------------------------------------------------------------------------- */
 
 Test( readers, run_frames_open_in_vtk )
@@ -343,7 +316,7 @@ Test( readers, run_frames_open_in_vtk )
 	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 300 --frames 3 --out %s", dir );
 	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
 	/* the triangle layer's point count is the model's (summary.json counts both layers) */
-	cr_assert_eq( run_stdout( "model data/leaves/wisteria.leaf --points 300 --json", text, sizeof( text ) ), 0 );
+	cr_assert_eq( sere_test_stdout( "model data/leaves/wisteria.leaf --points 300 --json", text, sizeof( text ) ), 0 );
 	int points = json_int( text, "triangle_particles" ), particles = json_int( text, "particles" );
 	char path[4200];
 	snprintf( path, sizeof( path ), "%s/summary.json", dir );
@@ -361,7 +334,7 @@ Test( readers, run_frames_open_in_vtk )
 	snprintf( frames, sizeof( frames ), "%s/frames", dir );
 	/* frames 0 to 3: with fewer than 24 frames every one is written */
 	check_series( path, frames, "frames/", 4, points, triangles, arrays, 4 );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
 Test( readers, wilt_frames_open_in_vtk )
@@ -370,7 +343,7 @@ Test( readers, wilt_frames_open_in_vtk )
 	cr_assert_not_null( mkdtemp( dir ) );
 	char args[1024], json[8192];
 	snprintf( args, sizeof( args ), "wilt --frames 3 --format ply,vtp --json --out %s", dir );
-	cr_assert_eq( run_stdout( args, json, sizeof( json ) ), 0, "sere %s failed", args );
+	cr_assert_eq( sere_test_stdout( args, json, sizeof( json ) ), 0, "sere %s failed", args );
 	int points = json_int( json, "vertices" ), triangles = json_int( json, "triangles" );
 	const expected_array arrays[] = {
 		{ "u", 0.0, 1.0, false },
@@ -391,5 +364,5 @@ Test( readers, wilt_frames_open_in_vtk )
 	cr_expect( uv->tuples == points && uv->components == 2 && uv->nonfinite == 0 && uv->min >= 0.0 && uv->max <= 1.0,
 			   "%s: texture coordinates %d x %d, %d not finite, in [%g, %g]", path, uv->tuples, uv->components,
 			   uv->nonfinite, uv->min, uv->max );
-	remove_tree( dir );
+	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }

@@ -216,28 +216,28 @@ Test( seasonleaf, bad_input_is_named )
 {
 	sere_season_leaf_options o = sere_season_leaf_options_default();
 	o.levels = 1;
+	/* one bad key point file or mask each, the rest of the options left as o has them */
+	static const struct
+	{
+		const char *keys, *mask, *phrase;
+	} bad_files[] = {
+		{ "tests/data/bad/nope.keys", NULL, "tests/data/bad/nope.keys: cannot open" },
+		{ "tests/data/bad/point_outside.keys", NULL,
+		  "point_outside.keys:4: point (600, 10) outside the 512 x 512 image" },
+		{ "tests/data/bad/no_image.keys", NULL, "no_image.keys:2: 'image W H' must come before the points" },
+		{ "tests/data/bad/two_points.keys", NULL, "two_points.keys: 2 key points; a leaf needs at least 3" },
+		{ NULL, "tests/data/bad/small_mask.pgm", "the mask is 4 x 4 pixels but the key points' image is 512 x 512" },
+		{ NULL, "tests/data/bad/truncated_mask.pgm", "truncated" },
+		{ NULL, "tests/data/bad/two_points.keys", "not a binary PGM" },
+	};
+	for ( size_t k = 0; k < sizeof( bad_files ) / sizeof( bad_files[0] ); ++k )
+	{
+		sere_season_leaf_options b = o;
+		b.keys_path = bad_files[k].keys != NULL ? bad_files[k].keys : o.keys_path;
+		b.mask_path = bad_files[k].mask != NULL ? bad_files[k].mask : o.mask_path;
+		expect_leaf_error( b, bad_files[k].phrase );
+	}
 	sere_season_leaf_options b = o;
-	b.keys_path = "tests/data/bad/nope.keys";
-	expect_leaf_error( b, "tests/data/bad/nope.keys: cannot open" );
-	b = o;
-	b.keys_path = "tests/data/bad/point_outside.keys";
-	expect_leaf_error( b, "point_outside.keys:4: point (600, 10) outside the 512 x 512 image" );
-	b = o;
-	b.keys_path = "tests/data/bad/no_image.keys";
-	expect_leaf_error( b, "no_image.keys:2: 'image W H' must come before the points" );
-	b = o;
-	b.keys_path = "tests/data/bad/two_points.keys";
-	expect_leaf_error( b, "two_points.keys: 2 key points; a leaf needs at least 3" );
-	b = o;
-	b.mask_path = "tests/data/bad/small_mask.pgm";
-	expect_leaf_error( b, "the mask is 4 x 4 pixels but the key points' image is 512 x 512" );
-	b = o;
-	b.mask_path = "tests/data/bad/truncated_mask.pgm";
-	expect_leaf_error( b, "truncated" );
-	b = o;
-	b.mask_path = "tests/data/bad/two_points.keys";
-	expect_leaf_error( b, "not a binary PGM" );
-	b = o;
 	b.levels = 0;
 	expect_leaf_error( b, "deformation levels: 0 is outside [1, 64]" );
 	b = o;

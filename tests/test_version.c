@@ -9,7 +9,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 
 /* The first line of VERSION, without its newline. */
 static void read_version_file( char* version, size_t size )
@@ -54,14 +53,9 @@ Test( version, simd_path_matches_the_compiler_flags )
 
 Test( version, command_prints_version_commit_and_simd_path )
 {
-	char command[1024], out[4096];
-	snprintf( command, sizeof( command ), "%s --version", sere_test_bin() );
-	FILE* pipe = popen( command, "r" );
-	cr_assert_not_null( pipe );
-	size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
-	out[used] = '\0';
-	int status = pclose( pipe );
-	cr_assert( WIFEXITED( status ) && WEXITSTATUS( status ) == 0, "%s exited with %d", command, status );
+	char out[4096];
+	int status = sere_test_stdout( "--version", out, sizeof( out ) );
+	cr_assert_eq( status, 0, "sere --version exited with %d", status );
 
 	char version[64], line[128];
 	read_version_file( version, sizeof( version ) );
@@ -74,13 +68,8 @@ Test( version, command_prints_version_commit_and_simd_path )
 
 Test( version, help_documents_version_and_sere_data )
 {
-	char command[1024], out[8192];
-	snprintf( command, sizeof( command ), "%s --help", sere_test_bin() );
-	FILE* pipe = popen( command, "r" );
-	cr_assert_not_null( pipe );
-	size_t used = fread( out, 1, sizeof( out ) - 1, pipe );
-	out[used] = '\0';
-	cr_assert_eq( pclose( pipe ), 0 );
+	char out[8192];
+	cr_assert_eq( sere_test_stdout( "--help", out, sizeof( out ) ), 0 );
 	cr_expect_not_null( strstr( out, "--version" ), "%s", out );
 	cr_expect_not_null( strstr( out, "SERE_DATA" ), "%s", out );
 }

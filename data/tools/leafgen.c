@@ -1097,6 +1097,74 @@ static leaf new_leaf( const char* name, double margin, double gap )
 	return l;
 }
 
+/* The lobe and its mirror image across the midrib (heading and bend negated), for palmate
+ * blades symmetric about the midrib. */
+static void add_palm_pair( blade* b, double angle, double length, double neck, double width, double peak, double taper,
+						   double tip, double bend, double swell )
+{
+	for ( int side = 1; side >= -1; side -= 2 )
+	{
+		add_lobe( b, palm( b, side * angle, length, neck, width, peak, taper, tip, side * bend, swell ) );
+	}
+}
+
+/* A primary up every lobe and third-order secondaries on each: `count` on the first three
+ * lobes (the middle one and its neighbours), `count_basal` on the others. */
+static void lobe_veins( leaf* l, const blade* b, int count, int count_basal, double lo, double hi, double angle,
+						double final, double reach )
+{
+	int primary[MAX_LOBES];
+	primaries( l, b, primary, 0.008 );
+	for ( int i = 0; i < b->lobe_count; ++i )
+	{
+		if ( primary[i] >= 0 )
+		{
+			secondaries( l, primary[i], 3, i < 3 ? count : count_basal, lo, hi, angle, final, reach, 0 );
+		}
+	}
+}
+
+/* A five-lobed palmate blade (plane, cucumber): the middle lobe along the midrib and two
+ * mirrored pairs from the junction, blended at a heart-shaped sinus, serrate all round, with a
+ * primary and its secondaries up every lobe. */
+typedef struct palmate
+{
+	const char* name;
+	double disc, sinus_half, disc_teeth, teeth_from; /* of the blade */
+	double lobes[3][9]; /* palm's arguments from the heading on: the middle lobe, then each pair */
+	int outline;		/* points on the outline */
+	double teeth[4];	/* serrate's wavelength, depth, duty and fine */
+	int count, count_basal;
+	double veins[5]; /* lobe_veins' lo, hi, angle, final and reach */
+	int table_n, table_b;
+} palmate;
+
+static void palmate_leaf( const char* folder, const palmate* p )
+{
+	static blade b;
+	b = ( blade ){ .junction = v2( 0.0, 0.0 ),
+				   .disc = p->disc,
+				   .blend = 0.1,
+				   .sinus = 0.1,
+				   .sinus_half = p->sinus_half,
+				   .cut = -INFINITY,
+				   .disc_teeth = p->disc_teeth,
+				   .teeth_from = p->teeth_from };
+	const double* m = p->lobes[0];
+	add_lobe( &b, palm( &b, m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8] ) );
+	for ( int k = 1; k < 3; ++k )
+	{
+		const double* q = p->lobes[k];
+		add_palm_pair( &b, q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8] );
+	}
+	leaf l = new_leaf( p->name, 0.02, 0.015 );
+	make_outline( &l, blade_field, &b, b.junction, p->outline );
+	serrate( &l, blade_teeth, &b, p->teeth[0], p->teeth[1], p->teeth[2], p->teeth[3] );
+	const double* v = p->veins;
+	lobe_veins( &l, &b, p->count, p->count_basal, v[0], v[1], v[2], v[3], v[4] );
+	write_leaf( &l, folder, p->table_n, p->table_b );
+}
+
 /* Japanese maple (Acer palmatum), Fig. 17 rows 1-2: seven deep, narrow, lanceolate lobes with
  * long points, doubly serrate, the basal pair small and pointing down and out; the primaries
  * radiate from the top of the petiole. */
@@ -1117,15 +1185,7 @@ static void maple( const char* folder )
 	leaf l = new_leaf( "maple", 0.02, 0.012 );
 	make_outline( &l, blade_field, &b, b.junction, 3000 );
 	serrate( &l, blade_teeth, &b, 0.042, 0.022, 1.0, 0.005 );
-	int primary[MAX_LOBES];
-	primaries( &l, &b, primary, 0.008 );
-	for ( int i = 0; i < b.lobe_count; ++i )
-	{
-		if ( primary[i] >= 0 )
-		{
-			secondaries( &l, primary[i], 3, 4, 0.3, 0.8, 52.0, 20.0, 0.12, 0 );
-		}
-	}
+	lobe_veins( &l, &b, 4, 4, 0.3, 0.8, 52.0, 20.0, 0.12 );
 	write_leaf( &l, folder, 4680, 841 );
 }
 
@@ -1134,37 +1194,22 @@ static void maple( const char* folder )
  * and a small basal pair. */
 static void plane( const char* folder )
 {
-	static blade b;
-	b = ( blade ){ .junction = v2( 0.0, 0.0 ),
-				   .disc = 0.37,
-				   .blend = 0.1,
-				   .sinus = 0.1,
-				   .sinus_half = 62.0,
-				   .cut = -INFINITY,
-				   .disc_teeth = 0.6,
-				   .teeth_from = 0.1 };
-	add_lobe( &b, palm( &b, 0.0, 1.0, 0.3, 0.37, 0.12, 1.3, 0.0, 0.0, 1.0 ) );
-	for ( int side = 1; side >= -1; side -= 2 )
-	{
-		add_lobe( &b, palm( &b, side * 54.0, 0.95, 0.3, 0.35, 0.12, 1.3, 0.0, side * 6.0, 1.0 ) );
-	}
-	for ( int side = 1; side >= -1; side -= 2 )
-	{
-		add_lobe( &b, palm( &b, side * 112.0, 0.55, 0.22, 0.25, 0.12, 1.3, 0.0, side * 10.0, 1.0 ) );
-	}
-	leaf l = new_leaf( "plane", 0.02, 0.015 );
-	make_outline( &l, blade_field, &b, b.junction, 2000 );
-	serrate( &l, blade_teeth, &b, 0.1, 0.022, 0.4, 0.0 );
-	int primary[MAX_LOBES];
-	primaries( &l, &b, primary, 0.008 );
-	for ( int i = 0; i < b.lobe_count; ++i )
-	{
-		if ( primary[i] >= 0 )
-		{
-			secondaries( &l, primary[i], 3, i < 3 ? 5 : 3, 0.2, 0.85, 50.0, 15.0, 0.3, 0 );
-		}
-	}
-	write_leaf( &l, folder, 5144, 361 );
+	static const palmate plane = { .name = "plane",
+								   .disc = 0.37,
+								   .sinus_half = 62.0,
+								   .disc_teeth = 0.6,
+								   .teeth_from = 0.1,
+								   .lobes = { { 0.0, 1.0, 0.3, 0.37, 0.12, 1.3, 0.0, 0.0, 1.0 },
+											  { 54.0, 0.95, 0.3, 0.35, 0.12, 1.3, 0.0, 6.0, 1.0 },
+											  { 112.0, 0.55, 0.22, 0.25, 0.12, 1.3, 0.0, 10.0, 1.0 } },
+								   .outline = 2000,
+								   .teeth = { 0.1, 0.022, 0.4, 0.0 },
+								   .count = 5,
+								   .count_basal = 3,
+								   .veins = { 0.2, 0.85, 50.0, 15.0, 0.3 },
+								   .table_n = 5144,
+								   .table_b = 361 };
+	palmate_leaf( folder, &plane );
 }
 
 /* A single-lobed blade along +y from the junction at the origin. */
@@ -1251,37 +1296,22 @@ static void hibiscus( const char* folder )
  * deep heart-shaped sinus at the petiole and small teeth all round; five primaries. */
 static void cucumber( const char* folder )
 {
-	static blade b;
-	b = ( blade ){ .junction = v2( 0.0, 0.0 ),
-				   .disc = 0.44,
-				   .blend = 0.1,
-				   .sinus = 0.1,
-				   .sinus_half = 12.0,
-				   .cut = -INFINITY,
-				   .disc_teeth = 1.0,
-				   .teeth_from = 0.0 };
-	add_lobe( &b, palm( &b, 0.0, 1.0, 0.3, 0.42, 0.2, 1.25, 0.0, 0.0, 1.0 ) );
-	for ( int side = 1; side >= -1; side -= 2 )
-	{
-		add_lobe( &b, palm( &b, side * 62.0, 0.9, 0.3, 0.4, 0.2, 1.25, 0.0, side * 6.0, 1.0 ) );
-	}
-	for ( int side = 1; side >= -1; side -= 2 )
-	{
-		add_lobe( &b, palm( &b, side * 126.0, 0.55, 0.26, 0.3, 0.2, 1.1, 0.0, side * 12.0, 1.0 ) );
-	}
-	leaf l = new_leaf( "cucumber", 0.02, 0.015 );
-	make_outline( &l, blade_field, &b, b.junction, 2400 );
-	serrate( &l, blade_teeth, &b, 0.04, 0.01, 0.6, 0.0 );
-	int primary[MAX_LOBES];
-	primaries( &l, &b, primary, 0.008 );
-	for ( int i = 0; i < b.lobe_count; ++i )
-	{
-		if ( primary[i] >= 0 )
-		{
-			secondaries( &l, primary[i], 3, i < 3 ? 4 : 3, 0.2, 0.8, 52.0, 18.0, 0.3, 0 );
-		}
-	}
-	write_leaf( &l, folder, 0, 0 );
+	static const palmate cucumber = { .name = "cucumber",
+									  .disc = 0.44,
+									  .sinus_half = 12.0,
+									  .disc_teeth = 1.0,
+									  .teeth_from = 0.0,
+									  .lobes = { { 0.0, 1.0, 0.3, 0.42, 0.2, 1.25, 0.0, 0.0, 1.0 },
+												 { 62.0, 0.9, 0.3, 0.4, 0.2, 1.25, 0.0, 6.0, 1.0 },
+												 { 126.0, 0.55, 0.26, 0.3, 0.2, 1.1, 0.0, 12.0, 1.0 } },
+									  .outline = 2400,
+									  .teeth = { 0.04, 0.01, 0.6, 0.0 },
+									  .count = 4,
+									  .count_basal = 3,
+									  .veins = { 0.2, 0.8, 52.0, 18.0, 0.3 },
+									  .table_n = 0,
+									  .table_b = 0 };
+	palmate_leaf( folder, &cucumber );
 }
 
 /* A lobule: a lobe starting at fraction `at` along lobe parent's axis. */
