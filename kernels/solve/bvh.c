@@ -2,15 +2,12 @@
 #define _GNU_SOURCE
 
 #include "solve/bvh.h"
+#include "core/internal/simd.h"
 #include "core/internal/team.h"
 
 #include <math.h>
 #include <stdatomic.h>
 #include <string.h>
-
-#if defined( __AVX__ )
-#include <immintrin.h>
-#endif
 
 /* Binned SAH down to this binary depth, object-median splits below it: the tree is then at
  * most 32 + 31 levels deep whatever the input, which bounds the traversal stack. */
@@ -378,96 +375,33 @@ static void build_node( sere_bvh* bvh, build_item item, int32_t* stack_size )
 	}
 }
 
-#if defined( __AVX__ )
-
-static inline float lanes_min( const float* v )
-{
-	__m256 a = _mm256_loadu_ps( v );
-	__m128 m = _mm_min_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
-	m = _mm_min_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_min_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	return _mm_cvtss_f32( m );
-}
-
-static inline float lanes_max( const float* v )
-{
-	__m256 a = _mm256_loadu_ps( v );
-	__m128 m = _mm_max_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
-	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	return _mm_cvtss_f32( m );
-}
-
+/* A query box, each face splat across the eight lanes of a node. */
 typedef struct query_box
 {
-	__m256 lx, ly, lz, hx, hy, hz;
+	sere_v8 lx, ly, lz, hx, hy, hz;
 } query_box;
 
 static inline query_box query_make( const float lo[3], const float hi[3] )
 {
-	query_box q = { _mm256_set1_ps( lo[0] ), _mm256_set1_ps( lo[1] ), _mm256_set1_ps( lo[2] ),
-					_mm256_set1_ps( hi[0] ), _mm256_set1_ps( hi[1] ), _mm256_set1_ps( hi[2] ) };
+	query_box q = { sere_v8_splat( lo[0] ), sere_v8_splat( lo[1] ), sere_v8_splat( lo[2] ),
+					sere_v8_splat( hi[0] ), sere_v8_splat( hi[1] ), sere_v8_splat( hi[2] ) };
 	return q;
+}
+
+/* Lanes where [min, max] overlaps [lo, hi] on one axis. */
+static inline sere_m8 axis_overlap( sere_v8 min, sere_v8 max, sere_v8 lo, sere_v8 hi )
+{
+	return sere_m8_and( sere_v8_le( min, hi ), sere_v8_ge( max, lo ) );
 }
 
 /* Bit k set when lane k's box overlaps the query box; empty lanes (+inf, −inf) never do. */
 static inline uint32_t overlap_mask( const sere_bvh_node* node, const query_box* q )
 {
-	__m256 x = _mm256_and_ps( _mm256_cmp_ps( _mm256_loadu_ps( node->min_x ), q->hx, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_loadu_ps( node->max_x ), q->lx, _CMP_GE_OQ ) );
-	__m256 y = _mm256_and_ps( _mm256_cmp_ps( _mm256_loadu_ps( node->min_y ), q->hy, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_loadu_ps( node->max_y ), q->ly, _CMP_GE_OQ ) );
-	__m256 z = _mm256_and_ps( _mm256_cmp_ps( _mm256_loadu_ps( node->min_z ), q->hz, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_loadu_ps( node->max_z ), q->lz, _CMP_GE_OQ ) );
-	return (uint32_t) _mm256_movemask_ps( _mm256_and_ps( x, _mm256_and_ps( y, z ) ) );
+	sere_m8 x = axis_overlap( sere_v8_load( node->min_x ), sere_v8_load( node->max_x ), q->lx, q->hx );
+	sere_m8 y = axis_overlap( sere_v8_load( node->min_y ), sere_v8_load( node->max_y ), q->ly, q->hy );
+	sere_m8 z = axis_overlap( sere_v8_load( node->min_z ), sere_v8_load( node->max_z ), q->lz, q->hz );
+	return sere_m8_bits( sere_m8_and( x, sere_m8_and( y, z ) ) );
 }
-
-#else
-
-static inline float lanes_min( const float* v )
-{
-	float m = v[0];
-	for ( int k = 1; k < SERE_BVH_WIDTH; ++k )
-	{
-		m = v[k] < m ? v[k] : m;
-	}
-	return m;
-}
-
-static inline float lanes_max( const float* v )
-{
-	float m = v[0];
-	for ( int k = 1; k < SERE_BVH_WIDTH; ++k )
-	{
-		m = v[k] > m ? v[k] : m;
-	}
-	return m;
-}
-
-typedef struct query_box
-{
-	float lo[3], hi[3];
-} query_box;
-
-static inline query_box query_make( const float lo[3], const float hi[3] )
-{
-	query_box q = { { lo[0], lo[1], lo[2] }, { hi[0], hi[1], hi[2] } };
-	return q;
-}
-
-static inline uint32_t overlap_mask( const sere_bvh_node* node, const query_box* q )
-{
-	uint32_t mask = 0;
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		bool hit = node->min_x[k] <= q->hi[0] && node->max_x[k] >= q->lo[0] && node->min_y[k] <= q->hi[1] &&
-				   node->max_y[k] >= q->lo[1] && node->min_z[k] <= q->hi[2] && node->max_z[k] >= q->lo[2];
-		mask |= (uint32_t) hit << k;
-	}
-	return mask;
-}
-
-#endif
 
 /* Recomputes the node's lane boxes from its children (already refit: they are refit first) or
  * from its triangles' vertices, and the area of its own box, kept in registers as the lanes
@@ -483,8 +417,10 @@ static void refit_node( sere_bvh* bvh, int32_t n, const float* x, const float* y
 		if ( c >= 0 )
 		{
 			const sere_bvh_node* child = bvh->nodes + c;
-			lx = lanes_min( child->min_x ), ly = lanes_min( child->min_y ), lz = lanes_min( child->min_z );
-			hx = lanes_max( child->max_x ), hy = lanes_max( child->max_y ), hz = lanes_max( child->max_z );
+			lx = sere_v8_min_all( child->min_x ), ly = sere_v8_min_all( child->min_y ),
+			lz = sere_v8_min_all( child->min_z );
+			hx = sere_v8_max_all( child->max_x ), hy = sere_v8_max_all( child->max_y ),
+			hz = sere_v8_max_all( child->max_z );
 		}
 		else if ( c != SERE_BVH_EMPTY )
 		{
@@ -868,58 +804,24 @@ void sere_bvh_query_box( const sere_bvh* bvh, const float lo[3], const float hi[
 	}
 }
 
-#if defined( __AVX__ )
-
-/* The group's lane boxes, one register per face. */
+/* The group's lane boxes, one group of eight per face. */
 typedef query_box group_box;
 
 /* Bit k set when the box [lo, hi] overlaps group lane k (ignored lanes hold empty boxes). */
 static inline uint32_t group_mask( const group_box* lanes, float lx, float ly, float lz, float hx, float hy, float hz )
 {
-	__m256 x = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( lx ), lanes->hx, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_set1_ps( hx ), lanes->lx, _CMP_GE_OQ ) );
-	__m256 y = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( ly ), lanes->hy, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_set1_ps( hy ), lanes->ly, _CMP_GE_OQ ) );
-	__m256 z = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( lz ), lanes->hz, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_set1_ps( hz ), lanes->lz, _CMP_GE_OQ ) );
-	return (uint32_t) _mm256_movemask_ps( _mm256_and_ps( x, _mm256_and_ps( y, z ) ) );
+	sere_m8 x = axis_overlap( sere_v8_splat( lx ), sere_v8_splat( hx ), lanes->lx, lanes->hx );
+	sere_m8 y = axis_overlap( sere_v8_splat( ly ), sere_v8_splat( hy ), lanes->ly, lanes->hy );
+	sere_m8 z = axis_overlap( sere_v8_splat( lz ), sere_v8_splat( hz ), lanes->lz, lanes->hz );
+	return sere_m8_bits( sere_m8_and( x, sere_m8_and( y, z ) ) );
 }
 
 static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SERE_BVH_WIDTH] )
 {
-	group_box q = { _mm256_loadu_ps( lo[0] ), _mm256_loadu_ps( lo[1] ), _mm256_loadu_ps( lo[2] ),
-					_mm256_loadu_ps( hi[0] ), _mm256_loadu_ps( hi[1] ), _mm256_loadu_ps( hi[2] ) };
+	group_box q = { sere_v8_load( lo[0] ), sere_v8_load( lo[1] ), sere_v8_load( lo[2] ),
+					sere_v8_load( hi[0] ), sere_v8_load( hi[1] ), sere_v8_load( hi[2] ) };
 	return q;
 }
-
-#else
-
-typedef struct group_box
-{
-	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
-} group_box;
-
-static inline uint32_t group_mask( const group_box* lanes, float lx, float ly, float lz, float hx, float hy, float hz )
-{
-	uint32_t mask = 0;
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		bool hit = lx <= lanes->hi[0][k] && hx >= lanes->lo[0][k] && ly <= lanes->hi[1][k] && hy >= lanes->lo[1][k] &&
-				   lz <= lanes->hi[2][k] && hz >= lanes->lo[2][k];
-		mask |= (uint32_t) hit << k;
-	}
-	return mask;
-}
-
-static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SERE_BVH_WIDTH] )
-{
-	group_box q;
-	memcpy( q.lo, lo, sizeof( q.lo ) );
-	memcpy( q.hi, hi, sizeof( q.hi ) );
-	return q;
-}
-
-#endif
 
 /* Bit k set when child k of the node is negative: a triangle, or SERE_BVH_EMPTY, whose empty
  * box no query overlaps. */

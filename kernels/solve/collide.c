@@ -2,15 +2,12 @@
 #define _GNU_SOURCE
 
 #include "solve/collide.h"
+#include "core/internal/simd.h"
 #include "core/internal/team.h"
 
 #include <math.h>
 #include <omp.h>
 #include <string.h>
-
-#if defined( __AVX__ )
-#include <immintrin.h>
-#endif
 
 /* Vertices are queried in fixed blocks, each thread taking one contiguous run of them: it then
  * queries the part of the mesh whose BVH subtrees it refit (sere_bvh orders its parallel refit by
@@ -408,68 +405,14 @@ static inline void triangle_frame( const float* x, const float* y, const float* 
 	n[0] *= inv, n[1] *= inv, n[2] *= inv;
 }
 
-/* Points gathered for vector tests, GATHER_LANES at a time. */
+/* Points gathered for vector tests, GATHER_LANES at a time: sere_v8_gather_records writes the
+ * points index[0 .. GATHER_LANES) of the interleaved position array into consecutive floats of
+ * x, y and z (only loads, shuffles and stores: the values a scalar copy would write). A point is
+ * one 16-byte load and eight are transposed in registers, where a scalar copy spends a load and
+ * a store per coordinate; the vectorizer's hardware gathers (vgatherdps, three per point) from
+ * the x, y, z arrays measured slower still: on the dried maple the response took 2.1 ms with
+ * them, 1.55 ms with this (one thread). sere_v8_scatter_records is its inverse. */
 #define GATHER_LANES 8
-
-/* Writes the points index[0 .. GATHER_LANES) of the interleaved array position into GATHER_LANES
- * consecutive floats of x, y and z. Only loads, shuffles and stores: the values are the ones a
- * scalar copy would write. With AVX a point is one 16-byte load and eight are transposed in
- * registers, where a scalar copy spends a load and a store per coordinate; the vectorizer's
- * hardware gathers (vgatherdps, three per point) from the x, y, z arrays measured slower still:
- * on the dried maple the response took 2.1 ms with them, 1.55 ms with this (one thread). */
-static inline void gather_points( const float* position, const int32_t index[GATHER_LANES], float* x, float* y,
-								  float* z )
-{
-#if defined( __AVX__ )
-	const float* p[GATHER_LANES];
-	for ( int l = 0; l < GATHER_LANES; ++l )
-	{
-		p[l] = position + 4 * (size_t) index[l];
-	}
-	/* rows of two points: lanes 0..3 from point l, lanes 4..7 from point l + 4 */
-	__m256 r0 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_loadu_ps( p[0] ) ), _mm_loadu_ps( p[4] ), 1 );
-	__m256 r1 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_loadu_ps( p[1] ) ), _mm_loadu_ps( p[5] ), 1 );
-	__m256 r2 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_loadu_ps( p[2] ) ), _mm_loadu_ps( p[6] ), 1 );
-	__m256 r3 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_loadu_ps( p[3] ) ), _mm_loadu_ps( p[7] ), 1 );
-	__m256 xy01 = _mm256_unpacklo_ps( r0, r1 ), zw01 = _mm256_unpackhi_ps( r0, r1 );
-	__m256 xy23 = _mm256_unpacklo_ps( r2, r3 ), zw23 = _mm256_unpackhi_ps( r2, r3 );
-	_mm256_storeu_ps( x, _mm256_shuffle_ps( xy01, xy23, _MM_SHUFFLE( 1, 0, 1, 0 ) ) );
-	_mm256_storeu_ps( y, _mm256_shuffle_ps( xy01, xy23, _MM_SHUFFLE( 3, 2, 3, 2 ) ) );
-	_mm256_storeu_ps( z, _mm256_shuffle_ps( zw01, zw23, _MM_SHUFFLE( 1, 0, 1, 0 ) ) );
-#else
-	for ( int l = 0; l < GATHER_LANES; ++l )
-	{
-		const float* p = position + 4 * (size_t) index[l];
-		x[l] = p[0], y[l] = p[1], z[l] = p[2];
-	}
-#endif
-}
-
-/* The inverse of gather_points for GATHER_LANES records of four: out[4 l + r] = row r, lane l
- * (rows x, y, z, w), by the same transposition, where a vectorized loop would extract and store
- * every float on its own. */
-static inline void scatter_records( const float* x, const float* y, const float* z, const float* w, float* out )
-{
-#if defined( __AVX__ )
-	__m256 rx = _mm256_loadu_ps( x ), ry = _mm256_loadu_ps( y ), rz = _mm256_loadu_ps( z ), rw = _mm256_loadu_ps( w );
-	__m256 xy_lo = _mm256_unpacklo_ps( rx, ry ), xy_hi = _mm256_unpackhi_ps( rx, ry );
-	__m256 zw_lo = _mm256_unpacklo_ps( rz, rw ), zw_hi = _mm256_unpackhi_ps( rz, rw );
-	/* records 0, 4 | 1, 5 | 2, 6 | 3, 7 */
-	__m256 r04 = _mm256_shuffle_ps( xy_lo, zw_lo, _MM_SHUFFLE( 1, 0, 1, 0 ) );
-	__m256 r15 = _mm256_shuffle_ps( xy_lo, zw_lo, _MM_SHUFFLE( 3, 2, 3, 2 ) );
-	__m256 r26 = _mm256_shuffle_ps( xy_hi, zw_hi, _MM_SHUFFLE( 1, 0, 1, 0 ) );
-	__m256 r37 = _mm256_shuffle_ps( xy_hi, zw_hi, _MM_SHUFFLE( 3, 2, 3, 2 ) );
-	_mm256_storeu_ps( out, _mm256_permute2f128_ps( r04, r15, 0x20 ) );
-	_mm256_storeu_ps( out + 8, _mm256_permute2f128_ps( r26, r37, 0x20 ) );
-	_mm256_storeu_ps( out + 16, _mm256_permute2f128_ps( r04, r15, 0x31 ) );
-	_mm256_storeu_ps( out + 24, _mm256_permute2f128_ps( r26, r37, 0x31 ) );
-#else
-	for ( int l = 0; l < GATHER_LANES; ++l )
-	{
-		out[4 * l] = x[l], out[4 * l + 1] = y[l], out[4 * l + 2] = z[l], out[4 * l + 3] = w[l];
-	}
-#endif
-}
 
 /* Thread tid's detection buffer (see thread_contacts). */
 static sere_contact* thread_buffer( const sere_collide* c, int tid )
@@ -1505,50 +1448,23 @@ static void detect_edge_flush( detect_context* c )
 static inline uint32_t table_hits( const detect_context* c, int32_t from, const float lo[3], const float hi[3],
 								   const float p[3], const float q[3], int32_t f0, int32_t f1 )
 {
-#if defined( __AVX2__ )
-	__m256 hit = _mm256_castsi256_ps( _mm256_set1_epi32( -1 ) );
-	__m256 sp = _mm256_setzero_ps(), sq = _mm256_setzero_ps();
+	sere_m8 hit = sere_m8_all();
+	sere_v8 sp = sere_v8_zero(), sq = sere_v8_zero();
 	for ( int a = 0; a < 3; ++a )
 	{
-		hit = _mm256_and_ps(
-			hit, _mm256_cmp_ps( _mm256_set1_ps( lo[a] ), _mm256_loadu_ps( c->table_hi[a] + from ), _CMP_LE_OQ ) );
-		hit = _mm256_and_ps(
-			hit, _mm256_cmp_ps( _mm256_set1_ps( hi[a] ), _mm256_loadu_ps( c->table_lo[a] + from ), _CMP_GE_OQ ) );
-		__m256 at = _mm256_loadu_ps( c->table_at[a] + from ), across = _mm256_loadu_ps( c->table_across[a] + from );
-		sp = _mm256_add_ps( sp, _mm256_mul_ps( _mm256_sub_ps( _mm256_set1_ps( p[a] ), at ), across ) );
-		sq = _mm256_add_ps( sq, _mm256_mul_ps( _mm256_sub_ps( _mm256_set1_ps( q[a] ), at ), across ) );
+		hit = sere_m8_and( hit, sere_v8_le( sere_v8_splat( lo[a] ), sere_v8_load( c->table_hi[a] + from ) ) );
+		hit = sere_m8_and( hit, sere_v8_ge( sere_v8_splat( hi[a] ), sere_v8_load( c->table_lo[a] + from ) ) );
+		sere_v8 at = sere_v8_load( c->table_at[a] + from ), across = sere_v8_load( c->table_across[a] + from );
+		sp = sere_v8_add( sp, sere_v8_mul( sere_v8_sub( sere_v8_splat( p[a] ), at ), across ) );
+		sq = sere_v8_add( sq, sere_v8_mul( sere_v8_sub( sere_v8_splat( q[a] ), at ), across ) );
 	}
-	__m256 margin = _mm256_loadu_ps( c->table_margin + from );
-	__m256 low = _mm256_sub_ps( _mm256_setzero_ps(), margin );
-	__m256 beyond =
-		_mm256_or_ps( _mm256_and_ps( _mm256_cmp_ps( sp, margin, _CMP_GT_OQ ), _mm256_cmp_ps( sq, margin, _CMP_GT_OQ ) ),
-					  _mm256_and_ps( _mm256_cmp_ps( sp, low, _CMP_LT_OQ ), _mm256_cmp_ps( sq, low, _CMP_LT_OQ ) ) );
-	__m256i lower = _mm256_loadu_si256( (const __m256i*) ( c->table_lower + from ) );
-	__m256i upper = _mm256_loadu_si256( (const __m256i*) ( c->table_upper + from ) );
-	__m256i skip = _mm256_or_si256( _mm256_cmpeq_epi32( upper, _mm256_set1_epi32( f0 ) ),
-									_mm256_cmpeq_epi32( upper, _mm256_set1_epi32( f1 ) ) );
-	skip = _mm256_or_si256( skip, _mm256_cmpgt_epi32( lower, _mm256_set1_epi32( f0 - 1 ) ) );
-	hit = _mm256_andnot_ps( _mm256_or_ps( beyond, _mm256_castsi256_ps( skip ) ), hit );
-	return (uint32_t) _mm256_movemask_ps( hit );
-#else
-	uint32_t mask = 0;
-	for ( int l = 0; l < 8; ++l )
-	{
-		int32_t j = from + l;
-		int hit = ( c->table_lower[j] < f0 ) & ( c->table_upper[j] != f0 ) & ( c->table_upper[j] != f1 );
-		float sp = 0.0f, sq = 0.0f;
-		for ( int a = 0; a < 3; ++a )
-		{
-			hit &= ( lo[a] <= c->table_hi[a][j] ) & ( hi[a] >= c->table_lo[a][j] );
-			sp += ( p[a] - c->table_at[a][j] ) * c->table_across[a][j];
-			sq += ( q[a] - c->table_at[a][j] ) * c->table_across[a][j];
-		}
-		float margin = c->table_margin[j];
-		hit &= !( ( ( sp > margin ) & ( sq > margin ) ) | ( ( sp < -margin ) & ( sq < -margin ) ) );
-		mask |= (uint32_t) hit << l;
-	}
-	return mask;
-#endif
+	sere_v8 margin = sere_v8_load( c->table_margin + from );
+	sere_v8 low = sere_v8_sub( sere_v8_zero(), margin );
+	sere_m8 beyond = sere_m8_or( sere_m8_and( sere_v8_gt( sp, margin ), sere_v8_gt( sq, margin ) ),
+								 sere_m8_and( sere_v8_lt( sp, low ), sere_v8_lt( sq, low ) ) );
+	sere_m8 skip = sere_m8_or( sere_i8_eq( c->table_upper + from, f0 ), sere_i8_eq( c->table_upper + from, f1 ) );
+	skip = sere_m8_or( skip, sere_i8_gt( c->table_lower + from, f0 - 1 ) );
+	return sere_m8_bits( sere_m8_and_not( hit, sere_m8_or( beyond, skip ) ) );
 }
 
 /* Tests the buffered candidate edges f against the rows of the lanes whose box overlaps their
@@ -2182,7 +2098,7 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 }
 
 /* Gathers the four members' points of contacts [begin, begin + count) into rows 3r .. 3r + 2 of
- * point (x, y, z of member r), eight contacts at a time (gather_points). */
+ * point (x, y, z of member r), eight contacts at a time (sere_v8_gather_records). */
 static void gather_members( const sere_collide* c, int32_t begin, int32_t count, float point[12][EVALUATE_BLOCK] )
 {
 	for ( int32_t m = 0; m < count; m += GATHER_LANES )
@@ -2200,7 +2116,7 @@ static void gather_members( const sere_collide* c, int32_t begin, int32_t count,
 				}
 				index = tail;
 			}
-			gather_points( c->position, index, point[3 * r] + m, point[3 * r + 1] + m, point[3 * r + 2] + m );
+			sere_v8_gather_records( c->position, index, point[3 * r] + m, point[3 * r + 1] + m, point[3 * r + 2] + m );
 		}
 	}
 }
@@ -2213,7 +2129,7 @@ static void store_corrections( sere_collide* c, int32_t begin, int32_t count, fl
 	int32_t whole = count - count % GATHER_LANES;
 	for ( int32_t m = 0; m < whole; m += GATHER_LANES )
 	{
-		scatter_records( row[0] + m, row[1] + m, row[2] + m, row[3] + m, corr + 4 * (size_t) m );
+		sere_v8_scatter_records( row[0] + m, row[1] + m, row[2] + m, row[3] + m, corr + 4 * (size_t) m );
 	}
 	for ( int32_t k = whole; k < count; ++k )
 	{
@@ -2325,117 +2241,79 @@ static int32_t evaluate_edges( sere_collide* c, int32_t begin, int32_t end, floa
 	return far;
 }
 
-#if defined( __AVX__ )
-
-/* The coefficient of entry e as a lane vector (coefficient, coefficient, coefficient, 1). */
-static inline __m128 entry_coefficient( const sere_collide* c, int32_t e )
+/* The coefficient of entry e as a group (coefficient, coefficient, coefficient, 1). */
+static inline sere_v4 entry_coefficient( const sere_collide* c, int32_t e )
 {
-	return _mm_blend_ps( _mm_broadcast_ss( c->entry_coef + e ), _mm_set1_ps( 1.0f ), 8 );
+	return sere_v4_xyz( c->entry_coef[e], 1.0f );
+}
+
+/* The correction record of entry e. */
+static inline sere_v4 entry_correction( const sere_collide* c, int32_t e )
+{
+	return sere_v4_load( c->corr + 4 * (size_t) c->entries[e] );
 }
 
 /* Adds the entries [e, end) to sum in order. */
-static inline __m128 gather_sum( const sere_collide* c, int32_t e, int32_t end, __m128 sum )
+static inline sere_v4 gather_sum( const sere_collide* c, int32_t e, int32_t end, sere_v4 sum )
 {
 	for ( ; e < end; ++e )
 	{
-		__m128 corr = _mm_loadu_ps( c->corr + 4 * (size_t) c->entries[e] );
-		sum = _mm_add_ps( sum, _mm_mul_ps( entry_coefficient( c, e ), corr ) );
+		sum = sere_v4_add( sum, sere_v4_mul( entry_coefficient( c, e ), entry_correction( c, e ) ) );
 	}
 	return sum;
 }
 
 /* Moves touched vertex slot j (vertex i) by ω / count times the summed correction. */
-static inline void gather_move( sere_collide* c, int32_t j, __m128 sum, const float* inv_m, float relaxation )
+static inline void gather_move( sere_collide* c, int32_t j, sere_v4 sum, const float* inv_m, float relaxation )
 {
 	int32_t i = c->touched[j];
-	float count = _mm_cvtss_f32( _mm_shuffle_ps( sum, sum, _MM_SHUFFLE( 3, 3, 3, 3 ) ) );
-	if ( count == 0.0f )
+	if ( sere_v4_w( sum ) == 0.0f )
 	{
 		return;
 	}
 	float scale = relaxation * inv_m[i];
 	/* lane 3 scaled by 0: the padding stays 0 */
-	__m128 d = _mm_mul_ps( sum, _mm_set_ps( 0.0f, scale, scale, scale ) );
+	sere_v4 d = sere_v4_mul( sum, sere_v4_xyz( scale, 0.0f ) );
 	float* position = c->position + 4 * (size_t) i;
 	float* acc = c->acc + 4 * (size_t) j;
-	_mm_storeu_ps( position, _mm_add_ps( _mm_loadu_ps( position ), d ) );
-	_mm_storeu_ps( acc, _mm_add_ps( _mm_loadu_ps( acc ), d ) );
+	sere_v4_store( position, sere_v4_add( sere_v4_load( position ), d ) );
+	sere_v4_store( acc, sere_v4_add( sere_v4_load( acc ), d ) );
 }
 
 /* Moves touched vertex slots j and j + 1 (gather_apply for each), their sums side by side in
- * one 256-bit register while both have entries left, then each on its own: every lane sees the
- * products and sums of the scalar form in the same order. A vertex averages 21 entries on the
- * dried maple, and two independent chains of adds keep the adder busy where one waits on the
- * last add. */
+ * one group of eight while both have entries left, then each on its own: every lane sees the
+ * products and sums of the one-vertex form in the same order. A vertex averages 21 entries on
+ * the dried maple, and two independent chains of adds keep the adder busy where one waits on
+ * the last add. */
 static void gather_apply_pair( sere_collide* c, int32_t j, const float* inv_m, float relaxation )
 {
 	int32_t i0 = c->touched[j], i1 = c->touched[j + 1];
 	int32_t e0 = c->entry_offset[i0], end0 = c->entry_offset[i0 + 1];
 	int32_t e1 = c->entry_offset[i1], end1 = c->entry_offset[i1 + 1];
 	int32_t common = end0 - e0 < end1 - e1 ? end0 - e0 : end1 - e1;
-	__m256 sum = _mm256_setzero_ps();
+	sere_v8 sum = sere_v8_zero();
 	for ( int32_t k = 0; k < common; ++k )
 	{
-		__m256 coefficient = _mm256_set_m128( entry_coefficient( c, e1 + k ), entry_coefficient( c, e0 + k ) );
-		__m256 corr =
-			_mm256_insertf128_ps( _mm256_castps128_ps256( _mm_loadu_ps( c->corr + 4 * (size_t) c->entries[e0 + k] ) ),
-								  _mm_loadu_ps( c->corr + 4 * (size_t) c->entries[e1 + k] ), 1 );
-		sum = _mm256_add_ps( sum, _mm256_mul_ps( coefficient, corr ) );
+		sere_v8 coefficient = sere_v8_pair( entry_coefficient( c, e0 + k ), entry_coefficient( c, e1 + k ) );
+		sere_v8 corr = sere_v8_pair( entry_correction( c, e0 + k ), entry_correction( c, e1 + k ) );
+		sum = sere_v8_add( sum, sere_v8_mul( coefficient, corr ) );
 	}
-	__m128 sum0 = gather_sum( c, e0 + common, end0, _mm256_castps256_ps128( sum ) );
-	__m128 sum1 = gather_sum( c, e1 + common, end1, _mm256_extractf128_ps( sum, 1 ) );
+	sere_v4 sum0 = gather_sum( c, e0 + common, end0, sere_v8_low( sum ) );
+	sere_v4 sum1 = gather_sum( c, e1 + common, end1, sere_v8_high( sum ) );
 	gather_move( c, j, sum0, inv_m, relaxation );
 	gather_move( c, j + 1, sum1, inv_m, relaxation );
 }
 
 /* Moves touched vertex slot j by ω times the mean of its pushing contacts' corrections, summed
  * in contact order (a contact that does not push has a zero correction and counts 0). The sums
- * run in the four lanes of one register, (coefficient, coefficient, coefficient, 1) times the
- * contact's (λ n̂, 1): lane by lane the same products and sums, in the same order, as the scalar
- * form. */
+ * run in the four lanes of one group, (coefficient, coefficient, coefficient, 1) times the
+ * contact's (λ n̂, 1). */
 static void gather_apply( sere_collide* c, int32_t j, const float* inv_m, float relaxation )
 {
 	int32_t i = c->touched[j];
-	__m128 sum = gather_sum( c, c->entry_offset[i], c->entry_offset[i + 1], _mm_setzero_ps() );
+	sere_v4 sum = gather_sum( c, c->entry_offset[i], c->entry_offset[i + 1], sere_v4_zero() );
 	gather_move( c, j, sum, inv_m, relaxation );
 }
-
-#else
-
-/* Moves touched vertex slot j by ω times the sum of its contacts' corrections (each already
- * divided by share_pushes), summed in contact order. */
-static void gather_apply( sere_collide* c, int32_t j, const float* inv_m, float relaxation )
-{
-	int32_t i = c->touched[j];
-	float dx = 0.0f, dy = 0.0f, dz = 0.0f, count = 0.0f;
-	for ( int32_t e = c->entry_offset[i]; e < c->entry_offset[i + 1]; ++e )
-	{
-		const float* corr = c->corr + 4 * (size_t) c->entries[e];
-		float coefficient = c->entry_coef[e];
-		dx += coefficient * corr[0];
-		dy += coefficient * corr[1];
-		dz += coefficient * corr[2];
-		count += corr[3];
-	}
-	if ( count == 0.0f )
-	{
-		return;
-	}
-	float scale = relaxation * inv_m[i];
-	dx *= scale, dy *= scale, dz *= scale;
-	float* position = c->position + 4 * (size_t) i;
-	float* acc = c->acc + 4 * (size_t) j;
-	position[0] += dx, position[1] += dy, position[2] += dz;
-	acc[0] += dx, acc[1] += dy, acc[2] += dz;
-}
-
-static void gather_apply_pair( sere_collide* c, int32_t j, const float* inv_m, float relaxation )
-{
-	gather_apply( c, j, inv_m, relaxation );
-	gather_apply( c, j + 1, inv_m, relaxation );
-}
-
-#endif
 
 /* The first touched slot of part `part` of `parts` when the touched vertices are cut into runs
  * of about equal gather work (entries): vertices differ a lot in their number of contacts (on the

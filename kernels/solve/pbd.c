@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 
 #include "solve/pbd.h"
+#include "core/internal/simd.h"
 #include "core/internal/team.h"
 
 #include <float.h>
@@ -13,10 +14,6 @@
 #include <string.h>
 #include <time.h>
 
-#if defined( __AVX512F__ ) || defined( __AVX__ )
-#include <immintrin.h>
-#endif
-
 /* For the block functions: each pass mode gets its own copy of the block loop (project_colors),
  * and GCC's size limits would otherwise leave the block an out-of-line call with its operands
  * in memory. */
@@ -24,7 +21,8 @@
 
 enum
 {
-	/* Constraints per block: one 512-bit register of floats (two 256-bit halves with AVX). */
+	/* Constraints per block: one 512-bit register of floats, a multiple of every lane width
+	 * (SERE_LANES: 16, 8 or 4). */
 	LANES = 16,
 	/* Bands hold at least this many particles, so the constraints joining two bands stay a
 	 * small share (on the maple, 8 bands: 6% of the constraints). */
@@ -652,118 +650,58 @@ typedef struct block_context
 	float k, alpha, one;
 } block_context;
 
-#if defined( __AVX512F__ )
-
+/* The worst residual and the flags of the lanes a pass has measured. */
 typedef struct lane_accum
 {
-	__m512 worst;
-	__mmask16 zero, nonfinite;
+	sere_vf worst;
+	sere_vmask zero, nonfinite;
 } lane_accum;
 
 FORCE_INLINE lane_accum lane_accum_start( void )
 {
-	lane_accum acc = { _mm512_setzero_ps(), 0, 0 };
+	lane_accum acc = { sere_vf_splat( 0.0f ), sere_vmask_none(), sere_vmask_none() };
 	return acc;
 }
 
 FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
 {
-	float w = _mm512_reduce_max_ps( acc->worst );
+	float w = sere_vf_max_all( acc->worst );
 	*worst = w > *worst ? w : *worst;
-	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
-}
-
-/* Four (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
- * lane j of register r, then a 4×4 transpose inside each 128-bit lane. This replaces AVX-512
- * gathers and scatters, which on this machine cost 3× as much for the same sweep. */
-FORCE_INLINE void load_records( const float* packed, const int32_t* at, __m512* x, __m512* y, __m512* z, __m512* w )
-{
-	__m512 r0 = _mm512_castps128_ps512( _mm_load_ps( packed + at[0] ) );
-	__m512 r1 = _mm512_castps128_ps512( _mm_load_ps( packed + at[1] ) );
-	__m512 r2 = _mm512_castps128_ps512( _mm_load_ps( packed + at[2] ) );
-	__m512 r3 = _mm512_castps128_ps512( _mm_load_ps( packed + at[3] ) );
-	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[4] ), 1 );
-	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[5] ), 1 );
-	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[6] ), 1 );
-	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[7] ), 1 );
-	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[8] ), 2 );
-	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[9] ), 2 );
-	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[10] ), 2 );
-	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[11] ), 2 );
-	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[12] ), 3 );
-	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[13] ), 3 );
-	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[14] ), 3 );
-	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[15] ), 3 );
-	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( r0, r1 ) ); /* x0 x1 y0 y1 per lane */
-	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( r0, r1 ) ); /* z0 z1 w0 w1 */
-	__m512d t2 = _mm512_castps_pd( _mm512_unpacklo_ps( r2, r3 ) );
-	__m512d t3 = _mm512_castps_pd( _mm512_unpackhi_ps( r2, r3 ) );
-	*x = _mm512_castpd_ps( _mm512_unpacklo_pd( t0, t2 ) );
-	*y = _mm512_castpd_ps( _mm512_unpackhi_pd( t0, t2 ) );
-	*z = _mm512_castpd_ps( _mm512_unpacklo_pd( t1, t3 ) );
-	*w = _mm512_castpd_ps( _mm512_unpackhi_pd( t1, t3 ) );
-}
-
-/* The inverse of load_records: four components into records, 16 stores of 128 bits. */
-FORCE_INLINE void store_records( float* packed, const int32_t* at, __m512 x, __m512 y, __m512 z, __m512 w )
-{
-	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( x, y ) );
-	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( x, y ) );
-	__m512d t2 = _mm512_castps_pd( _mm512_unpacklo_ps( z, w ) );
-	__m512d t3 = _mm512_castps_pd( _mm512_unpackhi_ps( z, w ) );
-	__m512 r0 = _mm512_castpd_ps( _mm512_unpacklo_pd( t0, t2 ) );
-	__m512 r1 = _mm512_castpd_ps( _mm512_unpackhi_pd( t0, t2 ) );
-	__m512 r2 = _mm512_castpd_ps( _mm512_unpacklo_pd( t1, t3 ) );
-	__m512 r3 = _mm512_castpd_ps( _mm512_unpackhi_pd( t1, t3 ) );
-	_mm_store_ps( packed + at[0], _mm512_castps512_ps128( r0 ) );
-	_mm_store_ps( packed + at[1], _mm512_castps512_ps128( r1 ) );
-	_mm_store_ps( packed + at[2], _mm512_castps512_ps128( r2 ) );
-	_mm_store_ps( packed + at[3], _mm512_castps512_ps128( r3 ) );
-	_mm_store_ps( packed + at[4], _mm512_extractf32x4_ps( r0, 1 ) );
-	_mm_store_ps( packed + at[5], _mm512_extractf32x4_ps( r1, 1 ) );
-	_mm_store_ps( packed + at[6], _mm512_extractf32x4_ps( r2, 1 ) );
-	_mm_store_ps( packed + at[7], _mm512_extractf32x4_ps( r3, 1 ) );
-	_mm_store_ps( packed + at[8], _mm512_extractf32x4_ps( r0, 2 ) );
-	_mm_store_ps( packed + at[9], _mm512_extractf32x4_ps( r1, 2 ) );
-	_mm_store_ps( packed + at[10], _mm512_extractf32x4_ps( r2, 2 ) );
-	_mm_store_ps( packed + at[11], _mm512_extractf32x4_ps( r3, 2 ) );
-	_mm_store_ps( packed + at[12], _mm512_extractf32x4_ps( r0, 3 ) );
-	_mm_store_ps( packed + at[13], _mm512_extractf32x4_ps( r1, 3 ) );
-	_mm_store_ps( packed + at[14], _mm512_extractf32x4_ps( r2, 3 ) );
-	_mm_store_ps( packed + at[15], _mm512_extractf32x4_ps( r3, 3 ) );
+	*flags |= ( sere_vmask_any( acc->zero ) ? FLAG_ZERO_LENGTH : 0 ) |
+			  ( sere_vmask_any( acc->nonfinite ) ? FLAG_NONFINITE : 0 );
 }
 
 /* What the measuring part of a block leaves for the moving part: both ends and the factor f. */
 typedef struct part_state
 {
-	__m512 ax, ay, az, aw, bx, by, bz, bw, f;
+	sere_vf ax, ay, az, aw, bx, by, bz, bw, f;
 } part_state;
 
-/* Loads both ends of the block at q and measures it (Jeong Eq. 13): the residual into acc and, unless
- * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
+/* Loads both ends of the SERE_LANES constraints at q, each (x, y, z, w) record with one 128-bit
+ * load and a transpose in registers (simd.h), and measures them (Jeong Eq. 13): the residual into
+ * acc and, unless mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored
+ * per lane). A lane whose denominator is not positive gets f = 0, its quotient (0/0 or x/0) kept
+ * out by the mask. */
 FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
 {
 	part_state h;
-	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
-	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
-	const __m512 zero = _mm512_setzero_ps();
-	__m512 dx = _mm512_sub_ps( h.bx, h.ax ), dy = _mm512_sub_ps( h.by, h.ay ), dz = _mm512_sub_ps( h.bz, h.az );
-	__m512 len2 =
-		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( dx, dx ), _mm512_mul_ps( dy, dy ) ), _mm512_mul_ps( dz, dz ) );
-	__m512 len = _mm512_sqrt_ps( len2 );
-	__m512 rest = _mm512_load_ps( ctx->rest + q );
-	__m512 c = _mm512_sub_ps( len, rest ); /* Jeong Eq. 13 */
-	acc->zero |= _mm512_cmp_ps_mask( len, zero, _CMP_EQ_OQ );
-	acc->nonfinite |= _mm512_cmp_ps_mask( len, _mm512_set1_ps( FLT_MAX ), _CMP_NLE_UQ );
-	__m512 wsum = _mm512_add_ps( h.aw, h.bw );
-	__m512 lambda = zero, alpha = zero, residual = c;
+	sere_vf_load_records_at( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
+	sere_vf_load_records_at( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
+	const sere_vf zero = sere_vf_splat( 0.0f );
+	sere_vf len = sere_vf_norm3( sere_vf_sub( h.bx, h.ax ), sere_vf_sub( h.by, h.ay ), sere_vf_sub( h.bz, h.az ) );
+	sere_vf rest = sere_vf_load( ctx->rest + q );
+	sere_vf c = sere_vf_sub( len, rest ); /* Jeong Eq. 13 */
+	acc->zero = sere_vmask_or( acc->zero, sere_vf_eq( len, zero ) );
+	acc->nonfinite = sere_vmask_or( acc->nonfinite, sere_vf_not_le( len, sere_vf_splat( FLT_MAX ) ) );
+	sere_vf wsum = sere_vf_add( h.aw, h.bw );
+	sere_vf lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
-		alpha = _mm512_mul_ps( _mm512_set1_ps( ctx->alpha ), _mm512_load_ps( ctx->weight + q ) );
-		lambda = _mm512_load_ps( ctx->lambda + q );
-		residual = _mm512_add_ps( c, _mm512_mul_ps( alpha, lambda ) );
+		alpha = sere_vf_mul( sere_vf_splat( ctx->alpha ), sere_vf_load( ctx->weight + q ) );
+		lambda = sere_vf_load( ctx->lambda + q );
+		residual = sere_vf_add( c, sere_vf_mul( alpha, lambda ) );
 	}
-	acc->worst = _mm512_max_ps( acc->worst, _mm512_div_ps( _mm512_abs_ps( residual ), rest ) );
+	acc->worst = sere_vf_max( acc->worst, sere_vf_div( sere_vf_abs( residual ), rest ) );
 	h.f = zero;
 	if ( mode == MODE_MEASURE )
 	{
@@ -771,307 +709,53 @@ FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block
 	}
 	if ( xpbd )
 	{
-		__m512 denominator = _mm512_add_ps( wsum, alpha );
-		__mmask16 movable = _mm512_cmp_ps_mask( denominator, zero, _CMP_GT_OQ );
-		__m512 numerator = _mm512_sub_ps( _mm512_sub_ps( zero, c ), _mm512_mul_ps( alpha, lambda ) );
-		__m512 dlambda = _mm512_maskz_div_ps( movable, numerator, denominator );
-		_mm512_store_ps( ctx->lambda + q, _mm512_add_ps( lambda, dlambda ) );
-		h.f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
+		sere_vf denominator = sere_vf_add( wsum, alpha );
+		sere_vf numerator = sere_vf_sub( sere_vf_sub( zero, c ), sere_vf_mul( alpha, lambda ) );
+		sere_vf dlambda = sere_vf_keep( sere_vf_gt( denominator, zero ), sere_vf_div( numerator, denominator ) );
+		sere_vf_store( ctx->lambda + q, sere_vf_add( lambda, dlambda ) );
+		h.f = sere_vf_div( sere_vf_sub( zero, dlambda ), len );
 	}
 	else
 	{
-		__mmask16 movable = _mm512_cmp_ps_mask( wsum, zero, _CMP_GT_OQ );
-		h.f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
+		h.f = sere_vf_keep( sere_vf_gt( wsum, zero ),
+							sere_vf_div( sere_vf_mul( sere_vf_splat( ctx->k ), c ), sere_vf_mul( wsum, len ) ) );
 	}
 	if ( mode == MODE_JACOBI )
 	{
-		_mm512_store_ps( ctx->factor + q, h.f );
+		sere_vf_store( ctx->factor + q, h.f );
 	}
 	return h;
 }
 
-/* The moving part of a Gauss–Seidel block: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored.
- * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
- * bits; recomputing it keeps three registers fewer alive between the two parts. */
+/* The moving part: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored. d = p_b − p_a
+ * again, the same operation on the same values as in measure_part, so the same bits;
+ * recomputing it keeps three registers fewer alive between the two parts. */
 FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
 {
-	__m512 dx = _mm512_sub_ps( h->bx, h->ax ), dy = _mm512_sub_ps( h->by, h->ay ), dz = _mm512_sub_ps( h->bz, h->az );
-	__m512 fa = _mm512_mul_ps( h->aw, h->f ), fb = _mm512_mul_ps( h->bw, h->f );
-	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( h->ax, _mm512_mul_ps( fa, dx ) ),
-				   _mm512_add_ps( h->ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( h->az, _mm512_mul_ps( fa, dz ) ),
-				   h->aw );
-	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( h->bx, _mm512_mul_ps( fb, dx ) ),
-				   _mm512_sub_ps( h->by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( h->bz, _mm512_mul_ps( fb, dz ) ),
-				   h->bw );
+	sere_vf dx = sere_vf_sub( h->bx, h->ax ), dy = sere_vf_sub( h->by, h->ay ), dz = sere_vf_sub( h->bz, h->az );
+	sere_vf fa = sere_vf_mul( h->aw, h->f ), fb = sere_vf_mul( h->bw, h->f );
+	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_add( h->ax, sere_vf_mul( fa, dx ) ),
+							  sere_vf_add( h->ay, sere_vf_mul( fa, dy ) ), sere_vf_add( h->az, sere_vf_mul( fa, dz ) ),
+							  h->aw );
+	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_sub( h->bx, sere_vf_mul( fb, dx ) ),
+							  sere_vf_sub( h->by, sere_vf_mul( fb, dy ) ), sere_vf_sub( h->bz, sere_vf_mul( fb, dz ) ),
+							  h->bw );
 }
 
+/* Loads and stores both ends unchanged: times one, opaque to the compiler, so the stores stay. */
 FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
 {
-	__m512 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	const __m512 one = _mm512_set1_ps( ctx->one );
-	store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
-				   _mm512_mul_ps( az, one ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
-				   _mm512_mul_ps( bz, one ), bw );
+	sere_vf ax, ay, az, aw, bx, by, bz, bw;
+	sere_vf_load_records_at( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
+	sere_vf_load_records_at( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
+	const sere_vf one = sere_vf_splat( ctx->one );
+	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_mul( ax, one ), sere_vf_mul( ay, one ),
+							  sere_vf_mul( az, one ), aw );
+	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_mul( bx, one ), sere_vf_mul( by, one ),
+							  sere_vf_mul( bz, one ), bw );
 }
 
-/* Constraints per measure/move part: one block of 16. */
-#define PART LANES
-
-#elif defined( __AVX__ )
-
-/* AVX (256-bit) build: each block of LANES constraints as two halves of eight. Lanes of a
- * block share no particle, so the halves are independent and the result has the bits of the
- * AVX-512 and portable builds. Without it a machine lacking AVX-512 ran the one-lane portable
- * loop, 7-10x slower per sweep. */
-typedef struct lane_accum
-{
-	__m256 worst;
-	int zero, nonfinite;
-} lane_accum;
-
-FORCE_INLINE lane_accum lane_accum_start( void )
-{
-	lane_accum acc = { _mm256_setzero_ps(), 0, 0 };
-	return acc;
-}
-
-FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
-{
-	__m128 m = _mm_max_ps( _mm256_castps256_ps128( acc->worst ), _mm256_extractf128_ps( acc->worst, 1 ) );
-	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	float w = _mm_cvtss_f32( m );
-	*worst = w > *worst ? w : *worst;
-	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
-}
-
-/* The record of lane j of a half. Offsets are read two at a time with one 64-bit load (x86 is
- * little-endian: lane 2i in the low half): a half takes four loads for its eight offsets
- * instead of eight, and a sweep reads every offset twice (to load and to store). Offsets are
- * non-negative, so zero extension is exact. */
-FORCE_INLINE float* record_at( float* packed, const int32_t* at, int j )
-{
-	uint64_t pair;
-	memcpy( &pair, at + ( j & ~1 ), sizeof( pair ) );
-	return packed + ( j & 1 ? (uint32_t) ( pair >> 32 ) : (uint32_t) pair );
-}
-
-/* Eight (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
- * lane j of register r, then a 4×4 transpose inside each 128-bit lane (as the AVX-512 path). */
-FORCE_INLINE void load_records( float* packed, const int32_t* at, __m256* x, __m256* y, __m256* z, __m256* w )
-{
-	__m256 r0 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 0 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 4 ) ), 1 );
-	__m256 r1 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 1 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 5 ) ), 1 );
-	__m256 r2 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 2 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 6 ) ), 1 );
-	__m256 r3 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 3 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 7 ) ), 1 );
-	__m256d t0 = _mm256_castps_pd( _mm256_unpacklo_ps( r0, r1 ) ); /* x0 x1 y0 y1 per lane */
-	__m256d t1 = _mm256_castps_pd( _mm256_unpackhi_ps( r0, r1 ) ); /* z0 z1 w0 w1 */
-	__m256d t2 = _mm256_castps_pd( _mm256_unpacklo_ps( r2, r3 ) );
-	__m256d t3 = _mm256_castps_pd( _mm256_unpackhi_ps( r2, r3 ) );
-	*x = _mm256_castpd_ps( _mm256_unpacklo_pd( t0, t2 ) );
-	*y = _mm256_castpd_ps( _mm256_unpackhi_pd( t0, t2 ) );
-	*z = _mm256_castpd_ps( _mm256_unpacklo_pd( t1, t3 ) );
-	*w = _mm256_castpd_ps( _mm256_unpackhi_pd( t1, t3 ) );
-}
-
-/* The inverse of load_records: four components into records, 8 stores of 128 bits. */
-FORCE_INLINE void store_records( float* packed, const int32_t* at, __m256 x, __m256 y, __m256 z, __m256 w )
-{
-	__m256d t0 = _mm256_castps_pd( _mm256_unpacklo_ps( x, y ) );
-	__m256d t1 = _mm256_castps_pd( _mm256_unpackhi_ps( x, y ) );
-	__m256d t2 = _mm256_castps_pd( _mm256_unpacklo_ps( z, w ) );
-	__m256d t3 = _mm256_castps_pd( _mm256_unpackhi_ps( z, w ) );
-	__m256 r0 = _mm256_castpd_ps( _mm256_unpacklo_pd( t0, t2 ) );
-	__m256 r1 = _mm256_castpd_ps( _mm256_unpackhi_pd( t0, t2 ) );
-	__m256 r2 = _mm256_castpd_ps( _mm256_unpacklo_pd( t1, t3 ) );
-	__m256 r3 = _mm256_castpd_ps( _mm256_unpackhi_pd( t1, t3 ) );
-	_mm_store_ps( record_at( packed, at, 0 ), _mm256_castps256_ps128( r0 ) );
-	_mm_store_ps( record_at( packed, at, 1 ), _mm256_castps256_ps128( r1 ) );
-	_mm_store_ps( record_at( packed, at, 2 ), _mm256_castps256_ps128( r2 ) );
-	_mm_store_ps( record_at( packed, at, 3 ), _mm256_castps256_ps128( r3 ) );
-	_mm_store_ps( record_at( packed, at, 4 ), _mm256_extractf128_ps( r0, 1 ) );
-	_mm_store_ps( record_at( packed, at, 5 ), _mm256_extractf128_ps( r1, 1 ) );
-	_mm_store_ps( record_at( packed, at, 6 ), _mm256_extractf128_ps( r2, 1 ) );
-	_mm_store_ps( record_at( packed, at, 7 ), _mm256_extractf128_ps( r3, 1 ) );
-}
-
-/* What the measuring part of a half leaves for the moving part: both ends and the factor f. */
-typedef struct part_state
-{
-	__m256 ax, ay, az, aw, bx, by, bz, bw, f;
-} part_state;
-
-/* Loads both ends of the half at q and measures it (Jeong Eq. 13): the residual into acc and, unless
- * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
-FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
-{
-	part_state h;
-	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
-	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
-	const __m256 zero = _mm256_setzero_ps();
-	__m256 dx = _mm256_sub_ps( h.bx, h.ax ), dy = _mm256_sub_ps( h.by, h.ay ), dz = _mm256_sub_ps( h.bz, h.az );
-	__m256 len2 =
-		_mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( dx, dx ), _mm256_mul_ps( dy, dy ) ), _mm256_mul_ps( dz, dz ) );
-	__m256 len = _mm256_sqrt_ps( len2 );
-	__m256 rest = _mm256_load_ps( ctx->rest + q );
-	__m256 c = _mm256_sub_ps( len, rest ); /* Jeong Eq. 13 */
-	acc->zero |= _mm256_movemask_ps( _mm256_cmp_ps( len, zero, _CMP_EQ_OQ ) );
-	acc->nonfinite |= _mm256_movemask_ps( _mm256_cmp_ps( len, _mm256_set1_ps( FLT_MAX ), _CMP_NLE_UQ ) );
-	__m256 wsum = _mm256_add_ps( h.aw, h.bw );
-	__m256 lambda = zero, alpha = zero, residual = c;
-	if ( xpbd )
-	{
-		alpha = _mm256_mul_ps( _mm256_set1_ps( ctx->alpha ), _mm256_load_ps( ctx->weight + q ) );
-		lambda = _mm256_load_ps( ctx->lambda + q );
-		residual = _mm256_add_ps( c, _mm256_mul_ps( alpha, lambda ) );
-	}
-	const __m256 magnitude = _mm256_castsi256_ps( _mm256_set1_epi32( 0x7fffffff ) );
-	acc->worst = _mm256_max_ps( acc->worst, _mm256_div_ps( _mm256_and_ps( residual, magnitude ), rest ) );
-	h.f = zero;
-	if ( mode == MODE_MEASURE )
-	{
-		return h;
-	}
-	/* a masked-off lane's quotient (0/0 or x/0) is replaced by zero, as the AVX-512 maskz_div */
-	if ( xpbd )
-	{
-		__m256 denominator = _mm256_add_ps( wsum, alpha );
-		__m256 movable = _mm256_cmp_ps( denominator, zero, _CMP_GT_OQ );
-		__m256 numerator = _mm256_sub_ps( _mm256_sub_ps( zero, c ), _mm256_mul_ps( alpha, lambda ) );
-		__m256 dlambda = _mm256_and_ps( movable, _mm256_div_ps( numerator, denominator ) );
-		_mm256_store_ps( ctx->lambda + q, _mm256_add_ps( lambda, dlambda ) );
-		h.f = _mm256_div_ps( _mm256_sub_ps( zero, dlambda ), len );
-	}
-	else
-	{
-		__m256 movable = _mm256_cmp_ps( wsum, zero, _CMP_GT_OQ );
-		h.f = _mm256_and_ps(
-			movable, _mm256_div_ps( _mm256_mul_ps( _mm256_set1_ps( ctx->k ), c ), _mm256_mul_ps( wsum, len ) ) );
-	}
-	if ( mode == MODE_JACOBI )
-	{
-		_mm256_store_ps( ctx->factor + q, h.f );
-	}
-	return h;
-}
-
-/* The moving part of a Gauss–Seidel half: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored.
- * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
- * bits; recomputing it keeps three registers fewer alive between the two parts. */
-FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
-{
-	__m256 dx = _mm256_sub_ps( h->bx, h->ax ), dy = _mm256_sub_ps( h->by, h->ay ), dz = _mm256_sub_ps( h->bz, h->az );
-	__m256 fa = _mm256_mul_ps( h->aw, h->f ), fb = _mm256_mul_ps( h->bw, h->f );
-	store_records( ctx->packed, ctx->ia + q, _mm256_add_ps( h->ax, _mm256_mul_ps( fa, dx ) ),
-				   _mm256_add_ps( h->ay, _mm256_mul_ps( fa, dy ) ), _mm256_add_ps( h->az, _mm256_mul_ps( fa, dz ) ),
-				   h->aw );
-	store_records( ctx->packed, ctx->ib + q, _mm256_sub_ps( h->bx, _mm256_mul_ps( fb, dx ) ),
-				   _mm256_sub_ps( h->by, _mm256_mul_ps( fb, dy ) ), _mm256_sub_ps( h->bz, _mm256_mul_ps( fb, dz ) ),
-				   h->bw );
-}
-
-FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
-{
-	__m256 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	const __m256 one = _mm256_set1_ps( ctx->one );
-	store_records( ctx->packed, ctx->ia + q, _mm256_mul_ps( ax, one ), _mm256_mul_ps( ay, one ),
-				   _mm256_mul_ps( az, one ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm256_mul_ps( bx, one ), _mm256_mul_ps( by, one ),
-				   _mm256_mul_ps( bz, one ), bw );
-}
-
-/* Constraints per measure/move part: half a block. */
-#define PART ( LANES / 2 )
-
-#else
-
-/* Portable build (no AVX): the same operations one lane at a time. Lanes of a block share
- * no particle, so doing them in sequence gives the bits the SIMD build gives. */
-typedef struct lane_accum
-{
-	float worst;
-	int zero, nonfinite;
-} lane_accum;
-
-FORCE_INLINE lane_accum lane_accum_start( void )
-{
-	lane_accum acc = { 0.0f, 0, 0 };
-	return acc;
-}
-
-FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
-{
-	*worst = acc->worst > *worst ? acc->worst : *worst;
-	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
-}
-
-FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mode mode, int xpbd, lane_accum* acc )
-{
-	for ( int32_t q = q0; q < q0 + LANES; ++q )
-	{
-		float* pa = ctx->packed + ctx->ia[q];
-		float* pb = ctx->packed + ctx->ib[q];
-		if ( mode == MODE_TOUCH )
-		{
-			for ( int j = 0; j < 3; ++j )
-			{
-				pa[j] = pa[j] * ctx->one;
-				pb[j] = pb[j] * ctx->one;
-			}
-			continue;
-		}
-		float dx = pb[0] - pa[0], dy = pb[1] - pa[1], dz = pb[2] - pa[2];
-		float len = sqrtf( ( dx * dx + dy * dy ) + dz * dz );
-		float rest = ctx->rest[q];
-		float c = len - rest; /* Jeong Eq. 13 */
-		acc->zero |= len == 0.0f;
-		acc->nonfinite |= !( len <= FLT_MAX );
-		float wsum = pa[3] + pb[3];
-		float lambda = xpbd ? ctx->lambda[q] : 0.0f;
-		float alpha = xpbd ? ctx->alpha * ctx->weight[q] : 0.0f;
-		float residual = xpbd ? c + alpha * lambda : c;
-		float strain = fabsf( residual ) / rest;
-		acc->worst = strain > acc->worst ? strain : acc->worst;
-		if ( mode == MODE_MEASURE )
-		{
-			continue;
-		}
-		float f;
-		if ( xpbd )
-		{
-			float denominator = wsum + alpha;
-			float dlambda = denominator > 0.0f ? ( ( 0.0f - c ) - alpha * lambda ) / denominator : 0.0f;
-			ctx->lambda[q] = lambda + dlambda;
-			f = ( 0.0f - dlambda ) / len;
-		}
-		else
-		{
-			f = wsum > 0.0f ? ( ctx->k * c ) / ( wsum * len ) : 0.0f;
-		}
-		if ( mode == MODE_JACOBI )
-		{
-			ctx->factor[q] = f;
-			continue;
-		}
-		float fa = pa[3] * f, fb = pb[3] * f;
-		pa[0] = pa[0] + fa * dx, pa[1] = pa[1] + fa * dy, pa[2] = pa[2] + fa * dz;
-		pb[0] = pb[0] - fb * dx, pb[1] = pb[1] - fb * dy, pb[2] = pb[2] - fb * dz;
-	}
-}
-
-#endif
-
-#if defined( __AVX512F__ ) || defined( __AVX__ )
-/* Lanes [first, last) of one color of one item, a multiple of LANES, in parts of PART lanes.
+/* Lanes [first, last) of one color of one item, a multiple of LANES, in parts of SERE_LANES.
  *
  * Gauss–Seidel is software-pipelined by one part: the next part is measured before this one
  * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
@@ -1079,15 +763,15 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mod
  * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
  * so a core worked on about one part at a time. Measured one part ahead, a part's moves find f
  * ready. On the maple at one thread this took an AVX2 sweep from 2.2 to 1.8 times its floor
- * (sere_pbd_touch_sweeps) and an AVX-512 sweep (one block a part) from 1.6 to 1.3 (CPU time). All lanes
- * of one color share no particle, so reading the next part before this one is stored reads the
- * same values. */
+ * (sere_pbd_touch_sweeps) and an AVX-512 sweep from 1.6 to 1.3 (CPU time). All lanes of one
+ * color share no particle, so reading the next part before this one is stored reads the same
+ * values, and every width (16, 8 or 4 lanes a part) gives the same bits. */
 FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
 								   lane_accum* acc )
 {
 	if ( mode != MODE_GAUSS_SEIDEL )
 	{
-		for ( int32_t q = first; q < last; q += PART )
+		for ( int32_t q = first; q < last; q += SERE_LANES )
 		{
 			if ( mode == MODE_TOUCH )
 			{
@@ -1105,25 +789,14 @@ FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int3
 		return;
 	}
 	part_state current = measure_part( ctx, first, mode, xpbd, acc );
-	for ( int32_t q = first; q + PART < last; q += PART )
+	for ( int32_t q = first; q + SERE_LANES < last; q += SERE_LANES )
 	{
-		part_state next = measure_part( ctx, q + PART, mode, xpbd, acc );
+		part_state next = measure_part( ctx, q + SERE_LANES, mode, xpbd, acc );
 		move_part( ctx, q, &current );
 		current = next;
 	}
-	move_part( ctx, last - PART, &current );
+	move_part( ctx, last - SERE_LANES, &current );
 }
-#else
-/* Lanes [first, last) of one color of one item, a multiple of LANES: block after block. */
-FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
-								   lane_accum* acc )
-{
-	for ( int32_t q = first; q < last; q += LANES )
-	{
-		project_block( ctx, q, mode, xpbd, acc );
-	}
-}
-#endif
 
 /* ---------------------------------------------------------------------------------------
  * Threads: work claiming and the barrier. */
