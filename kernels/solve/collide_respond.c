@@ -45,11 +45,41 @@ static void store_corrections( sere_collide* c, int32_t begin, int32_t count, fl
 	}
 }
 
+/* The response of contact k of an evaluation block, n its normal (not unit: scaled here by
+ * side / |n| into n̂) and d the vector between its two points of detection: the height d · n̂
+ * falls short of √(h² − |l|²), where the points are the thickness h apart for their lateral
+ * offset l, by the deficit, and λ = deficit / W. Stores row column k = (λ n̂, 1) for a contact that pushes,
+ * zeros for one that does not (a degenerate normal, scale 0, or an immovable contact, 1/W = 0,
+ * never does); returns 1 when it pushes by more than the tolerance. */
+static inline __attribute__( ( always_inline ) ) int32_t push_lane( float n[3], const float d[3], float side,
+																	float inverse, float h2, float tolerance,
+																	float row[4][EVALUATE_BLOCK], int32_t k )
+{
+	float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+	/* side is ±1, so side / |n| = side · (1 / |n|) exactly; written as a product used on every
+	 * path, its load stays a plain vector load instead of a masked one */
+	float inverse_length = length2 > 0.0f ? 1.0f / sqrtf( length2 > 0.0f ? length2 : 1.0f ) : 0.0f;
+	float scale = side * inverse_length;
+	n[0] *= scale, n[1] *= scale, n[2] *= scale;
+	float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+	float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
+	float room = h2 - ( l[0] * l[0] + l[1] * l[1] + l[2] * l[2] );
+	float deficit = sqrtf( room > 0.0f ? room : 0.0f ) - height;
+	int push = ( room > 0.0f ) & ( deficit > 0.0f ) & ( scale != 0.0f ) & ( inverse > 0.0f );
+	float lambda = push ? deficit * inverse : 0.0f;
+	row[0][k] = lambda * n[0];
+	row[1][k] = lambda * n[1];
+	row[2][k] = lambda * n[2];
+	row[3][k] = push ? 1.0f : 0.0f;
+	return push & ( deficit > tolerance );
+}
+
 /* Evaluates vertex–triangle contacts [begin, end), at most EVALUATE_BLOCK of them, at the current
- * positions (see sere_collide_respond) at their points of detection q = u a + v b + w c: stores
- * corr[4k ..] = (λ n̂, 1) for a contact that pushes, zeros for one that does not, and returns
- * how many push by more than the tolerance. The four points are gathered first, then the
- * arithmetic runs as straight-line vector code across contacts. */
+ * positions (see sere_collide_respond) at their points of detection q = u a + v b + w c, along
+ * n = (b − a) × (c − a): stores corr[4k ..] = (λ n̂, 1) for a contact that pushes, zeros for one
+ * that does not (push_lane), and returns how many push by more than the tolerance. The four
+ * points are gathered first, then the arithmetic runs as straight-line vector code across
+ * contacts. */
 static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, float h2, float tolerance )
 {
 	float point[12][EVALUATE_BLOCK];
@@ -70,31 +100,12 @@ static int32_t evaluate_contacts( sere_collide* c, int32_t begin, int32_t end, f
 		float ab[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
 		float ac[3] = { cc[0] - a[0], cc[1] - a[1], cc[2] - a[2] };
 		float n[3] = { ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0] };
-		float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-		/* a degenerate triangle has no normal (scale 0) and never pushes */
-		/* side[k] is ±1, so side / |n| = side · (1 / |n|) exactly; written as a product used on
-		 * every path, its load stays a plain vector load instead of a masked one */
-		float inverse_length = length2 > 0.0f ? 1.0f / sqrtf( length2 > 0.0f ? length2 : 1.0f ) : 0.0f;
-		float scale = side[k] * inverse_length;
-		float inverse = inv_weight[k];
-		n[0] *= scale, n[1] *= scale, n[2] *= scale;
 		float d[3];
 		for ( int r = 0; r < 3; ++r )
 		{
 			d[r] = p[r] - ( bu[k] * a[r] + bv[k] * b[r] + bw[k] * cc[r] );
 		}
-		float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-		float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
-		float room = h2 - ( l[0] * l[0] + l[1] * l[1] + l[2] * l[2] );
-		float deficit = sqrtf( room > 0.0f ? room : 0.0f ) - height;
-		/* an immovable contact (1/W = 0) never pushes either */
-		int push = ( room > 0.0f ) & ( deficit > 0.0f ) & ( scale != 0.0f ) & ( inverse > 0.0f );
-		float lambda = push ? deficit * inverse : 0.0f;
-		row[0][k] = lambda * n[0];
-		row[1][k] = lambda * n[1];
-		row[2][k] = lambda * n[2];
-		row[3][k] = push ? 1.0f : 0.0f;
-		far += push & ( deficit > tolerance );
+		far += push_lane( n, d, side[k], inv_weight[k], h2, tolerance, row, k );
 	}
 	store_corrections( c, begin, count, row );
 	return far;
@@ -122,28 +133,13 @@ static int32_t evaluate_edges( sere_collide* c, int32_t begin, int32_t end, floa
 		float u[3] = { a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2] };
 		float v[3] = { b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2] };
 		float n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
-		float length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-		float inverse_length = length2 > 0.0f ? 1.0f / sqrtf( length2 > 0.0f ? length2 : 1.0f ) : 0.0f;
-		float scale = side[k] * inverse_length;
-		float inverse = inv_weight[k];
-		n[0] *= scale, n[1] *= scale, n[2] *= scale;
 		float s = ws[k], t = wt[k];
 		float d[3];
 		for ( int r = 0; r < 3; ++r )
 		{
 			d[r] = ( ( 1.0f - s ) * a0[r] + s * a1[r] ) - ( ( 1.0f - t ) * b0[r] + t * b1[r] );
 		}
-		float height = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-		float l[3] = { d[0] - height * n[0], d[1] - height * n[1], d[2] - height * n[2] };
-		float room = h2 - ( l[0] * l[0] + l[1] * l[1] + l[2] * l[2] );
-		float deficit = sqrtf( room > 0.0f ? room : 0.0f ) - height;
-		int push = ( room > 0.0f ) & ( deficit > 0.0f ) & ( scale != 0.0f ) & ( inverse > 0.0f );
-		float lambda = push ? deficit * inverse : 0.0f;
-		row[0][k] = lambda * n[0];
-		row[1][k] = lambda * n[1];
-		row[2][k] = lambda * n[2];
-		row[3][k] = push ? 1.0f : 0.0f;
-		far += push & ( deficit > tolerance );
+		far += push_lane( n, d, side[k], inv_weight[k], h2, tolerance, row, k );
 	}
 	store_corrections( c, begin, count, row );
 	return far;
