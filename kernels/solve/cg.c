@@ -378,9 +378,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 		for ( int32_t at = 0; at < np; ++at )
 		{
 			int32_t i = a->row[at];
-			b[at] = i >= 0 ? b_in[i] : 0.0;
-			x[at] = i >= 0 ? x_in[i] : 0.0;
-			nonfinite |= !isfinite( b[at] ) || !isfinite( x[at] );
+			nonfinite |= load_position( i, b_in, x_in, b, x, at );
 			double diagonal = a->diagonal[at] >= 0 ? a->val[a->diagonal[at]] : 0.0;
 			bad_diagonal |= i >= 0 && !( diagonal > 0.0 );
 			inv_diag[at] = diagonal > 0.0 ? 1.0 / diagonal : 0.0;

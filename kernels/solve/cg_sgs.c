@@ -451,9 +451,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 		for ( int32_t at = 0; at < np; ++at )
 		{
 			int32_t i = g->row[at];
-			b[at] = i >= 0 ? b_in[i] : 0.0;
-			x[at] = i >= 0 ? x_in[i] : 0.0;
-			nonfinite |= !isfinite( b[at] ) || !isfinite( x[at] );
+			nonfinite |= load_position( i, b_in, x_in, b, x, at );
 			bad_diagonal |= i >= 0 && !( diagonal[at] > 0.0 );
 			inv_diag[at] = i >= 0 && diagonal[at] > 0.0 ? 1.0 / diagonal[at] : 0.0;
 		}

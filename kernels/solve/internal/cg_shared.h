@@ -110,3 +110,12 @@ static inline int32_t block_end( int32_t blk, int32_t n )
 {
 	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
 }
+
+/* Row i's entries of b_in and x_in into position at, zeros for a padding lane (i < 0); nonzero
+ * when either is not finite. */
+static inline int load_position( int32_t i, const double* b_in, const double* x_in, double* b, double* x, int32_t at )
+{
+	b[at] = i >= 0 ? b_in[i] : 0.0;
+	x[at] = i >= 0 ? x_in[i] : 0.0;
+	return !isfinite( b[at] ) || !isfinite( x[at] );
+}
