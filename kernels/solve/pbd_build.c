@@ -8,6 +8,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -145,6 +146,30 @@ static int assign_bands( int32_t bands, int32_t n, const int32_t* ends, const in
 	return 1;
 }
 
+/* The per-lane arrays for pbd->lanes lanes and the per-slot records (n particles rounded up to
+ * 4, then a dummy pair per item); false when one is missing. */
+static bool alloc_lanes( sere_pbd* pbd, int32_t n )
+{
+	const size_t lanes = (size_t) pbd->lanes;
+	pbd->ia = sere_alloc( sizeof( int32_t ) * lanes );
+	pbd->ib = sere_alloc( sizeof( int32_t ) * lanes );
+	pbd->source = sere_alloc( sizeof( int32_t ) * lanes );
+	pbd->rest = sere_alloc( sizeof( float ) * lanes );
+	pbd->lambda = sere_alloc( sizeof( float ) * lanes );
+	pbd->weight = sere_alloc( sizeof( float ) * lanes );
+	pbd->factor = sere_alloc( sizeof( float ) * lanes );
+	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
+	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+	for ( int h = 0; h < 2; ++h )
+	{
+		pbd->history[h] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
+		pbd->lambda_history[h] = sere_alloc( sizeof( float ) * lanes );
+	}
+	return pbd->ia && pbd->ib && pbd->source && pbd->rest && pbd->lambda && pbd->weight && pbd->factor &&
+		   pbd->packed[0] && pbd->packed[1] && pbd->history[0] && pbd->history[1] && pbd->lambda_history[0] &&
+		   pbd->lambda_history[1];
+}
 static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t* b )
 {
 	const int32_t n = pbd->particle_count, count = pbd->constraint_count, colors = pbd->colors;
@@ -202,25 +227,7 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 		pbd->segment[g + 1] = pbd->segment[g] + ( ( fill[g] + LANES - 1 ) / LANES ) * LANES;
 	}
 	pbd->lanes = pbd->segment[segments];
-	const size_t lanes = (size_t) pbd->lanes;
-	pbd->ia = sere_alloc( sizeof( int32_t ) * lanes );
-	pbd->ib = sere_alloc( sizeof( int32_t ) * lanes );
-	pbd->source = sere_alloc( sizeof( int32_t ) * lanes );
-	pbd->rest = sere_alloc( sizeof( float ) * lanes );
-	pbd->lambda = sere_alloc( sizeof( float ) * lanes );
-	pbd->weight = sere_alloc( sizeof( float ) * lanes );
-	pbd->factor = sere_alloc( sizeof( float ) * lanes );
-	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
-	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-	for ( int h = 0; h < 2; ++h )
-	{
-		pbd->history[h] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-		pbd->lambda_history[h] = sere_alloc( sizeof( float ) * lanes );
-	}
-	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->weight || !pbd->factor ||
-		 !pbd->packed[0] || !pbd->packed[1] || !pbd->history[0] || !pbd->history[1] || !pbd->lambda_history[0] ||
-		 !pbd->lambda_history[1] )
+	if ( !alloc_lanes( pbd, n ) )
 	{
 		free( band_of_slot ), free( keys ), free( fill );
 		return SERE_ERR_MEMORY;
