@@ -500,19 +500,9 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 	return true;
 }
 
-/* Builds so far, of every BVH in the process: each build's generation is its ordinal. */
-static _Atomic uint64_t builds;
-
-sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const float* z )
+/* Each triangle's box, its centre and the identity order, for the build. */
+static void triangle_boxes( sere_bvh* bvh, const float* x, const float* y, const float* z )
 {
-	if ( bvh == NULL || x == NULL || y == NULL || z == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	if ( !positions_finite( bvh->vertex_count, x, y, z ) )
-	{
-		return SERE_ERR_NONFINITE;
-	}
 	int32_t n = bvh->triangle_count;
 #pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t t = 0; t < n; ++t )
@@ -529,17 +519,11 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->c_z[t] = 0.5f * ( bvh->lo_z[t] + bvh->hi_z[t] );
 		bvh->order[t] = t;
 	}
+}
 
-	bvh->node_count = 1;
-	bvh->node_level[0] = 0;
-	int32_t stack_size = 0;
-	bvh->stack[stack_size++] = ( build_item ){ 0, 0, n, 0 };
-	while ( stack_size > 0 )
-	{
-		build_item item = bvh->stack[--stack_size];
-		build_node( bvh, item, &stack_size );
-	}
-
+/* The nodes grouped by level (for the parallel bottom-up refit) and each node's subtree range. */
+static void group_levels( sere_bvh* bvh )
+{
 	/* group nodes by level for the parallel bottom-up refit */
 	int32_t levels = 0;
 	for ( int32_t i = 0; i < bvh->node_count; ++i )
@@ -581,6 +565,11 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->subtree_begin[i] = begin < end ? begin : end;
 		bvh->subtree_end[i] = end;
 	}
+}
+
+/* For every lane of every node, the highest vertex of the triangles below it. */
+static void child_tops( sere_bvh* bvh )
+{
 	/* children come after their parent: bottom-up from the last node */
 	for ( int32_t i = bvh->node_count - 1; i >= 0; --i )
 	{
@@ -606,7 +595,13 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 			bvh->child_top[(size_t) i * SERE_BVH_WIDTH + (size_t) k] = top;
 		}
 	}
+}
 
+/* The subtree roots at the cut level (at most 2), ordered by the mean first vertex of their
+ * triangles, for the parallel refit's order by vertex index. */
+static void order_cut( sere_bvh* bvh )
+{
+	const int32_t levels = bvh->level_count;
 	bvh->cut_level = levels - 1 < 2 ? levels - 1 : 2;
 	bvh->cut_count = bvh->level_start[bvh->cut_level + 1] - bvh->level_start[bvh->cut_level];
 	for ( int32_t i = 0; i < bvh->cut_count; ++i )
@@ -638,7 +633,36 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->cut_key[j] = key;
 		bvh->cut_roots[j] = root;
 	}
+}
 
+/* Builds so far, of every BVH in the process: each build's generation is its ordinal. */
+static _Atomic uint64_t builds;
+
+sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const float* z )
+{
+	if ( bvh == NULL || x == NULL || y == NULL || z == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( !positions_finite( bvh->vertex_count, x, y, z ) )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	triangle_boxes( bvh, x, y, z );
+
+	bvh->node_count = 1;
+	bvh->node_level[0] = 0;
+	int32_t stack_size = 0;
+	bvh->stack[stack_size++] = ( build_item ){ 0, 0, bvh->triangle_count, 0 };
+	while ( stack_size > 0 )
+	{
+		build_item item = bvh->stack[--stack_size];
+		build_node( bvh, item, &stack_size );
+	}
+
+	group_levels( bvh );
+	child_tops( bvh );
+	order_cut( bvh );
 	refit_tree( bvh, x, y, z );
 	bvh->quality_built = bvh->quality;
 	bvh->generation = atomic_fetch_add( &builds, 1 ) + 1;
