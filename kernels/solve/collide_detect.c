@@ -34,6 +34,47 @@ static int32_t run_begin( const sere_collide* c, int part, int parts )
 	return lo;
 }
 
+/* Copies block `block`'s contacts, [begin, next) of the combined numbering (vertex–triangle
+ * contacts first, total of them), into their list, and their members, sides and weights into the
+ * per-contact arrays of the response. */
+static void copy_block( sere_collide* c, const int32_t* tri, int32_t block, int64_t begin, int64_t next, int64_t total )
+{
+	size_t count = (size_t) ( next - begin );
+	if ( block < c->vertex_blocks )
+	{
+		const sere_contact* from = thread_buffer( c, c->block_thread[block] ) + c->block_start[block];
+		if ( count > 0 && from != c->contacts + begin )
+		{
+			memcpy( c->contacts + begin, from, sizeof( sere_contact ) * count );
+		}
+		for ( int64_t k = begin; k < next; ++k )
+		{
+			const sere_contact* contact = c->contacts + k;
+			const int32_t* v = tri + 3 * (size_t) contact->triangle;
+			c->member[0][k] = contact->vertex;
+			c->member[1][k] = v[0], c->member[2][k] = v[1], c->member[3][k] = v[2];
+			c->contact_side[k] = contact->side;
+			c->weight[0][k] = contact->u, c->weight[1][k] = contact->v, c->weight[2][k] = contact->w;
+		}
+	}
+	else
+	{
+		const sere_edge_contact* from = thread_edge_buffer( c, c->block_thread[block] ) + c->block_start[block];
+		if ( count > 0 )
+		{
+			memcpy( c->edge_contacts + ( begin - total ), from, sizeof( sere_edge_contact ) * count );
+		}
+		for ( int64_t k = begin; k < next; ++k )
+		{
+			const sere_edge_contact* contact = c->edge_contacts + ( k - total );
+			c->member[0][k] = contact->a0, c->member[1][k] = contact->a1;
+			c->member[2][k] = contact->b0, c->member[3][k] = contact->b1;
+			c->contact_side[k] = contact->side;
+			c->weight[0][k] = contact->s, c->weight[1][k] = contact->t, c->weight[2][k] = 0.0f;
+		}
+	}
+}
+
 /* Lists the contacts found (total vertex–triangle ones, then edge_total edge–edge ones): copies
  * each block's contacts from its thread's buffer to the block's place in its list (thread 0's
  * vertex–triangle contacts are there already), with the per-contact arrays of the response, and
@@ -59,40 +100,7 @@ static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, i
 		{
 			int64_t begin = c->block_found[block];
 			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : all;
-			size_t count = (size_t) ( next - begin );
-			if ( block < c->vertex_blocks )
-			{
-				const sere_contact* from = thread_buffer( c, c->block_thread[block] ) + c->block_start[block];
-				if ( count > 0 && from != c->contacts + begin )
-				{
-					memcpy( c->contacts + begin, from, sizeof( sere_contact ) * count );
-				}
-				for ( int64_t k = begin; k < next; ++k )
-				{
-					const sere_contact* contact = c->contacts + k;
-					const int32_t* v = tri + 3 * (size_t) contact->triangle;
-					c->member[0][k] = contact->vertex;
-					c->member[1][k] = v[0], c->member[2][k] = v[1], c->member[3][k] = v[2];
-					c->contact_side[k] = contact->side;
-					c->weight[0][k] = contact->u, c->weight[1][k] = contact->v, c->weight[2][k] = contact->w;
-				}
-			}
-			else
-			{
-				const sere_edge_contact* from = thread_edge_buffer( c, c->block_thread[block] ) + c->block_start[block];
-				if ( count > 0 )
-				{
-					memcpy( c->edge_contacts + ( begin - total ), from, sizeof( sere_edge_contact ) * count );
-				}
-				for ( int64_t k = begin; k < next; ++k )
-				{
-					const sere_edge_contact* contact = c->edge_contacts + ( k - total );
-					c->member[0][k] = contact->a0, c->member[1][k] = contact->a1;
-					c->member[2][k] = contact->b0, c->member[3][k] = contact->b1;
-					c->contact_side[k] = contact->side;
-					c->weight[0][k] = contact->s, c->weight[1][k] = contact->t, c->weight[2][k] = 0.0f;
-				}
-			}
+			copy_block( c, tri, block, begin, next, total );
 			for ( int64_t k = begin; k < next; ++k )
 			{
 				for ( int r = 0; r < 4; ++r )
