@@ -260,36 +260,13 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 	return !far;
 }
 
-sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-								 const float* z, float thickness, int32_t* contact_count )
+/* Whether this detection replays the list (see SKIN) or searches the tree, listing anew: then
+ * the skin adapts to how long the last list lasted and the edges' across vectors are taken at
+ * these positions. */
+static bool choose_list( sere_collide* collide, const sere_bvh* bvh, const int32_t* tri, const float* x, const float* y,
+						 const float* z, float thickness, int threads )
 {
-	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
-		 !( thickness > 0.0f ) || !isfinite( thickness ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	int32_t triangles;
-	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
-	if ( sere_bvh_vertex_count( bvh ) != collide->vertex_count || triangles != collide->triangle_count )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	*contact_count = 0;
-	collide->contact_count = 0;
-	collide->edge_contact_count = 0;
-	collide->edge_found = 0;
-	collide->touched_count = 0;
-	int32_t n = collide->vertex_count;
-	int32_t threads = sere_team_default();
-	threads = threads < collide->slots ? threads : collide->slots;
-	float h2 = thickness * thickness;
-	collide->work_prefix[0] = 0;
-	for ( int32_t block = 0; block < collide->block_count; ++block )
-	{
-		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
-	}
 	bool replay = list_serves( collide, bvh, x, y, z, thickness, threads );
-	bool listing = !replay;
 	if ( replay )
 	{
 		collide->cache_uses += 1;
@@ -314,7 +291,100 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 			sere_coll_edge_across_at( collide, tri, x, y, z, e );
 		}
 	}
+	return replay;
+}
+
+/* Thread tid's detection context. */
+static void context_init( detect_context* c, const sere_collide* collide, const int32_t* tri, const float* x,
+						  const float* y, const float* z, float thickness, bool listing, int tid )
+{
 	size_t across_stride = (size_t) sere_pad( collide->edge_count );
+	*c = ( detect_context ){
+		.x = x,
+		.y = y,
+		.z = z,
+		.tri = tri,
+		.edge_end = collide->edge_end,
+		.lower_edge = collide->lower_edge,
+		.owned = collide->owned,
+		.edge_triangle = collide->edge_triangle,
+		.mark_offset = collide->mark_offset,
+		.mark_vertex = collide->mark_vertex,
+		.mark_bits = collide->mark_bits,
+		.mark = collide->lane_mark + (size_t) tid * (size_t) sere_pad( collide->vertex_count ),
+		.h2 = thickness * thickness,
+		.buffer = thread_buffer( collide, tid ),
+		.edge_buffer = thread_edge_buffer( collide, tid ),
+		.capacity = collide->capacity,
+		.listing = listing,
+		.thickness = thickness,
+		/* 2δ, and 2⁻⁸ of it for the rounding of the displacement test and of cull_radius's
+		 * |p| term at the moved positions */
+		.grow = listing ? 2.0f * collide->cache_delta * ( 1.0f + 0x1p-8f ) : 0.0f,
+		.list_item = collide->cache_item + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_target = collide->cache_target + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_near = collide->cache_near + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_capacity = collide->cache_capacity,
+		.across = { collide->edge_across, collide->edge_across + across_stride,
+					collide->edge_across + 2 * across_stride },
+	};
+}
+
+/* After a listing search: the list serves later detections when no thread outgrew its room and
+ * every vertex was finite; it keeps the positions, thickness and tree build it was made for. */
+static void keep_list( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
+					   float thickness, int threads, int bad )
+{
+	bool whole = !bad;
+	for ( int t = 0; t < threads; ++t )
+	{
+		whole = whole && collide->cache_used[FAR_STRIDE * t] >= 0;
+	}
+	collide->cache_valid = whole;
+	if ( !whole && !bad )
+	{
+		/* the list outgrew its room: the next one lists fewer pairs */
+		collide->skin = SKIN_MIN;
+	}
+	if ( whole )
+	{
+		memcpy( collide->cache_x, x, sizeof( float ) * (size_t) collide->vertex_count );
+		memcpy( collide->cache_y, y, sizeof( float ) * (size_t) collide->vertex_count );
+		memcpy( collide->cache_z, z, sizeof( float ) * (size_t) collide->vertex_count );
+		collide->cache_thickness = thickness;
+		collide->cache_generation = sere_bvh_generation( bvh );
+	}
+}
+
+sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+								 const float* z, float thickness, int32_t* contact_count )
+{
+	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
+		 !( thickness > 0.0f ) || !isfinite( thickness ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t triangles;
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
+	if ( sere_bvh_vertex_count( bvh ) != collide->vertex_count || triangles != collide->triangle_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*contact_count = 0;
+	collide->contact_count = 0;
+	collide->edge_contact_count = 0;
+	collide->edge_found = 0;
+	collide->touched_count = 0;
+	int32_t n = collide->vertex_count;
+	int32_t threads = sere_team_default();
+	threads = threads < collide->slots ? threads : collide->slots;
+	collide->work_prefix[0] = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
+	}
+	bool replay = choose_list( collide, bvh, tri, x, y, z, thickness, threads );
+	bool listing = !replay;
 	for ( int t = 0; t < threads; ++t )
 	{
 		/* a thread the team turns out not to have lists nothing */
@@ -324,35 +394,8 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 #pragma omp parallel num_threads( threads ) reduction( | : bad )
 	{
 		int tid = omp_get_thread_num(), team = omp_get_num_threads();
-		detect_context c = {
-			.x = x,
-			.y = y,
-			.z = z,
-			.tri = tri,
-			.edge_end = collide->edge_end,
-			.lower_edge = collide->lower_edge,
-			.owned = collide->owned,
-			.edge_triangle = collide->edge_triangle,
-			.mark_offset = collide->mark_offset,
-			.mark_vertex = collide->mark_vertex,
-			.mark_bits = collide->mark_bits,
-			.mark = collide->lane_mark + (size_t) tid * (size_t) sere_pad( n ),
-			.h2 = h2,
-			.buffer = thread_buffer( collide, tid ),
-			.edge_buffer = thread_edge_buffer( collide, tid ),
-			.capacity = collide->capacity,
-			.listing = listing,
-			.thickness = thickness,
-			/* 2δ, and 2⁻⁸ of it for the rounding of the displacement test and of cull_radius's
-			 * |p| term at the moved positions */
-			.grow = listing ? 2.0f * collide->cache_delta * ( 1.0f + 0x1p-8f ) : 0.0f,
-			.list_item = collide->cache_item + (size_t) tid * (size_t) collide->cache_capacity,
-			.list_target = collide->cache_target + (size_t) tid * (size_t) collide->cache_capacity,
-			.list_near = collide->cache_near + (size_t) tid * (size_t) collide->cache_capacity,
-			.list_capacity = collide->cache_capacity,
-			.across = { collide->edge_across, collide->edge_across + across_stride,
-						collide->edge_across + 2 * across_stride },
-		};
+		detect_context c;
+		context_init( &c, collide, tri, x, y, z, thickness, listing, tid );
 		int32_t run_end = run_begin( collide, tid + 1, team );
 		for ( int32_t block = run_begin( collide, tid, team ); block < run_end; ++block )
 		{
@@ -388,25 +431,7 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	}
 	if ( listing )
 	{
-		bool whole = !bad;
-		for ( int t = 0; t < threads; ++t )
-		{
-			whole = whole && collide->cache_used[FAR_STRIDE * t] >= 0;
-		}
-		collide->cache_valid = whole;
-		if ( !whole && !bad )
-		{
-			/* the list outgrew its room: the next one lists fewer pairs */
-			collide->skin = SKIN_MIN;
-		}
-		if ( whole )
-		{
-			memcpy( collide->cache_x, x, sizeof( float ) * (size_t) n );
-			memcpy( collide->cache_y, y, sizeof( float ) * (size_t) n );
-			memcpy( collide->cache_z, z, sizeof( float ) * (size_t) n );
-			collide->cache_thickness = thickness;
-			collide->cache_generation = sere_bvh_generation( bvh );
-		}
+		keep_list( collide, bvh, x, y, z, thickness, threads, bad );
 	}
 	if ( bad )
 	{
