@@ -331,25 +331,14 @@ static bool params_valid( const sere_collide_params* p )
 		   p->relaxation <= 2.0f;
 }
 
-static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
-							const sere_collide_params* params, int32_t* unresolved, int32_t* iterations )
+/* Loads the touched vertices' positions into records (checking the inputs the response reads)
+ * and zeroes their accumulated moves; W = w_p + Σ w_k b_k² (or Σ over the edge ends of w times the
+ * squared weight on the edge) with the weights of detection, fixed for the response. Nonzero when
+ * an input is not finite. */
+static int load_response( sere_collide* collide, const sere_collide_state* state, int32_t vertex_contacts,
+						  int32_t contacts, bool parallel )
 {
-	if ( collide == NULL || bvh == NULL || !state_valid( state ) || !params_valid( params ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	int32_t triangles;
-	sere_bvh_triangles( bvh, &triangles );
-	if ( triangles != collide->triangle_count || sere_bvh_vertex_count( bvh ) != collide->vertex_count )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	/* the vertex–triangle contacts [0, vertex_contacts), then the edge–edge ones */
-	int32_t vertex_contacts = collide->contact_count, touched = collide->touched_count;
-	int32_t contacts = vertex_contacts + collide->edge_contact_count;
-	/* A few hundred contacts take less time than the barriers of a parallel response; the result
-	 * is the same either way. */
-	bool parallel = contacts >= RESPOND_PARALLEL;
+	int32_t touched = collide->touched_count;
 	const float* inv_m = state->inv_m;
 	int bad = 0;
 #pragma omp parallel num_threads( sere_team_default() ) if ( parallel )
@@ -367,8 +356,6 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			float* acc = collide->acc + 4 * (size_t) j;
 			acc[0] = acc[1] = acc[2] = acc[3] = 0.0f;
 		}
-		/* W = w_p + Σ w_k b_k² (or Σ over the edge ends of w times the squared weight on the
-		 * edge) with the weights of detection, fixed for the response */
 #pragma omp for schedule( static )
 		for ( int32_t k = 0; k < contacts; ++k )
 		{
@@ -382,6 +369,68 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			collide->inv_weight[k] = weight > 0.0f ? 1.0f / weight : 0.0f;
 		}
 	}
+	return bad;
+}
+
+/* Evaluates the calling thread's share of the evaluation blocks (a static share: a worksharing
+ * loop inside the caller's parallel region) and returns how many of its contacts push by more
+ * than the tolerance. */
+static int32_t evaluate_share( sere_collide* collide, int32_t blocks, int32_t vertex_blocks, int32_t contacts, float h2,
+							   float tolerance )
+{
+	int32_t vertex_contacts = collide->contact_count;
+	int32_t mine = 0;
+#pragma omp for schedule( static ) nowait
+	for ( int32_t block = 0; block < blocks; ++block )
+	{
+		bool vertex = block < vertex_blocks;
+		int32_t begin = vertex ? block * EVALUATE_BLOCK : vertex_contacts + ( block - vertex_blocks ) * EVALUATE_BLOCK;
+		int32_t last = vertex ? vertex_contacts : contacts;
+		int32_t end = begin + EVALUATE_BLOCK < last ? begin + EVALUATE_BLOCK : last;
+		mine += vertex ? evaluate_contacts( collide, begin, end, h2, tolerance )
+					   : evaluate_edges( collide, begin, end, h2, tolerance );
+	}
+	return mine;
+}
+
+/* Writes the touched slots [begin, end) back: the moved positions, and velocities changed by the
+ * accumulated move over dt. */
+static void write_back( const sere_collide* collide, const sere_collide_state* state, int32_t begin, int32_t end,
+						float inv_dt )
+{
+	for ( int32_t j = begin; j < end; ++j )
+	{
+		int32_t i = collide->touched[j];
+		const float* position = collide->position + 4 * (size_t) i;
+		const float* acc = collide->acc + 4 * (size_t) j;
+		state->x[i] = position[0], state->y[i] = position[1], state->z[i] = position[2];
+		state->vx[i] += acc[0] * inv_dt;
+		state->vy[i] += acc[1] * inv_dt;
+		state->vz[i] += acc[2] * inv_dt;
+	}
+}
+
+static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+							const sere_collide_params* params, int32_t* unresolved, int32_t* iterations )
+{
+	if ( collide == NULL || bvh == NULL || !state_valid( state ) || !params_valid( params ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t triangles;
+	sere_bvh_triangles( bvh, &triangles );
+	if ( triangles != collide->triangle_count || sere_bvh_vertex_count( bvh ) != collide->vertex_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	/* the vertex–triangle contacts [0, vertex_contacts), then the edge–edge ones */
+	int32_t vertex_contacts = collide->contact_count;
+	int32_t contacts = vertex_contacts + collide->edge_contact_count;
+	/* A few hundred contacts take less time than the barriers of a parallel response; the result
+	 * is the same either way. */
+	bool parallel = contacts >= RESPOND_PARALLEL;
+	const float* inv_m = state->inv_m;
+	int bad = load_response( collide, state, vertex_contacts, contacts, parallel );
 	if ( bad )
 	{
 		return SERE_ERR_NONFINITE;
@@ -416,18 +465,7 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 		}
 		for ( int32_t it = 0; it <= params->iterations; ++it )
 		{
-			int32_t mine = 0;
-#pragma omp for schedule( static ) nowait
-			for ( int32_t block = 0; block < blocks; ++block )
-			{
-				bool vertex = block < vertex_blocks;
-				int32_t begin =
-					vertex ? block * EVALUATE_BLOCK : vertex_contacts + ( block - vertex_blocks ) * EVALUATE_BLOCK;
-				int32_t last = vertex ? vertex_contacts : contacts;
-				int32_t end = begin + EVALUATE_BLOCK < last ? begin + EVALUATE_BLOCK : last;
-				mine += vertex ? evaluate_contacts( collide, begin, end, h2, tolerance )
-							   : evaluate_edges( collide, begin, end, h2, tolerance );
-			}
+			int32_t mine = evaluate_share( collide, blocks, vertex_blocks, contacts, h2, tolerance );
 			far[tid * FAR_STRIDE] = mine;
 #pragma omp barrier
 			int32_t total = 0;
@@ -459,16 +497,7 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			applied += 1;
 		}
 		/* the gather's share: each thread reads the sums it wrote */
-		for ( int32_t j = mine_begin; j < mine_end; ++j )
-		{
-			int32_t i = collide->touched[j];
-			const float* position = collide->position + 4 * (size_t) i;
-			const float* acc = collide->acc + 4 * (size_t) j;
-			state->x[i] = position[0], state->y[i] = position[1], state->z[i] = position[2];
-			state->vx[i] += acc[0] * inv_dt;
-			state->vy[i] += acc[1] * inv_dt;
-			state->vz[i] += acc[2] * inv_dt;
-		}
+		write_back( collide, state, mine_begin, mine_end, inv_dt );
 	}
 	*unresolved = remaining;
 	*iterations = applied;
