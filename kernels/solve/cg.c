@@ -54,6 +54,50 @@ static int by_length( const void* left, const void* right )
 	return l->row < r->row ? -1 : l->row > r->row;
 }
 
+/* The chunks' columns, values and slots from the CSR rows (position: row → its lane), and
+ * each lane's diagonal slot; false when a row holds its diagonal twice. */
+static bool fill_chunks( sere_sell* s, const sere_csr* a, const int32_t* position )
+{
+	for ( int32_t c = 0; c < s->chunks; ++c )
+	{
+		int32_t width = ( s->chunk_ptr[c + 1] - s->chunk_ptr[c] ) / LANES;
+		for ( int32_t l = 0; l < LANES; ++l )
+		{
+			int32_t i = s->row[c * LANES + l];
+			int32_t begin = i >= 0 ? a->row_ptr[i] : 0, length = i >= 0 ? a->row_ptr[i + 1] - begin : 0;
+			/* Padding repeats the row's last column: x_j is read anyway, so padding touches no
+			 * new cache line and meets a non-finite x_j only where the row itself does. */
+			int32_t pad = length > 0 ? a->col[begin + length - 1] : ( i >= 0 ? i : 0 );
+			for ( int32_t k = 0; k < width; ++k )
+			{
+				int32_t at = s->chunk_ptr[c] + k * LANES + l;
+				s->col[at] = k < length ? a->col[begin + k] : pad;
+				s->local_col[at] = position[s->col[at]];
+				s->val[at] = k < length ? a->val[begin + k] : 0.0;
+				if ( k < length )
+				{
+					s->slot[begin + k] = at;
+				}
+			}
+			int32_t* diagonal = s->diagonal + c * LANES + l;
+			*diagonal = -1;
+			for ( int32_t k = 0; k < length; ++k )
+			{
+				if ( a->col[begin + k] != i )
+				{
+					continue;
+				}
+				if ( *diagonal >= 0 )
+				{
+					return false;
+				}
+				*diagonal = s->chunk_ptr[c] + k * LANES + l;
+			}
+		}
+	}
+	return true;
+}
+
 sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out )
 {
 	if ( a == NULL || out == NULL || a->rows <= 0 || a->nnz < 0 || a->row_ptr == NULL || sigma < LANES ||
@@ -137,46 +181,13 @@ sere_status sere_sell_create( const sere_csr* a, int32_t sigma, sere_sell** out 
 			position[s->row[at]] = at;
 		}
 	}
-	for ( int32_t c = 0; c < s->chunks; ++c )
-	{
-		int32_t width = ( s->chunk_ptr[c + 1] - s->chunk_ptr[c] ) / LANES;
-		for ( int32_t l = 0; l < LANES; ++l )
-		{
-			int32_t i = s->row[c * LANES + l];
-			int32_t begin = i >= 0 ? a->row_ptr[i] : 0, length = i >= 0 ? a->row_ptr[i + 1] - begin : 0;
-			/* Padding repeats the row's last column: x_j is read anyway, so padding touches no
-			 * new cache line and meets a non-finite x_j only where the row itself does. */
-			int32_t pad = length > 0 ? a->col[begin + length - 1] : ( i >= 0 ? i : 0 );
-			for ( int32_t k = 0; k < width; ++k )
-			{
-				int32_t at = s->chunk_ptr[c] + k * LANES + l;
-				s->col[at] = k < length ? a->col[begin + k] : pad;
-				s->local_col[at] = position[s->col[at]];
-				s->val[at] = k < length ? a->val[begin + k] : 0.0;
-				if ( k < length )
-				{
-					s->slot[begin + k] = at;
-				}
-			}
-			int32_t* diagonal = s->diagonal + c * LANES + l;
-			*diagonal = -1;
-			for ( int32_t k = 0; k < length; ++k )
-			{
-				if ( a->col[begin + k] != i )
-				{
-					continue;
-				}
-				if ( *diagonal >= 0 )
-				{
-					free( position );
-					sere_sell_destroy( s );
-					return SERE_ERR_ARGUMENT;
-				}
-				*diagonal = s->chunk_ptr[c] + k * LANES + l;
-			}
-		}
-	}
+	bool filled = fill_chunks( s, a, position );
 	free( position );
+	if ( !filled )
+	{
+		sere_sell_destroy( s );
+		return SERE_ERR_ARGUMENT;
+	}
 	*out = s;
 	return SERE_OK;
 }

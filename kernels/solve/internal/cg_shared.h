@@ -7,6 +7,7 @@
 #include "solve/cg.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
