@@ -29,6 +29,108 @@ static sere_status sgs_fail( sere_sgs* g, int32_t* scratch, sere_status status )
 	return status;
 }
 
+/* Greedy coloring in row order (count: rows per color); false when a row does not hold its
+ * diagonal exactly once, needs a 33rd color, or the pattern is not symmetric. */
+static bool color_rows( sere_sgs* g, const sere_csr* a, int32_t* count )
+{
+	const int32_t n = a->rows;
+	memset( count, 0, sizeof( int32_t ) * SERE_SGS_MAX_COLORS );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		uint32_t taken = 0;
+		int32_t diagonals = 0;
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			int32_t j = a->col[k];
+			diagonals += j == i;
+			if ( j < i )
+			{
+				taken |= 1u << g->color[j];
+			}
+		}
+		if ( diagonals != 1 || taken == UINT32_MAX )
+		{
+			return false;
+		}
+		int32_t c = 0;
+		while ( taken & ( 1u << c ) )
+		{
+			++c;
+		}
+		g->color[i] = c;
+		count[c] += 1;
+		g->colors = c + 1 > g->colors ? c + 1 : g->colors;
+	}
+	_Static_assert( SERE_SGS_MAX_COLORS == 32, "the taken colors are one 32-bit mask" );
+	/* The pattern must be symmetric: a row's later neighbors chose their colors without it if
+	 * they do not list it back, and M is SPD only for symmetric A. Rows are short (a scan each). */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			int32_t j = a->col[k], back = 0;
+			for ( int32_t q = a->row_ptr[j]; q < a->row_ptr[j + 1] && !back; ++q )
+			{
+				back = a->col[q] == i;
+			}
+			if ( !back || ( j != i && g->color[j] == g->color[i] ) )
+			{
+				return false;
+			}
+		}
+	}
+	return true;
+}
+
+/* The slots of every chunk from the CSR rows: the L part, the U part (columns as positions,
+ * position: row → its position) and the diagonal after them; padding stays inert. */
+static void fill_slots( sere_sgs* g, const sere_csr* a, const int32_t* position, size_t slots )
+{
+	double* diagonal = g->val + slots;
+	for ( int32_t ch = 0; ch < g->chunks; ++ch )
+	{
+		int32_t c = 0;
+		while ( g->color_chunk[c + 1] <= ch )
+		{
+			++c;
+		}
+		for ( int32_t l = 0; l < LANES; ++l )
+		{
+			int32_t at = ch * LANES + l, i = g->row[at];
+			/* Padding repeats the lane's own position with value 0: a read the lane makes anyway. */
+			for ( int32_t s = g->lower_ptr[ch] + l; s < g->lower_ptr[ch + 1]; s += LANES )
+			{
+				g->col[s] = at;
+				g->val[s] = 0.0;
+			}
+			for ( int32_t s = g->upper_ptr[ch] + l; s < g->upper_ptr[ch + 1]; s += LANES )
+			{
+				g->col[s] = at;
+				g->val[s] = 0.0;
+			}
+			diagonal[at] = 1.0; /* padding: a lane of zeros stays zero through every sweep */
+			if ( i < 0 )
+			{
+				continue;
+			}
+			int32_t sl = g->lower_ptr[ch] + l, su = g->upper_ptr[ch] + l;
+			for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+			{
+				int32_t j = a->col[k];
+				int32_t s = g->color[j] < c ? sl : g->color[j] > c ? su : (int32_t) slots + at;
+				sl += g->color[j] < c ? LANES : 0;
+				su += g->color[j] > c ? LANES : 0;
+				if ( j != i )
+				{
+					g->col[s] = position[j];
+				}
+				g->val[s] = a->val[k];
+				g->slot[k] = s;
+			}
+		}
+	}
+}
+
 sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 {
 	if ( a == NULL || out == NULL || a->rows <= 0 || a->nnz < 0 || a->row_ptr == NULL || a->row_ptr[0] != 0 ||
@@ -57,51 +159,9 @@ sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 	{
 		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
 	}
-	/* Greedy coloring in row order; a row must hold its diagonal exactly once. */
-	memset( count, 0, sizeof( int32_t ) * SERE_SGS_MAX_COLORS );
-	for ( int32_t i = 0; i < n; ++i )
+	if ( !color_rows( g, a, count ) )
 	{
-		uint32_t taken = 0;
-		int32_t diagonals = 0;
-		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
-		{
-			int32_t j = a->col[k];
-			diagonals += j == i;
-			if ( j < i )
-			{
-				taken |= 1u << g->color[j];
-			}
-		}
-		if ( diagonals != 1 || taken == UINT32_MAX )
-		{
-			return sgs_fail( g, scratch, SERE_ERR_ARGUMENT );
-		}
-		int32_t c = 0;
-		while ( taken & ( 1u << c ) )
-		{
-			++c;
-		}
-		g->color[i] = c;
-		count[c] += 1;
-		g->colors = c + 1 > g->colors ? c + 1 : g->colors;
-	}
-	_Static_assert( SERE_SGS_MAX_COLORS == 32, "the taken colors are one 32-bit mask" );
-	/* The pattern must be symmetric: a row's later neighbors chose their colors without it if
-	 * they do not list it back, and M is SPD only for symmetric A. Rows are short (a scan each). */
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
-		{
-			int32_t j = a->col[k], back = 0;
-			for ( int32_t q = a->row_ptr[j]; q < a->row_ptr[j + 1] && !back; ++q )
-			{
-				back = a->col[q] == i;
-			}
-			if ( !back || ( j != i && g->color[j] == g->color[i] ) )
-			{
-				return sgs_fail( g, scratch, SERE_ERR_ARGUMENT );
-			}
-		}
+		return sgs_fail( g, scratch, SERE_ERR_ARGUMENT );
 	}
 	g->color_chunk[0] = 0;
 	for ( int32_t c = 0; c < g->colors; ++c )
@@ -170,49 +230,7 @@ sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 	{
 		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
 	}
-	double* diagonal = g->val + slots;
-	for ( int32_t ch = 0; ch < g->chunks; ++ch )
-	{
-		int32_t c = 0;
-		while ( g->color_chunk[c + 1] <= ch )
-		{
-			++c;
-		}
-		for ( int32_t l = 0; l < LANES; ++l )
-		{
-			int32_t at = ch * LANES + l, i = g->row[at];
-			/* Padding repeats the lane's own position with value 0: a read the lane makes anyway. */
-			for ( int32_t s = g->lower_ptr[ch] + l; s < g->lower_ptr[ch + 1]; s += LANES )
-			{
-				g->col[s] = at;
-				g->val[s] = 0.0;
-			}
-			for ( int32_t s = g->upper_ptr[ch] + l; s < g->upper_ptr[ch + 1]; s += LANES )
-			{
-				g->col[s] = at;
-				g->val[s] = 0.0;
-			}
-			diagonal[at] = 1.0; /* padding: a lane of zeros stays zero through every sweep */
-			if ( i < 0 )
-			{
-				continue;
-			}
-			int32_t sl = g->lower_ptr[ch] + l, su = g->upper_ptr[ch] + l;
-			for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
-			{
-				int32_t j = a->col[k];
-				int32_t s = g->color[j] < c ? sl : g->color[j] > c ? su : (int32_t) slots + at;
-				sl += g->color[j] < c ? LANES : 0;
-				su += g->color[j] > c ? LANES : 0;
-				if ( j != i )
-				{
-					g->col[s] = position[j];
-				}
-				g->val[s] = a->val[k];
-				g->slot[k] = s;
-			}
-		}
-	}
+	fill_slots( g, a, position, slots );
 	free( scratch );
 	*out = g;
 	return SERE_OK;

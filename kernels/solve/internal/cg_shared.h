@@ -7,8 +7,8 @@
 #include "solve/cg.h"
 
 #include <math.h>
-#include <stdbool.h>
 #include <omp.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
