@@ -337,50 +337,16 @@ static inline void block_product_sums( const sere_sell* a, int32_t blk, int32_t 
 	partial[4 * blk + 2] = gamma;
 }
 
-sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const double* b_in, double* x_in,
-						   double tolerance, int32_t max_iterations, sere_cg_result* result )
+/* The solve's start: b and x into positions, D⁻¹, r = b − Ax, u = D⁻¹r, the first product's sums,
+ * and whether the start already ends the solve. */
+static void cg_start( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, const double* b_in, const double* x_in,
+					  double tolerance, int32_t max_iterations )
 {
-	result->iterations = 0;
-	result->residual = 0.0;
-	if ( ws == NULL || a == NULL || b_in == NULL || x_in == NULL || a->rows <= 0 || a->rows > ws->capacity ||
-		 a->sigma <= 0 || SERE_CG_BLOCK % a->sigma != 0 || !( tolerance >= 0.0 ) || max_iterations < 0 )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
 	const int32_t np = a->chunks * LANES; /* positions, the last chunk's padding lanes included */
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	double *x = ws->x, *b = ws->b, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *inv_diag = ws->inv_diag, *partial = ws->partial;
-	sere_status status = SERE_OK;
-	int32_t iterations = 0;
-	double relative = 0.0;
 	int bad_diagonal = 0, nonfinite = 0;
-
-	/* Parallel regions that span many steps: the systems are small (thousands of rows), so
-	 * fork/join per kernel would cost more than the kernels. Every thread takes the same
-	 * decisions from the same block sums, so no broadcast is needed. Blocks are whole chunks
-	 * (σ divides SERE_CG_BLOCK), so a block's products are written and read by one thread.
-	 *
-	 * The recurrence is Chronopoulos and Gear's (1989) form of Jacobi PCG: besides x, r and
-	 * u = D⁻¹r it carries w = Au and s = Ap, updated as s = w + βs, so the one product per
-	 * iteration is w = Au, and both sums it needs, δ = uᵀw and γ = rᵀu, come out of that same
-	 * sweep; pᵀAp = δ − βγ/α_prev follows from them. An iteration is then two sweeps and two
-	 * barriers (the product needs every block's u; the step needs the sums), and the product
-	 * gathers one vector, where the textbook form needs a third barrier before q = Ap or, to
-	 * avoid it, forms p = z + βp inside the product and gathers two. In exact arithmetic the
-	 * iterates are the textbook's.
-	 *
-	 * The steps run in rounds of `chunk` iterations, each round its own parallel region, with
-	 * the thread count sere_team gives at its start: a long solve on a machine that other
-	 * processes start to load (or that was loaded when the solve began, before any measure)
-	 * goes on with the cores left to it after a round, instead of stalling at every barrier
-	 * for a thread that waits for its share of a busy core. A round is about 2²⁴ matrix
-	 * entries of products (tens of ms): a small system (the maple's osmosis) runs its whole
-	 * solve in one round, as before, and a 300 × 300 Poisson system in rounds of about 36 iterations,
-	 * a fork and join per 10 ms or more. Blocks and their sums do not depend on the thread
-	 * count, so neither do the iterates. */
-	int done = 0;
-	double b_norm = 0.0, rel = 0.0;
 #pragma omp parallel num_threads( sere_team_default() )
 	{
 		/* Into positions; padding lanes get b = x = 0 and D⁻¹ = 0, so they stay 0 throughout
@@ -437,91 +403,142 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 		/* every thread holds the same values; the region's end publishes the master's */
 #pragma omp master
 		{
-			done = my_done;
-			b_norm = my_b_norm;
-			rel = my_rel;
+			st->done = my_done;
+			st->b_norm = my_b_norm;
+			st->rel = my_rel;
 		}
 	}
+	st->bad_diagonal = bad_diagonal;
+	st->nonfinite = nonfinite;
+}
+
+/* One round of at most `chunk` steps of the recurrence, in one parallel region (see
+ * sere_cg_solve). */
+static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, double tolerance, int32_t max_iterations,
+					  int32_t chunk )
+{
+	const int32_t np = a->chunks * LANES; /* positions, the last chunk's padding lanes included */
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *inv_diag = ws->inv_diag, *partial = ws->partial;
+#pragma omp parallel num_threads( sere_team_default() )
+	{
+		int32_t my_it = st->it;
+		double my_alpha_prev = st->alpha_prev, my_gamma_prev = st->gamma_prev, my_rel = st->rel;
+		int my_status = SERE_OK, my_done = 0;
+		const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
+		while ( my_it < round_end )
+		{
+			double delta = block_sum( partial, blocks, 1 );
+			double gamma = block_sum( partial, blocks, 2 );
+			double beta = my_it == 0 ? 0.0 : gamma / my_gamma_prev;
+			double pap = my_it == 0 ? delta : delta - beta * gamma / my_alpha_prev; /* pᵀAp */
+			double alpha;
+			my_status = cg_step_length( pap, gamma, &alpha );
+			if ( my_status != SERE_OK )
+			{
+				my_done = 1;
+				break;
+			}
+			/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
+#pragma omp for schedule( static )
+			for ( int32_t blk = 0; blk < blocks; ++blk )
+			{
+				double rr_block = 0.0;
+#pragma omp simd reduction( + : rr_block )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				{
+					p[i] = u[i] + beta * p[i];
+					s[i] = w[i] + beta * s[i];
+					x[i] += alpha * p[i];
+					r[i] -= alpha * s[i];
+					u[i] = inv_diag[i] * r[i];
+					rr_block += r[i] * r[i];
+				}
+				partial[4 * blk] = rr_block;
+			}
+			/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
+			 * step rewrites it only after every thread has passed the product's barrier, so
+			 * after reading it here. */
+			double my_rr = block_sum( partial, blocks, 0 );
+			my_it += 1;
+			my_rel = sqrt( my_rr ) / st->b_norm;
+			if ( !isfinite( my_rel ) )
+			{
+				my_status = SERE_ERR_NONFINITE;
+				my_done = 1;
+				break;
+			}
+			if ( my_rel <= tolerance || my_it == max_iterations )
+			{
+				my_done = 1;
+				break;
+			}
+#pragma omp for schedule( static )
+			for ( int32_t blk = 0; blk < blocks; ++blk )
+			{
+				block_product_sums( a, blk, np, u, r, w, partial );
+			}
+			my_alpha_prev = alpha;
+			my_gamma_prev = gamma;
+		}
+#pragma omp master
+		{
+			st->it = my_it;
+			st->alpha_prev = my_alpha_prev;
+			st->gamma_prev = my_gamma_prev;
+			st->rel = my_rel;
+			st->status = my_status;
+			st->done = my_done;
+		}
+	}
+}
+
+sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const double* b_in, double* x_in,
+						   double tolerance, int32_t max_iterations, sere_cg_result* result )
+{
+	result->iterations = 0;
+	result->residual = 0.0;
+	if ( ws == NULL || a == NULL || b_in == NULL || x_in == NULL || a->rows <= 0 || a->rows > ws->capacity ||
+		 a->sigma <= 0 || SERE_CG_BLOCK % a->sigma != 0 || !( tolerance >= 0.0 ) || max_iterations < 0 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	/* Parallel regions that span many steps: the systems are small (thousands of rows), so
+	 * fork/join per kernel would cost more than the kernels. Every thread takes the same
+	 * decisions from the same block sums, so no broadcast is needed. Blocks are whole chunks
+	 * (σ divides SERE_CG_BLOCK), so a block's products are written and read by one thread.
+	 *
+	 * The recurrence is Chronopoulos and Gear's (1989) form of Jacobi PCG: besides x, r and
+	 * u = D⁻¹r it carries w = Au and s = Ap, updated as s = w + βs, so the one product per
+	 * iteration is w = Au, and both sums it needs, δ = uᵀw and γ = rᵀu, come out of that same
+	 * sweep; pᵀAp = δ − βγ/α_prev follows from them. An iteration is then two sweeps and two
+	 * barriers (the product needs every block's u; the step needs the sums), and the product
+	 * gathers one vector, where the textbook form needs a third barrier before q = Ap or, to
+	 * avoid it, forms p = z + βp inside the product and gathers two. In exact arithmetic the
+	 * iterates are the textbook's.
+	 *
+	 * The steps run in rounds of `chunk` iterations, each round its own parallel region, with
+	 * the thread count sere_team gives at its start: a long solve on a machine that other
+	 * processes start to load (or that was loaded when the solve began, before any measure)
+	 * goes on with the cores left to it after a round, instead of stalling at every barrier
+	 * for a thread that waits for its share of a busy core. A round is about 2²⁴ matrix
+	 * entries of products (tens of ms): a small system (the maple's osmosis) runs its whole
+	 * solve in one round, as before, and a 300 × 300 Poisson system in rounds of about 36 iterations,
+	 * a fork and join per 10 ms or more. Blocks and their sums do not depend on the thread
+	 * count, so neither do the iterates. */
+	cg_state st = { 0 };
+	cg_start( &st, ws, a, b_in, x_in, tolerance, max_iterations );
 	const int64_t chunk_entries = a->chunk_ptr[a->chunks] > 0 ? a->chunk_ptr[a->chunks] : 1;
 	const int32_t chunk = (int32_t) ( ( 1 << 24 ) / chunk_entries > 16 ? ( 1 << 24 ) / chunk_entries : 16 );
-	int32_t it = 0;
-	double alpha_prev = 0.0, gamma_prev = 0.0;
-	int local_status = SERE_OK;
-	while ( !done && it < max_iterations )
+	while ( !st.done && st.it < max_iterations )
 	{
-#pragma omp parallel num_threads( sere_team_default() )
-		{
-			int32_t my_it = it;
-			double my_alpha_prev = alpha_prev, my_gamma_prev = gamma_prev, my_rel = rel;
-			int my_status = SERE_OK, my_done = 0;
-			const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
-			while ( my_it < round_end )
-			{
-				double delta = block_sum( partial, blocks, 1 );
-				double gamma = block_sum( partial, blocks, 2 );
-				double beta = my_it == 0 ? 0.0 : gamma / my_gamma_prev;
-				double pap = my_it == 0 ? delta : delta - beta * gamma / my_alpha_prev; /* pᵀAp */
-				double alpha;
-				my_status = cg_step_length( pap, gamma, &alpha );
-				if ( my_status != SERE_OK )
-				{
-					my_done = 1;
-					break;
-				}
-				/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
-#pragma omp for schedule( static )
-				for ( int32_t blk = 0; blk < blocks; ++blk )
-				{
-					double rr_block = 0.0;
-#pragma omp simd reduction( + : rr_block )
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						p[i] = u[i] + beta * p[i];
-						s[i] = w[i] + beta * s[i];
-						x[i] += alpha * p[i];
-						r[i] -= alpha * s[i];
-						u[i] = inv_diag[i] * r[i];
-						rr_block += r[i] * r[i];
-					}
-					partial[4 * blk] = rr_block;
-				}
-				/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
-				 * step rewrites it only after every thread has passed the product's barrier, so
-				 * after reading it here. */
-				double my_rr = block_sum( partial, blocks, 0 );
-				my_it += 1;
-				my_rel = sqrt( my_rr ) / b_norm;
-				if ( !isfinite( my_rel ) )
-				{
-					my_status = SERE_ERR_NONFINITE;
-					my_done = 1;
-					break;
-				}
-				if ( my_rel <= tolerance || my_it == max_iterations )
-				{
-					my_done = 1;
-					break;
-				}
-#pragma omp for schedule( static )
-				for ( int32_t blk = 0; blk < blocks; ++blk )
-				{
-					block_product_sums( a, blk, np, u, r, w, partial );
-				}
-				my_alpha_prev = alpha;
-				my_gamma_prev = gamma;
-			}
-#pragma omp master
-			{
-				it = my_it;
-				alpha_prev = my_alpha_prev;
-				gamma_prev = my_gamma_prev;
-				rel = my_rel;
-				local_status = my_status;
-				done = my_done;
-			}
-		}
+		cg_round( &st, ws, a, tolerance, max_iterations, chunk );
 	}
 	/* Out of positions: the last iterate, whatever stopped the solve. */
+	const int32_t np = a->chunks * LANES;
+	const double* x = ws->x;
+	sere_status status = SERE_OK;
 #pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t at = 0; at < np; ++at )
 	{
@@ -530,25 +547,23 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 			x_in[a->row[at]] = x[at];
 		}
 	}
-	iterations = it;
-	relative = rel;
-	if ( bad_diagonal )
+	if ( st.bad_diagonal )
 	{
 		status = SERE_ERR_NOT_SPD;
 	}
-	else if ( nonfinite )
+	else if ( st.nonfinite )
 	{
 		status = SERE_ERR_NONFINITE;
 	}
-	else if ( local_status != SERE_OK )
+	else if ( st.status != SERE_OK )
 	{
-		status = (sere_status) local_status;
+		status = (sere_status) st.status;
 	}
-	else if ( rel > tolerance )
+	else if ( st.rel > tolerance )
 	{
 		status = SERE_ERR_NO_CONVERGE;
 	}
-	result->iterations = iterations;
-	result->residual = relative;
+	result->iterations = st.it;
+	result->residual = st.rel;
 	return status;
 }

@@ -120,3 +120,13 @@ static inline int load_position( int32_t i, const double* b_in, const double* x_
 	x[at] = i >= 0 ? x_in[i] : 0.0;
 	return !isfinite( b[at] ) || !isfinite( x[at] );
 }
+
+/* A solve's state between its parallel regions: every thread of a region holds the same values
+ * (they take the same decisions from the same block sums), and the master publishes them at the
+ * region's end. */
+typedef struct cg_state
+{
+	int32_t it;
+	double alpha_prev, gamma_prev, rel, b_norm;
+	int status, done, met, bad_diagonal, nonfinite;
+} cg_state;
