@@ -447,21 +447,14 @@ static void sgs_residual( const sere_sgs* g, int32_t blocks, int32_t np, const d
 	}
 }
 
-sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, double* x_in,
-							   double tolerance, int32_t max_iterations, sere_cg_result* result )
+/* The solve's start: b and x into positions, D⁻¹ and the blocks' sums of b²; flags a diagonal
+ * that is not positive and a non-finite input. */
+static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, const double* x_in )
 {
-	result->iterations = 0;
-	result->residual = 0.0;
-	if ( ws == NULL || g == NULL || b_in == NULL || x_in == NULL || g->rows <= 0 || g->rows > ws->capacity ||
-		 g->chunks * LANES > ws->positions || !( tolerance >= 0.0 ) || max_iterations < 0 )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
 	const int32_t np = g->chunks * LANES;
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
-	double *x = ws->x, *b = ws->b, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
-	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+	double *x = ws->x, *b = ws->b, *inv_diag = ws->inv_diag, *partial = ws->partial;
 	int bad_diagonal = 0, nonfinite = 0;
 #pragma omp parallel num_threads( sere_team_default() )
 	{
@@ -484,9 +477,141 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 			partial[4 * blk + 3] = bb;
 		}
 	}
-	if ( bad_diagonal || nonfinite )
+	st->bad_diagonal = bad_diagonal;
+	st->nonfinite = nonfinite;
+}
+
+/* Into Eisenstat's variables: r̂ = L̃⁻¹ r, ŷ = L̃ᵀ x, u = D⁻¹ r̂, w = E u. s = p = 0 so that the
+ * first step's p = u + 0·p is u. Returns r̂ᵀr̂. */
+static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it )
+{
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+#pragma omp parallel num_threads( sere_team_default() )
 	{
-		return bad_diagonal ? SERE_ERR_NOT_SPD : SERE_ERR_NONFINITE;
+		sgs_forward( g, inv_diag, r );
+		sgs_upper_product( g, x );
+#pragma omp for schedule( static )
+		for ( int32_t blk = 0; blk < blocks; ++blk )
+		{
+			double rr = 0.0, gamma = 0.0;
+			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+			{
+				u[i] = diagonal[i] * r[i];
+				p[i] = 0.0;
+				s[i] = 0.0;
+				rr += r[i] * r[i];
+				gamma += r[i] * u[i];
+			}
+			partial[4 * blk] = rr;
+			partial[4 * blk + 2 + ( it & 1 )] = gamma;
+		}
+		sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
+	}
+	return block_sum( partial, blocks, 0 );
+}
+
+/* One round of at most `chunk` steps of the recurrence from step `first`, in one parallel region
+ * (as sere_cg_solve's rounds), until the recursive residual reaches target. */
+static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, int32_t first, double target,
+					   int32_t max_iterations, int32_t chunk )
+{
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+#pragma omp parallel num_threads( sere_team_default() )
+	{
+		int32_t my_it = st->it;
+		double my_alpha_prev = st->alpha_prev, my_gamma_prev = st->gamma_prev;
+		int my_status = SERE_OK, my_done = 0, my_met = 0;
+		const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
+		while ( my_it < round_end )
+		{
+			double delta = block_sum( partial, blocks, 1 );
+			/* γ = r̂ᵀu comes from the previous step's update sweep, into slot 2 or 3 by the
+			 * parity of the step: a thread that runs ahead into this step's update writes
+			 * the other slot while a slower one may still be reading this one. */
+			double gamma = block_sum( partial, blocks, 2 + ( my_it & 1 ) );
+			double beta = my_it == first ? 0.0 : gamma / my_gamma_prev;
+			double pap = my_it == first ? delta : delta - beta * gamma / my_alpha_prev;
+			double alpha;
+			my_status = cg_step_length( pap, gamma, &alpha );
+			if ( my_status != SERE_OK )
+			{
+				my_done = 1;
+				break;
+			}
+#pragma omp for schedule( static )
+			for ( int32_t blk = 0; blk < blocks; ++blk )
+			{
+				double rr_block = 0.0, gamma_block = 0.0;
+#pragma omp simd reduction( + : rr_block, gamma_block )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				{
+					p[i] = u[i] + beta * p[i];
+					s[i] = w[i] + beta * s[i];
+					x[i] += alpha * p[i];
+					r[i] -= alpha * s[i];
+					u[i] = diagonal[i] * r[i];
+					rr_block += r[i] * r[i];
+					gamma_block += r[i] * u[i];
+				}
+				partial[4 * blk] = rr_block;
+				partial[4 * blk + 2 + ( ( my_it + 1 ) & 1 )] = gamma_block;
+			}
+			double my_rr = block_sum( partial, blocks, 0 );
+			my_it += 1;
+			if ( !isfinite( my_rr ) )
+			{
+				my_status = SERE_ERR_NONFINITE;
+				my_done = 1;
+				break;
+			}
+			if ( sqrt( my_rr ) <= target || my_it == max_iterations )
+			{
+				my_met = sqrt( my_rr ) <= target;
+				my_done = 1;
+				break;
+			}
+			sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
+			my_alpha_prev = alpha;
+			my_gamma_prev = gamma;
+		}
+#pragma omp master
+		{
+			st->it = my_it;
+			st->alpha_prev = my_alpha_prev;
+			st->gamma_prev = my_gamma_prev;
+			st->status = my_status;
+			st->done = my_done;
+			st->met = my_met;
+		}
+	}
+}
+
+sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, double* x_in,
+							   double tolerance, int32_t max_iterations, sere_cg_result* result )
+{
+	result->iterations = 0;
+	result->residual = 0.0;
+	if ( ws == NULL || g == NULL || b_in == NULL || x_in == NULL || g->rows <= 0 || g->rows > ws->capacity ||
+		 g->chunks * LANES > ws->positions || !( tolerance >= 0.0 ) || max_iterations < 0 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	double *x = ws->x, *b = ws->b, *r = ws->r, *inv_diag = ws->inv_diag, *partial = ws->partial;
+	cg_state st = { 0 };
+	sgs_start( &st, ws, g, b_in, x_in );
+	if ( st.bad_diagonal || st.nonfinite )
+	{
+		return st.bad_diagonal ? SERE_ERR_NOT_SPD : SERE_ERR_NONFINITE;
 	}
 	const double b_norm = sqrt( block_sum( partial, blocks, 3 ) );
 	if ( b_norm == 0.0 )
@@ -499,14 +624,10 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	}
 	const int64_t entries = g->upper_ptr[g->chunks] + np;
 	const int32_t chunk = (int32_t) ( ( 1 << 24 ) / entries > 16 ? ( 1 << 24 ) / entries : 16 );
-	int32_t it = 0;
-	int local_status = SERE_OK;
 	double rel = 0.0, safety = 1.0, previous = INFINITY;
-	int met = 0; /* the last round's recursive residual reached its target */
 	for ( ;; )
 	{
 		/* The true residual of x: the answer, or where (re)starting from x begins. */
-		double rr_hat = 0.0;
 #pragma omp parallel num_threads( sere_team_default() )
 		{
 			sgs_residual( g, blocks, np, b, x, r, partial );
@@ -514,116 +635,26 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 		rel = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( !isfinite( rel ) )
 		{
-			local_status = SERE_ERR_NONFINITE;
+			st.status = SERE_ERR_NONFINITE;
 			break;
 		}
 		/* Restart only while restarting still pays: below the rounding floor of b − A x
 		 * itself (near 1e-14 relative on diffusion-dominated rows) the true residual stalls. */
-		if ( rel <= tolerance || it >= max_iterations || local_status != SERE_OK || rel > 0.5 * previous )
+		if ( rel <= tolerance || st.it >= max_iterations || st.status != SERE_OK || rel > 0.5 * previous )
 		{
 			break;
 		}
 		previous = rel;
-		/* Into Eisenstat's variables: r̂ = L̃⁻¹ r, ŷ = L̃ᵀ x, u = D⁻¹ r̂, w = E u. s = p = 0 so that
-		 * the first step's p = u + 0·p is u. */
-#pragma omp parallel num_threads( sere_team_default() )
-		{
-			sgs_forward( g, inv_diag, r );
-			sgs_upper_product( g, x );
-#pragma omp for schedule( static )
-			for ( int32_t blk = 0; blk < blocks; ++blk )
-			{
-				double rr = 0.0, gamma = 0.0;
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-				{
-					u[i] = diagonal[i] * r[i];
-					p[i] = 0.0;
-					s[i] = 0.0;
-					rr += r[i] * r[i];
-					gamma += r[i] * u[i];
-				}
-				partial[4 * blk] = rr;
-				partial[4 * blk + 2 + ( it & 1 )] = gamma;
-			}
-			sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
-		}
-		rr_hat = block_sum( partial, blocks, 0 );
+		double rr_hat = sgs_restart( ws, g, st.it );
 		/* Reduce the transformed residual by the factor the true one still needs (and by half
 		 * more at every restart, should the two norms have disagreed). */
 		const double target = sqrt( rr_hat ) * ( tolerance / rel ) * safety;
-		double alpha_prev = 0.0, gamma_prev = 0.0;
-		int32_t first = it;
-		int done = 0;
-		while ( !done && it < max_iterations )
+		st.alpha_prev = 0.0, st.gamma_prev = 0.0;
+		int32_t first = st.it;
+		st.done = 0;
+		while ( !st.done && st.it < max_iterations )
 		{
-#pragma omp parallel num_threads( sere_team_default() )
-			{
-				int32_t my_it = it;
-				double my_alpha_prev = alpha_prev, my_gamma_prev = gamma_prev;
-				int my_status = SERE_OK, my_done = 0, my_met = 0;
-				const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
-				while ( my_it < round_end )
-				{
-					double delta = block_sum( partial, blocks, 1 );
-					/* γ = r̂ᵀu comes from the previous step's update sweep, into slot 2 or 3 by the
-					 * parity of the step: a thread that runs ahead into this step's update writes
-					 * the other slot while a slower one may still be reading this one. */
-					double gamma = block_sum( partial, blocks, 2 + ( my_it & 1 ) );
-					double beta = my_it == first ? 0.0 : gamma / my_gamma_prev;
-					double pap = my_it == first ? delta : delta - beta * gamma / my_alpha_prev;
-					double alpha;
-					my_status = cg_step_length( pap, gamma, &alpha );
-					if ( my_status != SERE_OK )
-					{
-						my_done = 1;
-						break;
-					}
-#pragma omp for schedule( static )
-					for ( int32_t blk = 0; blk < blocks; ++blk )
-					{
-						double rr_block = 0.0, gamma_block = 0.0;
-#pragma omp simd reduction( + : rr_block, gamma_block )
-						for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-						{
-							p[i] = u[i] + beta * p[i];
-							s[i] = w[i] + beta * s[i];
-							x[i] += alpha * p[i];
-							r[i] -= alpha * s[i];
-							u[i] = diagonal[i] * r[i];
-							rr_block += r[i] * r[i];
-							gamma_block += r[i] * u[i];
-						}
-						partial[4 * blk] = rr_block;
-						partial[4 * blk + 2 + ( ( my_it + 1 ) & 1 )] = gamma_block;
-					}
-					double my_rr = block_sum( partial, blocks, 0 );
-					my_it += 1;
-					if ( !isfinite( my_rr ) )
-					{
-						my_status = SERE_ERR_NONFINITE;
-						my_done = 1;
-						break;
-					}
-					if ( sqrt( my_rr ) <= target || my_it == max_iterations )
-					{
-						my_met = sqrt( my_rr ) <= target;
-						my_done = 1;
-						break;
-					}
-					sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
-					my_alpha_prev = alpha;
-					my_gamma_prev = gamma;
-				}
-#pragma omp master
-				{
-					it = my_it;
-					alpha_prev = my_alpha_prev;
-					gamma_prev = my_gamma_prev;
-					local_status = my_status;
-					done = my_done;
-					met = my_met;
-				}
-			}
+			sgs_round( &st, ws, g, first, target, max_iterations, chunk );
 		}
 		/* Back from ŷ: x = L̃⁻ᵀ ŷ. */
 #pragma omp parallel num_threads( sere_team_default() )
@@ -640,14 +671,14 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 			x_in[g->row[at]] = x[at];
 		}
 	}
-	result->iterations = it;
+	result->iterations = st.it;
 	result->residual = rel;
-	if ( local_status != SERE_OK )
+	if ( st.status != SERE_OK )
 	{
-		return (sere_status) local_status;
+		return (sere_status) st.status;
 	}
 	/* A true residual stalled above tolerance after the recursive one met it is rounding, not
 	 * a lack of convergence: SERE_OK, as the Jacobi path (which checks only the recursive one)
 	 * would return, with the true residual reported. */
-	return rel <= tolerance || met ? SERE_OK : SERE_ERR_NO_CONVERGE;
+	return rel <= tolerance || st.met ? SERE_OK : SERE_ERR_NO_CONVERGE;
 }
