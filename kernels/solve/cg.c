@@ -423,21 +423,21 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 	double *inv_diag = ws->inv_diag, *partial = ws->partial;
 #pragma omp parallel num_threads( sere_team_default() )
 	{
-		int32_t my_it = st->it;
-		double my_alpha_prev = st->alpha_prev, my_gamma_prev = st->gamma_prev, my_rel = st->rel;
-		int my_status = SERE_OK, my_done = 0;
-		const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
-		while ( my_it < round_end )
+		/* every thread steps its own copy; they stay equal */
+		cg_state my = *st;
+		my.status = SERE_OK, my.done = 0, my.met = 0;
+		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
+		while ( my.it < round_end )
 		{
 			double delta = block_sum( partial, blocks, 1 );
 			double gamma = block_sum( partial, blocks, 2 );
-			double beta = my_it == 0 ? 0.0 : gamma / my_gamma_prev;
-			double pap = my_it == 0 ? delta : delta - beta * gamma / my_alpha_prev; /* pᵀAp */
+			double beta = my.it == 0 ? 0.0 : gamma / my.gamma_prev;
+			double pap = my.it == 0 ? delta : delta - beta * gamma / my.alpha_prev; /* pᵀAp */
 			double alpha;
-			my_status = cg_step_length( pap, gamma, &alpha );
-			if ( my_status != SERE_OK )
+			my.status = cg_step_length( pap, gamma, &alpha );
+			if ( my.status != SERE_OK )
 			{
-				my_done = 1;
+				my.done = 1;
 				break;
 			}
 			/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
@@ -461,17 +461,17 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 			 * step rewrites it only after every thread has passed the product's barrier, so
 			 * after reading it here. */
 			double my_rr = block_sum( partial, blocks, 0 );
-			my_it += 1;
-			my_rel = sqrt( my_rr ) / st->b_norm;
-			if ( !isfinite( my_rel ) )
+			my.it += 1;
+			my.rel = sqrt( my_rr ) / my.b_norm;
+			if ( !isfinite( my.rel ) )
 			{
-				my_status = SERE_ERR_NONFINITE;
-				my_done = 1;
+				my.status = SERE_ERR_NONFINITE;
+				my.done = 1;
 				break;
 			}
-			if ( my_rel <= tolerance || my_it == max_iterations )
+			if ( my.rel <= tolerance || my.it == max_iterations )
 			{
-				my_done = 1;
+				my.done = 1;
 				break;
 			}
 #pragma omp for schedule( static )
@@ -479,18 +479,11 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 			{
 				block_product_sums( a, blk, np, u, r, w, partial );
 			}
-			my_alpha_prev = alpha;
-			my_gamma_prev = gamma;
+			my.alpha_prev = alpha;
+			my.gamma_prev = gamma;
 		}
 #pragma omp master
-		{
-			st->it = my_it;
-			st->alpha_prev = my_alpha_prev;
-			st->gamma_prev = my_gamma_prev;
-			st->rel = my_rel;
-			st->status = my_status;
-			st->done = my_done;
-		}
+		*st = my;
 	}
 }
 

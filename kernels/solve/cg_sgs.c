@@ -526,24 +526,24 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
 #pragma omp parallel num_threads( sere_team_default() )
 	{
-		int32_t my_it = st->it;
-		double my_alpha_prev = st->alpha_prev, my_gamma_prev = st->gamma_prev;
-		int my_status = SERE_OK, my_done = 0, my_met = 0;
-		const int32_t round_end = max_iterations - my_it > chunk ? my_it + chunk : max_iterations;
-		while ( my_it < round_end )
+		/* every thread steps its own copy; they stay equal */
+		cg_state my = *st;
+		my.status = SERE_OK, my.done = 0, my.met = 0;
+		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
+		while ( my.it < round_end )
 		{
 			double delta = block_sum( partial, blocks, 1 );
 			/* γ = r̂ᵀu comes from the previous step's update sweep, into slot 2 or 3 by the
 			 * parity of the step: a thread that runs ahead into this step's update writes
 			 * the other slot while a slower one may still be reading this one. */
-			double gamma = block_sum( partial, blocks, 2 + ( my_it & 1 ) );
-			double beta = my_it == first ? 0.0 : gamma / my_gamma_prev;
-			double pap = my_it == first ? delta : delta - beta * gamma / my_alpha_prev;
+			double gamma = block_sum( partial, blocks, 2 + ( my.it & 1 ) );
+			double beta = my.it == first ? 0.0 : gamma / my.gamma_prev;
+			double pap = my.it == first ? delta : delta - beta * gamma / my.alpha_prev;
 			double alpha;
-			my_status = cg_step_length( pap, gamma, &alpha );
-			if ( my_status != SERE_OK )
+			my.status = cg_step_length( pap, gamma, &alpha );
+			if ( my.status != SERE_OK )
 			{
-				my_done = 1;
+				my.done = 1;
 				break;
 			}
 #pragma omp for schedule( static )
@@ -562,35 +562,28 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 					gamma_block += r[i] * u[i];
 				}
 				partial[4 * blk] = rr_block;
-				partial[4 * blk + 2 + ( ( my_it + 1 ) & 1 )] = gamma_block;
+				partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
 			}
 			double my_rr = block_sum( partial, blocks, 0 );
-			my_it += 1;
+			my.it += 1;
 			if ( !isfinite( my_rr ) )
 			{
-				my_status = SERE_ERR_NONFINITE;
-				my_done = 1;
+				my.status = SERE_ERR_NONFINITE;
+				my.done = 1;
 				break;
 			}
-			if ( sqrt( my_rr ) <= target || my_it == max_iterations )
+			if ( sqrt( my_rr ) <= target || my.it == max_iterations )
 			{
-				my_met = sqrt( my_rr ) <= target;
-				my_done = 1;
+				my.met = sqrt( my_rr ) <= target;
+				my.done = 1;
 				break;
 			}
 			sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
-			my_alpha_prev = alpha;
-			my_gamma_prev = gamma;
+			my.alpha_prev = alpha;
+			my.gamma_prev = gamma;
 		}
 #pragma omp master
-		{
-			st->it = my_it;
-			st->alpha_prev = my_alpha_prev;
-			st->gamma_prev = my_gamma_prev;
-			st->status = my_status;
-			st->done = my_done;
-			st->met = my_met;
-		}
+		*st = my;
 	}
 }
 
