@@ -511,8 +511,8 @@ static inline float list_radius( const detect_context* c, const float far[3] )
 
 /* collide_search.c: vertex–triangle detection. */
 
-/* Runs the exact test (closest_point, Ericson 5.1.5) on the buffered vertex–triangle pairs and
- * lists or emits those that pass. */
+/* The exact test (closest_point, Ericson 5.1.5) of the buffered vertex–triangle pairs, in the
+ * order they were buffered. */
 void sere_coll_detect_flush( detect_context* c );
 
 /* Queries the groups of vertex block `block` (lanes are vertices); nonzero when a vertex is not
@@ -521,12 +521,13 @@ int sere_coll_detect_vertex_block( detect_context* c, const sere_bvh* bvh, int32
 
 /* collide_edges.c: edge–edge detection. */
 
-/* Runs the exact test (closest_segments, Ericson 5.1.9) on the buffered edge pairs. */
+/* The exact test (closest_segments, Ericson 5.1.9) of the buffered edge pairs, in the order they
+ * were buffered. */
 void sere_coll_detect_edge_flush( detect_context* c );
 
-/* Queries the edge table of vertex block `block`. */
+/* Queries vertex block `block` for edge–edge pairs (its edges by their lower end). */
 void sere_coll_detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_t block, int32_t n, float thickness );
 
-/* The unit vector across every edge in the plane of its first triangle (for the edge table). */
+/* The unit vector across edge e in the plane of its first triangle, for the edge table. */
 void sere_coll_edge_across_at( sere_collide* collide, const int32_t* tri, const float* x, const float* y,
 							   const float* z, int32_t e );
