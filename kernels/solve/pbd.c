@@ -560,7 +560,8 @@ static void unpack( const float* packed, const int32_t* slot, int32_t n, float* 
  * Out of line and on a cache line of its own: inlined, its gather loop sat wherever the code
  * linked before this file left it, and one placement cost the Jacobi sweep 16% (CPU time, one
  * thread, the maple) against another with the same instructions. */
-static __attribute__( ( noinline, aligned( 64 ) ) ) void jacobi_apply( sere_pbd* pbd, const float* old, float* next, float omega, int t, int threads )
+static __attribute__( ( noinline, aligned( 64 ) ) ) void jacobi_apply( sere_pbd* pbd, const float* old, float* next,
+																	   float omega, int t, int threads )
 {
 	int32_t first, last;
 	share( pbd->particle_count, t, threads, &first, &last );
