@@ -1,91 +1,11 @@
 /* _GNU_SOURCE: sched_getaffinity for internal/team.h. */
 #define _GNU_SOURCE
 
-#include "solve/bvh.h"
-#include "core/internal/team.h"
+#include "solve/internal/bvh_shared.h"
 
 #include <math.h>
 #include <stdatomic.h>
 #include <string.h>
-
-#if defined( __AVX__ )
-#include <immintrin.h>
-#endif
-
-/* Binned SAH down to this binary depth, object-median splits below it: the tree is then at
- * most 32 + 31 levels deep whatever the input, which bounds the traversal stack. */
-#define SAH_DEPTH_LIMIT 32
-
-/* A traversal keeps at most 7 pending siblings per level plus the node being opened. */
-#define STACK_SIZE ( ( SERE_BVH_WIDTH - 1 ) * ( SAH_DEPTH_LIMIT + 31 ) + 1 )
-
-/* Sixteen bins per axis find splits within a few percent of a full sweep at a fraction of the
- * cost; the build only runs when quality has degraded. */
-#define BIN_COUNT 16
-
-typedef struct build_item
-{
-	int32_t node, begin, end, depth;
-} build_item;
-
-typedef struct box3
-{
-	float lo[3], hi[3];
-} box3;
-
-struct sere_bvh
-{
-	int32_t triangle_count;
-	int32_t vertex_count;
-	int32_t node_count;
-	int32_t node_capacity;
-	int32_t level_count;
-	int32_t* tri;
-	sere_bvh_node* nodes;
-	int32_t* node_level;  /* per node: depth below the root */
-	int32_t* level_nodes; /* node indices grouped by level, root first */
-	int32_t* level_start; /* level_count + 1 offsets into level_nodes */
-	/* The descendants of node n are exactly the nodes subtree_begin[n] .. subtree_end[n] − 1:
-	 * build_node allocates a node's children together and then its first child's whole
-	 * subtree, then the second's, ... */
-	int32_t* subtree_begin;
-	int32_t* subtree_end;
-	/* The roots of the subtrees refit in parallel (two levels down), in the order of the mean
-	 * index of their triangles' vertices: a static share of them then gives each thread the
-	 * part of the mesh a static share of vertex-ordered work (the collision queries) gives it,
-	 * so the nodes a thread refits are the ones it reads next, from its own cache. */
-	int32_t cut_level;
-	int32_t cut_count;
-	int32_t* cut_roots;
-	double* cut_key;
-	float* node_area; /* per node: surface area of the node's own box */
-	/* Per node, SERE_BVH_WIDTH apart: the highest corner index of the triangles below child k
-	 * (−1 for an empty child), for sere_bvh_query_group_above. Set by the build: a refit moves
-	 * boxes, never triangles between subtrees. */
-	int32_t* child_top;
-	double quality;		  /* SAH cost of the internal nodes after the last refit */
-	double quality_built; /* the same right after the last build */
-	uint64_t generation;  /* sere_bvh_generation: unique to the last build */
-
-	/* Build scratch: per-triangle box and box centre, the triangle permutation being split,
-	 * and the pending nodes. */
-	float *lo_x, *lo_y, *lo_z, *hi_x, *hi_y, *hi_z;
-	float *c_x, *c_y, *c_z;
-	int32_t* order;
-	build_item* stack;
-};
-
-/* min and max as single instructions: fminf and fmaxf are library calls when NaN must be
- * handled, and no NaN gets this far (positions are checked first). */
-static inline float min2( float a, float b )
-{
-	return a < b ? a : b;
-}
-
-static inline float max2( float a, float b )
-{
-	return a > b ? a : b;
-}
 
 static float box_area( float lx, float ly, float lz, float hx, float hy, float hz )
 {
@@ -378,97 +298,6 @@ static void build_node( sere_bvh* bvh, build_item item, int32_t* stack_size )
 	}
 }
 
-#if defined( __AVX__ )
-
-static inline float lanes_min( const float* v )
-{
-	__m256 a = _mm256_loadu_ps( v );
-	__m128 m = _mm_min_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
-	m = _mm_min_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_min_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	return _mm_cvtss_f32( m );
-}
-
-static inline float lanes_max( const float* v )
-{
-	__m256 a = _mm256_loadu_ps( v );
-	__m128 m = _mm_max_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
-	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	return _mm_cvtss_f32( m );
-}
-
-typedef struct query_box
-{
-	__m256 lx, ly, lz, hx, hy, hz;
-} query_box;
-
-static inline query_box query_make( const float lo[3], const float hi[3] )
-{
-	query_box q = { _mm256_set1_ps( lo[0] ), _mm256_set1_ps( lo[1] ), _mm256_set1_ps( lo[2] ),
-					_mm256_set1_ps( hi[0] ), _mm256_set1_ps( hi[1] ), _mm256_set1_ps( hi[2] ) };
-	return q;
-}
-
-/* Bit k set when lane k's box overlaps the query box; empty lanes (+inf, −inf) never do. */
-static inline uint32_t overlap_mask( const sere_bvh_node* node, const query_box* q )
-{
-	__m256 x = _mm256_and_ps( _mm256_cmp_ps( _mm256_loadu_ps( node->min_x ), q->hx, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_loadu_ps( node->max_x ), q->lx, _CMP_GE_OQ ) );
-	__m256 y = _mm256_and_ps( _mm256_cmp_ps( _mm256_loadu_ps( node->min_y ), q->hy, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_loadu_ps( node->max_y ), q->ly, _CMP_GE_OQ ) );
-	__m256 z = _mm256_and_ps( _mm256_cmp_ps( _mm256_loadu_ps( node->min_z ), q->hz, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_loadu_ps( node->max_z ), q->lz, _CMP_GE_OQ ) );
-	return (uint32_t) _mm256_movemask_ps( _mm256_and_ps( x, _mm256_and_ps( y, z ) ) );
-}
-
-#else
-
-static inline float lanes_min( const float* v )
-{
-	float m = v[0];
-	for ( int k = 1; k < SERE_BVH_WIDTH; ++k )
-	{
-		m = v[k] < m ? v[k] : m;
-	}
-	return m;
-}
-
-static inline float lanes_max( const float* v )
-{
-	float m = v[0];
-	for ( int k = 1; k < SERE_BVH_WIDTH; ++k )
-	{
-		m = v[k] > m ? v[k] : m;
-	}
-	return m;
-}
-
-typedef struct query_box
-{
-	float lo[3], hi[3];
-} query_box;
-
-static inline query_box query_make( const float lo[3], const float hi[3] )
-{
-	query_box q = { { lo[0], lo[1], lo[2] }, { hi[0], hi[1], hi[2] } };
-	return q;
-}
-
-static inline uint32_t overlap_mask( const sere_bvh_node* node, const query_box* q )
-{
-	uint32_t mask = 0;
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		bool hit = node->min_x[k] <= q->hi[0] && node->max_x[k] >= q->lo[0] && node->min_y[k] <= q->hi[1] &&
-				   node->max_y[k] >= q->lo[1] && node->min_z[k] <= q->hi[2] && node->max_z[k] >= q->lo[2];
-		mask |= (uint32_t) hit << k;
-	}
-	return mask;
-}
-
-#endif
-
 /* Recomputes the node's lane boxes from its children (already refit: they are refit first) or
  * from its triangles' vertices, and the area of its own box, kept in registers as the lanes
  * are written (reading the lanes back would stall on the stores just made). */
@@ -483,8 +312,10 @@ static void refit_node( sere_bvh* bvh, int32_t n, const float* x, const float* y
 		if ( c >= 0 )
 		{
 			const sere_bvh_node* child = bvh->nodes + c;
-			lx = lanes_min( child->min_x ), ly = lanes_min( child->min_y ), lz = lanes_min( child->min_z );
-			hx = lanes_max( child->max_x ), hy = lanes_max( child->max_y ), hz = lanes_max( child->max_z );
+			lx = sere_v8_min_all( child->min_x ), ly = sere_v8_min_all( child->min_y ),
+			lz = sere_v8_min_all( child->min_z );
+			hx = sere_v8_max_all( child->max_x ), hy = sere_v8_max_all( child->max_y ),
+			hz = sere_v8_max_all( child->max_z );
 		}
 		else if ( c != SERE_BVH_EMPTY )
 		{
@@ -564,19 +395,9 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 	return true;
 }
 
-/* Builds so far, of every BVH in the process: each build's generation is its ordinal. */
-static _Atomic uint64_t builds;
-
-sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const float* z )
+/* Each triangle's box, its centre and the identity order, for the build. */
+static void triangle_boxes( sere_bvh* bvh, const float* x, const float* y, const float* z )
 {
-	if ( bvh == NULL || x == NULL || y == NULL || z == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	if ( !positions_finite( bvh->vertex_count, x, y, z ) )
-	{
-		return SERE_ERR_NONFINITE;
-	}
 	int32_t n = bvh->triangle_count;
 #pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
 	for ( int32_t t = 0; t < n; ++t )
@@ -593,17 +414,11 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->c_z[t] = 0.5f * ( bvh->lo_z[t] + bvh->hi_z[t] );
 		bvh->order[t] = t;
 	}
+}
 
-	bvh->node_count = 1;
-	bvh->node_level[0] = 0;
-	int32_t stack_size = 0;
-	bvh->stack[stack_size++] = ( build_item ){ 0, 0, n, 0 };
-	while ( stack_size > 0 )
-	{
-		build_item item = bvh->stack[--stack_size];
-		build_node( bvh, item, &stack_size );
-	}
-
+/* The nodes grouped by level (for the parallel bottom-up refit) and each node's subtree range. */
+static void group_levels( sere_bvh* bvh )
+{
 	/* group nodes by level for the parallel bottom-up refit */
 	int32_t levels = 0;
 	for ( int32_t i = 0; i < bvh->node_count; ++i )
@@ -645,6 +460,11 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->subtree_begin[i] = begin < end ? begin : end;
 		bvh->subtree_end[i] = end;
 	}
+}
+
+/* For every lane of every node, the highest vertex of the triangles below it. */
+static void child_tops( sere_bvh* bvh )
+{
 	/* children come after their parent: bottom-up from the last node */
 	for ( int32_t i = bvh->node_count - 1; i >= 0; --i )
 	{
@@ -670,7 +490,13 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 			bvh->child_top[(size_t) i * SERE_BVH_WIDTH + (size_t) k] = top;
 		}
 	}
+}
 
+/* The subtree roots at the cut level (at most 2), ordered by the mean first vertex of their
+ * triangles, for the parallel refit's order by vertex index. */
+static void order_cut( sere_bvh* bvh )
+{
+	const int32_t levels = bvh->level_count;
 	bvh->cut_level = levels - 1 < 2 ? levels - 1 : 2;
 	bvh->cut_count = bvh->level_start[bvh->cut_level + 1] - bvh->level_start[bvh->cut_level];
 	for ( int32_t i = 0; i < bvh->cut_count; ++i )
@@ -702,7 +528,36 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 		bvh->cut_key[j] = key;
 		bvh->cut_roots[j] = root;
 	}
+}
 
+/* Builds so far, of every BVH in the process: each build's generation is its ordinal. */
+static _Atomic uint64_t builds;
+
+sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const float* z )
+{
+	if ( bvh == NULL || x == NULL || y == NULL || z == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( !positions_finite( bvh->vertex_count, x, y, z ) )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	triangle_boxes( bvh, x, y, z );
+
+	bvh->node_count = 1;
+	bvh->node_level[0] = 0;
+	int32_t stack_size = 0;
+	bvh->stack[stack_size++] = ( build_item ){ 0, 0, bvh->triangle_count, 0 };
+	while ( stack_size > 0 )
+	{
+		build_item item = bvh->stack[--stack_size];
+		build_node( bvh, item, &stack_size );
+	}
+
+	group_levels( bvh );
+	child_tops( bvh );
+	order_cut( bvh );
 	refit_tree( bvh, x, y, z );
 	bvh->quality_built = bvh->quality;
 	bvh->generation = atomic_fetch_add( &builds, 1 ) + 1;
@@ -831,231 +686,6 @@ sere_status sere_bvh_update( sere_bvh* bvh, const float* x, const float* y, cons
 		*rebuilt = rebuild;
 	}
 	return status;
-}
-
-void sere_bvh_query_box( const sere_bvh* bvh, const float lo[3], const float hi[3], sere_bvh_visit_fn* visit,
-						 void* context )
-{
-	for ( int a = 0; a < 3; ++a )
-	{
-		if ( !( isfinite( lo[a] ) && isfinite( hi[a] ) ) )
-		{
-			return;
-		}
-	}
-	query_box q = query_make( lo, hi );
-	int32_t stack[STACK_SIZE];
-	int32_t size = 0;
-	stack[size++] = 0;
-	while ( size > 0 )
-	{
-		const sere_bvh_node* node = bvh->nodes + stack[--size];
-		uint32_t mask = overlap_mask( node, &q );
-		while ( mask != 0 )
-		{
-			int k = __builtin_ctz( mask );
-			mask &= mask - 1;
-			int32_t c = node->child[k];
-			if ( c >= 0 )
-			{
-				stack[size++] = c;
-			}
-			else
-			{
-				visit( context, ~c );
-			}
-		}
-	}
-}
-
-#if defined( __AVX__ )
-
-/* The group's lane boxes, one register per face. */
-typedef query_box group_box;
-
-/* Bit k set when the box [lo, hi] overlaps group lane k (ignored lanes hold empty boxes). */
-static inline uint32_t group_mask( const group_box* lanes, float lx, float ly, float lz, float hx, float hy, float hz )
-{
-	__m256 x = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( lx ), lanes->hx, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_set1_ps( hx ), lanes->lx, _CMP_GE_OQ ) );
-	__m256 y = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( ly ), lanes->hy, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_set1_ps( hy ), lanes->ly, _CMP_GE_OQ ) );
-	__m256 z = _mm256_and_ps( _mm256_cmp_ps( _mm256_set1_ps( lz ), lanes->hz, _CMP_LE_OQ ),
-							  _mm256_cmp_ps( _mm256_set1_ps( hz ), lanes->lz, _CMP_GE_OQ ) );
-	return (uint32_t) _mm256_movemask_ps( _mm256_and_ps( x, _mm256_and_ps( y, z ) ) );
-}
-
-static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SERE_BVH_WIDTH] )
-{
-	group_box q = { _mm256_loadu_ps( lo[0] ), _mm256_loadu_ps( lo[1] ), _mm256_loadu_ps( lo[2] ),
-					_mm256_loadu_ps( hi[0] ), _mm256_loadu_ps( hi[1] ), _mm256_loadu_ps( hi[2] ) };
-	return q;
-}
-
-#else
-
-typedef struct group_box
-{
-	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
-} group_box;
-
-static inline uint32_t group_mask( const group_box* lanes, float lx, float ly, float lz, float hx, float hy, float hz )
-{
-	uint32_t mask = 0;
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		bool hit = lx <= lanes->hi[0][k] && hx >= lanes->lo[0][k] && ly <= lanes->hi[1][k] && hy >= lanes->lo[1][k] &&
-				   lz <= lanes->hi[2][k] && hz >= lanes->lo[2][k];
-		mask |= (uint32_t) hit << k;
-	}
-	return mask;
-}
-
-static inline group_box group_lanes( float lo[3][SERE_BVH_WIDTH], float hi[3][SERE_BVH_WIDTH] )
-{
-	group_box q;
-	memcpy( q.lo, lo, sizeof( q.lo ) );
-	memcpy( q.hi, hi, sizeof( q.hi ) );
-	return q;
-}
-
-#endif
-
-/* Bit k set when child k of the node is negative: a triangle, or SERE_BVH_EMPTY, whose empty
- * box no query overlaps. */
-static inline uint32_t leaf_mask( const sere_bvh_node* node )
-{
-	uint32_t mask = 0;
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		mask |= (uint32_t) ( node->child[k] < 0 ) << k;
-	}
-	return mask;
-}
-
-/* Bit k set when child k of node n holds a triangle with a corner index above floor. */
-static inline uint32_t above_mask( const sere_bvh* bvh, int32_t n, int32_t floor )
-{
-	const int32_t* top = bvh->child_top + (size_t) n * SERE_BVH_WIDTH;
-	uint32_t mask = 0;
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		mask |= (uint32_t) ( top[k] > floor ) << k;
-	}
-	return mask;
-}
-
-/* sere_bvh_query_group, or sere_bvh_query_group_above when above (inlined with a constant, so
- * the plain query carries no index test). */
-static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group, bool above, int32_t floor,
-								sere_bvh_visit_group_fn* visit, void* context )
-{
-	/* the lanes as given, ignored ones emptied, and their union for the walk down */
-	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
-	float ulo[3] = { INFINITY, INFINITY, INFINITY }, uhi[3] = { -INFINITY, -INFINITY, -INFINITY };
-	const float* glo[3] = { group->lo_x, group->lo_y, group->lo_z };
-	const float* ghi[3] = { group->hi_x, group->hi_y, group->hi_z };
-	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-	{
-		bool used = k < group->count;
-		for ( int a = 0; a < 3; ++a )
-		{
-			used = used && isfinite( glo[a][k] ) && isfinite( ghi[a][k] );
-		}
-		for ( int a = 0; a < 3; ++a )
-		{
-			lo[a][k] = used ? glo[a][k] : INFINITY;
-			hi[a][k] = used ? ghi[a][k] : -INFINITY;
-			ulo[a] = min2( ulo[a], lo[a][k] );
-			uhi[a] = max2( uhi[a], hi[a][k] );
-		}
-	}
-	if ( !( ulo[0] <= uhi[0] && ulo[1] <= uhi[1] && ulo[2] <= uhi[2] ) )
-	{
-		return;
-	}
-	query_box q = query_make( ulo, uhi );
-	group_box lanes = group_lanes( lo, hi );
-	int32_t stack[STACK_SIZE];
-	int32_t size = 0;
-	stack[size++] = 0;
-	while ( size > 0 )
-	{
-		int32_t index = stack[--size];
-		const sere_bvh_node* node = bvh->nodes + index;
-		/* Each child inside the union is tested against the eight lanes: a child inside the union
-		 * can still miss every lane (the union of eight cubes along a curve of vertices is mostly
-		 * empty space), and skipping such subtrees saved 14% of the flat maple's detection and 9%
-		 * of the dried one's. Which children any lane hits is gathered as bits first and only then
-		 * acted on: half the children inside the union miss every lane, and a branch on each one
-		 * mispredicted as often as not (without it the dried maple's detection took 7% longer on
-		 * one thread). The children pushed here are popped only after this node's leaves are
-		 * visited, so the visits come in the same order as when each child was handled in turn. */
-		uint32_t mask = overlap_mask( node, &q );
-		if ( above )
-		{
-			mask &= above_mask( bvh, index, floor );
-		}
-		uint32_t hits[SERE_BVH_WIDTH];
-		uint32_t live = 0;
-		while ( mask != 0 )
-		{
-			int k = __builtin_ctz( mask );
-			mask &= mask - 1;
-			hits[k] = group_mask( &lanes, node->min_x[k], node->min_y[k], node->min_z[k], node->max_x[k],
-								  node->max_y[k], node->max_z[k] );
-			live |= (uint32_t) ( hits[k] != 0 ) << k;
-		}
-		uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
-		while ( inner != 0 )
-		{
-			stack[size++] = node->child[__builtin_ctz( inner )];
-			inner &= inner - 1;
-		}
-		while ( leaves != 0 )
-		{
-			int k = __builtin_ctz( leaves );
-			leaves &= leaves - 1;
-			visit( context, ~node->child[k], hits[k] );
-		}
-	}
-}
-
-void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
-						   void* context )
-{
-	query_group( bvh, group, false, 0, visit, context );
-}
-
-void sere_bvh_query_group_above( const sere_bvh* bvh, const sere_bvh_group* group, int32_t floor,
-								 sere_bvh_visit_group_fn* visit, void* context )
-{
-	query_group( bvh, group, true, floor, visit, context );
-}
-
-typedef struct collect_context
-{
-	int32_t* out;
-	int32_t capacity;
-	int32_t count;
-} collect_context;
-
-static void collect( void* context, int32_t triangle )
-{
-	collect_context* c = context;
-	if ( c->count < c->capacity )
-	{
-		c->out[c->count] = triangle;
-	}
-	c->count += 1;
-}
-
-int32_t sere_bvh_query( const sere_bvh* bvh, float x, float y, float z, float r, int32_t* out, int32_t capacity )
-{
-	float lo[3] = { x - r, y - r, z - r }, hi[3] = { x + r, y + r, z + r };
-	collect_context c = { out, capacity, 0 };
-	sere_bvh_query_box( bvh, lo, hi, collect, &c );
-	return c.count;
 }
 
 const sere_bvh_node* sere_bvh_nodes( const sere_bvh* bvh, int32_t* node_count )

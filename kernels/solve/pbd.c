@@ -2,8 +2,8 @@
  * for internal/team.h. */
 #define _GNU_SOURCE
 
-#include "solve/pbd.h"
-#include "core/internal/team.h"
+#include "core/internal/simd.h"
+#include "solve/internal/pbd_shared.h"
 
 #include <float.h>
 #include <math.h>
@@ -13,28 +13,10 @@
 #include <string.h>
 #include <time.h>
 
-#if defined( __AVX512F__ ) || defined( __AVX__ )
-#include <immintrin.h>
-#endif
-
 /* For the block functions: each pass mode gets its own copy of the block loop (project_colors),
  * and GCC's size limits would otherwise leave the block an out-of-line call with its operands
  * in memory. */
 #define FORCE_INLINE static inline __attribute__( ( always_inline ) )
-
-enum
-{
-	/* Constraints per block: one 512-bit register of floats (two 256-bit halves with AVX). */
-	LANES = 16,
-	/* Bands hold at least this many particles, so the constraints joining two bands stay a
-	 * small share (on the maple, 8 bands: 6% of the constraints). */
-	BAND_PARTICLES = 1600,
-	MAX_BANDS = 8,
-	/* Threads past this many are not started (per-thread slots live in the workspace). */
-	MAX_THREADS = 64,
-	/* A waiting thread naps this long at a time once it has spun SPIN_SECONDS. */
-	NAP_NANOSECONDS = 50000,
-};
 
 #define SPIN_SECONDS 100e-6
 
@@ -60,63 +42,6 @@ enum
 	FLAG_ZERO_LENGTH = 1,
 	FLAG_NONFINITE = 2,
 	FLAG_NEGATIVE_MASS = 4,
-};
-
-/* Per-thread results of a pass, double-buffered by pass parity so a fast thread can publish
- * the next pass's values while a slow one still reads this one's. One cache line each. */
-typedef struct thread_slot
-{
-	_Alignas( 64 ) float worst[2];
-	int32_t flags[2];
-} thread_slot;
-
-/* A counter alone on its cache line. */
-typedef struct padded_counter
-{
-	_Alignas( 64 ) atomic_int value;
-} padded_counter;
-
-/* A sense-free spin barrier. libgomp's barrier makes a futex system call at every release,
- * about 1 µs on this machine's virtual CPUs even for one thread; a sweep crosses several per
- * iteration, so the projection synchronizes with this one instead (0.2–0.5 µs for two threads,
- * nothing for one). */
-typedef struct spin_barrier
-{
-	_Alignas( 64 ) atomic_uint arrived;
-	_Alignas( 64 ) atomic_uint generation;
-} spin_barrier;
-
-struct sere_pbd
-{
-	int32_t particle_count, constraint_count;
-	sere_coloring coloring;
-	int32_t colors;
-	int32_t bands, items; /* items: bands 0..R−1, then cut r (bands r, r+1) is item R + r */
-	int32_t interface_count;
-	int32_t* segment;		   /* items·colors + 1 lane offsets, multiples of LANES: item w, color c */
-	int32_t lanes;			   /* segment[items·colors] */
-	int32_t *ia, *ib;		   /* per lane: float offset 4·slot of each end */
-	int32_t* source;		   /* per lane: the caller's constraint index, −1 for padding */
-	float* rest;			   /* per lane; padding lanes keep 1 */
-	float* lambda;			   /* per lane, XPBD multipliers */
-	float* weight;			   /* per lane, XPBD compliance weight (α_j = α · weight_j); padding keeps 1 */
-	float* factor;			   /* per lane, Jacobi: the f of the block below */
-	int32_t* slot;			   /* particle → slot (its place in breadth-first order) */
-	int32_t* particle;		   /* slot → particle, for slots < particle_count */
-	int32_t* band_start;	   /* bands + 1 slot offsets, multiples of 4 but the last (particle_count) */
-	int32_t slot_count;		   /* particles rounded up to 4, then a dummy pair per item */
-	float* packed[2];		   /* (x, y, z, w) per slot; Jacobi alternates the two, the others use [0] */
-	float* history[2];		   /* Chebyshev: records of the last two iterates, x_{k−1} and x_k */
-	float* lambda_history[2];  /* Chebyshev: multipliers of the last two iterates, per lane */
-	int32_t* adjacency_offset; /* per slot < particle_count, Jacobi */
-	int32_t* adjacency;		   /* pairs (lane, 4·slot of the other end) */
-	float* inv_degree;		   /* per slot: 1/n_i, 0 for a particle without constraints */
-	float one;				   /* 1.0f, opaque to the compiler so sere_pbd_touch keeps its stores */
-	int rest_valid;
-	thread_slot* threads;	  /* MAX_THREADS */
-	padded_counter* counters; /* 2 × MAX_THREADS: next item of each thread's list, by pass parity */
-	padded_counter* done;	  /* per item: the sweep of the current call that last projected it */
-	spin_barrier* barrier;
 };
 
 sere_pbd_params sere_pbd_params_default( void )
@@ -189,448 +114,6 @@ sere_pbd_info sere_pbd_get_info( const sere_pbd* pbd )
 }
 
 /* ---------------------------------------------------------------------------------------
- * Create: particle order, bands, lane layout. */
-
-/* Breadth-first search from start over the particle graph; appends the visited particles to
- * order (from *count on) and marks them with tag. */
-static void breadth_first( int32_t start, const int32_t* offset, const int32_t* neighbor, int32_t* mark, int32_t tag,
-						   int32_t* order, int32_t* count )
-{
-	int32_t head = *count;
-	mark[start] = tag;
-	order[( *count )++] = start;
-	while ( head < *count )
-	{
-		int32_t i = order[head++];
-		for ( int32_t e = offset[i]; e < offset[i + 1]; ++e )
-		{
-			int32_t j = neighbor[e];
-			if ( mark[j] != tag )
-			{
-				mark[j] = tag;
-				order[( *count )++] = j;
-			}
-		}
-	}
-}
-
-/* Particles in breadth-first order, each connected component from a pseudo-peripheral
- * particle (the last one reached from its lowest index): the order then sweeps across the
- * mesh in levels, each constraint joins equal or adjacent levels, and a range of the order is
- * a band whose boundary with the next range is short. */
-static sere_status order_particles( const int32_t* a, const int32_t* b, int32_t count, int32_t n, int32_t* order )
-{
-	int32_t* offset = calloc( (size_t) n + 1, sizeof( int32_t ) );
-	int32_t* neighbor = malloc( sizeof( int32_t ) * 2 * (size_t) count );
-	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) n );
-	int32_t* mark = malloc( sizeof( int32_t ) * (size_t) n );
-	if ( offset == NULL || neighbor == NULL || fill == NULL || mark == NULL )
-	{
-		free( offset ), free( neighbor ), free( fill ), free( mark );
-		return SERE_ERR_MEMORY;
-	}
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		offset[a[k] + 1] += 1;
-		offset[b[k] + 1] += 1;
-	}
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		offset[i + 1] += offset[i];
-		mark[i] = -1;
-	}
-	memcpy( fill, offset, sizeof( int32_t ) * (size_t) n );
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		neighbor[fill[a[k]]++] = b[k];
-		neighbor[fill[b[k]]++] = a[k];
-	}
-	int32_t placed = 0, components = 0;
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		if ( mark[i] >= 0 )
-		{
-			continue;
-		}
-		/* Probe from i (written past the placed prefix, then overwritten), keep its last. */
-		int32_t probe = placed;
-		breadth_first( i, offset, neighbor, mark, 2 * components, order, &probe );
-		int32_t far = order[probe - 1];
-		breadth_first( far, offset, neighbor, mark, 2 * components + 1, order, &placed );
-		components += 1;
-	}
-	free( offset ), free( neighbor ), free( fill ), free( mark );
-	return SERE_OK;
-}
-
-typedef struct lane_key
-{
-	int64_t key; /* segment, then lower slot of the two ends */
-	int32_t constraint;
-} lane_key;
-
-static int compare_lane_keys( const void* p, const void* q )
-{
-	const lane_key* u = p;
-	const lane_key* v = q;
-	if ( u->key != v->key )
-	{
-		return u->key < v->key ? -1 : 1;
-	}
-	return ( u->constraint > v->constraint ) - ( u->constraint < v->constraint );
-}
-
-/* Cuts the n slots into R bands, start[0..R], each holding about the same share of the
- * constraint ends (ends[s]: ends in slots before s), so that threads get equal work (bands of
- * equal particle counts differed by 9% in constraints on the maple); the bounds sit on
- * multiples of 4 slots (a 64-byte line of records), so two bands never share a cache line.
- * Returns 0 when one of several bands would be empty or some constraint joins two bands that are not
- * neighbors (bands thinner than a breadth-first level). */
-static int assign_bands( int32_t bands, int32_t n, const int32_t* ends, const int32_t* a, const int32_t* b,
-						 int32_t count, const int32_t* slot, int32_t* start, int32_t* band_of_slot )
-{
-	start[0] = 0, start[bands] = n;
-	int32_t s = 0;
-	for ( int32_t r = 1; r < bands; ++r )
-	{
-		const int64_t target = (int64_t) ends[n] * r / bands;
-		while ( ends[s] < target )
-		{
-			s += 1;
-		}
-		start[r] = s & ~3;
-	}
-	for ( int32_t r = 0; r < bands; ++r )
-	{
-		if ( start[r + 1] <= start[r] && bands > 1 )
-		{
-			return 0;
-		}
-		for ( int32_t q = start[r]; q < start[r + 1]; ++q )
-		{
-			band_of_slot[q] = r;
-		}
-	}
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		int32_t ra = band_of_slot[slot[a[k]]], rb = band_of_slot[slot[b[k]]];
-		if ( ra - rb > 1 || rb - ra > 1 )
-		{
-			return 0;
-		}
-	}
-	return 1;
-}
-
-static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t* b )
-{
-	const int32_t n = pbd->particle_count, count = pbd->constraint_count, colors = pbd->colors;
-	int32_t* band_of_slot = malloc( sizeof( int32_t ) * (size_t) n );
-	int32_t* ends = calloc( (size_t) n + 1, sizeof( int32_t ) );
-	lane_key* keys = malloc( sizeof( lane_key ) * (size_t) count );
-	pbd->band_start = sere_alloc( sizeof( int32_t ) * ( MAX_BANDS + 1 ) );
-	if ( band_of_slot == NULL || ends == NULL || keys == NULL || pbd->band_start == NULL )
-	{
-		free( band_of_slot ), free( ends ), free( keys );
-		return SERE_ERR_MEMORY;
-	}
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		ends[pbd->slot[a[k]] + 1] += 1;
-		ends[pbd->slot[b[k]] + 1] += 1;
-	}
-	for ( int32_t s = 0; s < n; ++s )
-	{
-		ends[s + 1] += ends[s];
-	}
-	/* The band count depends on the mesh only (never on threads): determinism. One band
-	 * always passes (its only bounds are 0 and n). */
-	int32_t bands = n / BAND_PARTICLES;
-	bands = bands < 1 ? 1 : bands > MAX_BANDS ? MAX_BANDS : bands;
-	while ( !assign_bands( bands, n, ends, a, b, count, pbd->slot, pbd->band_start, band_of_slot ) )
-	{
-		bands -= 1;
-	}
-	free( ends );
-	pbd->bands = bands;
-	pbd->items = 2 * bands - 1;
-	const int32_t segments = pbd->items * colors;
-	pbd->segment = sere_alloc( sizeof( int32_t ) * ( (size_t) segments + 1 ) );
-	int32_t* fill = calloc( (size_t) segments + 1, sizeof( int32_t ) );
-	if ( pbd->segment == NULL || fill == NULL )
-	{
-		free( band_of_slot ), free( keys ), free( fill );
-		return SERE_ERR_MEMORY;
-	}
-	pbd->interface_count = 0;
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		int32_t sa = pbd->slot[a[k]], sb = pbd->slot[b[k]];
-		int32_t ra = band_of_slot[sa], rb = band_of_slot[sb];
-		int32_t item = ra == rb ? ra : bands + ( ra < rb ? ra : rb );
-		pbd->interface_count += ra != rb;
-		int64_t seg = (int64_t) item * colors + pbd->coloring.color[k];
-		keys[k].key = seg << 32 | (int64_t) ( sa < sb ? sa : sb );
-		keys[k].constraint = k;
-		fill[seg] += 1;
-	}
-	for ( int32_t g = 0; g < segments; ++g )
-	{
-		pbd->segment[g + 1] = pbd->segment[g] + ( ( fill[g] + LANES - 1 ) / LANES ) * LANES;
-	}
-	pbd->lanes = pbd->segment[segments];
-	const size_t lanes = (size_t) pbd->lanes;
-	pbd->ia = sere_alloc( sizeof( int32_t ) * lanes );
-	pbd->ib = sere_alloc( sizeof( int32_t ) * lanes );
-	pbd->source = sere_alloc( sizeof( int32_t ) * lanes );
-	pbd->rest = sere_alloc( sizeof( float ) * lanes );
-	pbd->lambda = sere_alloc( sizeof( float ) * lanes );
-	pbd->weight = sere_alloc( sizeof( float ) * lanes );
-	pbd->factor = sere_alloc( sizeof( float ) * lanes );
-	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
-	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-	for ( int h = 0; h < 2; ++h )
-	{
-		pbd->history[h] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
-		pbd->lambda_history[h] = sere_alloc( sizeof( float ) * lanes );
-	}
-	if ( !pbd->ia || !pbd->ib || !pbd->source || !pbd->rest || !pbd->lambda || !pbd->weight || !pbd->factor ||
-		 !pbd->packed[0] || !pbd->packed[1] || !pbd->history[0] || !pbd->history[1] || !pbd->lambda_history[0] ||
-		 !pbd->lambda_history[1] )
-	{
-		free( band_of_slot ), free( keys ), free( fill );
-		return SERE_ERR_MEMORY;
-	}
-	/* Within a segment, constraints by their lower slot: neighbors in space share SIMD steps
-	 * and cache lines. */
-	qsort( keys, (size_t) count, sizeof( lane_key ), compare_lane_keys );
-	for ( int32_t g = 0; g < segments; ++g )
-	{
-		fill[g] = pbd->segment[g];
-	}
-	for ( int32_t j = 0; j < count; ++j )
-	{
-		int32_t k = keys[j].constraint;
-		int32_t q = fill[keys[j].key >> 32]++;
-		pbd->ia[q] = 4 * pbd->slot[a[k]];
-		pbd->ib[q] = 4 * pbd->slot[b[k]];
-		pbd->source[q] = k;
-	}
-	/* Padding lanes join the item's own dummy pair, unit length apart with w = 0: they measure
-	 * C = 0, move nothing, and no two threads ever write the same dummy. */
-	const int32_t dummies = ( n + 3 ) & ~3;
-	for ( int32_t g = 0; g < segments; ++g )
-	{
-		int32_t item = g / colors;
-		for ( int32_t q = fill[g]; q < pbd->segment[g + 1]; ++q )
-		{
-			pbd->ia[q] = 4 * ( dummies + 4 * item );
-			pbd->ib[q] = 4 * ( dummies + 4 * item + 1 );
-			pbd->source[q] = -1;
-			pbd->rest[q] = 1.0f;
-		}
-	}
-	for ( int32_t q = 0; q < pbd->lanes; ++q )
-	{
-		pbd->weight[q] = 1.0f;
-	}
-	for ( int32_t item = 0; item < pbd->items; ++item )
-	{
-		pbd->packed[0][4 * ( dummies + 4 * item + 1 )] = 1.0f;
-		pbd->packed[1][4 * ( dummies + 4 * item + 1 )] = 1.0f;
-	}
-	free( band_of_slot ), free( keys ), free( fill );
-	return SERE_OK;
-}
-
-/* Particle → constraint lists for the Jacobi gather, in lane order. */
-static sere_status build_adjacency( sere_pbd* pbd )
-{
-	const int32_t n = pbd->particle_count;
-	pbd->adjacency_offset = sere_alloc( sizeof( int32_t ) * ( (size_t) n + 1 ) );
-	pbd->adjacency = sere_alloc( sizeof( int32_t ) * 4 * (size_t) pbd->constraint_count );
-	pbd->inv_degree = sere_alloc( sizeof( float ) * (size_t) n );
-	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) n );
-	if ( !pbd->adjacency_offset || !pbd->adjacency || !pbd->inv_degree || !fill )
-	{
-		free( fill );
-		return SERE_ERR_MEMORY;
-	}
-	for ( int32_t q = 0; q < pbd->lanes; ++q )
-	{
-		if ( pbd->source[q] >= 0 )
-		{
-			pbd->adjacency_offset[pbd->ia[q] / 4 + 1] += 1;
-			pbd->adjacency_offset[pbd->ib[q] / 4 + 1] += 1;
-		}
-	}
-	for ( int32_t s = 0; s < n; ++s )
-	{
-		int32_t degree = pbd->adjacency_offset[s + 1];
-		pbd->inv_degree[s] = degree > 0 ? 1.0f / (float) degree : 0.0f;
-		pbd->adjacency_offset[s + 1] += pbd->adjacency_offset[s];
-	}
-	memcpy( fill, pbd->adjacency_offset, sizeof( int32_t ) * (size_t) n );
-	for ( int32_t q = 0; q < pbd->lanes; ++q )
-	{
-		if ( pbd->source[q] >= 0 )
-		{
-			int32_t ea = 2 * fill[pbd->ia[q] / 4]++, eb = 2 * fill[pbd->ib[q] / 4]++;
-			pbd->adjacency[ea] = q, pbd->adjacency[ea + 1] = pbd->ib[q];
-			pbd->adjacency[eb] = q, pbd->adjacency[eb + 1] = pbd->ia[q];
-		}
-	}
-	free( fill );
-	return SERE_OK;
-}
-
-sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, int32_t particle_count, sere_pbd** out )
-{
-	if ( out == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	*out = NULL;
-	sere_pbd* pbd = sere_alloc( sizeof( *pbd ) );
-	if ( pbd == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
-	sere_status status = sere_color_springs( a, b, count, particle_count, &pbd->coloring );
-	if ( status != SERE_OK )
-	{
-		sere_free( pbd );
-		return status;
-	}
-	pbd->particle_count = particle_count;
-	pbd->constraint_count = count;
-	pbd->colors = pbd->coloring.color_count;
-	pbd->one = 1.0f;
-	pbd->slot = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
-	pbd->threads = sere_alloc( sizeof( thread_slot ) * MAX_THREADS );
-	pbd->counters = sere_alloc( sizeof( padded_counter ) * 2 * MAX_THREADS );
-	pbd->done = sere_alloc( sizeof( padded_counter ) * ( 2 * MAX_BANDS - 1 ) );
-	pbd->barrier = sere_alloc( sizeof( spin_barrier ) );
-	pbd->particle = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
-	if ( !pbd->slot || !pbd->particle || !pbd->threads || !pbd->counters || !pbd->done || !pbd->barrier )
-	{
-		sere_pbd_destroy( pbd );
-		return SERE_ERR_MEMORY;
-	}
-	atomic_init( &pbd->barrier->arrived, 0u );
-	atomic_init( &pbd->barrier->generation, 0u );
-	for ( int32_t c = 0; c < 2 * MAX_THREADS; ++c )
-	{
-		atomic_init( &pbd->counters[c].value, 0 );
-	}
-	for ( int32_t item = 0; item < 2 * MAX_BANDS - 1; ++item )
-	{
-		atomic_init( &pbd->done[item].value, 0 );
-	}
-	status = order_particles( a, b, count, particle_count, pbd->particle );
-	for ( int32_t s = 0; status == SERE_OK && s < particle_count; ++s )
-	{
-		pbd->slot[pbd->particle[s]] = s;
-	}
-	if ( status == SERE_OK )
-	{
-		status = build_layout( pbd, a, b );
-	}
-	if ( status == SERE_OK )
-	{
-		status = build_adjacency( pbd );
-	}
-	if ( status != SERE_OK )
-	{
-		sere_pbd_destroy( pbd );
-		return status;
-	}
-	*out = pbd;
-	return SERE_OK;
-}
-
-sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest )
-{
-	if ( pbd == NULL || rest == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	int bad = 0;
-	const int32_t lanes = pbd->lanes;
-	const int32_t* source = pbd->source;
-	float* lane_rest = pbd->rest;
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static ) reduction( | : bad )
-	for ( int32_t q = 0; q < lanes; ++q )
-	{
-		if ( source[q] >= 0 )
-		{
-			float l = rest[source[q]];
-			bad |= !( l > 0.0f && l <= FLT_MAX );
-			lane_rest[q] = l;
-		}
-	}
-	pbd->rest_valid = !bad;
-	return bad ? SERE_ERR_GEOMETRY : SERE_OK;
-}
-
-sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight )
-{
-	if ( pbd == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	if ( weight != NULL )
-	{
-		for ( int32_t k = 0; k < pbd->constraint_count; ++k )
-		{
-			if ( !( weight[k] >= 0.0f && weight[k] <= FLT_MAX ) )
-			{
-				return SERE_ERR_ARGUMENT;
-			}
-		}
-	}
-	for ( int32_t q = 0; q < pbd->lanes; ++q )
-	{
-		pbd->weight[q] = weight != NULL && pbd->source[q] >= 0 ? weight[pbd->source[q]] : 1.0f;
-	}
-	return SERE_OK;
-}
-
-void sere_pbd_predict( int32_t count, const float* x, const float* y, const float* z, float* vx, float* vy, float* vz,
-					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt )
-{
-	const float gx = gravity[0] * dt, gy = gravity[1] * dt, gz = gravity[2] * dt;
-#pragma omp parallel for simd num_threads( sere_team_default() ) schedule( static )
-	for ( int32_t i = 0; i < count; ++i )
-	{
-		float free_particle = inv_m[i] > 0.0f ? 1.0f : 0.0f;
-		vx[i] = free_particle * ( vx[i] + gx );
-		vy[i] = free_particle * ( vy[i] + gy );
-		vz[i] = free_particle * ( vz[i] + gz );
-		px[i] = x[i] + vx[i] * dt;
-		py[i] = y[i] + vy[i] * dt;
-		pz[i] = z[i] + vz[i] * dt;
-	}
-}
-
-void sere_pbd_finish( int32_t count, float* x, float* y, float* z, float* vx, float* vy, float* vz, const float* px,
-					  const float* py, const float* pz, float dt )
-{
-	const float inv_dt = 1.0f / dt;
-#pragma omp parallel for simd num_threads( sere_team_default() ) schedule( static )
-	for ( int32_t i = 0; i < count; ++i )
-	{
-		vx[i] = ( px[i] - x[i] ) * inv_dt;
-		vy[i] = ( py[i] - y[i] ) * inv_dt;
-		vz[i] = ( pz[i] - z[i] ) * inv_dt;
-		x[i] = px[i];
-		y[i] = py[i];
-		z[i] = pz[i];
-	}
-}
-
-/* ---------------------------------------------------------------------------------------
  * The constraint block: 16 constraints of one color, no particle twice.
  *
  * Per lane, in this order (the scalar build does the same operations, so both round alike):
@@ -652,118 +135,58 @@ typedef struct block_context
 	float k, alpha, one;
 } block_context;
 
-#if defined( __AVX512F__ )
-
+/* The worst residual and the flags of the lanes a pass has measured. */
 typedef struct lane_accum
 {
-	__m512 worst;
-	__mmask16 zero, nonfinite;
+	sere_vf worst;
+	sere_vmask zero, nonfinite;
 } lane_accum;
 
 FORCE_INLINE lane_accum lane_accum_start( void )
 {
-	lane_accum acc = { _mm512_setzero_ps(), 0, 0 };
+	lane_accum acc = { sere_vf_splat( 0.0f ), sere_vmask_none(), sere_vmask_none() };
 	return acc;
 }
 
 FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
 {
-	float w = _mm512_reduce_max_ps( acc->worst );
+	float w = sere_vf_max_all( acc->worst );
 	*worst = w > *worst ? w : *worst;
-	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
-}
-
-/* Four (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
- * lane j of register r, then a 4×4 transpose inside each 128-bit lane. This replaces AVX-512
- * gathers and scatters, which on this machine cost 3× as much for the same sweep. */
-FORCE_INLINE void load_records( const float* packed, const int32_t* at, __m512* x, __m512* y, __m512* z, __m512* w )
-{
-	__m512 r0 = _mm512_castps128_ps512( _mm_load_ps( packed + at[0] ) );
-	__m512 r1 = _mm512_castps128_ps512( _mm_load_ps( packed + at[1] ) );
-	__m512 r2 = _mm512_castps128_ps512( _mm_load_ps( packed + at[2] ) );
-	__m512 r3 = _mm512_castps128_ps512( _mm_load_ps( packed + at[3] ) );
-	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[4] ), 1 );
-	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[5] ), 1 );
-	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[6] ), 1 );
-	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[7] ), 1 );
-	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[8] ), 2 );
-	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[9] ), 2 );
-	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[10] ), 2 );
-	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[11] ), 2 );
-	r0 = _mm512_insertf32x4( r0, _mm_load_ps( packed + at[12] ), 3 );
-	r1 = _mm512_insertf32x4( r1, _mm_load_ps( packed + at[13] ), 3 );
-	r2 = _mm512_insertf32x4( r2, _mm_load_ps( packed + at[14] ), 3 );
-	r3 = _mm512_insertf32x4( r3, _mm_load_ps( packed + at[15] ), 3 );
-	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( r0, r1 ) ); /* x0 x1 y0 y1 per lane */
-	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( r0, r1 ) ); /* z0 z1 w0 w1 */
-	__m512d t2 = _mm512_castps_pd( _mm512_unpacklo_ps( r2, r3 ) );
-	__m512d t3 = _mm512_castps_pd( _mm512_unpackhi_ps( r2, r3 ) );
-	*x = _mm512_castpd_ps( _mm512_unpacklo_pd( t0, t2 ) );
-	*y = _mm512_castpd_ps( _mm512_unpackhi_pd( t0, t2 ) );
-	*z = _mm512_castpd_ps( _mm512_unpacklo_pd( t1, t3 ) );
-	*w = _mm512_castpd_ps( _mm512_unpackhi_pd( t1, t3 ) );
-}
-
-/* The inverse of load_records: four components into records, 16 stores of 128 bits. */
-FORCE_INLINE void store_records( float* packed, const int32_t* at, __m512 x, __m512 y, __m512 z, __m512 w )
-{
-	__m512d t0 = _mm512_castps_pd( _mm512_unpacklo_ps( x, y ) );
-	__m512d t1 = _mm512_castps_pd( _mm512_unpackhi_ps( x, y ) );
-	__m512d t2 = _mm512_castps_pd( _mm512_unpacklo_ps( z, w ) );
-	__m512d t3 = _mm512_castps_pd( _mm512_unpackhi_ps( z, w ) );
-	__m512 r0 = _mm512_castpd_ps( _mm512_unpacklo_pd( t0, t2 ) );
-	__m512 r1 = _mm512_castpd_ps( _mm512_unpackhi_pd( t0, t2 ) );
-	__m512 r2 = _mm512_castpd_ps( _mm512_unpacklo_pd( t1, t3 ) );
-	__m512 r3 = _mm512_castpd_ps( _mm512_unpackhi_pd( t1, t3 ) );
-	_mm_store_ps( packed + at[0], _mm512_castps512_ps128( r0 ) );
-	_mm_store_ps( packed + at[1], _mm512_castps512_ps128( r1 ) );
-	_mm_store_ps( packed + at[2], _mm512_castps512_ps128( r2 ) );
-	_mm_store_ps( packed + at[3], _mm512_castps512_ps128( r3 ) );
-	_mm_store_ps( packed + at[4], _mm512_extractf32x4_ps( r0, 1 ) );
-	_mm_store_ps( packed + at[5], _mm512_extractf32x4_ps( r1, 1 ) );
-	_mm_store_ps( packed + at[6], _mm512_extractf32x4_ps( r2, 1 ) );
-	_mm_store_ps( packed + at[7], _mm512_extractf32x4_ps( r3, 1 ) );
-	_mm_store_ps( packed + at[8], _mm512_extractf32x4_ps( r0, 2 ) );
-	_mm_store_ps( packed + at[9], _mm512_extractf32x4_ps( r1, 2 ) );
-	_mm_store_ps( packed + at[10], _mm512_extractf32x4_ps( r2, 2 ) );
-	_mm_store_ps( packed + at[11], _mm512_extractf32x4_ps( r3, 2 ) );
-	_mm_store_ps( packed + at[12], _mm512_extractf32x4_ps( r0, 3 ) );
-	_mm_store_ps( packed + at[13], _mm512_extractf32x4_ps( r1, 3 ) );
-	_mm_store_ps( packed + at[14], _mm512_extractf32x4_ps( r2, 3 ) );
-	_mm_store_ps( packed + at[15], _mm512_extractf32x4_ps( r3, 3 ) );
+	*flags |= ( sere_vmask_any( acc->zero ) ? FLAG_ZERO_LENGTH : 0 ) |
+			  ( sere_vmask_any( acc->nonfinite ) ? FLAG_NONFINITE : 0 );
 }
 
 /* What the measuring part of a block leaves for the moving part: both ends and the factor f. */
 typedef struct part_state
 {
-	__m512 ax, ay, az, aw, bx, by, bz, bw, f;
+	sere_vf ax, ay, az, aw, bx, by, bz, bw, f;
 } part_state;
 
-/* Loads both ends of the block at q and measures it (Jeong Eq. 13): the residual into acc and, unless
- * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
+/* Loads both ends of the SERE_LANES constraints at q, each (x, y, z, w) record with one 128-bit
+ * load and a transpose in registers (simd.h), and measures them (Jeong Eq. 13): the residual into
+ * acc and, unless mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored
+ * per lane). A lane whose denominator is not positive gets f = 0, its quotient (0/0 or x/0) kept
+ * out by the mask. */
 FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
 {
 	part_state h;
-	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
-	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
-	const __m512 zero = _mm512_setzero_ps();
-	__m512 dx = _mm512_sub_ps( h.bx, h.ax ), dy = _mm512_sub_ps( h.by, h.ay ), dz = _mm512_sub_ps( h.bz, h.az );
-	__m512 len2 =
-		_mm512_add_ps( _mm512_add_ps( _mm512_mul_ps( dx, dx ), _mm512_mul_ps( dy, dy ) ), _mm512_mul_ps( dz, dz ) );
-	__m512 len = _mm512_sqrt_ps( len2 );
-	__m512 rest = _mm512_load_ps( ctx->rest + q );
-	__m512 c = _mm512_sub_ps( len, rest ); /* Jeong Eq. 13 */
-	acc->zero |= _mm512_cmp_ps_mask( len, zero, _CMP_EQ_OQ );
-	acc->nonfinite |= _mm512_cmp_ps_mask( len, _mm512_set1_ps( FLT_MAX ), _CMP_NLE_UQ );
-	__m512 wsum = _mm512_add_ps( h.aw, h.bw );
-	__m512 lambda = zero, alpha = zero, residual = c;
+	sere_vf_load_records_at( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
+	sere_vf_load_records_at( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
+	const sere_vf zero = sere_vf_splat( 0.0f );
+	sere_vf len = sere_vf_norm3( sere_vf_sub( h.bx, h.ax ), sere_vf_sub( h.by, h.ay ), sere_vf_sub( h.bz, h.az ) );
+	sere_vf rest = sere_vf_load( ctx->rest + q );
+	sere_vf c = sere_vf_sub( len, rest ); /* Jeong Eq. 13 */
+	acc->zero = sere_vmask_or( acc->zero, sere_vf_eq( len, zero ) );
+	acc->nonfinite = sere_vmask_or( acc->nonfinite, sere_vf_not_le( len, sere_vf_splat( FLT_MAX ) ) );
+	sere_vf wsum = sere_vf_add( h.aw, h.bw );
+	sere_vf lambda = zero, alpha = zero, residual = c;
 	if ( xpbd )
 	{
-		alpha = _mm512_mul_ps( _mm512_set1_ps( ctx->alpha ), _mm512_load_ps( ctx->weight + q ) );
-		lambda = _mm512_load_ps( ctx->lambda + q );
-		residual = _mm512_add_ps( c, _mm512_mul_ps( alpha, lambda ) );
+		alpha = sere_vf_mul( sere_vf_splat( ctx->alpha ), sere_vf_load( ctx->weight + q ) );
+		lambda = sere_vf_load( ctx->lambda + q );
+		residual = sere_vf_add( c, sere_vf_mul( alpha, lambda ) );
 	}
-	acc->worst = _mm512_max_ps( acc->worst, _mm512_div_ps( _mm512_abs_ps( residual ), rest ) );
+	acc->worst = sere_vf_max( acc->worst, sere_vf_div( sere_vf_abs( residual ), rest ) );
 	h.f = zero;
 	if ( mode == MODE_MEASURE )
 	{
@@ -771,307 +194,53 @@ FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block
 	}
 	if ( xpbd )
 	{
-		__m512 denominator = _mm512_add_ps( wsum, alpha );
-		__mmask16 movable = _mm512_cmp_ps_mask( denominator, zero, _CMP_GT_OQ );
-		__m512 numerator = _mm512_sub_ps( _mm512_sub_ps( zero, c ), _mm512_mul_ps( alpha, lambda ) );
-		__m512 dlambda = _mm512_maskz_div_ps( movable, numerator, denominator );
-		_mm512_store_ps( ctx->lambda + q, _mm512_add_ps( lambda, dlambda ) );
-		h.f = _mm512_div_ps( _mm512_sub_ps( zero, dlambda ), len );
+		sere_vf denominator = sere_vf_add( wsum, alpha );
+		sere_vf numerator = sere_vf_sub( sere_vf_sub( zero, c ), sere_vf_mul( alpha, lambda ) );
+		sere_vf dlambda = sere_vf_keep( sere_vf_gt( denominator, zero ), sere_vf_div( numerator, denominator ) );
+		sere_vf_store( ctx->lambda + q, sere_vf_add( lambda, dlambda ) );
+		h.f = sere_vf_div( sere_vf_sub( zero, dlambda ), len );
 	}
 	else
 	{
-		__mmask16 movable = _mm512_cmp_ps_mask( wsum, zero, _CMP_GT_OQ );
-		h.f = _mm512_maskz_div_ps( movable, _mm512_mul_ps( _mm512_set1_ps( ctx->k ), c ), _mm512_mul_ps( wsum, len ) );
+		h.f = sere_vf_keep( sere_vf_gt( wsum, zero ),
+							sere_vf_div( sere_vf_mul( sere_vf_splat( ctx->k ), c ), sere_vf_mul( wsum, len ) ) );
 	}
 	if ( mode == MODE_JACOBI )
 	{
-		_mm512_store_ps( ctx->factor + q, h.f );
+		sere_vf_store( ctx->factor + q, h.f );
 	}
 	return h;
 }
 
-/* The moving part of a Gauss–Seidel block: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored.
- * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
- * bits; recomputing it keeps three registers fewer alive between the two parts. */
+/* The moving part: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored. d = p_b − p_a
+ * again, the same operation on the same values as in measure_part, so the same bits;
+ * recomputing it keeps three registers fewer alive between the two parts. */
 FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
 {
-	__m512 dx = _mm512_sub_ps( h->bx, h->ax ), dy = _mm512_sub_ps( h->by, h->ay ), dz = _mm512_sub_ps( h->bz, h->az );
-	__m512 fa = _mm512_mul_ps( h->aw, h->f ), fb = _mm512_mul_ps( h->bw, h->f );
-	store_records( ctx->packed, ctx->ia + q, _mm512_add_ps( h->ax, _mm512_mul_ps( fa, dx ) ),
-				   _mm512_add_ps( h->ay, _mm512_mul_ps( fa, dy ) ), _mm512_add_ps( h->az, _mm512_mul_ps( fa, dz ) ),
-				   h->aw );
-	store_records( ctx->packed, ctx->ib + q, _mm512_sub_ps( h->bx, _mm512_mul_ps( fb, dx ) ),
-				   _mm512_sub_ps( h->by, _mm512_mul_ps( fb, dy ) ), _mm512_sub_ps( h->bz, _mm512_mul_ps( fb, dz ) ),
-				   h->bw );
+	sere_vf dx = sere_vf_sub( h->bx, h->ax ), dy = sere_vf_sub( h->by, h->ay ), dz = sere_vf_sub( h->bz, h->az );
+	sere_vf fa = sere_vf_mul( h->aw, h->f ), fb = sere_vf_mul( h->bw, h->f );
+	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_add( h->ax, sere_vf_mul( fa, dx ) ),
+							  sere_vf_add( h->ay, sere_vf_mul( fa, dy ) ), sere_vf_add( h->az, sere_vf_mul( fa, dz ) ),
+							  h->aw );
+	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_sub( h->bx, sere_vf_mul( fb, dx ) ),
+							  sere_vf_sub( h->by, sere_vf_mul( fb, dy ) ), sere_vf_sub( h->bz, sere_vf_mul( fb, dz ) ),
+							  h->bw );
 }
 
+/* Loads and stores both ends unchanged: times one, opaque to the compiler, so the stores stay. */
 FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
 {
-	__m512 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	const __m512 one = _mm512_set1_ps( ctx->one );
-	store_records( ctx->packed, ctx->ia + q, _mm512_mul_ps( ax, one ), _mm512_mul_ps( ay, one ),
-				   _mm512_mul_ps( az, one ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm512_mul_ps( bx, one ), _mm512_mul_ps( by, one ),
-				   _mm512_mul_ps( bz, one ), bw );
+	sere_vf ax, ay, az, aw, bx, by, bz, bw;
+	sere_vf_load_records_at( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
+	sere_vf_load_records_at( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
+	const sere_vf one = sere_vf_splat( ctx->one );
+	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_mul( ax, one ), sere_vf_mul( ay, one ),
+							  sere_vf_mul( az, one ), aw );
+	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_mul( bx, one ), sere_vf_mul( by, one ),
+							  sere_vf_mul( bz, one ), bw );
 }
 
-/* Constraints per measure/move part: one block of 16. */
-#define PART LANES
-
-#elif defined( __AVX__ )
-
-/* AVX (256-bit) build: each block of LANES constraints as two halves of eight. Lanes of a
- * block share no particle, so the halves are independent and the result has the bits of the
- * AVX-512 and portable builds. Without it a machine lacking AVX-512 ran the one-lane portable
- * loop, 7-10x slower per sweep. */
-typedef struct lane_accum
-{
-	__m256 worst;
-	int zero, nonfinite;
-} lane_accum;
-
-FORCE_INLINE lane_accum lane_accum_start( void )
-{
-	lane_accum acc = { _mm256_setzero_ps(), 0, 0 };
-	return acc;
-}
-
-FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
-{
-	__m128 m = _mm_max_ps( _mm256_castps256_ps128( acc->worst ), _mm256_extractf128_ps( acc->worst, 1 ) );
-	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
-	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
-	float w = _mm_cvtss_f32( m );
-	*worst = w > *worst ? w : *worst;
-	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
-}
-
-/* The record of lane j of a half. Offsets are read two at a time with one 64-bit load (x86 is
- * little-endian: lane 2i in the low half): a half takes four loads for its eight offsets
- * instead of eight, and a sweep reads every offset twice (to load and to store). Offsets are
- * non-negative, so zero extension is exact. */
-FORCE_INLINE float* record_at( float* packed, const int32_t* at, int j )
-{
-	uint64_t pair;
-	memcpy( &pair, at + ( j & ~1 ), sizeof( pair ) );
-	return packed + ( j & 1 ? (uint32_t) ( pair >> 32 ) : (uint32_t) pair );
-}
-
-/* Eight (x, y, z, w) records into one register per component: record 4j + r sits in 128-bit
- * lane j of register r, then a 4×4 transpose inside each 128-bit lane (as the AVX-512 path). */
-FORCE_INLINE void load_records( float* packed, const int32_t* at, __m256* x, __m256* y, __m256* z, __m256* w )
-{
-	__m256 r0 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 0 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 4 ) ), 1 );
-	__m256 r1 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 1 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 5 ) ), 1 );
-	__m256 r2 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 2 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 6 ) ), 1 );
-	__m256 r3 = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( record_at( packed, at, 3 ) ) ),
-									  _mm_load_ps( record_at( packed, at, 7 ) ), 1 );
-	__m256d t0 = _mm256_castps_pd( _mm256_unpacklo_ps( r0, r1 ) ); /* x0 x1 y0 y1 per lane */
-	__m256d t1 = _mm256_castps_pd( _mm256_unpackhi_ps( r0, r1 ) ); /* z0 z1 w0 w1 */
-	__m256d t2 = _mm256_castps_pd( _mm256_unpacklo_ps( r2, r3 ) );
-	__m256d t3 = _mm256_castps_pd( _mm256_unpackhi_ps( r2, r3 ) );
-	*x = _mm256_castpd_ps( _mm256_unpacklo_pd( t0, t2 ) );
-	*y = _mm256_castpd_ps( _mm256_unpackhi_pd( t0, t2 ) );
-	*z = _mm256_castpd_ps( _mm256_unpacklo_pd( t1, t3 ) );
-	*w = _mm256_castpd_ps( _mm256_unpackhi_pd( t1, t3 ) );
-}
-
-/* The inverse of load_records: four components into records, 8 stores of 128 bits. */
-FORCE_INLINE void store_records( float* packed, const int32_t* at, __m256 x, __m256 y, __m256 z, __m256 w )
-{
-	__m256d t0 = _mm256_castps_pd( _mm256_unpacklo_ps( x, y ) );
-	__m256d t1 = _mm256_castps_pd( _mm256_unpackhi_ps( x, y ) );
-	__m256d t2 = _mm256_castps_pd( _mm256_unpacklo_ps( z, w ) );
-	__m256d t3 = _mm256_castps_pd( _mm256_unpackhi_ps( z, w ) );
-	__m256 r0 = _mm256_castpd_ps( _mm256_unpacklo_pd( t0, t2 ) );
-	__m256 r1 = _mm256_castpd_ps( _mm256_unpackhi_pd( t0, t2 ) );
-	__m256 r2 = _mm256_castpd_ps( _mm256_unpacklo_pd( t1, t3 ) );
-	__m256 r3 = _mm256_castpd_ps( _mm256_unpackhi_pd( t1, t3 ) );
-	_mm_store_ps( record_at( packed, at, 0 ), _mm256_castps256_ps128( r0 ) );
-	_mm_store_ps( record_at( packed, at, 1 ), _mm256_castps256_ps128( r1 ) );
-	_mm_store_ps( record_at( packed, at, 2 ), _mm256_castps256_ps128( r2 ) );
-	_mm_store_ps( record_at( packed, at, 3 ), _mm256_castps256_ps128( r3 ) );
-	_mm_store_ps( record_at( packed, at, 4 ), _mm256_extractf128_ps( r0, 1 ) );
-	_mm_store_ps( record_at( packed, at, 5 ), _mm256_extractf128_ps( r1, 1 ) );
-	_mm_store_ps( record_at( packed, at, 6 ), _mm256_extractf128_ps( r2, 1 ) );
-	_mm_store_ps( record_at( packed, at, 7 ), _mm256_extractf128_ps( r3, 1 ) );
-}
-
-/* What the measuring part of a half leaves for the moving part: both ends and the factor f. */
-typedef struct part_state
-{
-	__m256 ax, ay, az, aw, bx, by, bz, bw, f;
-} part_state;
-
-/* Loads both ends of the half at q and measures it (Jeong Eq. 13): the residual into acc and, unless
- * mode is MODE_MEASURE, the factor f (XPBD: and the multiplier λ; Jacobi: f stored per lane). */
-FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block_mode mode, int xpbd, lane_accum* acc )
-{
-	part_state h;
-	load_records( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
-	load_records( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
-	const __m256 zero = _mm256_setzero_ps();
-	__m256 dx = _mm256_sub_ps( h.bx, h.ax ), dy = _mm256_sub_ps( h.by, h.ay ), dz = _mm256_sub_ps( h.bz, h.az );
-	__m256 len2 =
-		_mm256_add_ps( _mm256_add_ps( _mm256_mul_ps( dx, dx ), _mm256_mul_ps( dy, dy ) ), _mm256_mul_ps( dz, dz ) );
-	__m256 len = _mm256_sqrt_ps( len2 );
-	__m256 rest = _mm256_load_ps( ctx->rest + q );
-	__m256 c = _mm256_sub_ps( len, rest ); /* Jeong Eq. 13 */
-	acc->zero |= _mm256_movemask_ps( _mm256_cmp_ps( len, zero, _CMP_EQ_OQ ) );
-	acc->nonfinite |= _mm256_movemask_ps( _mm256_cmp_ps( len, _mm256_set1_ps( FLT_MAX ), _CMP_NLE_UQ ) );
-	__m256 wsum = _mm256_add_ps( h.aw, h.bw );
-	__m256 lambda = zero, alpha = zero, residual = c;
-	if ( xpbd )
-	{
-		alpha = _mm256_mul_ps( _mm256_set1_ps( ctx->alpha ), _mm256_load_ps( ctx->weight + q ) );
-		lambda = _mm256_load_ps( ctx->lambda + q );
-		residual = _mm256_add_ps( c, _mm256_mul_ps( alpha, lambda ) );
-	}
-	const __m256 magnitude = _mm256_castsi256_ps( _mm256_set1_epi32( 0x7fffffff ) );
-	acc->worst = _mm256_max_ps( acc->worst, _mm256_div_ps( _mm256_and_ps( residual, magnitude ), rest ) );
-	h.f = zero;
-	if ( mode == MODE_MEASURE )
-	{
-		return h;
-	}
-	/* a masked-off lane's quotient (0/0 or x/0) is replaced by zero, as the AVX-512 maskz_div */
-	if ( xpbd )
-	{
-		__m256 denominator = _mm256_add_ps( wsum, alpha );
-		__m256 movable = _mm256_cmp_ps( denominator, zero, _CMP_GT_OQ );
-		__m256 numerator = _mm256_sub_ps( _mm256_sub_ps( zero, c ), _mm256_mul_ps( alpha, lambda ) );
-		__m256 dlambda = _mm256_and_ps( movable, _mm256_div_ps( numerator, denominator ) );
-		_mm256_store_ps( ctx->lambda + q, _mm256_add_ps( lambda, dlambda ) );
-		h.f = _mm256_div_ps( _mm256_sub_ps( zero, dlambda ), len );
-	}
-	else
-	{
-		__m256 movable = _mm256_cmp_ps( wsum, zero, _CMP_GT_OQ );
-		h.f = _mm256_and_ps(
-			movable, _mm256_div_ps( _mm256_mul_ps( _mm256_set1_ps( ctx->k ), c ), _mm256_mul_ps( wsum, len ) ) );
-	}
-	if ( mode == MODE_JACOBI )
-	{
-		_mm256_store_ps( ctx->factor + q, h.f );
-	}
-	return h;
-}
-
-/* The moving part of a Gauss–Seidel half: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored.
- * d = p_b − p_a again, the same operation on the same values as in measure_part, so the same
- * bits; recomputing it keeps three registers fewer alive between the two parts. */
-FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
-{
-	__m256 dx = _mm256_sub_ps( h->bx, h->ax ), dy = _mm256_sub_ps( h->by, h->ay ), dz = _mm256_sub_ps( h->bz, h->az );
-	__m256 fa = _mm256_mul_ps( h->aw, h->f ), fb = _mm256_mul_ps( h->bw, h->f );
-	store_records( ctx->packed, ctx->ia + q, _mm256_add_ps( h->ax, _mm256_mul_ps( fa, dx ) ),
-				   _mm256_add_ps( h->ay, _mm256_mul_ps( fa, dy ) ), _mm256_add_ps( h->az, _mm256_mul_ps( fa, dz ) ),
-				   h->aw );
-	store_records( ctx->packed, ctx->ib + q, _mm256_sub_ps( h->bx, _mm256_mul_ps( fb, dx ) ),
-				   _mm256_sub_ps( h->by, _mm256_mul_ps( fb, dy ) ), _mm256_sub_ps( h->bz, _mm256_mul_ps( fb, dz ) ),
-				   h->bw );
-}
-
-FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
-{
-	__m256 ax, ay, az, aw, bx, by, bz, bw;
-	load_records( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
-	load_records( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
-	const __m256 one = _mm256_set1_ps( ctx->one );
-	store_records( ctx->packed, ctx->ia + q, _mm256_mul_ps( ax, one ), _mm256_mul_ps( ay, one ),
-				   _mm256_mul_ps( az, one ), aw );
-	store_records( ctx->packed, ctx->ib + q, _mm256_mul_ps( bx, one ), _mm256_mul_ps( by, one ),
-				   _mm256_mul_ps( bz, one ), bw );
-}
-
-/* Constraints per measure/move part: half a block. */
-#define PART ( LANES / 2 )
-
-#else
-
-/* Portable build (no AVX): the same operations one lane at a time. Lanes of a block share
- * no particle, so doing them in sequence gives the bits the SIMD build gives. */
-typedef struct lane_accum
-{
-	float worst;
-	int zero, nonfinite;
-} lane_accum;
-
-FORCE_INLINE lane_accum lane_accum_start( void )
-{
-	lane_accum acc = { 0.0f, 0, 0 };
-	return acc;
-}
-
-FORCE_INLINE void lane_accum_finish( const lane_accum* acc, float* worst, int32_t* flags )
-{
-	*worst = acc->worst > *worst ? acc->worst : *worst;
-	*flags |= ( acc->zero ? FLAG_ZERO_LENGTH : 0 ) | ( acc->nonfinite ? FLAG_NONFINITE : 0 );
-}
-
-FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mode mode, int xpbd, lane_accum* acc )
-{
-	for ( int32_t q = q0; q < q0 + LANES; ++q )
-	{
-		float* pa = ctx->packed + ctx->ia[q];
-		float* pb = ctx->packed + ctx->ib[q];
-		if ( mode == MODE_TOUCH )
-		{
-			for ( int j = 0; j < 3; ++j )
-			{
-				pa[j] = pa[j] * ctx->one;
-				pb[j] = pb[j] * ctx->one;
-			}
-			continue;
-		}
-		float dx = pb[0] - pa[0], dy = pb[1] - pa[1], dz = pb[2] - pa[2];
-		float len = sqrtf( ( dx * dx + dy * dy ) + dz * dz );
-		float rest = ctx->rest[q];
-		float c = len - rest; /* Jeong Eq. 13 */
-		acc->zero |= len == 0.0f;
-		acc->nonfinite |= !( len <= FLT_MAX );
-		float wsum = pa[3] + pb[3];
-		float lambda = xpbd ? ctx->lambda[q] : 0.0f;
-		float alpha = xpbd ? ctx->alpha * ctx->weight[q] : 0.0f;
-		float residual = xpbd ? c + alpha * lambda : c;
-		float strain = fabsf( residual ) / rest;
-		acc->worst = strain > acc->worst ? strain : acc->worst;
-		if ( mode == MODE_MEASURE )
-		{
-			continue;
-		}
-		float f;
-		if ( xpbd )
-		{
-			float denominator = wsum + alpha;
-			float dlambda = denominator > 0.0f ? ( ( 0.0f - c ) - alpha * lambda ) / denominator : 0.0f;
-			ctx->lambda[q] = lambda + dlambda;
-			f = ( 0.0f - dlambda ) / len;
-		}
-		else
-		{
-			f = wsum > 0.0f ? ( ctx->k * c ) / ( wsum * len ) : 0.0f;
-		}
-		if ( mode == MODE_JACOBI )
-		{
-			ctx->factor[q] = f;
-			continue;
-		}
-		float fa = pa[3] * f, fb = pb[3] * f;
-		pa[0] = pa[0] + fa * dx, pa[1] = pa[1] + fa * dy, pa[2] = pa[2] + fa * dz;
-		pb[0] = pb[0] - fb * dx, pb[1] = pb[1] - fb * dy, pb[2] = pb[2] - fb * dz;
-	}
-}
-
-#endif
-
-#if defined( __AVX512F__ ) || defined( __AVX__ )
-/* Lanes [first, last) of one color of one item, a multiple of LANES, in parts of PART lanes.
+/* Lanes [first, last) of one color of one item, a multiple of LANES, in parts of SERE_LANES.
  *
  * Gauss–Seidel is software-pipelined by one part: the next part is measured before this one
  * moves. Measuring (loads, transposes, √, two divisions) is a dependency chain of some 60 cycles
@@ -1079,15 +248,15 @@ FORCE_INLINE void project_block( const block_context* ctx, int32_t q0, block_mod
  * window (llvm-mca's Zen 3 model: the 64-entry floating-point scheduler full most of the time),
  * so a core worked on about one part at a time. Measured one part ahead, a part's moves find f
  * ready. On the maple at one thread this took an AVX2 sweep from 2.2 to 1.8 times its floor
- * (sere_pbd_touch_sweeps) and an AVX-512 sweep (one block a part) from 1.6 to 1.3 (CPU time). All lanes
- * of one color share no particle, so reading the next part before this one is stored reads the
- * same values. */
+ * (sere_pbd_touch_sweeps) and an AVX-512 sweep from 1.6 to 1.3 (CPU time). All lanes of one
+ * color share no particle, so reading the next part before this one is stored reads the same
+ * values, and every width (16, 8 or 4 lanes a part) gives the same bits. */
 FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
 								   lane_accum* acc )
 {
 	if ( mode != MODE_GAUSS_SEIDEL )
 	{
-		for ( int32_t q = first; q < last; q += PART )
+		for ( int32_t q = first; q < last; q += SERE_LANES )
 		{
 			if ( mode == MODE_TOUCH )
 			{
@@ -1105,25 +274,14 @@ FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int3
 		return;
 	}
 	part_state current = measure_part( ctx, first, mode, xpbd, acc );
-	for ( int32_t q = first; q + PART < last; q += PART )
+	for ( int32_t q = first; q + SERE_LANES < last; q += SERE_LANES )
 	{
-		part_state next = measure_part( ctx, q + PART, mode, xpbd, acc );
+		part_state next = measure_part( ctx, q + SERE_LANES, mode, xpbd, acc );
 		move_part( ctx, q, &current );
 		current = next;
 	}
-	move_part( ctx, last - PART, &current );
+	move_part( ctx, last - SERE_LANES, &current );
 }
-#else
-/* Lanes [first, last) of one color of one item, a multiple of LANES: block after block. */
-FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int32_t last, block_mode mode, int xpbd,
-								   lane_accum* acc )
-{
-	for ( int32_t q = first; q < last; q += LANES )
-	{
-		project_block( ctx, q, mode, xpbd, acc );
-	}
-}
-#endif
 
 /* ---------------------------------------------------------------------------------------
  * Threads: work claiming and the barrier. */
@@ -1397,8 +555,13 @@ static void unpack( const float* packed, const int32_t* slot, int32_t n, float* 
 
 /* Jacobi: every particle of thread t's share moves from its old record to a new one by
  * ω/n_i · w_i Σ f_q (p_other − p_i) over its constraints q, summed in lane order (both ends
- * of a constraint move along their own d, which is how −w_b f d reads from b's side). */
-static void jacobi_apply( sere_pbd* pbd, const float* old, float* next, float omega, int t, int threads )
+ * of a constraint move along their own d, which is how −w_b f d reads from b's side).
+ *
+ * Out of line and on a cache line of its own: inlined, its gather loop sat wherever the code
+ * linked before this file left it, and one placement cost the Jacobi sweep 16% (CPU time, one
+ * thread, the maple) against another with the same instructions. */
+static __attribute__( ( noinline, aligned( 64 ) ) ) void jacobi_apply( sere_pbd* pbd, const float* old, float* next,
+																	   float omega, int t, int threads )
 {
 	int32_t first, last;
 	share( pbd->particle_count, t, threads, &first, &last );

@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #if defined( __AVX512F__ ) || defined( __AVX2__ )
 #include <immintrin.h>
@@ -103,9 +104,50 @@ static inline void sere_vf_store_first( float* p, int32_t n, sere_vf a )
 {
 	_mm512_mask_storeu_ps( p, sere_vmask_first( n ), a );
 }
-/* Lane j of c0..c3 receives the four floats of record at[j] (16-byte aligned records). Lane j's
- * record sits in 128-bit lane j / 4 of register j % 4; a 4 × 4 transpose inside every 128-bit
- * lane then gathers the components. */
+/* The in-register 4 × 4 transpose inside every 128-bit lane: lane j of r[k] holds the record of
+ * 128-bit lane j / 4 … as the record loads place them; it is its own inverse. */
+static inline void sere_vf_transpose4( const sere_vf r[4], sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
+{
+	__m512 t0 = _mm512_unpacklo_ps( r[0], r[1] ), t1 = _mm512_unpackhi_ps( r[0], r[1] );
+	__m512 t2 = _mm512_unpacklo_ps( r[2], r[3] ), t3 = _mm512_unpackhi_ps( r[2], r[3] );
+	*c0 = _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) );
+	*c1 = _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) );
+	*c2 = _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) );
+	*c3 = _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) );
+}
+/* Lane j of c0..c3 receives the four floats at base + offset[j] (16-byte aligned). Lane j's
+ * record sits in 128-bit lane j / 4 of register j % 4; the transpose then gathers the
+ * components. AVX-512 gathers cost three times as much for the PBD sweep on this machine. */
+static inline void sere_vf_load_records_at( const float* base, const int32_t* offset, sere_vf* c0, sere_vf* c1,
+											sere_vf* c2, sere_vf* c3 )
+{
+	__m512 r[4];
+	for ( int k = 0; k < 4; ++k )
+	{
+		r[k] = _mm512_castps128_ps512( _mm_load_ps( base + offset[k] ) );
+		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( base + offset[k + 4] ), 1 );
+		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( base + offset[k + 8] ), 2 );
+		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( base + offset[k + 12] ), 3 );
+	}
+	sere_vf_transpose4( r, c0, c1, c2, c3 );
+}
+/* The inverse of sere_vf_load_records_at for every lane: 128-bit stores straight from the
+ * transposed registers. */
+static inline void sere_vf_store_records_at( float* base, const int32_t* offset, sere_vf c0, sere_vf c1, sere_vf c2,
+											 sere_vf c3 )
+{
+	const __m512 c[4] = { c0, c1, c2, c3 };
+	__m512 r[4];
+	sere_vf_transpose4( c, &r[0], &r[1], &r[2], &r[3] );
+	for ( int k = 0; k < 4; ++k )
+	{
+		_mm_store_ps( base + offset[k], _mm512_castps512_ps128( r[k] ) );
+		_mm_store_ps( base + offset[k + 4], _mm512_extractf32x4_ps( r[k], 1 ) );
+		_mm_store_ps( base + offset[k + 8], _mm512_extractf32x4_ps( r[k], 2 ) );
+		_mm_store_ps( base + offset[k + 12], _mm512_extractf32x4_ps( r[k], 3 ) );
+	}
+}
+/* Lane j of c0..c3 receives the four floats of record at[j] (16-byte aligned records). */
 static inline void sere_vf_load_records( const float* rec, const int32_t* at, sere_vf* c0, sere_vf* c1, sere_vf* c2,
 										 sere_vf* c3 )
 {
@@ -117,31 +159,59 @@ static inline void sere_vf_load_records( const float* rec, const int32_t* at, se
 		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( rec + 4 * at[k + 8] ), 2 );
 		r[k] = _mm512_insertf32x4( r[k], _mm_load_ps( rec + 4 * at[k + 12] ), 3 );
 	}
-	__m512 t0 = _mm512_unpacklo_ps( r[0], r[1] ), t1 = _mm512_unpackhi_ps( r[0], r[1] );
-	__m512 t2 = _mm512_unpacklo_ps( r[2], r[3] ), t3 = _mm512_unpackhi_ps( r[2], r[3] );
-	*c0 = _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) );
-	*c1 = _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) );
-	*c2 = _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) );
-	*c3 = _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) );
+	sere_vf_transpose4( r, c0, c1, c2, c3 );
 }
 /* The inverse of sere_vf_load_records for the first n lanes (the transpose is its own inverse). */
 static inline void sere_vf_store_records( float* rec, const int32_t* at, int32_t n, sere_vf c0, sere_vf c1, sere_vf c2,
 										  sere_vf c3 )
 {
 	_Alignas( 64 ) float tmp[64];
-	__m512 t0 = _mm512_unpacklo_ps( c0, c1 ), t1 = _mm512_unpackhi_ps( c0, c1 );
-	__m512 t2 = _mm512_unpacklo_ps( c2, c3 ), t3 = _mm512_unpackhi_ps( c2, c3 );
-	_mm512_store_ps( tmp, _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) ) );
-	_mm512_store_ps( tmp + 16,
-					 _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t0 ), _mm512_castps_pd( t2 ) ) ) );
-	_mm512_store_ps( tmp + 32,
-					 _mm512_castpd_ps( _mm512_unpacklo_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) ) );
-	_mm512_store_ps( tmp + 48,
-					 _mm512_castpd_ps( _mm512_unpackhi_pd( _mm512_castps_pd( t1 ), _mm512_castps_pd( t3 ) ) ) );
+	const __m512 c[4] = { c0, c1, c2, c3 };
+	__m512 r[4];
+	sere_vf_transpose4( c, &r[0], &r[1], &r[2], &r[3] );
+	for ( int k = 0; k < 4; ++k )
+	{
+		_mm512_store_ps( tmp + 16 * k, r[k] );
+	}
 	for ( int32_t j = 0; j < n; ++j )
 	{
 		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 16 * ( j % 4 ) + 4 * ( j / 4 ) ) );
 	}
+}
+static inline sere_vf sere_vf_load( const float* p )
+{
+	return _mm512_load_ps( p );
+}
+static inline void sere_vf_store( float* p, sere_vf a )
+{
+	_mm512_store_ps( p, a );
+}
+/* a = b (ordered: false when either is NaN). */
+static inline sere_vmask sere_vf_eq( sere_vf a, sere_vf b )
+{
+	return _mm512_cmp_ps_mask( a, b, _CMP_EQ_OQ );
+}
+/* not a ≤ b (unordered: true when either is NaN). */
+static inline sere_vmask sere_vf_not_le( sere_vf a, sere_vf b )
+{
+	return _mm512_cmp_ps_mask( a, b, _CMP_NLE_UQ );
+}
+static inline sere_vmask sere_vmask_none( void )
+{
+	return 0;
+}
+static inline sere_vmask sere_vmask_or( sere_vmask a, sere_vmask b )
+{
+	return (sere_vmask) ( a | b );
+}
+static inline int sere_vmask_any( sere_vmask m )
+{
+	return m != 0;
+}
+/* The largest lane of a. */
+static inline float sere_vf_max_all( sere_vf a )
+{
+	return _mm512_reduce_max_ps( a );
 }
 
 #elif defined( __AVX2__ )
@@ -212,13 +282,16 @@ static inline sere_vf sere_vf_keep( sere_vmask m, sere_vf a )
 {
 	return _mm256_and_ps( m, a );
 }
-static inline float sere_vf_max_where( sere_vmask m, sere_vf a )
+static inline float sere_vf_max_all( sere_vf a )
 {
-	a = _mm256_blendv_ps( _mm256_set1_ps( -INFINITY ), a, m );
 	__m128 h = _mm_max_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
 	h = _mm_max_ps( h, _mm_movehl_ps( h, h ) );
 	h = _mm_max_ss( h, _mm_shuffle_ps( h, h, 1 ) );
 	return _mm_cvtss_f32( h );
+}
+static inline float sere_vf_max_where( sere_vmask m, sere_vf a )
+{
+	return sere_vf_max_all( _mm256_blendv_ps( _mm256_set1_ps( -INFINITY ), a, m ) );
 }
 static inline sere_vf sere_vf_load_first( const float* p, int32_t n, float fill )
 {
@@ -229,7 +302,40 @@ static inline void sere_vf_store_first( float* p, int32_t n, sere_vf a )
 {
 	_mm256_maskstore_ps( p, _mm256_castps_si256( sere_vmask_first( n ) ), a );
 }
-/* As the AVX-512 version: 128-bit record loads, then the in-lane 4 × 4 transpose. */
+/* The in-lane 4 × 4 transpose, as the AVX-512 one; its own inverse. */
+static inline void sere_vf_transpose4( const sere_vf r[4], sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
+{
+	__m256 t0 = _mm256_unpacklo_ps( r[0], r[1] ), t1 = _mm256_unpackhi_ps( r[0], r[1] );
+	__m256 t2 = _mm256_unpacklo_ps( r[2], r[3] ), t3 = _mm256_unpackhi_ps( r[2], r[3] );
+	*c0 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
+	*c1 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
+	*c2 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
+	*c3 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
+}
+/* As the AVX-512 versions: 128-bit record loads, then the in-lane 4 × 4 transpose. */
+static inline void sere_vf_load_records_at( const float* base, const int32_t* offset, sere_vf* c0, sere_vf* c1,
+											sere_vf* c2, sere_vf* c3 )
+{
+	__m256 r[4];
+	for ( int k = 0; k < 4; ++k )
+	{
+		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( base + offset[k] ) ),
+									 _mm_load_ps( base + offset[k + 4] ), 1 );
+	}
+	sere_vf_transpose4( r, c0, c1, c2, c3 );
+}
+static inline void sere_vf_store_records_at( float* base, const int32_t* offset, sere_vf c0, sere_vf c1, sere_vf c2,
+											 sere_vf c3 )
+{
+	const __m256 c[4] = { c0, c1, c2, c3 };
+	__m256 r[4];
+	sere_vf_transpose4( c, &r[0], &r[1], &r[2], &r[3] );
+	for ( int k = 0; k < 4; ++k )
+	{
+		_mm_store_ps( base + offset[k], _mm256_castps256_ps128( r[k] ) );
+		_mm_store_ps( base + offset[k + 4], _mm256_extractf128_ps( r[k], 1 ) );
+	}
+}
 static inline void sere_vf_load_records( const float* rec, const int32_t* at, sere_vf* c0, sere_vf* c1, sere_vf* c2,
 										 sere_vf* c3 )
 {
@@ -239,30 +345,51 @@ static inline void sere_vf_load_records( const float* rec, const int32_t* at, se
 		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( rec + 4 * at[k] ) ),
 									 _mm_load_ps( rec + 4 * at[k + 4] ), 1 );
 	}
-	__m256 t0 = _mm256_unpacklo_ps( r[0], r[1] ), t1 = _mm256_unpackhi_ps( r[0], r[1] );
-	__m256 t2 = _mm256_unpacklo_ps( r[2], r[3] ), t3 = _mm256_unpackhi_ps( r[2], r[3] );
-	*c0 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
-	*c1 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) );
-	*c2 = _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
-	*c3 = _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) );
+	sere_vf_transpose4( r, c0, c1, c2, c3 );
 }
 static inline void sere_vf_store_records( float* rec, const int32_t* at, int32_t n, sere_vf c0, sere_vf c1, sere_vf c2,
 										  sere_vf c3 )
 {
 	_Alignas( 32 ) float tmp[32];
-	__m256 t0 = _mm256_unpacklo_ps( c0, c1 ), t1 = _mm256_unpackhi_ps( c0, c1 );
-	__m256 t2 = _mm256_unpacklo_ps( c2, c3 ), t3 = _mm256_unpackhi_ps( c2, c3 );
-	_mm256_store_ps( tmp, _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) ) );
-	_mm256_store_ps( tmp + 8,
-					 _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t0 ), _mm256_castps_pd( t2 ) ) ) );
-	_mm256_store_ps( tmp + 16,
-					 _mm256_castpd_ps( _mm256_unpacklo_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) ) );
-	_mm256_store_ps( tmp + 24,
-					 _mm256_castpd_ps( _mm256_unpackhi_pd( _mm256_castps_pd( t1 ), _mm256_castps_pd( t3 ) ) ) );
+	const __m256 c[4] = { c0, c1, c2, c3 };
+	__m256 r[4];
+	sere_vf_transpose4( c, &r[0], &r[1], &r[2], &r[3] );
+	for ( int k = 0; k < 4; ++k )
+	{
+		_mm256_store_ps( tmp + 8 * k, r[k] );
+	}
 	for ( int32_t j = 0; j < n; ++j )
 	{
 		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 8 * ( j % 4 ) + 4 * ( j / 4 ) ) );
 	}
+}
+static inline sere_vf sere_vf_load( const float* p )
+{
+	return _mm256_load_ps( p );
+}
+static inline void sere_vf_store( float* p, sere_vf a )
+{
+	_mm256_store_ps( p, a );
+}
+static inline sere_vmask sere_vf_eq( sere_vf a, sere_vf b )
+{
+	return _mm256_cmp_ps( a, b, _CMP_EQ_OQ );
+}
+static inline sere_vmask sere_vf_not_le( sere_vf a, sere_vf b )
+{
+	return _mm256_cmp_ps( a, b, _CMP_NLE_UQ );
+}
+static inline sere_vmask sere_vmask_none( void )
+{
+	return _mm256_setzero_ps();
+}
+static inline sere_vmask sere_vmask_or( sere_vmask a, sere_vmask b )
+{
+	return _mm256_or_ps( a, b );
+}
+static inline int sere_vmask_any( sere_vmask m )
+{
+	return _mm256_movemask_ps( m ) != 0;
 }
 
 #else
@@ -407,6 +534,68 @@ static inline void sere_vf_store_records( float* rec, const int32_t* at, int32_t
 	}
 }
 
+static inline void sere_vf_load_records_at( const float* base, const int32_t* offset, sere_vf* c0, sere_vf* c1,
+											sere_vf* c2, sere_vf* c3 )
+{
+	for ( int j = 0; j < SERE_LANES; ++j )
+	{
+		const float* r = base + offset[j];
+		c0->v[j] = r[0];
+		c1->v[j] = r[1];
+		c2->v[j] = r[2];
+		c3->v[j] = r[3];
+	}
+}
+static inline void sere_vf_store_records_at( float* base, const int32_t* offset, sere_vf c0, sere_vf c1, sere_vf c2,
+											 sere_vf c3 )
+{
+	for ( int j = 0; j < SERE_LANES; ++j )
+	{
+		float* r = base + offset[j];
+		r[0] = c0.v[j];
+		r[1] = c1.v[j];
+		r[2] = c2.v[j];
+		r[3] = c3.v[j];
+	}
+}
+static inline sere_vf sere_vf_load( const float* p )
+{
+	SERE_VF_LANEWISE( p[j] );
+}
+static inline void sere_vf_store( float* p, sere_vf a )
+{
+	memcpy( p, a.v, sizeof( a.v ) );
+}
+static inline sere_vmask sere_vf_eq( sere_vf a, sere_vf b )
+{
+	SERE_VMASK_LANEWISE( a.v[j] == b.v[j] );
+}
+static inline sere_vmask sere_vf_not_le( sere_vf a, sere_vf b )
+{
+	SERE_VMASK_LANEWISE( !( a.v[j] <= b.v[j] ) );
+}
+static inline sere_vmask sere_vmask_none( void )
+{
+	SERE_VMASK_LANEWISE( 0 );
+}
+static inline sere_vmask sere_vmask_or( sere_vmask a, sere_vmask b )
+{
+	SERE_VMASK_LANEWISE( a.v[j] || b.v[j] );
+}
+static inline int sere_vmask_any( sere_vmask m )
+{
+	return sere_vmask_count( m ) != 0;
+}
+static inline float sere_vf_max_all( sere_vf a )
+{
+	float best = a.v[0];
+	for ( int j = 1; j < SERE_LANES; ++j )
+	{
+		best = a.v[j] > best ? a.v[j] : best;
+	}
+	return best;
+}
+
 #undef SERE_VF_LANEWISE
 #undef SERE_VMASK_LANEWISE
 
@@ -417,3 +606,368 @@ static inline sere_vf sere_vf_norm3( sere_vf x, sere_vf y, sere_vf z )
 {
 	return sere_vf_sqrt( sere_vf_add( sere_vf_add( sere_vf_mul( x, x ), sere_vf_mul( y, y ) ), sere_vf_mul( z, z ) ) );
 }
+
+/* Fixed groups of eight and of four floats, for data laid out that wide whatever the build's
+ * width: the BVH's eight-lane nodes and eight-row tables, a contact's (x, y, z, w) record. They
+ * are 256- and 128-bit registers when the build has AVX2 (also under AVX-512, where a 512-bit
+ * register would stay half empty) and plain C arrays otherwise. Lane-wise IEEE as above; the
+ * reductions take the pairwise tree the AVX instructions take (halves, then pairs, then the
+ * last two), at every width, so even the order-dependent cases (±0, NaN) agree. */
+#if defined( __AVX2__ )
+
+typedef __m256 sere_v8;
+typedef __m256 sere_m8; /* a lane is set when all its bits are */
+typedef __m128 sere_v4;
+
+static inline sere_v8 sere_v8_load( const float* p )
+{
+	return _mm256_loadu_ps( p );
+}
+static inline sere_v8 sere_v8_splat( float a )
+{
+	return _mm256_set1_ps( a );
+}
+static inline sere_v8 sere_v8_add( sere_v8 a, sere_v8 b )
+{
+	return _mm256_add_ps( a, b );
+}
+static inline sere_v8 sere_v8_sub( sere_v8 a, sere_v8 b )
+{
+	return _mm256_sub_ps( a, b );
+}
+static inline sere_v8 sere_v8_mul( sere_v8 a, sere_v8 b )
+{
+	return _mm256_mul_ps( a, b );
+}
+/* The compares are ordered: false when either side is NaN. */
+static inline sere_m8 sere_v8_le( sere_v8 a, sere_v8 b )
+{
+	return _mm256_cmp_ps( a, b, _CMP_LE_OQ );
+}
+static inline sere_m8 sere_v8_ge( sere_v8 a, sere_v8 b )
+{
+	return _mm256_cmp_ps( a, b, _CMP_GE_OQ );
+}
+static inline sere_m8 sere_v8_lt( sere_v8 a, sere_v8 b )
+{
+	return _mm256_cmp_ps( a, b, _CMP_LT_OQ );
+}
+static inline sere_m8 sere_v8_gt( sere_v8 a, sere_v8 b )
+{
+	return _mm256_cmp_ps( a, b, _CMP_GT_OQ );
+}
+/* p[j] = s and p[j] > s, lane-wise over eight int32. */
+static inline sere_m8 sere_i8_eq( const int32_t* p, int32_t s )
+{
+	return _mm256_castsi256_ps(
+		_mm256_cmpeq_epi32( _mm256_loadu_si256( (const __m256i*) p ), _mm256_set1_epi32( s ) ) );
+}
+static inline sere_m8 sere_i8_gt( const int32_t* p, int32_t s )
+{
+	return _mm256_castsi256_ps(
+		_mm256_cmpgt_epi32( _mm256_loadu_si256( (const __m256i*) p ), _mm256_set1_epi32( s ) ) );
+}
+static inline sere_m8 sere_m8_and( sere_m8 a, sere_m8 b )
+{
+	return _mm256_and_ps( a, b );
+}
+static inline sere_m8 sere_m8_or( sere_m8 a, sere_m8 b )
+{
+	return _mm256_or_ps( a, b );
+}
+/* a and not b. */
+static inline sere_m8 sere_m8_and_not( sere_m8 a, sere_m8 b )
+{
+	return _mm256_andnot_ps( b, a );
+}
+static inline sere_m8 sere_m8_all( void )
+{
+	return _mm256_castsi256_ps( _mm256_set1_epi32( -1 ) );
+}
+/* Bit j set when lane j is. */
+static inline uint32_t sere_m8_bits( sere_m8 m )
+{
+	return (uint32_t) _mm256_movemask_ps( m );
+}
+static inline float sere_v8_min_all( const float* p )
+{
+	__m256 a = _mm256_loadu_ps( p );
+	__m128 m = _mm_min_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
+	m = _mm_min_ps( m, _mm_movehl_ps( m, m ) );
+	m = _mm_min_ss( m, _mm_shuffle_ps( m, m, 1 ) );
+	return _mm_cvtss_f32( m );
+}
+static inline float sere_v8_max_all( const float* p )
+{
+	__m256 a = _mm256_loadu_ps( p );
+	__m128 m = _mm_max_ps( _mm256_castps256_ps128( a ), _mm256_extractf128_ps( a, 1 ) );
+	m = _mm_max_ps( m, _mm_movehl_ps( m, m ) );
+	m = _mm_max_ss( m, _mm_shuffle_ps( m, m, 1 ) );
+	return _mm_cvtss_f32( m );
+}
+/* x[l], y[l], z[l] = the first three floats of record at[l] (records of four, any alignment):
+ * one 16-byte load per record and a transpose in registers, where the hardware gathers
+ * (vgatherdps, three per record) measured slower on the collision response. */
+static inline void sere_v8_gather_records( const float* rec, const int32_t at[8], float* x, float* y, float* z )
+{
+	__m256 r[4];
+	for ( int k = 0; k < 4; ++k )
+	{
+		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_loadu_ps( rec + 4 * (size_t) at[k] ) ),
+									 _mm_loadu_ps( rec + 4 * (size_t) at[k + 4] ), 1 );
+	}
+	__m256 xy01 = _mm256_unpacklo_ps( r[0], r[1] ), zw01 = _mm256_unpackhi_ps( r[0], r[1] );
+	__m256 xy23 = _mm256_unpacklo_ps( r[2], r[3] ), zw23 = _mm256_unpackhi_ps( r[2], r[3] );
+	_mm256_storeu_ps( x, _mm256_shuffle_ps( xy01, xy23, _MM_SHUFFLE( 1, 0, 1, 0 ) ) );
+	_mm256_storeu_ps( y, _mm256_shuffle_ps( xy01, xy23, _MM_SHUFFLE( 3, 2, 3, 2 ) ) );
+	_mm256_storeu_ps( z, _mm256_shuffle_ps( zw01, zw23, _MM_SHUFFLE( 1, 0, 1, 0 ) ) );
+}
+/* out[4 l + r] = row r, lane l of the rows x, y, z, w: eight records of four, by the same
+ * transposition, where a vectorized loop would extract and store every float on its own. */
+static inline void sere_v8_scatter_records( const float* x, const float* y, const float* z, const float* w, float* out )
+{
+	__m256 rx = _mm256_loadu_ps( x ), ry = _mm256_loadu_ps( y ), rz = _mm256_loadu_ps( z ), rw = _mm256_loadu_ps( w );
+	__m256 xy_lo = _mm256_unpacklo_ps( rx, ry ), xy_hi = _mm256_unpackhi_ps( rx, ry );
+	__m256 zw_lo = _mm256_unpacklo_ps( rz, rw ), zw_hi = _mm256_unpackhi_ps( rz, rw );
+	/* records 0, 4 | 1, 5 | 2, 6 | 3, 7 */
+	__m256 r04 = _mm256_shuffle_ps( xy_lo, zw_lo, _MM_SHUFFLE( 1, 0, 1, 0 ) );
+	__m256 r15 = _mm256_shuffle_ps( xy_lo, zw_lo, _MM_SHUFFLE( 3, 2, 3, 2 ) );
+	__m256 r26 = _mm256_shuffle_ps( xy_hi, zw_hi, _MM_SHUFFLE( 1, 0, 1, 0 ) );
+	__m256 r37 = _mm256_shuffle_ps( xy_hi, zw_hi, _MM_SHUFFLE( 3, 2, 3, 2 ) );
+	_mm256_storeu_ps( out, _mm256_permute2f128_ps( r04, r15, 0x20 ) );
+	_mm256_storeu_ps( out + 8, _mm256_permute2f128_ps( r26, r37, 0x20 ) );
+	_mm256_storeu_ps( out + 16, _mm256_permute2f128_ps( r04, r15, 0x31 ) );
+	_mm256_storeu_ps( out + 24, _mm256_permute2f128_ps( r26, r37, 0x31 ) );
+}
+/* Two groups of four side by side, and back. */
+static inline sere_v8 sere_v8_pair( sere_v4 low, sere_v4 high )
+{
+	return _mm256_set_m128( high, low );
+}
+static inline sere_v4 sere_v8_low( sere_v8 a )
+{
+	return _mm256_castps256_ps128( a );
+}
+static inline sere_v4 sere_v8_high( sere_v8 a )
+{
+	return _mm256_extractf128_ps( a, 1 );
+}
+static inline sere_v8 sere_v8_zero( void )
+{
+	return _mm256_setzero_ps();
+}
+
+static inline sere_v4 sere_v4_load( const float* p )
+{
+	return _mm_loadu_ps( p );
+}
+static inline void sere_v4_store( float* p, sere_v4 a )
+{
+	_mm_storeu_ps( p, a );
+}
+static inline sere_v4 sere_v4_zero( void )
+{
+	return _mm_setzero_ps();
+}
+static inline sere_v4 sere_v4_add( sere_v4 a, sere_v4 b )
+{
+	return _mm_add_ps( a, b );
+}
+static inline sere_v4 sere_v4_mul( sere_v4 a, sere_v4 b )
+{
+	return _mm_mul_ps( a, b );
+}
+/* (a, a, a, w). */
+static inline sere_v4 sere_v4_xyz( float a, float w )
+{
+	return _mm_set_ps( w, a, a, a );
+}
+/* Lane 3, the w of a record. */
+static inline float sere_v4_w( sere_v4 a )
+{
+	return _mm_cvtss_f32( _mm_shuffle_ps( a, a, _MM_SHUFFLE( 3, 3, 3, 3 ) ) );
+}
+
+#else
+
+typedef struct
+{
+	float v[8];
+} sere_v8;
+typedef struct
+{
+	int32_t v[8];
+} sere_m8;
+typedef struct
+{
+	float v[4];
+} sere_v4;
+
+#define SERE_LANEWISE( type, n, expr )                                                                                 \
+	type r;                                                                                                            \
+	for ( int j = 0; j < ( n ); ++j )                                                                                  \
+	{                                                                                                                  \
+		r.v[j] = ( expr );                                                                                             \
+	}                                                                                                                  \
+	return r
+
+static inline sere_v8 sere_v8_load( const float* p )
+{
+	SERE_LANEWISE( sere_v8, 8, p[j] );
+}
+static inline sere_v8 sere_v8_splat( float a )
+{
+	SERE_LANEWISE( sere_v8, 8, a );
+}
+static inline sere_v8 sere_v8_add( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_v8, 8, a.v[j] + b.v[j] );
+}
+static inline sere_v8 sere_v8_sub( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_v8, 8, a.v[j] - b.v[j] );
+}
+static inline sere_v8 sere_v8_mul( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_v8, 8, a.v[j] * b.v[j] );
+}
+static inline sere_m8 sere_v8_le( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] <= b.v[j] );
+}
+static inline sere_m8 sere_v8_ge( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] >= b.v[j] );
+}
+static inline sere_m8 sere_v8_lt( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] < b.v[j] );
+}
+static inline sere_m8 sere_v8_gt( sere_v8 a, sere_v8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] > b.v[j] );
+}
+static inline sere_m8 sere_i8_eq( const int32_t* p, int32_t s )
+{
+	SERE_LANEWISE( sere_m8, 8, p[j] == s );
+}
+static inline sere_m8 sere_i8_gt( const int32_t* p, int32_t s )
+{
+	SERE_LANEWISE( sere_m8, 8, p[j] > s );
+}
+static inline sere_m8 sere_m8_and( sere_m8 a, sere_m8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] && b.v[j] );
+}
+static inline sere_m8 sere_m8_or( sere_m8 a, sere_m8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] || b.v[j] );
+}
+static inline sere_m8 sere_m8_and_not( sere_m8 a, sere_m8 b )
+{
+	SERE_LANEWISE( sere_m8, 8, a.v[j] && !b.v[j] );
+}
+static inline sere_m8 sere_m8_all( void )
+{
+	SERE_LANEWISE( sere_m8, 8, 1 );
+}
+static inline uint32_t sere_m8_bits( sere_m8 m )
+{
+	uint32_t bits = 0;
+	for ( int j = 0; j < 8; ++j )
+	{
+		bits |= (uint32_t) ( m.v[j] != 0 ) << j;
+	}
+	return bits;
+}
+/* x86 minps/maxps: the second operand unless the first comparison holds. */
+static inline float sere_min_x86( float a, float b )
+{
+	return a < b ? a : b;
+}
+static inline float sere_max_x86( float a, float b )
+{
+	return a > b ? a : b;
+}
+static inline float sere_v8_min_all( const float* p )
+{
+	float m[4];
+	for ( int j = 0; j < 4; ++j )
+	{
+		m[j] = sere_min_x86( p[j], p[j + 4] );
+	}
+	return sere_min_x86( sere_min_x86( m[0], m[2] ), sere_min_x86( m[1], m[3] ) );
+}
+static inline float sere_v8_max_all( const float* p )
+{
+	float m[4];
+	for ( int j = 0; j < 4; ++j )
+	{
+		m[j] = sere_max_x86( p[j], p[j + 4] );
+	}
+	return sere_max_x86( sere_max_x86( m[0], m[2] ), sere_max_x86( m[1], m[3] ) );
+}
+static inline void sere_v8_gather_records( const float* rec, const int32_t at[8], float* x, float* y, float* z )
+{
+	for ( int l = 0; l < 8; ++l )
+	{
+		const float* r = rec + 4 * (size_t) at[l];
+		x[l] = r[0], y[l] = r[1], z[l] = r[2];
+	}
+}
+static inline void sere_v8_scatter_records( const float* x, const float* y, const float* z, const float* w, float* out )
+{
+	for ( int l = 0; l < 8; ++l )
+	{
+		out[4 * l] = x[l], out[4 * l + 1] = y[l], out[4 * l + 2] = z[l], out[4 * l + 3] = w[l];
+	}
+}
+static inline sere_v8 sere_v8_pair( sere_v4 low, sere_v4 high )
+{
+	SERE_LANEWISE( sere_v8, 8, j < 4 ? low.v[j] : high.v[j - 4] );
+}
+static inline sere_v4 sere_v8_low( sere_v8 a )
+{
+	SERE_LANEWISE( sere_v4, 4, a.v[j] );
+}
+static inline sere_v4 sere_v8_high( sere_v8 a )
+{
+	SERE_LANEWISE( sere_v4, 4, a.v[j + 4] );
+}
+static inline sere_v8 sere_v8_zero( void )
+{
+	SERE_LANEWISE( sere_v8, 8, 0.0f );
+}
+
+static inline sere_v4 sere_v4_load( const float* p )
+{
+	SERE_LANEWISE( sere_v4, 4, p[j] );
+}
+static inline void sere_v4_store( float* p, sere_v4 a )
+{
+	memcpy( p, a.v, sizeof( a.v ) );
+}
+static inline sere_v4 sere_v4_zero( void )
+{
+	SERE_LANEWISE( sere_v4, 4, 0.0f );
+}
+static inline sere_v4 sere_v4_add( sere_v4 a, sere_v4 b )
+{
+	SERE_LANEWISE( sere_v4, 4, a.v[j] + b.v[j] );
+}
+static inline sere_v4 sere_v4_mul( sere_v4 a, sere_v4 b )
+{
+	SERE_LANEWISE( sere_v4, 4, a.v[j] * b.v[j] );
+}
+static inline sere_v4 sere_v4_xyz( float a, float w )
+{
+	SERE_LANEWISE( sere_v4, 4, j < 3 ? a : w );
+}
+static inline float sere_v4_w( sere_v4 a )
+{
+	return a.v[3];
+}
+
+#undef SERE_LANEWISE
+
+#endif

@@ -1,0 +1,677 @@
+/* sere — the symmetric Gauss–Seidel preconditioner of the conjugate gradient solver: its
+ * chunked layout, the forward and backward sweeps, and sere_cg_solve_sgs.
+ * _GNU_SOURCE: sched_getaffinity for internal/team.h. */
+#define _GNU_SOURCE
+
+#include "solve/internal/cg_shared.h"
+
+void sere_sgs_destroy( sere_sgs* g )
+{
+	if ( g == NULL )
+	{
+		return;
+	}
+	sere_free( g->color_chunk );
+	sere_free( g->color );
+	sere_free( g->row );
+	sere_free( g->lower_ptr );
+	sere_free( g->upper_ptr );
+	sere_free( g->col );
+	sere_free( g->val );
+	sere_free( g->slot );
+	free( g );
+}
+
+static sere_status sgs_fail( sere_sgs* g, int32_t* scratch, sere_status status )
+{
+	free( scratch );
+	sere_sgs_destroy( g );
+	return status;
+}
+
+/* Greedy coloring in row order (count: rows per color); false when a row does not hold its
+ * diagonal exactly once, needs a 33rd color, or the pattern is not symmetric. */
+static bool color_rows( sere_sgs* g, const sere_csr* a, int32_t* count )
+{
+	const int32_t n = a->rows;
+	memset( count, 0, sizeof( int32_t ) * SERE_SGS_MAX_COLORS );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		uint32_t taken = 0;
+		int32_t diagonals = 0;
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			int32_t j = a->col[k];
+			diagonals += j == i;
+			if ( j < i )
+			{
+				taken |= 1u << g->color[j];
+			}
+		}
+		if ( diagonals != 1 || taken == UINT32_MAX )
+		{
+			return false;
+		}
+		int32_t c = 0;
+		while ( taken & ( 1u << c ) )
+		{
+			++c;
+		}
+		g->color[i] = c;
+		count[c] += 1;
+		g->colors = c + 1 > g->colors ? c + 1 : g->colors;
+	}
+	_Static_assert( SERE_SGS_MAX_COLORS == 32, "the taken colors are one 32-bit mask" );
+	/* The pattern must be symmetric: a row's later neighbors chose their colors without it if
+	 * they do not list it back, and M is SPD only for symmetric A. Rows are short (a scan each). */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			int32_t j = a->col[k], back = 0;
+			for ( int32_t q = a->row_ptr[j]; q < a->row_ptr[j + 1] && !back; ++q )
+			{
+				back = a->col[q] == i;
+			}
+			if ( !back || ( j != i && g->color[j] == g->color[i] ) )
+			{
+				return false;
+			}
+		}
+	}
+	return true;
+}
+
+/* The slots of every chunk from the CSR rows: the L part, the U part (columns as positions,
+ * position: row → its position) and the diagonal after them; padding stays inert. */
+static void fill_slots( sere_sgs* g, const sere_csr* a, const int32_t* position, size_t slots )
+{
+	double* diagonal = g->val + slots;
+	for ( int32_t ch = 0; ch < g->chunks; ++ch )
+	{
+		int32_t c = 0;
+		while ( g->color_chunk[c + 1] <= ch )
+		{
+			++c;
+		}
+		for ( int32_t l = 0; l < LANES; ++l )
+		{
+			int32_t at = ch * LANES + l, i = g->row[at];
+			/* Padding repeats the lane's own position with value 0: a read the lane makes anyway. */
+			for ( int32_t s = g->lower_ptr[ch] + l; s < g->lower_ptr[ch + 1]; s += LANES )
+			{
+				g->col[s] = at;
+				g->val[s] = 0.0;
+			}
+			for ( int32_t s = g->upper_ptr[ch] + l; s < g->upper_ptr[ch + 1]; s += LANES )
+			{
+				g->col[s] = at;
+				g->val[s] = 0.0;
+			}
+			diagonal[at] = 1.0; /* padding: a lane of zeros stays zero through every sweep */
+			if ( i < 0 )
+			{
+				continue;
+			}
+			int32_t sl = g->lower_ptr[ch] + l, su = g->upper_ptr[ch] + l;
+			for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+			{
+				int32_t j = a->col[k];
+				int32_t s = g->color[j] < c ? sl : g->color[j] > c ? su : (int32_t) slots + at;
+				sl += g->color[j] < c ? LANES : 0;
+				su += g->color[j] > c ? LANES : 0;
+				if ( j != i )
+				{
+					g->col[s] = position[j];
+				}
+				g->val[s] = a->val[k];
+				g->slot[k] = s;
+			}
+		}
+	}
+}
+
+sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
+{
+	if ( a == NULL || out == NULL || a->rows <= 0 || a->nnz < 0 || a->row_ptr == NULL || a->row_ptr[0] != 0 ||
+		 a->row_ptr[a->rows] != a->nnz )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = a->rows;
+	if ( !csr_indices_valid( a ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sere_sgs* g = calloc( 1, sizeof( *g ) );
+	/* scratch: per row its position, then per color its row count and next position */
+	int32_t* scratch = malloc( sizeof( int32_t ) * ( (size_t) n + 2 * SERE_SGS_MAX_COLORS ) );
+	if ( g == NULL || scratch == NULL )
+	{
+		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
+	}
+	int32_t *position = scratch, *count = scratch + n, *next = count + SERE_SGS_MAX_COLORS;
+	g->rows = n;
+	g->nnz = a->nnz;
+	g->color = sere_alloc( sizeof( int32_t ) * (size_t) n );
+	g->color_chunk = sere_alloc( sizeof( int32_t ) * ( SERE_SGS_MAX_COLORS + 1 ) );
+	if ( g->color == NULL || g->color_chunk == NULL )
+	{
+		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
+	}
+	if ( !color_rows( g, a, count ) )
+	{
+		return sgs_fail( g, scratch, SERE_ERR_ARGUMENT );
+	}
+	g->color_chunk[0] = 0;
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+		g->color_chunk[c + 1] = g->color_chunk[c] + ( count[c] + LANES - 1 ) / LANES;
+		next[c] = g->color_chunk[c] * LANES;
+	}
+	g->chunks = g->color_chunk[g->colors];
+	const int32_t np = g->chunks * LANES;
+	g->row = sere_alloc( sizeof( int32_t ) * (size_t) np );
+	g->lower_ptr = sere_alloc( sizeof( int32_t ) * ( (size_t) g->chunks + 1 ) );
+	g->upper_ptr = sere_alloc( sizeof( int32_t ) * ( (size_t) g->chunks + 1 ) );
+	if ( g->row == NULL || g->lower_ptr == NULL || g->upper_ptr == NULL )
+	{
+		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
+	}
+	for ( int32_t at = 0; at < np; ++at )
+	{
+		g->row[at] = -1;
+	}
+	/* Within a color, rows keep their order: neighbors in the numbering stay near in memory. */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		position[i] = next[g->color[i]]++;
+		g->row[position[i]] = i;
+	}
+	/* Slot counts: a chunk is as wide as its widest row's L (or U) part. */
+	int64_t lower = 0, upper = 0;
+	g->lower_ptr[0] = 0;
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		{
+			int32_t lw = 0, uw = 0;
+			for ( int32_t l = 0; l < LANES; ++l )
+			{
+				int32_t i = g->row[ch * LANES + l], nl = 0, nu = 0;
+				for ( int32_t k = i >= 0 ? a->row_ptr[i] : 0; k < ( i >= 0 ? a->row_ptr[i + 1] : 0 ); ++k )
+				{
+					nl += g->color[a->col[k]] < c;
+					nu += g->color[a->col[k]] > c;
+				}
+				lw = nl > lw ? nl : lw;
+				uw = nu > uw ? nu : uw;
+			}
+			lower += (int64_t) lw * LANES;
+			upper += (int64_t) uw * LANES;
+			if ( lower + upper + np > INT32_MAX )
+			{
+				return sgs_fail( g, scratch, SERE_ERR_ARGUMENT );
+			}
+			g->lower_ptr[ch + 1] = (int32_t) lower;
+			g->upper_ptr[ch + 1] = (int32_t) upper;
+		}
+	}
+	g->upper_ptr[0] = 0;
+	for ( int32_t ch = 0; ch <= g->chunks; ++ch )
+	{
+		g->upper_ptr[ch] += (int32_t) lower;
+	}
+	const size_t slots = (size_t) ( lower + upper );
+	g->col = sere_alloc( sizeof( int32_t ) * ( slots > 0 ? slots : 1 ) );
+	g->val = sere_alloc( sizeof( double ) * ( slots + (size_t) np ) );
+	g->slot = sere_alloc( sizeof( int32_t ) * ( a->nnz > 0 ? (size_t) a->nnz : 1 ) );
+	if ( g->col == NULL || g->val == NULL || g->slot == NULL )
+	{
+		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
+	}
+	fill_slots( g, a, position, slots );
+	free( scratch );
+	*out = g;
+	return SERE_OK;
+}
+
+sere_status sere_sgs_update( sere_sgs* g, const sere_csr* a )
+{
+	if ( g == NULL || a == NULL || a->rows != g->rows || a->nnz != g->nnz )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+	for ( int32_t k = 0; k < a->nnz; ++k )
+	{
+		g->val[g->slot[k]] = a->val[k];
+	}
+	return SERE_OK;
+}
+
+/* Sum over a chunk's slots [begin, end) of val · x[col], lane by lane in slot order. */
+static inline void chunk_sum( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
+							  lanes_t* out )
+{
+	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
+	for ( int32_t s = begin; s < end; s += LANES )
+	{
+		gather( &xlo, x, col + s );
+		gather( &xhi, x, col + s + 4 );
+		lo += *(const half_t*) ( val + s ) * xlo;
+		hi += *(const half_t*) ( val + s + 4 ) * xhi;
+	}
+	out->lo = lo;
+	out->hi = hi;
+}
+
+/* Forward sweep z = L̃⁻¹ v in place (v in z on entry): color by color, each row
+ * z_i = (v_i − Σ_L a_ij z_j) / d_i, the z_j of earlier colors already final. To be called by
+ * every thread of a parallel region (the loop over a color's chunks is shared; its implicit
+ * barrier orders the colors). */
+static void sgs_forward( const sere_sgs* g, const double* inv_diag, double* z )
+{
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+#pragma omp for schedule( static )
+		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		{
+			lanes_t sum, v = load_lanes( z + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+			chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], z, &sum );
+			v.lo = ( v.lo - sum.lo ) * inv.lo;
+			v.hi = ( v.hi - sum.hi ) * inv.hi;
+			store_lanes( z + ch * LANES, &v );
+		}
+	}
+}
+
+/* Backward sweep t = L̃⁻ᵀ u (t may be u): colors in reverse, t_i = (u_i − Σ_U a_ij t_j) / d_i;
+ * the sums Σ_U a_ij t_j go to upper_sum (= u_i − d_i t_i in exact arithmetic), when not NULL. */
+static void sgs_backward( const sere_sgs* g, const double* inv_diag, const double* u, double* t, double* upper_sum )
+{
+	for ( int32_t c = g->colors - 1; c >= 0; --c )
+	{
+#pragma omp for schedule( static )
+		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		{
+			lanes_t sum, v = load_lanes( u + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+			chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], t, &sum );
+			v.lo = ( v.lo - sum.lo ) * inv.lo;
+			v.hi = ( v.hi - sum.hi ) * inv.hi;
+			store_lanes( t + ch * LANES, &v );
+			if ( upper_sum != NULL )
+			{
+				store_lanes( upper_sum + ch * LANES, &sum );
+			}
+		}
+	}
+}
+
+/* y = A v for chunk ch: (L v + U v) + D v. */
+static inline void sgs_chunk_product( const sere_sgs* g, int32_t ch, const double* v, double* y )
+{
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	lanes_t lo, up, d = load_lanes( diagonal + ch * LANES ), x = load_lanes( v + ch * LANES );
+	chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], v, &lo );
+	chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], v, &up );
+	lo.lo = ( lo.lo + up.lo ) + d.lo * x.lo;
+	lo.hi = ( lo.hi + up.hi ) + d.hi * x.hi;
+	store_lanes( y + ch * LANES, &lo );
+}
+
+sere_status sere_sgs_apply( const sere_sgs* g, const double* r, double* z )
+{
+	if ( g == NULL || r == NULL || z == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t np = g->chunks * LANES;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *v = sere_alloc( sizeof( double ) * (size_t) np ), *inv = sere_alloc( sizeof( double ) * (size_t) np );
+	if ( v == NULL || inv == NULL )
+	{
+		sere_free( v ), sere_free( inv );
+		return SERE_ERR_MEMORY;
+	}
+	int bad = 0;
+	for ( int32_t at = 0; at < np; ++at )
+	{
+		int32_t i = g->row[at];
+		v[at] = i >= 0 ? r[i] : 0.0;
+		bad |= i >= 0 && !( diagonal[at] > 0.0 );
+		inv[at] = i >= 0 && diagonal[at] > 0.0 ? 1.0 / diagonal[at] : 0.0;
+	}
+	if ( !bad )
+	{
+		/* M⁻¹ r = L̃⁻ᵀ D L̃⁻¹ r */
+#pragma omp parallel num_threads( sere_team_default() )
+		{
+			sgs_forward( g, inv, v );
+#pragma omp for schedule( static )
+			for ( int32_t at = 0; at < np; ++at )
+			{
+				v[at] = inv[at] > 0.0 ? diagonal[at] * v[at] : 0.0;
+			}
+			sgs_backward( g, inv, v, v, NULL );
+		}
+		for ( int32_t at = 0; at < np; ++at )
+		{
+			if ( g->row[at] >= 0 )
+			{
+				z[g->row[at]] = v[at];
+			}
+		}
+	}
+	sere_free( v ), sere_free( inv );
+	return bad ? SERE_ERR_NOT_SPD : SERE_OK;
+}
+
+/* ŷ = L̃ᵀ x = D x + U x in place: colors in order, so a row's U columns (later colors) still
+ * hold x when it reads them. Called by every thread of a region. */
+static void sgs_upper_product( const sere_sgs* g, double* x )
+{
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+#pragma omp for schedule( static )
+		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		{
+			lanes_t sum, d = load_lanes( diagonal + ch * LANES ), v = load_lanes( x + ch * LANES );
+			chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], x, &sum );
+			v.lo = d.lo * v.lo + sum.lo;
+			v.hi = d.hi * v.hi + sum.hi;
+			store_lanes( x + ch * LANES, &v );
+		}
+	}
+}
+
+/* w = E u = t + L̃⁻¹ (u − D t), t = L̃⁻ᵀ u (Eisenstat), and the block sums of δ = uᵀw (slot 1):
+ * the forward sweep forms each chunk's w and its lane-ordered share of δ, summed per block in
+ * chunk order (the same bits for any thread count). Called by every thread of a region. */
+static void sgs_product_sums( const sere_sgs* g, int32_t blocks, const double* inv_diag, const double* u, double* t,
+							  double* z, double* w, double* chunk_delta, double* partial )
+{
+	sgs_backward( g, inv_diag, u, t, z );
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+#pragma omp for schedule( static )
+		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		{
+			lanes_t sum, v = load_lanes( z + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+			lanes_t tt = load_lanes( t + ch * LANES ), uu = load_lanes( u + ch * LANES );
+			chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], z, &sum );
+			v.lo = ( v.lo - sum.lo ) * inv.lo;
+			v.hi = ( v.hi - sum.hi ) * inv.hi;
+			store_lanes( z + ch * LANES, &v );
+			v.lo += tt.lo;
+			v.hi += tt.hi;
+			store_lanes( w + ch * LANES, &v );
+			half_t d = uu.lo * v.lo + uu.hi * v.hi;
+			chunk_delta[ch] = ( d[0] + d[1] ) + ( d[2] + d[3] );
+		}
+	}
+#pragma omp for schedule( static )
+	for ( int32_t blk = 0; blk < blocks; ++blk )
+	{
+		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+		double delta = 0.0;
+		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+		{
+			delta += chunk_delta[ch];
+		}
+		partial[4 * blk + 1] = delta;
+	}
+}
+
+/* r = b − A x and its block sums of rᵀr (slot 0). Called by every thread of a region. */
+static void sgs_residual( const sere_sgs* g, int32_t blocks, int32_t np, const double* b, const double* x, double* r,
+						  double* partial )
+{
+#pragma omp for schedule( static )
+	for ( int32_t blk = 0; blk < blocks; ++blk )
+	{
+		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+		{
+			sgs_chunk_product( g, ch, x, r );
+		}
+		double rr = 0.0;
+#pragma omp simd reduction( + : rr )
+		for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+		{
+			r[i] = b[i] - r[i];
+			rr += r[i] * r[i];
+		}
+		partial[4 * blk] = rr;
+	}
+}
+
+/* The solve's start: b and x into positions, D⁻¹ and the blocks' sums of b²; flags a diagonal
+ * that is not positive and a non-finite input. */
+static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, const double* x_in )
+{
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *x = ws->x, *b = ws->b, *inv_diag = ws->inv_diag, *partial = ws->partial;
+	int bad_diagonal = 0, nonfinite = 0;
+#pragma omp parallel num_threads( sere_team_default() )
+	{
+#pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite )
+		for ( int32_t at = 0; at < np; ++at )
+		{
+			int32_t i = g->row[at];
+			nonfinite |= load_position( i, b_in, x_in, b, x, at );
+			bad_diagonal |= i >= 0 && !( diagonal[at] > 0.0 );
+			inv_diag[at] = i >= 0 && diagonal[at] > 0.0 ? 1.0 / diagonal[at] : 0.0;
+		}
+#pragma omp for schedule( static )
+		for ( int32_t blk = 0; blk < blocks; ++blk )
+		{
+			double bb = 0.0;
+			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+			{
+				bb += b[i] * b[i];
+			}
+			partial[4 * blk + 3] = bb;
+		}
+	}
+	st->bad_diagonal = bad_diagonal;
+	st->nonfinite = nonfinite;
+}
+
+/* Into Eisenstat's variables: r̂ = L̃⁻¹ r, ŷ = L̃ᵀ x, u = D⁻¹ r̂, w = E u. s = p = 0 so that the
+ * first step's p = u + 0·p is u. Returns r̂ᵀr̂. */
+static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it )
+{
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+#pragma omp parallel num_threads( sere_team_default() )
+	{
+		sgs_forward( g, inv_diag, r );
+		sgs_upper_product( g, x );
+#pragma omp for schedule( static )
+		for ( int32_t blk = 0; blk < blocks; ++blk )
+		{
+			double rr = 0.0, gamma = 0.0;
+			for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+			{
+				u[i] = diagonal[i] * r[i];
+				p[i] = 0.0;
+				s[i] = 0.0;
+				rr += r[i] * r[i];
+				gamma += r[i] * u[i];
+			}
+			partial[4 * blk] = rr;
+			partial[4 * blk + 2 + ( it & 1 )] = gamma;
+		}
+		sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
+	}
+	return block_sum( partial, blocks, 0 );
+}
+
+/* One round of at most `chunk` steps of the recurrence from step `first`, in one parallel region
+ * (as sere_cg_solve's rounds), until the recursive residual reaches target. */
+static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, int32_t first, double target,
+					   int32_t max_iterations, int32_t chunk )
+{
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+#pragma omp parallel num_threads( sere_team_default() )
+	{
+		/* every thread steps its own copy; they stay equal */
+		cg_state my = *st;
+		my.status = SERE_OK, my.done = 0, my.met = 0;
+		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
+		while ( my.it < round_end )
+		{
+			double delta = block_sum( partial, blocks, 1 );
+			/* γ = r̂ᵀu comes from the previous step's update sweep, into slot 2 or 3 by the
+			 * parity of the step: a thread that runs ahead into this step's update writes
+			 * the other slot while a slower one may still be reading this one. */
+			double gamma = block_sum( partial, blocks, 2 + ( my.it & 1 ) );
+			double beta = my.it == first ? 0.0 : gamma / my.gamma_prev;
+			double pap = my.it == first ? delta : delta - beta * gamma / my.alpha_prev;
+			double alpha;
+			my.status = cg_step_length( pap, gamma, &alpha );
+			if ( my.status != SERE_OK )
+			{
+				my.done = 1;
+				break;
+			}
+#pragma omp for schedule( static )
+			for ( int32_t blk = 0; blk < blocks; ++blk )
+			{
+				double rr_block = 0.0, gamma_block = 0.0;
+#pragma omp simd reduction( + : rr_block, gamma_block )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				{
+					p[i] = u[i] + beta * p[i];
+					s[i] = w[i] + beta * s[i];
+					x[i] += alpha * p[i];
+					r[i] -= alpha * s[i];
+					u[i] = diagonal[i] * r[i];
+					rr_block += r[i] * r[i];
+					gamma_block += r[i] * u[i];
+				}
+				partial[4 * blk] = rr_block;
+				partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
+			}
+			double my_rr = block_sum( partial, blocks, 0 );
+			my.it += 1;
+			if ( !isfinite( my_rr ) )
+			{
+				my.status = SERE_ERR_NONFINITE;
+				my.done = 1;
+				break;
+			}
+			if ( sqrt( my_rr ) <= target || my.it == max_iterations )
+			{
+				my.met = sqrt( my_rr ) <= target;
+				my.done = 1;
+				break;
+			}
+			sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
+			my.alpha_prev = alpha;
+			my.gamma_prev = gamma;
+		}
+#pragma omp master
+		*st = my;
+	}
+}
+
+sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, double* x_in,
+							   double tolerance, int32_t max_iterations, sere_cg_result* result )
+{
+	result->iterations = 0;
+	result->residual = 0.0;
+	if ( ws == NULL || g == NULL || b_in == NULL || x_in == NULL || g->rows <= 0 || g->rows > ws->capacity ||
+		 g->chunks * LANES > ws->positions || !( tolerance >= 0.0 ) || max_iterations < 0 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	double *x = ws->x, *b = ws->b, *r = ws->r, *inv_diag = ws->inv_diag, *partial = ws->partial;
+	cg_state st = { 0 };
+	sgs_start( &st, ws, g, b_in, x_in );
+	if ( st.bad_diagonal || st.nonfinite )
+	{
+		return st.bad_diagonal ? SERE_ERR_NOT_SPD : SERE_ERR_NONFINITE;
+	}
+	const double b_norm = sqrt( block_sum( partial, blocks, 3 ) );
+	if ( b_norm == 0.0 )
+	{
+		for ( int32_t i = 0; i < g->rows; ++i )
+		{
+			x_in[i] = 0.0;
+		}
+		return SERE_OK;
+	}
+	const int64_t entries = g->upper_ptr[g->chunks] + np;
+	const int32_t chunk = (int32_t) ( ( 1 << 24 ) / entries > 16 ? ( 1 << 24 ) / entries : 16 );
+	double rel = 0.0, safety = 1.0, previous = INFINITY;
+	for ( ;; )
+	{
+		/* The true residual of x: the answer, or where (re)starting from x begins. */
+#pragma omp parallel num_threads( sere_team_default() )
+		{
+			sgs_residual( g, blocks, np, b, x, r, partial );
+		}
+		rel = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
+		if ( !isfinite( rel ) )
+		{
+			st.status = SERE_ERR_NONFINITE;
+			break;
+		}
+		/* Restart only while restarting still pays: below the rounding floor of b − A x
+		 * itself (near 1e-14 relative on diffusion-dominated rows) the true residual stalls. */
+		if ( rel <= tolerance || st.it >= max_iterations || st.status != SERE_OK || rel > 0.5 * previous )
+		{
+			break;
+		}
+		previous = rel;
+		double rr_hat = sgs_restart( ws, g, st.it );
+		/* Reduce the transformed residual by the factor the true one still needs (and by half
+		 * more at every restart, should the two norms have disagreed). */
+		const double target = sqrt( rr_hat ) * ( tolerance / rel ) * safety;
+		st.alpha_prev = 0.0, st.gamma_prev = 0.0;
+		int32_t first = st.it;
+		st.done = 0;
+		while ( !st.done && st.it < max_iterations )
+		{
+			sgs_round( &st, ws, g, first, target, max_iterations, chunk );
+		}
+		/* Back from ŷ: x = L̃⁻ᵀ ŷ. */
+#pragma omp parallel num_threads( sere_team_default() )
+		{
+			sgs_backward( g, inv_diag, x, x, NULL );
+		}
+		safety *= 0.5;
+	}
+#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+	for ( int32_t at = 0; at < np; ++at )
+	{
+		if ( g->row[at] >= 0 )
+		{
+			x_in[g->row[at]] = x[at];
+		}
+	}
+	result->iterations = st.it;
+	result->residual = rel;
+	if ( st.status != SERE_OK )
+	{
+		return (sere_status) st.status;
+	}
+	/* A true residual stalled above tolerance after the recursive one met it is rounding, not
+	 * a lack of convergence: SERE_OK, as the Jacobi path (which checks only the recursive one)
+	 * would return, with the true residual reported. */
+	return rel <= tolerance || st.met ? SERE_OK : SERE_ERR_NO_CONVERGE;
+}

@@ -1,0 +1,464 @@
+/* sere — sere_collide_detect: the runs of blocks per thread, the candidate list (search or replay, see SKIN) and the
+ * contact lists in block order. _GNU_SOURCE: sched_getaffinity for internal/team.h. */
+#define _GNU_SOURCE
+
+#include "solve/internal/collide_shared.h"
+
+/* The first block of run `part` of `parts`: runs of about equal work by the previous detection
+ * (work_prefix), or of equal block counts before any. */
+static int32_t run_begin( const sere_collide* c, int part, int parts )
+{
+	if ( part >= parts )
+	{
+		return c->block_count;
+	}
+	int64_t total = c->work_prefix[c->block_count];
+	if ( total == 0 )
+	{
+		return (int32_t) ( (int64_t) c->block_count * part / parts );
+	}
+	int64_t target = total * part / parts;
+	int32_t lo = 0, hi = c->block_count;
+	while ( lo < hi )
+	{
+		int32_t mid = lo + ( hi - lo ) / 2;
+		if ( c->work_prefix[mid] < target )
+		{
+			lo = mid + 1;
+		}
+		else
+		{
+			hi = mid;
+		}
+	}
+	return lo;
+}
+
+/* Copies block `block`'s contacts, [begin, next) of the combined numbering (vertex–triangle
+ * contacts first, total of them), into their list, and their members, sides and weights into the
+ * per-contact arrays of the response. */
+static void copy_block( sere_collide* c, const int32_t* tri, int32_t block, int64_t begin, int64_t next, int64_t total )
+{
+	size_t count = (size_t) ( next - begin );
+	if ( block < c->vertex_blocks )
+	{
+		const sere_contact* from = thread_buffer( c, c->block_thread[block] ) + c->block_start[block];
+		if ( count > 0 && from != c->contacts + begin )
+		{
+			memcpy( c->contacts + begin, from, sizeof( sere_contact ) * count );
+		}
+		for ( int64_t k = begin; k < next; ++k )
+		{
+			const sere_contact* contact = c->contacts + k;
+			const int32_t* v = tri + 3 * (size_t) contact->triangle;
+			c->member[0][k] = contact->vertex;
+			c->member[1][k] = v[0], c->member[2][k] = v[1], c->member[3][k] = v[2];
+			c->contact_side[k] = contact->side;
+			c->weight[0][k] = contact->u, c->weight[1][k] = contact->v, c->weight[2][k] = contact->w;
+		}
+	}
+	else
+	{
+		const sere_edge_contact* from = thread_edge_buffer( c, c->block_thread[block] ) + c->block_start[block];
+		if ( count > 0 )
+		{
+			memcpy( c->edge_contacts + ( begin - total ), from, sizeof( sere_edge_contact ) * count );
+		}
+		for ( int64_t k = begin; k < next; ++k )
+		{
+			const sere_edge_contact* contact = c->edge_contacts + ( k - total );
+			c->member[0][k] = contact->a0, c->member[1][k] = contact->a1;
+			c->member[2][k] = contact->b0, c->member[3][k] = contact->b1;
+			c->contact_side[k] = contact->side;
+			c->weight[0][k] = contact->s, c->weight[1][k] = contact->t, c->weight[2][k] = 0.0f;
+		}
+	}
+}
+
+/* Lists the contacts found (total vertex–triangle ones, then edge_total edge–edge ones): copies
+ * each block's contacts from its thread's buffer to the block's place in its list (thread 0's
+ * vertex–triangle contacts are there already), with the per-contact arrays of the response, and
+ * builds the per-vertex gather lists by a stable counting sort, in one parallel region. Each
+ * thread counts the entries of its own (static, contiguous) share of blocks per vertex; then,
+ * over its run of vertices, turns the counts of every thread into where each thread's entries of
+ * each vertex begin, thread by thread: a vertex's list is then in contact order whatever the
+ * thread count. Each thread finally writes the entries of the contacts it copied. Run
+ * sequentially, the gather lists alone cost a fifth of the search's time on two threads (random
+ * writes into a list of 4 × contacts entries). */
+static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, int64_t edge_total, int threads )
+{
+	int32_t n = c->vertex_count;
+	size_t stride = (size_t) sere_pad( n );
+	int64_t all = total + edge_total;
+#pragma omp parallel num_threads( threads )
+	{
+		int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		int32_t* mine = c->entry_cursor + (size_t) tid * stride;
+		memset( mine, 0, sizeof( int32_t ) * (size_t) n );
+#pragma omp for schedule( static )
+		for ( int32_t block = 0; block < c->block_count; ++block )
+		{
+			int64_t begin = c->block_found[block];
+			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : all;
+			copy_block( c, tri, block, begin, next, total );
+			for ( int64_t k = begin; k < next; ++k )
+			{
+				for ( int r = 0; r < 4; ++r )
+				{
+					mine[c->member[r][k]] += 1;
+				}
+			}
+		}
+		/* this thread's run of vertices: its entries and touched vertices */
+		int32_t first = (int32_t) ( (int64_t) n * tid / team ), last = (int32_t) ( (int64_t) n * ( tid + 1 ) / team );
+		int32_t entries = 0, touched = 0;
+		for ( int32_t i = first; i < last; ++i )
+		{
+			int32_t before = entries;
+			for ( int t = 0; t < team; ++t )
+			{
+				entries += c->entry_cursor[(size_t) t * stride + (size_t) i];
+			}
+			touched += entries > before;
+		}
+		c->run_total[2 * FAR_STRIDE * tid] = entries;
+		c->run_total[2 * FAR_STRIDE * tid + 1] = touched;
+#pragma omp barrier
+		entries = touched = 0;
+		for ( int t = 0; t < tid; ++t )
+		{
+			entries += c->run_total[2 * FAR_STRIDE * t];
+			touched += c->run_total[2 * FAR_STRIDE * t + 1];
+		}
+		for ( int32_t i = first; i < last; ++i )
+		{
+			c->entry_offset[i] = entries;
+			for ( int t = 0; t < team; ++t )
+			{
+				int32_t* cursor = c->entry_cursor + (size_t) t * stride + (size_t) i;
+				int32_t count = *cursor;
+				*cursor = entries;
+				entries += count;
+			}
+			if ( entries > c->entry_offset[i] )
+			{
+				c->touched[touched++] = i;
+			}
+		}
+		if ( tid == team - 1 )
+		{
+			c->entry_offset[n] = entries;
+			c->touched_count = touched;
+		}
+#pragma omp barrier
+		/* the same static schedule as the copy: each thread lists the contacts it counted */
+#pragma omp for schedule( static )
+		for ( int32_t block = 0; block < c->block_count; ++block )
+		{
+			int64_t next = block + 1 < c->block_count ? c->block_found[block + 1] : all;
+			for ( int64_t k = c->block_found[block]; k < next; ++k )
+			{
+				/* a triangle's corners move against the push by their barycentric weight, the
+				 * vertex with it; the first edge's ends with it by their weights on the edge, the
+				 * second edge's against it */
+				bool vertex = k < total;
+				float s = c->weight[0][k], t = c->weight[1][k];
+				int32_t member[4] = { c->member[vertex ? 1 : 0][k], c->member[vertex ? 2 : 1][k],
+									  c->member[vertex ? 3 : 2][k], c->member[vertex ? 0 : 3][k] };
+				float coef[4] = { -s, -t, -c->weight[2][k], 1.0f };
+				if ( !vertex )
+				{
+					coef[0] = 1.0f - s, coef[1] = s, coef[2] = -( 1.0f - t ), coef[3] = -t;
+				}
+				for ( int r = 0; r < 4; ++r )
+				{
+					int32_t e = mine[member[r]]++;
+					c->entries[e] = (int32_t) k;
+					c->entry_coef[e] = coef[r];
+				}
+			}
+		}
+	}
+}
+
+/* Runs the exact test on block `block`'s listed pairs (see SKIN), in their order, as the search
+ * would have buffered them. */
+static void replay_block( detect_context* c, const sere_collide* collide, int32_t block, bool vertices )
+{
+	size_t base = (size_t) collide->cache_block_thread[block] * (size_t) collide->cache_capacity +
+				  (size_t) collide->cache_block_start[block];
+	int32_t count = collide->cache_block_count[block];
+	for ( int32_t done = 0; done < count; done += PAIR_BUFFER )
+	{
+		int32_t batch = count - done < PAIR_BUFFER ? count - done : PAIR_BUFFER;
+		memcpy( c->pair_item, collide->cache_item + base + done, sizeof( int32_t ) * (size_t) batch );
+		memcpy( c->pair_target, collide->cache_target + base + done, sizeof( int32_t ) * (size_t) batch );
+		memcpy( c->pair_near, collide->cache_near + base + done, (size_t) batch );
+		c->pair_count = batch;
+		if ( vertices )
+		{
+			sere_coll_detect_flush( c );
+		}
+		else
+		{
+			sere_coll_detect_edge_flush( c );
+		}
+	}
+}
+
+/* True when the list (see SKIN) serves positions x, y, z and this thickness: it is whole, was made
+ * for a thickness no smaller and for this build of the tree, and every vertex is within δ of
+ * where it was then, up to one translation T common to all (the middle of the displacements'
+ * box): distances, the only thing the list's argument uses, do not see T. The float |Δ − T|²
+ * is within a few ulps of the true one, and the |T| 2⁻¹⁴ taken off δ covers what T adds to
+ * cull_radius's |p| term and to the rounding of Δ − T, both far inside the 2⁻⁸ δ of room the
+ * grown radius keeps; a NaN fails the test. */
+static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+						 const float* z, float thickness, int threads )
+{
+	if ( !collide->cache_valid || !( thickness <= collide->cache_thickness ) ||
+		 sere_bvh_generation( bvh ) != collide->cache_generation )
+	{
+		return false;
+	}
+	int32_t n = collide->vertex_count;
+	const float* now[3] = { x, y, z };
+	const float* then[3] = { collide->cache_x, collide->cache_y, collide->cache_z };
+	float lo[3], hi[3];
+	for ( int a = 0; a < 3; ++a )
+	{
+		float l = INFINITY, h = -INFINITY;
+		const float *p = now[a], *q = then[a];
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( min : l ) reduction( max : h )
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			float d = p[i] - q[i];
+			l = d < l ? d : l;
+			h = d > h ? d : h;
+		}
+		lo[a] = l, hi[a] = h;
+	}
+	if ( !( isfinite( lo[0] + lo[1] + lo[2] ) && isfinite( hi[0] + hi[1] + hi[2] ) ) )
+	{
+		return false;
+	}
+	float t[3] = { 0.5f * ( lo[0] + hi[0] ), 0.5f * ( lo[1] + hi[1] ), 0.5f * ( lo[2] + hi[2] ) };
+	float skin = collide->cache_delta - ( fabsf( t[0] ) + fabsf( t[1] ) + fabsf( t[2] ) ) * 0x1p-14f;
+	if ( !( skin > 0.0f ) )
+	{
+		return false;
+	}
+	float limit = skin * skin;
+	int far = 0;
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( | : far )
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		float dx = x[i] - collide->cache_x[i] - t[0], dy = y[i] - collide->cache_y[i] - t[1];
+		float dz = z[i] - collide->cache_z[i] - t[2];
+		far |= !( dx * dx + dy * dy + dz * dz <= limit );
+	}
+	return !far;
+}
+
+/* Whether this detection replays the list (see SKIN) or searches the tree, listing anew: then
+ * the skin adapts to how long the last list lasted and the edges' across vectors are taken at
+ * these positions. */
+static bool choose_list( sere_collide* collide, const sere_bvh* bvh, const int32_t* tri, const float* x, const float* y,
+						 const float* z, float thickness, int threads )
+{
+	bool replay = list_serves( collide, bvh, x, y, z, thickness, threads );
+	if ( replay )
+	{
+		collide->cache_uses += 1;
+	}
+	else
+	{
+		if ( collide->cache_valid && collide->cache_uses < SKIN_SHORT )
+		{
+			collide->skin = collide->skin * 1.25f < SKIN_MAX ? collide->skin * 1.25f : SKIN_MAX;
+		}
+		else if ( collide->cache_valid && collide->cache_uses > SKIN_LONG )
+		{
+			collide->skin = collide->skin * 0.8f > SKIN_MIN ? collide->skin * 0.8f : SKIN_MIN;
+		}
+		collide->cache_valid = false;
+		collide->cache_uses = 0;
+		collide->cache_delta = collide->skin * thickness;
+		int32_t edges = collide->edge_count;
+#pragma omp parallel for num_threads( threads ) schedule( static )
+		for ( int32_t e = 0; e < edges; ++e )
+		{
+			sere_coll_edge_across_at( collide, tri, x, y, z, e );
+		}
+	}
+	return replay;
+}
+
+/* Thread tid's detection context. */
+static void context_init( detect_context* c, const sere_collide* collide, const int32_t* tri, const float* x,
+						  const float* y, const float* z, float thickness, bool listing, int tid )
+{
+	size_t across_stride = (size_t) sere_pad( collide->edge_count );
+	*c = ( detect_context ){
+		.x = x,
+		.y = y,
+		.z = z,
+		.tri = tri,
+		.edge_end = collide->edge_end,
+		.lower_edge = collide->lower_edge,
+		.owned = collide->owned,
+		.edge_triangle = collide->edge_triangle,
+		.mark_offset = collide->mark_offset,
+		.mark_vertex = collide->mark_vertex,
+		.mark_bits = collide->mark_bits,
+		.mark = collide->lane_mark + (size_t) tid * (size_t) sere_pad( collide->vertex_count ),
+		.h2 = thickness * thickness,
+		.buffer = thread_buffer( collide, tid ),
+		.edge_buffer = thread_edge_buffer( collide, tid ),
+		.capacity = collide->capacity,
+		.listing = listing,
+		.thickness = thickness,
+		/* 2δ, and 2⁻⁸ of it for the rounding of the displacement test and of cull_radius's
+		 * |p| term at the moved positions */
+		.grow = listing ? 2.0f * collide->cache_delta * ( 1.0f + 0x1p-8f ) : 0.0f,
+		.list_item = collide->cache_item + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_target = collide->cache_target + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_near = collide->cache_near + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_capacity = collide->cache_capacity,
+		.across = { collide->edge_across, collide->edge_across + across_stride,
+					collide->edge_across + 2 * across_stride },
+	};
+}
+
+/* After a listing search: the list serves later detections when no thread outgrew its room and
+ * every vertex was finite; it keeps the positions, thickness and tree build it was made for. */
+static void keep_list( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
+					   float thickness, int threads, int bad )
+{
+	bool whole = !bad;
+	for ( int t = 0; t < threads; ++t )
+	{
+		whole = whole && collide->cache_used[FAR_STRIDE * t] >= 0;
+	}
+	collide->cache_valid = whole;
+	if ( !whole && !bad )
+	{
+		/* the list outgrew its room: the next one lists fewer pairs */
+		collide->skin = SKIN_MIN;
+	}
+	if ( whole )
+	{
+		memcpy( collide->cache_x, x, sizeof( float ) * (size_t) collide->vertex_count );
+		memcpy( collide->cache_y, y, sizeof( float ) * (size_t) collide->vertex_count );
+		memcpy( collide->cache_z, z, sizeof( float ) * (size_t) collide->vertex_count );
+		collide->cache_thickness = thickness;
+		collide->cache_generation = sere_bvh_generation( bvh );
+	}
+}
+
+sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+								 const float* z, float thickness, int32_t* contact_count )
+{
+	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
+		 !( thickness > 0.0f ) || !isfinite( thickness ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t triangles;
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
+	if ( sere_bvh_vertex_count( bvh ) != collide->vertex_count || triangles != collide->triangle_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*contact_count = 0;
+	collide->contact_count = 0;
+	collide->edge_contact_count = 0;
+	collide->edge_found = 0;
+	collide->touched_count = 0;
+	int32_t n = collide->vertex_count;
+	int32_t threads = sere_team_default();
+	threads = threads < collide->slots ? threads : collide->slots;
+	collide->work_prefix[0] = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
+	}
+	bool replay = choose_list( collide, bvh, tri, x, y, z, thickness, threads );
+	bool listing = !replay;
+	for ( int t = 0; t < threads; ++t )
+	{
+		/* a thread the team turns out not to have lists nothing */
+		collide->cache_used[FAR_STRIDE * t] = 0;
+	}
+	int bad = 0;
+#pragma omp parallel num_threads( threads ) reduction( | : bad )
+	{
+		int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		detect_context c;
+		context_init( &c, collide, tri, x, y, z, thickness, listing, tid );
+		int32_t run_end = run_begin( collide, tid + 1, team );
+		for ( int32_t block = run_begin( collide, tid, team ); block < run_end; ++block )
+		{
+			bool vertices = block < collide->vertex_blocks;
+			int32_t start = vertices ? c.used : c.edge_used;
+			int64_t found = vertices ? c.found : c.edge_found;
+			double clock = omp_get_wtime();
+			int32_t listed = c.list_used;
+			if ( replay )
+			{
+				replay_block( &c, collide, block, vertices );
+			}
+			else if ( vertices )
+			{
+				bad |= sere_coll_detect_vertex_block( &c, bvh, block, n, thickness );
+			}
+			else
+			{
+				sere_coll_detect_edge_block( &c, bvh, block - collide->vertex_blocks, n, thickness );
+			}
+			if ( listing )
+			{
+				collide->cache_block_thread[block] = tid;
+				collide->cache_block_start[block] = listed;
+				collide->cache_block_count[block] = c.list_used - listed;
+			}
+			collide->block_thread[block] = tid;
+			collide->block_start[block] = start;
+			collide->block_found[block] = ( vertices ? c.found : c.edge_found ) - found;
+			collide->block_work[block] = (int64_t) ( ( omp_get_wtime() - clock ) * 1e9 );
+		}
+		collide->cache_used[FAR_STRIDE * tid] = c.list_used;
+	}
+	if ( listing )
+	{
+		keep_list( collide, bvh, x, y, z, thickness, threads, bad );
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	int64_t total = 0, edge_total = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		*( block < collide->vertex_blocks ? &total : &edge_total ) += collide->block_found[block];
+	}
+	*contact_count = total < INT32_MAX ? (int32_t) total : INT32_MAX;
+	collide->edge_found = edge_total;
+	if ( total > collide->capacity || edge_total > collide->capacity )
+	{
+		return SERE_ERR_CAPACITY;
+	}
+	/* block_found becomes each block's offset in the per-contact arrays: the vertex–triangle
+	 * contacts, then the edge–edge ones */
+	int64_t offset = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		int64_t found = collide->block_found[block];
+		collide->block_found[block] = offset;
+		offset += found;
+	}
+	list_contacts( collide, tri, total, edge_total, threads );
+	collide->contact_count = (int32_t) total;
+	collide->edge_contact_count = (int32_t) edge_total;
+	return SERE_OK;
+}

@@ -1,0 +1,132 @@
+/* sere — private to cg.c and cg_sgs.c, not installed and not part of the API: the lane layout of
+ * the SELL-C-σ matrices, the workspace, and the step and block-sum helpers both conjugate gradient
+ * solvers share. */
+#pragma once
+
+#include "core/internal/team.h"
+#include "solve/cg.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum
+{
+	LANES = SERE_SELL_C,
+	CHUNKS_PER_BLOCK = SERE_CG_BLOCK / SERE_SELL_C
+};
+
+/* The CG step length α = γ / pᵀAp, or why there is none: a non-finite γ or pᵀAp
+ * (SERE_ERR_NONFINITE), or pᵀAp ≤ 0, a matrix that is not SPD (SERE_ERR_NOT_SPD). */
+static inline sere_status cg_step_length( double pap, double gamma, double* alpha )
+{
+	if ( !isfinite( pap ) || !isfinite( gamma ) )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	if ( !( pap > 0.0 ) )
+	{
+		return SERE_ERR_NOT_SPD;
+	}
+	*alpha = gamma / pap;
+	return SERE_OK;
+}
+
+/* Row pointers that never decrease and column indices inside the matrix (the caller has checked
+ * row_ptr[0] = 0 and row_ptr[rows] = nnz). */
+static inline int csr_indices_valid( const sere_csr* a )
+{
+	for ( int32_t i = 0; i < a->rows; ++i )
+	{
+		if ( a->row_ptr[i + 1] < a->row_ptr[i] )
+		{
+			return 0;
+		}
+	}
+	for ( int32_t k = 0; k < a->nnz; ++k )
+	{
+		if ( a->col[k] < 0 || a->col[k] >= a->rows )
+		{
+			return 0;
+		}
+	}
+	return 1;
+}
+
+/* A chunk's sums live in two 4-lane vectors (a vector type, not a double[8]: gcc keeps an
+ * array in memory, and every step of the sums then waits on a store and a reload; 4 lanes, one
+ * AVX2 register, because gcc lowers wider vector types through memory where they are not
+ * native). Values pass through pointers so that no vector crosses a call ABI. */
+typedef double half_t __attribute__( ( vector_size( 4 * sizeof( double ) ) ) );
+_Static_assert( SERE_SELL_C == 8, "a chunk is two 4-lane vectors" );
+
+typedef struct lanes_t
+{
+	half_t lo, hi;
+} lanes_t;
+
+/* A chunk's 8 lanes of a position-indexed vector (sere_alloc aligns to SERE_ALIGN, chunks start
+ * at multiples of 8 doubles): direct vector loads and stores, no copy through the stack. */
+static inline lanes_t load_lanes( const double* v )
+{
+	return ( lanes_t ){ *(const half_t*) v, *(const half_t*) ( v + 4 ) };
+}
+
+static inline void store_lanes( double* v, const lanes_t* in )
+{
+	*(half_t*) v = in->lo;
+	*(half_t*) ( v + 4 ) = in->hi;
+}
+
+static inline void gather( half_t* out, const double* x, const int32_t* col )
+{
+	*out = ( half_t ){ x[col[0]], x[col[1]], x[col[2]], x[col[3]] };
+}
+
+/* Vectors of the solve, indexed by position (see sere_sell): x and b as permuted in. */
+struct sere_cg_workspace
+{
+	int32_t capacity;
+	int32_t positions; /* vector length: n rounded to chunks, plus a chunk of padding per SGS color */
+	int32_t block_capacity;
+	double *x, *b, *r, *u, *w, *p, *s, *inv_diag, *t, *z;
+	double* partial;	 /* 4 sums per block: rᵀr, uᵀw, rᵀu, bᵀb */
+	double* chunk_delta; /* SGS: per chunk, its share of uᵀw */
+};
+
+/* Sum of partial[slot], partial[slot + 4], ... over blocks in block order. */
+static inline double block_sum( const double* partial, int32_t blocks, int slot )
+{
+	double sum = 0.0;
+	for ( int32_t k = 0; k < blocks; ++k )
+	{
+		sum += partial[4 * k + slot];
+	}
+	return sum;
+}
+
+static inline int32_t block_end( int32_t blk, int32_t n )
+{
+	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
+}
+
+/* Row i's entries of b_in and x_in into position at, zeros for a padding lane (i < 0); nonzero
+ * when either is not finite. */
+static inline int load_position( int32_t i, const double* b_in, const double* x_in, double* b, double* x, int32_t at )
+{
+	b[at] = i >= 0 ? b_in[i] : 0.0;
+	x[at] = i >= 0 ? x_in[i] : 0.0;
+	return !isfinite( b[at] ) || !isfinite( x[at] );
+}
+
+/* A solve's state between its parallel regions: every thread of a region holds the same values
+ * (they take the same decisions from the same block sums), and the master publishes them at the
+ * region's end. */
+typedef struct cg_state
+{
+	int32_t it;
+	double alpha_prev, gamma_prev, rel, b_norm;
+	int status, done, met, bad_diagonal, nonfinite;
+} cg_state;
