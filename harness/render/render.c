@@ -2,6 +2,7 @@
 #include "render/render.h"
 
 #include "common/io.h"
+#include "core/array.h"
 
 #include <errno.h>
 #include <math.h>
@@ -231,24 +232,6 @@ void sere_render_project( const sere_render_view* view, double x0, double y0, do
 	*sy = y0 + 0.5 * h - view->scale * dot3( f.up, x, y, z );
 }
 
-typedef struct depth_key
-{
-	double depth;
-	int32_t triangle;
-} depth_key;
-
-/* Far first; equal depths by triangle index, a total order, so qsort gives one answer. */
-static int far_first( const void* pa, const void* pb )
-{
-	const depth_key* a = pa;
-	const depth_key* b = pb;
-	if ( a->depth != b->depth )
-	{
-		return a->depth > b->depth ? -1 : 1;
-	}
-	return ( a->triangle > b->triangle ) - ( a->triangle < b->triangle );
-}
-
 static void vertex_color( const sere_render_mesh* mesh, int32_t i, double rgb[3] )
 {
 	for ( int c = 0; c < 3; ++c )
@@ -396,7 +379,7 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 
 	size_t n = (size_t) mesh->vertex_count, t_count = (size_t) mesh->triangle_count;
 	double* screen = malloc( sizeof( double ) * 3 * ( n > 0 ? n : 1 ) );
-	depth_key* order = malloc( sizeof( depth_key ) * ( t_count > 0 ? t_count : 1 ) );
+	sere_sort_item* order = malloc( sizeof( sere_sort_item ) * ( t_count > 0 ? t_count : 1 ) );
 	if ( screen == NULL || order == NULL )
 	{
 		free( screen );
@@ -416,10 +399,12 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 	for ( size_t t = 0; t < t_count; ++t )
 	{
 		const int32_t* c = mesh->triangles + 3 * t;
-		order[t].depth = screen[3 * c[0] + 2] + screen[3 * c[1] + 2] + screen[3 * c[2] + 2];
-		order[t].triangle = (int32_t) t;
+		/* Far first: the complement turns the larger depth into the smaller key; equal depths
+		 * by triangle index, so the picture is one answer. */
+		double depth = screen[3 * c[0] + 2] + screen[3 * c[1] + 2] + screen[3 * c[2] + 2];
+		order[t] = ( sere_sort_item ){ ~sere_sort_key_double( depth ), (int32_t) t, 0 };
 	}
-	qsort( order, t_count, sizeof( depth_key ), far_first );
+	sere_sort_items( order, (int32_t) t_count );
 
 	/* The light sits in camera space (upper left, in front of the screen) so every view of
 	 * every frame is lit alike; taken to model space once. */
@@ -444,7 +429,7 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 	}
 	for ( size_t k = 0; k < t_count; ++k )
 	{
-		const int32_t* c = mesh->triangles + 3 * order[k].triangle;
+		const int32_t* c = mesh->triangles + 3 * order[k].index;
 		double ax = mesh->x[c[1]] - mesh->x[c[0]], ay = mesh->y[c[1]] - mesh->y[c[0]],
 			   az = vertex_z( mesh, c[1] ) - vertex_z( mesh, c[0] );
 		double bx = mesh->x[c[2]] - mesh->x[c[0]], by = mesh->y[c[2]] - mesh->y[c[0]],

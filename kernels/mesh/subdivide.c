@@ -1,5 +1,7 @@
 #include "mesh/subdivide.h"
 
+#include "core/array.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,24 +44,6 @@ void sere_tri_mesh_destroy( sere_tri_mesh* mesh )
 	memset( mesh, 0, sizeof( *mesh ) );
 }
 
-/* A triangle corner's edge, keyed by its sorted endpoints so both triangles of an edge meet. */
-typedef struct edge_slot
-{
-	uint64_t key;
-	int32_t slot; /* 3 * triangle + corner: the edge from corner to corner + 1 */
-} edge_slot;
-
-static int edge_slot_order( const void* a, const void* b )
-{
-	const edge_slot* p = a;
-	const edge_slot* q = b;
-	if ( p->key != q->key )
-	{
-		return p->key < q->key ? -1 : 1;
-	}
-	return ( p->slot > q->slot ) - ( p->slot < q->slot );
-}
-
 static double distance( const sere_tri_mesh* m, int32_t a, int32_t b )
 {
 	double dx = (double) m->x[a] - (double) m->x[b];
@@ -81,7 +65,9 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 {
 	int32_t f = in->triangle_count;
 	int32_t slots = 3 * f;
-	edge_slot* edges = malloc( (size_t) ( slots > 0 ? slots : 1 ) * sizeof( edge_slot ) );
+	/* A triangle corner's edge keyed by its sorted endpoints so both triangles of an edge meet;
+	 * the index is the slot 3 * triangle + corner, the edge from corner to corner + 1. */
+	sere_sort_item* edges = malloc( (size_t) ( slots > 0 ? slots : 1 ) * sizeof( sere_sort_item ) );
 	int32_t* mid = malloc( (size_t) ( slots > 0 ? slots : 1 ) * sizeof( int32_t ) );
 	if ( edges == NULL || mid == NULL )
 	{
@@ -95,9 +81,9 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		uint32_t a = (uint32_t) in->tri[3 * t + k];
 		uint32_t b = (uint32_t) in->tri[3 * t + ( k + 1 ) % 3];
 		edges[s].key = a < b ? ( (uint64_t) a << 32 ) | b : ( (uint64_t) b << 32 ) | a;
-		edges[s].slot = s;
+		edges[s].index = s;
 	}
-	qsort( edges, (size_t) slots, sizeof( edge_slot ), edge_slot_order );
+	sere_sort_items( edges, slots );
 
 	/* Midpoints are numbered in sorted edge order, so the result depends only on the input. */
 	int64_t next = in->vertex_count;
@@ -117,7 +103,7 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		}
 		for ( int32_t q = s; q < e; ++q )
 		{
-			mid[edges[q].slot] = m;
+			mid[edges[q].index] = m;
 		}
 		s = e;
 	}

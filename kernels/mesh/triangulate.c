@@ -1,5 +1,7 @@
 #include "mesh/triangulate.h"
 
+#include "core/array.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -525,23 +527,6 @@ static sere_status insert_segment( mesh* m, int32_t* vt, int32_t a, int32_t b, e
 	return mark_fixed( m, vt, a, b ) ? SERE_OK : SERE_ERR_GEOMETRY;
 }
 
-typedef struct sorted_point
-{
-	uint64_t key;
-	int32_t index;
-} sorted_point;
-
-static int compare_sorted( const void* pa, const void* pb )
-{
-	const sorted_point* a = pa;
-	const sorted_point* b = pb;
-	if ( a->key != b->key )
-	{
-		return a->key < b->key ? -1 : 1;
-	}
-	return ( a->index > b->index ) - ( a->index < b->index );
-}
-
 static uint64_t spread32( uint64_t v )
 {
 	v &= 0xffffffffull;
@@ -599,7 +584,7 @@ sere_status sere_triangulate( const sere_cdt_input* input, sere_triangulation* o
 	edge_list crossing = { 0 };
 	int32_t* vt = NULL;
 	uint8_t* exterior = NULL;
-	sorted_point* order = malloc( sizeof( sorted_point ) * (size_t) n );
+	sere_sort_item* order = malloc( sizeof( sere_sort_item ) * (size_t) n );
 	m.p = malloc( sizeof( ipoint ) * ( (size_t) n + 3 ) );
 	vt = malloc( sizeof( int32_t ) * ( (size_t) n + 3 ) );
 	out->vertex_map = malloc( sizeof( int32_t ) * (size_t) n );
@@ -618,7 +603,7 @@ sere_status sere_triangulate( const sere_cdt_input* input, sere_triangulation* o
 	}
 	/* Morton order: each insertion starts its walk next to the previous point. Equal keys are
 	 * equal snapped points: the first in input order represents them. */
-	qsort( order, (size_t) n, sizeof( sorted_point ), compare_sorted );
+	sere_sort_items( order, n );
 	for ( int32_t k = 0; k < n; ++k )
 	{
 		int32_t i = order[k].index;
