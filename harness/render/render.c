@@ -500,6 +500,28 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 	return cairo_failed( cr, err, err_size );
 }
 
+void sere_render_segments_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_view* view,
+								const sere_render_segments* segments )
+{
+	cairo_save( cr );
+	cairo_rectangle( cr, x0, y0, w, h );
+	cairo_clip( cr );
+	cairo_set_line_cap( cr, CAIRO_LINE_CAP_ROUND );
+	for ( int32_t k = 0; k < segments->count; ++k )
+	{
+		const double* p = segments->xyz + 6 * k;
+		double sx, sy;
+		sere_render_project( view, x0, y0, w, h, p[0], p[1], p[2], &sx, &sy );
+		cairo_move_to( cr, sx, sy );
+		sere_render_project( view, x0, y0, w, h, p[3], p[4], p[5], &sx, &sy );
+		cairo_line_to( cr, sx, sy );
+	}
+	cairo_set_source_rgb( cr, segments->rgb[0], segments->rgb[1], segments->rgb[2] );
+	cairo_set_line_width( cr, segments->width > 0.0 ? segments->width : 1.0 );
+	cairo_stroke( cr );
+	cairo_restore( cr );
+}
+
 void sere_render_dry_color( double relative_water, float rgb[3] )
 {
 	const double fresh[3] = { 0.30, 0.55, 0.18 }, dry[3] = { 0.55, 0.38, 0.20 };
