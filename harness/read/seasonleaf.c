@@ -3,6 +3,7 @@
 #include "read/seasonleaf.h"
 
 #include "common/params.h"
+#include "core/array.h"
 #include "mesh/bspline.h"
 #include "mesh/meshopt.h"
 #include "mesh/triangulate.h"
@@ -140,8 +141,8 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 		{
 			if ( n == capacity )
 			{
-				capacity = capacity > 0 ? 2 * capacity : 64;
-				double* grown = realloc( points, sizeof( double ) * 2 * (size_t) capacity );
+				capacity = sere_array_capacity( capacity, (int64_t) n + 1, 64 );
+				double* grown = capacity > 0 ? sere_array_resize( points, capacity, 2 * sizeof( double ) ) : NULL;
 				if ( grown == NULL )
 				{
 					status = failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", path );

@@ -1,5 +1,6 @@
 #include "mesh/sample.h"
 
+#include "core/array.h"
 #include "core/geometry.h"
 
 #include <math.h>
@@ -28,26 +29,17 @@ static int point_push( point_list* list, double x, double y, uint8_t vein )
 {
 	if ( list->count == list->capacity )
 	{
-		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 256;
-		double* nx = realloc( list->x, sizeof( double ) * (size_t) capacity );
-		if ( nx != NULL )
-		{
-			list->x = nx;
-		}
-		double* ny = realloc( list->y, sizeof( double ) * (size_t) capacity );
-		if ( ny != NULL )
-		{
-			list->y = ny;
-		}
-		uint8_t* nv = realloc( list->vein, (size_t) capacity );
-		if ( nv != NULL )
-		{
-			list->vein = nv;
-		}
-		if ( nx == NULL || ny == NULL || nv == NULL )
+		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
+		double* nx = capacity > 0 ? sere_array_resize( list->x, capacity, sizeof( double ) ) : NULL;
+		list->x = nx != NULL ? nx : list->x;
+		double* ny = nx != NULL ? sere_array_resize( list->y, capacity, sizeof( double ) ) : NULL;
+		list->y = ny != NULL ? ny : list->y;
+		uint8_t* nv = ny != NULL ? sere_array_resize( list->vein, capacity, 1 ) : NULL;
+		if ( nv == NULL )
 		{
 			return -1;
 		}
+		list->vein = nv;
 		list->capacity = capacity;
 	}
 	list->x[list->count] = x;
@@ -66,8 +58,8 @@ static int segment_push( segment_list* list, int32_t a, int32_t b )
 {
 	if ( list->count == list->capacity )
 	{
-		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 256;
-		int32_t* pairs = realloc( list->pairs, sizeof( int32_t ) * 2 * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
+		int32_t* pairs = capacity > 0 ? sere_array_resize( list->pairs, capacity, 2 * sizeof( int32_t ) ) : NULL;
 		if ( pairs == NULL )
 		{
 			return -1;
@@ -245,24 +237,6 @@ static double nearest_segment2( const grid* g, const double* sx, const double* s
 	return best;
 }
 
-typedef struct anchor
-{
-	double a;	   /* arc length on the vein */
-	int32_t child; /* the vein branching here, or -1 for the end points */
-	int32_t vertex;
-} anchor;
-
-static int compare_anchor( const void* pa, const void* pb )
-{
-	const anchor* a = pa;
-	const anchor* b = pb;
-	if ( a->a != b->a )
-	{
-		return a->a < b->a ? -1 : 1;
-	}
-	return ( a->child > b->child ) - ( a->child < b->child );
-}
-
 static sere_status place_veins( const sere_leaf_shape* shape, double spacing, point_list* points,
 								segment_list* segments )
 {
@@ -275,8 +249,9 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 	double** lengths = calloc( (size_t) veins, sizeof( double* ) );
 	double* branch_at = malloc( sizeof( double ) * (size_t) veins );
 	int32_t* start_vertex = malloc( sizeof( int32_t ) * (size_t) veins );
-	anchor* anchors = malloc( sizeof( anchor ) * ( (size_t) veins + 2 ) );
-	if ( !lengths || !branch_at || !start_vertex || !anchors )
+	/* The veins branching off one vein, keyed by where along it they branch, ties by index. */
+	sere_sort_item* branches = malloc( sizeof( sere_sort_item ) * (size_t) veins );
+	if ( !lengths || !branch_at || !start_vertex || !branches )
 	{
 		status = SERE_ERR_MEMORY;
 		goto done;
@@ -311,16 +286,14 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 		const double* s = lengths[v];
 		double total = s[vein->count - 1];
 		int32_t count = 0;
-		anchors[count++] = ( anchor ){ 0.0, -1, start_vertex[v] };
 		for ( int32_t c = v + 1; c < veins; ++c )
 		{
 			if ( shape->veins[c].parent == v )
 			{
-				anchors[count++] = ( anchor ){ fmin( branch_at[c], total ), c, -1 };
+				branches[count++] = ( sere_sort_item ){ sere_sort_key_double( fmin( branch_at[c], total ) ), c, 0 };
 			}
 		}
-		anchors[count++] = ( anchor ){ total, -1, -1 };
-		qsort( anchors + 1, (size_t) ( count - 2 ), sizeof( anchor ), compare_anchor );
+		sere_sort_items( branches, count );
 		if ( start_vertex[v] < 0 )
 		{
 			status = SERE_ERR_GEOMETRY;
@@ -328,16 +301,18 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 		}
 		int32_t previous = start_vertex[v];
 		double previous_a = 0.0;
-		for ( int32_t k = 1; k < count; ++k )
+		/* The anchors after the vein's start: each branch point, then the vein's end. */
+		for ( int32_t k = 0; k <= count; ++k )
 		{
-			double a = anchors[k].a;
+			int32_t child = k < count ? branches[k].index : -1;
+			double a = k < count ? fmin( branch_at[child], total ) : total;
 			/* Branches closer than half a spacing to the previous anchor share its vertex. */
-			if ( a - previous_a < 0.5 * spacing && k < count - 1 )
+			if ( a - previous_a < 0.5 * spacing && k < count )
 			{
-				start_vertex[anchors[k].child] = previous;
+				start_vertex[child] = previous;
 				continue;
 			}
-			if ( k == count - 1 && a - previous_a < 0.5 * spacing )
+			if ( k == count && a - previous_a < 0.5 * spacing )
 			{
 				break; /* the vein ends within half a spacing of its last vertex */
 			}
@@ -355,17 +330,17 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 				previous = vertex;
 			}
 			previous_a = a;
-			if ( anchors[k].child >= 0 )
+			if ( child >= 0 )
 			{
-				start_vertex[anchors[k].child] = previous;
+				start_vertex[child] = previous;
 			}
 		}
 		/* Children that merged into the vein's end anchor. */
-		for ( int32_t k = 1; k < count; ++k )
+		for ( int32_t k = 0; k < count; ++k )
 		{
-			if ( anchors[k].child >= 0 && start_vertex[anchors[k].child] < 0 )
+			if ( start_vertex[branches[k].index] < 0 )
 			{
-				start_vertex[anchors[k].child] = previous;
+				start_vertex[branches[k].index] = previous;
 			}
 		}
 	}
@@ -380,7 +355,7 @@ done:
 	free( lengths );
 	free( branch_at );
 	free( start_vertex );
-	free( anchors );
+	free( branches );
 	return status;
 }
 

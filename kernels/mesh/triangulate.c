@@ -77,19 +77,11 @@ static int grow( mesh* m, int32_t extra )
 		return 0;
 	}
 	int32_t capacity = 2 * ( m->count + extra );
-	int32_t* v = realloc( m->v, sizeof( int32_t ) * 3 * (size_t) capacity );
-	if ( v == NULL )
-	{
-		return -1;
-	}
-	m->v = v;
-	int32_t* n = realloc( m->n, sizeof( int32_t ) * 3 * (size_t) capacity );
-	if ( n == NULL )
-	{
-		return -1;
-	}
-	m->n = n;
-	uint8_t* fixed = realloc( m->fixed, 3 * (size_t) capacity );
+	int32_t* v = sere_array_resize( m->v, capacity, 3 * sizeof( int32_t ) );
+	m->v = v != NULL ? v : m->v;
+	int32_t* n = v != NULL ? sere_array_resize( m->n, capacity, 3 * sizeof( int32_t ) ) : NULL;
+	m->n = n != NULL ? n : m->n;
+	uint8_t* fixed = n != NULL ? sere_array_resize( m->fixed, capacity, 3 ) : NULL;
 	if ( fixed == NULL )
 	{
 		return -1;
@@ -103,8 +95,8 @@ static int push( mesh* m, int32_t value )
 {
 	if ( m->stack_count == m->stack_capacity )
 	{
-		int32_t capacity = m->stack_capacity > 0 ? 2 * m->stack_capacity : 1024;
-		int32_t* stack = realloc( m->stack, sizeof( int32_t ) * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( m->stack_capacity, (int64_t) m->stack_count + 1, 1024 );
+		int32_t* stack = capacity > 0 ? sere_array_resize( m->stack, capacity, sizeof( int32_t ) ) : NULL;
 		if ( stack == NULL )
 		{
 			return -1;
@@ -378,8 +370,8 @@ static int edge_push( edge_list* list, int32_t x, int32_t y )
 {
 	if ( list->count == list->capacity )
 	{
-		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 64;
-		int32_t* e = realloc( list->e, sizeof( int32_t ) * 2 * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 64 );
+		int32_t* e = capacity > 0 ? sere_array_resize( list->e, capacity, 2 * sizeof( int32_t ) ) : NULL;
 		if ( e == NULL )
 		{
 			return -1;
