@@ -755,15 +755,9 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 	*strain_out = strain;
 }
 
-sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* p,
-								  const sere_massspring_params* params, sere_massspring_report* report )
+/* Every particle finite and no inverse mass negative. */
+static sere_status check_particles( const sere_massspring_particles* p )
 {
-	if ( ms == NULL || p == NULL || params == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL ||
-		 p->z == NULL || p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL ||
-		 !params_valid( params ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
 	int bad = 0, negative = 0;
 #pragma omp parallel for schedule( static ) reduction( | : bad, negative )
 	for ( int32_t i = 0; i < p->count; ++i )
@@ -776,9 +770,40 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 	{
 		return SERE_ERR_NONFINITE;
 	}
-	if ( negative )
+	return negative ? SERE_ERR_ARGUMENT : SERE_OK;
+}
+
+/* The velocities the sweeps left (in the packed records) become the particles', and the
+ * particles move by them (Tang Eq. 1: x ← x + v Δt with the new v). Called inside the parallel
+ * region: its loop is shared among the team. */
+static void advance_positions( const sere_massspring* ms, sere_massspring_particles* p, float dt )
+{
+	const float* restrict vr = ms->vrec;
+#pragma omp for schedule( static )
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		p->vx[i] = vr[4 * i];
+		p->vy[i] = vr[4 * i + 1];
+		p->vz[i] = vr[4 * i + 2];
+		p->x[i] = p->x[i] + vr[4 * i] * dt;
+		p->y[i] = p->y[i] + vr[4 * i + 1] * dt;
+		p->z[i] = p->z[i] + vr[4 * i + 2] * dt;
+	}
+}
+
+sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* p,
+								  const sere_massspring_params* params, sere_massspring_report* report )
+{
+	if ( ms == NULL || p == NULL || params == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL ||
+		 p->z == NULL || p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL ||
+		 !params_valid( params ) )
 	{
 		return SERE_ERR_ARGUMENT;
+	}
+	sere_status status = check_particles( p );
+	if ( status != SERE_OK )
+	{
+		return status;
 	}
 
 	const float keep = 1.0f - params->shrink;
@@ -871,17 +896,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 			final_strain = fmaxf( final_strain, own_strain );
 		}
 
-		const float* restrict vr = ms->vrec;
-#pragma omp for schedule( static )
-		for ( int32_t i = 0; i < p->count; ++i )
-		{
-			p->vx[i] = vr[4 * i];
-			p->vy[i] = vr[4 * i + 1];
-			p->vz[i] = vr[4 * i + 2];
-			p->x[i] = p->x[i] + vr[4 * i] * dt;
-			p->y[i] = p->y[i] + vr[4 * i + 1] * dt;
-			p->z[i] = p->z[i] + vr[4 * i + 2] * dt;
-		}
+		advance_positions( ms, p, dt );
 	}
 
 	if ( report != NULL )
