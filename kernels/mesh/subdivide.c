@@ -61,6 +61,57 @@ static int32_t* put( int32_t* out, int32_t a, int32_t b, int32_t c )
 }
 
 /* One pass. mid[slot] receives the midpoint vertex of each corner's edge or -1. */
+/* Each triangle with its cut edges' midpoints (mid: per corner slot, -1 for an edge kept
+ * whole) as one, two, three or four triangles of out, in input order. */
+static void split_triangles( const sere_tri_mesh* in, const int32_t* mid, sere_tri_mesh* out )
+{
+	int32_t f = in->triangle_count;
+	int32_t* o = out->tri;
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		const int32_t* c = in->tri + 3 * t;
+		const int32_t* m = mid + 3 * t;
+		int cut = ( m[0] >= 0 ) + ( m[1] >= 0 ) + ( m[2] >= 0 );
+		if ( cut == 0 )
+		{
+			o = put( o, c[0], c[1], c[2] );
+		}
+		else if ( cut == 3 )
+		{
+			o = put( o, c[0], m[0], m[2] );
+			o = put( o, m[0], c[1], m[1] );
+			o = put( o, m[2], m[1], c[2] );
+			o = put( o, m[0], m[1], m[2] );
+		}
+		else if ( cut == 1 )
+		{
+			int k = m[0] >= 0 ? 0 : ( m[1] >= 0 ? 1 : 2 );
+			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
+			o = put( o, a, m[k], d );
+			o = put( o, m[k], b, d );
+		}
+		else
+		{
+			/* Edge k (a→b) stays whole; b→d and d→a are cut at mb and md. The corner at d is one
+			 * triangle; the quad a, b, mb, md is cut along its shorter diagonal. */
+			int k = m[0] < 0 ? 0 : ( m[1] < 0 ? 1 : 2 );
+			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
+			int32_t mb = m[( k + 1 ) % 3], md = m[( k + 2 ) % 3];
+			o = put( o, mb, d, md );
+			if ( distance( out, a, mb ) <= distance( out, b, md ) )
+			{
+				o = put( o, a, b, mb );
+				o = put( o, a, mb, md );
+			}
+			else
+			{
+				o = put( o, a, b, md );
+				o = put( o, b, mb, md );
+			}
+		}
+	}
+}
+
 static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, sere_tri_mesh* out, int* changed )
 {
 	int32_t f = in->triangle_count;
@@ -154,50 +205,7 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		}
 	}
 
-	int32_t* o = out->tri;
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		const int32_t* c = in->tri + 3 * t;
-		const int32_t* m = mid + 3 * t;
-		int cut = ( m[0] >= 0 ) + ( m[1] >= 0 ) + ( m[2] >= 0 );
-		if ( cut == 0 )
-		{
-			o = put( o, c[0], c[1], c[2] );
-		}
-		else if ( cut == 3 )
-		{
-			o = put( o, c[0], m[0], m[2] );
-			o = put( o, m[0], c[1], m[1] );
-			o = put( o, m[2], m[1], c[2] );
-			o = put( o, m[0], m[1], m[2] );
-		}
-		else if ( cut == 1 )
-		{
-			int k = m[0] >= 0 ? 0 : ( m[1] >= 0 ? 1 : 2 );
-			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
-			o = put( o, a, m[k], d );
-			o = put( o, m[k], b, d );
-		}
-		else
-		{
-			/* Edge k (a→b) stays whole; b→d and d→a are cut at mb and md. The corner at d is one
-			 * triangle; the quad a, b, mb, md is cut along its shorter diagonal. */
-			int k = m[0] < 0 ? 0 : ( m[1] < 0 ? 1 : 2 );
-			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
-			int32_t mb = m[( k + 1 ) % 3], md = m[( k + 2 ) % 3];
-			o = put( o, mb, d, md );
-			if ( distance( out, a, mb ) <= distance( out, b, md ) )
-			{
-				o = put( o, a, b, mb );
-				o = put( o, a, mb, md );
-			}
-			else
-			{
-				o = put( o, a, b, md );
-				o = put( o, b, mb, md );
-			}
-		}
-	}
+	split_triangles( in, mid, out );
 	*changed = next > in->vertex_count;
 	free( edges );
 	free( mid );
