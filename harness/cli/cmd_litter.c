@@ -411,12 +411,10 @@ static sere_status place_leaf( const litter_draw* d, const sere_model* model, co
 	return SERE_OK;
 }
 
-/* The leaf's own PLY file, its run in the header comment; 0, or -1 with errno set. */
-static int write_leaf( const litter_options* o, long index, const litter_result* r, const litter_mesh* m )
+/* A PLY file of m with comment in its header, written atomically; 0, or -1 with errno set. */
+static int write_ply( const char* path, const char* comment, const litter_mesh* m )
 {
-	char path[4200], comment[256], header[2048];
-	leaf_path( path, sizeof( path ), o, index );
-	leaf_comment( comment, sizeof( comment ), o, index, r->frames, r->desiccated, r->ms );
+	char header[2048];
 	ply_header( header, sizeof( header ), comment, m->vertices, m->triangles );
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
@@ -428,6 +426,15 @@ static int write_leaf( const litter_options* o, long index, const litter_result*
 	ply_body( f, m );
 	ply_faces( f, m, 0 );
 	return sere_atomic_commit( &file );
+}
+
+/* The leaf's own PLY file, its run in the header comment; 0, or -1 with errno set. */
+static int write_leaf( const litter_options* o, long index, const litter_result* r, const litter_mesh* m )
+{
+	char path[4200], comment[256];
+	leaf_path( path, sizeof( path ), o, index );
+	leaf_comment( comment, sizeof( comment ), o, index, r->frames, r->desiccated, r->ms );
+	return write_ply( path, comment, m );
 }
 
 /* Dries leaf index as sere run would (harness/cli/cmd_run.c) on the ground, places it in the scene
@@ -542,20 +549,10 @@ static int mesh_append( litter_mesh* scene, const litter_mesh* leaf )
 
 static int write_scene_ply( const char* path, const litter_options* o, const litter_mesh* scene )
 {
-	char comment[256], header[2048];
+	char comment[256];
 	snprintf( comment, sizeof( comment ), "sere litter seed %ld leaves %ld preset %s points %ld frames_max %ld",
 			  o->seed, o->leaves, o->species >= 0 ? preset_names[o->species] : "drawn", o->points, o->frames );
-	ply_header( header, sizeof( header ), comment, scene->vertices, scene->triangles );
-	sere_atomic_file file;
-	FILE* f = sere_atomic_open( &file, path );
-	if ( f == NULL )
-	{
-		return -1;
-	}
-	fputs( header, f );
-	ply_body( f, scene );
-	ply_faces( f, scene, 0 );
-	return sere_atomic_commit( &file );
+	return write_ply( path, comment, scene );
 }
 
 /* Where rank 0's time went, in seconds from the common start (the barrier after the deal). */
