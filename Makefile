@@ -69,8 +69,8 @@ CFLAGS_ALL   := -std=c17 $(COMMON) $(WARN) $(INCLUDES)
 HARNESS_CFLAGS := $(CFLAGS_ALL) $(CAIRO_CFLAGS) -DSERE_DATA_DIR='"$(PREFIX)/share/sere"'
 CXXFLAGS_ALL := -std=c++17 $(COMMON) $(WARN) $(INCLUDES) -isystem /usr/include/eigen3
 # MPI when Open MPI's development files are there (scripts/deps.sh installs them): only
-# cmd_litter.c calls it, so only it gets the flags and -DSERE_MPI; without them the same sources
-# build without MPI and sere litter runs every leaf in one process.
+# the cmd_litter*.c files call it, so only they get the flags and -DSERE_MPI; without them the
+# same sources build without MPI and sere litter runs every leaf in one process.
 MPI_CFLAGS   := $(shell pkg-config --cflags ompi-c 2>/dev/null)
 MPI_LIBS     := $(shell pkg-config --libs ompi-c 2>/dev/null)
 LIBS_HARNESS := -lhwloc -lpng $(CAIRO_LIBS) $(MPI_LIBS) -lm
@@ -157,7 +157,7 @@ $(BUILD)/obj/kernels/core/base.o: CFLAGS_ALL += -DSERE_VERSION='"$(VERSION)"'
 $(BUILD)/obj/kernels/core/base.o: VERSION
 
 ifneq ($(MPI_LIBS),)
-$(BUILD)/obj/harness/cli/cmd_litter.o: HARNESS_CFLAGS += -DSERE_MPI $(MPI_CFLAGS)
+$(BUILD)/obj/harness/cli/cmd_litter.o $(BUILD)/obj/harness/cli/cmd_litter_world.o: HARNESS_CFLAGS += -DSERE_MPI $(MPI_CFLAGS)
 endif
 
 # The commit reaches main.c (sere --version) and machine.c (the machine facts of every result);

@@ -3,6 +3,7 @@
 #pragma once
 
 /* core: status, memory, plane geometry */
+#include "core/array.h"
 #include "core/base.h"
 #include "core/geometry.h"
 

@@ -78,17 +78,23 @@ static void remove_dir( const char* dir )
 	cr_expect_eq( system( line ), 0 );
 }
 
-static const char* const wilt_frames[] = { "frame_0000.ply", "frame_0000.vtp", "frame_0000.png", "frame_0003.ply",
-										   "frame_0003.vtp", "frame_0003.png", "frame_0005.ply", "frame_0005.vtp",
-										   "frame_0005.png", "wilt.pvd" };
+/* The meshes of `sere wilt` and its pictures are hashed apart. The mesh hashes hold the bits of
+ * main at 002e313. The pictures changed once, on purpose, when wilt moved from its own camera
+ * and painter onto harness/render/render.c (one renderer for run, season, wilt and litter: its
+ * light, shading and depth order differ), while the meshes kept their bits. */
+static const char* const wilt_meshes[] = { "frame_0000.ply", "frame_0000.vtp", "frame_0003.ply", "frame_0003.vtp",
+										   "frame_0005.ply", "frame_0005.vtp", "wilt.pvd" };
+static const char* const wilt_pictures[] = { "frame_0000.png", "frame_0003.png", "frame_0005.png" };
 
-static void expect_wilt_hash( const char* args, uint64_t expected )
+static void expect_wilt_hash( const char* args, uint64_t meshes, uint64_t pictures )
 {
 	char dir[64], out[256];
 	run_into( "wilt", args, dir, sizeof( dir ), out, sizeof( out ) );
-	uint64_t h = hash_files( out, wilt_frames, sizeof( wilt_frames ) / sizeof( wilt_frames[0] ) );
+	uint64_t h = hash_files( out, wilt_meshes, sizeof( wilt_meshes ) / sizeof( wilt_meshes[0] ) );
+	uint64_t p = hash_files( out, wilt_pictures, sizeof( wilt_pictures ) / sizeof( wilt_pictures[0] ) );
 	remove_dir( dir );
-	cr_expect_eq( h, expected, "sere wilt %s: hash 0x%016" PRIx64 ", stored 0x%016" PRIx64, args, h, expected );
+	cr_expect_eq( h, meshes, "sere wilt %s: mesh hash 0x%016" PRIx64 ", stored 0x%016" PRIx64, args, h, meshes );
+	cr_expect_eq( p, pictures, "sere wilt %s: picture hash 0x%016" PRIx64 ", stored 0x%016" PRIx64, args, p, pictures );
 }
 
 /* The parametric leaf on a three-leaf plant with the piercing check, droop and minimal angle
@@ -96,14 +102,14 @@ static void expect_wilt_hash( const char* args, uint64_t expected )
  * bits for 1, 2 and 3 threads (the determinism contract). */
 Test( outhash, wilt_parametric_plant )
 {
-	const uint64_t stored = UINT64_C( 0x66604eecfe2ed29d );
+	const uint64_t meshes = UINT64_C( 0x1e83be353f9d9059 ), pictures = UINT64_C( 0xe9d551ceb88ef2a3 );
 	const char* threads[] = { "1", "2", "3" };
 	for ( size_t k = 0; k < 3; ++k )
 	{
 		char args[256];
 		snprintf( args, sizeof( args ),
 				  "--leaves 3 --frames 6 --every 3 --droop 0.9 --min-angle 130 --size 96x72 --threads %s", threads[k] );
-		expect_wilt_hash( args, stored );
+		expect_wilt_hash( args, meshes, pictures );
 	}
 }
 
@@ -111,14 +117,14 @@ Test( outhash, wilt_parametric_plant )
 Test( outhash, wilt_cucumber )
 {
 	expect_wilt_hash( "cucumber --frames 6 --every 3 --subdivide 2 --min-edge 0.05 --size 80x64 --threads 2",
-					  UINT64_C( 0x5c8049b517680518 ) );
+					  UINT64_C( 0x135f5f145c04bb3e ), UINT64_C( 0xaac51ea3c1abc625 ) );
 }
 
 /* The watermelon skeleton without the piercing check, a custom speed and view. */
 Test( outhash, wilt_watermelon_no_pierce )
 {
 	expect_wilt_hash( "watermelon --frames 6 --every 3 --no-pierce --speed 0.3 --view 30,40 --size 64x64 --threads 2",
-					  UINT64_C( 0xaa2f9d5cc6455550 ) );
+					  UINT64_C( 0x5e5642051a9c172c ), UINT64_C( 0xfdac385693558104 ) );
 }
 
 /* A custom skeleton file with generated venation options. */
@@ -127,7 +133,7 @@ Test( outhash, wilt_generated_venation )
 	expect_wilt_hash( "--length 8 --width 5 --features 7 --mid-segments 12 --veins 4 --vein-segments 5 "
 					  "--vein-angle 40 --mid-bend 70 --vein-bend 60 --spread 0.3 --frames 6 --every 3 "
 					  "--size 64x64 --threads 2",
-					  UINT64_C( 0xd39d719874e97b48 ) );
+					  UINT64_C( 0xf930131d1ed99d1d ), UINT64_C( 0x6168beaa939ad762 ) );
 }
 
 /* `sere season` with its key points and mask map read from the auxiliary image: the PNG reader,

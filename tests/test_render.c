@@ -848,3 +848,38 @@ Test( render, leafpics_errors_name_the_file )
 	cr_assert_eq( scratch_tmp_count( &s ), 0 );
 	scratch_remove( &s );
 }
+
+/* `sere wilt` draws with this renderer: its picture of a rest plant is not blank but shows
+ * leaf-green pixels (green well over red and blue, unlike the pale sky) and the stem. */
+Test( render, wilt_picture_shows_the_leaves )
+{
+	const char* bin = getenv( "SERE_BIN" );
+	if ( bin == NULL || bin[0] == '\0' )
+	{
+		cr_skip_test( "SERE_BIN is not set (make test sets it to the built sere)" );
+	}
+	scratch s;
+	scratch_make( &s );
+	char line[1024], path[512];
+	snprintf( line, sizeof( line ),
+			  "'%s' wilt --leaves 2 --frames 1 --format png --size 160x120 --out '%s' >/dev/null 2>&1", bin, s.dir );
+	cr_assert_eq( system( line ), 0, "failed: %s", line );
+	scratch_path( &s, "frame_0000.png", path, sizeof( path ) );
+	picture p = picture_load( path );
+	cr_assert_eq( p.width, 160 );
+	cr_assert_eq( p.height, 120 );
+	int leaf = 0;
+	for ( int y = 0; y < p.height; ++y )
+	{
+		for ( int x = 0; x < p.width; ++x )
+		{
+			int rgb[3];
+			picture_rgb( &p, x, y, rgb );
+			leaf += rgb[1] > rgb[0] + 20 && rgb[1] > rgb[2] + 20;
+		}
+	}
+	cairo_surface_destroy( p.surface );
+	cr_expect_gt( leaf, p.width * p.height / 50, "only %d leaf pixels of %d", leaf, p.width * p.height );
+	cr_expect_eq( scratch_tmp_count( &s ), 0 );
+	scratch_remove( &s );
+}

@@ -3,11 +3,13 @@
  * rerun into the same directory redoes only the leaves that are missing, and one leaf's failure
  * costs no other leaf. */
 #define _POSIX_C_SOURCE 200809L
+#include "cli/cmd_litter_shared.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
 #include "common/params.h"
 #include "common/topo.h"
+#include "core/array.h"
 #include "drying/leaf.h"
 #include "read/build.h"
 #include "render/glb.h"
@@ -23,10 +25,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-
-#ifdef SERE_MPI
-#include <mpi.h>
-#endif
 
 /* The shipped leaves that have a preset, the species a litter draws from. */
 static const char* const species_names[] = { "maple", "maple", "plane", "wisteria", "grass" };
@@ -66,25 +64,6 @@ typedef struct litter_options
 	int frames_given; /* --frames chose the cap: leaves it stops before they dry are no surprise */
 	long progress;	  /* seconds between progress lines on stderr */
 } litter_options;
-
-/* A leaf's outcome: dried now, reused from an earlier run, or failed with a reason. */
-typedef enum litter_state
-{
-	LITTER_FAILED,
-	LITTER_DRIED,
-	LITTER_RESUMED
-} litter_state;
-
-typedef struct litter_result
-{
-	litter_state state;
-	int rank;
-	int desiccated; /* it dried to the end (a layer ran dry) before the frame cap */
-	int32_t vertices, triangles;
-	long frames;
-	double ms;
-	char error[4400];
-} litter_result;
 
 /* A leaf's final triangle layer in the scene, or the whole scene. */
 typedef struct litter_mesh
@@ -142,181 +121,6 @@ static litter_draw draw_leaf( const litter_options* o, long index )
 	return d;
 }
 
-/* The processes sharing the leaves: MPI's ranks under mpirun (one alone without it), and
- * those of them on this machine, which share its cores. Without MPI, one process. */
-typedef struct litter_world
-{
-	int rank, size, local_rank, local_size;
-	int mpi; /* MPI was started (under a launcher): every rank must take part in its calls */
-} litter_world;
-
-#ifdef SERE_MPI
-/* Whether an MPI launcher started this process: Open MPI's mpirun sets OMPI_COMM_WORLD_SIZE,
- * PMIx launchers (mpirun, srun --mpi=pmix) PMIX_RANK, PMI-1/2 ones (srun, MPICH's hydra)
- * PMI_RANK. Started alone, the command runs as one process without MPI: Open MPI's singleton
- * start would fork a daemon only to learn that there is one rank. */
-static int world_launched( void )
-{
-	return getenv( "OMPI_COMM_WORLD_SIZE" ) != NULL || getenv( "PMIX_RANK" ) != NULL || getenv( "PMI_RANK" ) != NULL;
-}
-#endif
-
-static int world_init( litter_world* w )
-{
-	*w = ( litter_world ){ 0, 1, 0, 1, 0 };
-#ifdef SERE_MPI
-	if ( !world_launched() )
-	{
-		return 0;
-	}
-	w->mpi = 1;
-	/* only the main thread calls MPI; the OpenMP threads only dry leaves */
-	int provided;
-	if ( MPI_Init_thread( NULL, NULL, MPI_THREAD_FUNNELED, &provided ) != MPI_SUCCESS )
-	{
-		return -1;
-	}
-	MPI_Comm_rank( MPI_COMM_WORLD, &w->rank );
-	MPI_Comm_size( MPI_COMM_WORLD, &w->size );
-	MPI_Comm local;
-	MPI_Comm_split_type( MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local );
-	MPI_Comm_rank( local, &w->local_rank );
-	MPI_Comm_size( local, &w->local_size );
-	MPI_Comm_free( &local );
-#endif
-	return 0;
-}
-
-/* Ends the run on every rank with the worst of their statuses, so that a leaf failed on any
- * rank makes every rank's exit code non-zero. */
-static int world_finish( const litter_world* w, int status )
-{
-#ifdef SERE_MPI
-	if ( !w->mpi )
-	{
-		return status;
-	}
-	int worst = status;
-	MPI_Allreduce( &status, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD );
-	MPI_Finalize();
-	return worst;
-#else
-	(void) w;
-	return status;
-#endif
-}
-
-/* Out of memory after MPI started: the other ranks would wait for this one forever. */
-static int world_abort( const litter_world* w )
-{
-#ifdef SERE_MPI
-	if ( w->mpi )
-	{
-		MPI_Abort( MPI_COMM_WORLD, 1 );
-	}
-#else
-	(void) w;
-#endif
-	return 1;
-}
-
-static void world_barrier( const litter_world* w )
-{
-#ifdef SERE_MPI
-	if ( w->mpi )
-	{
-		MPI_Barrier( MPI_COMM_WORLD );
-	}
-#else
-	(void) w;
-#endif
-}
-
-/* Rank 0 gets every rank's results (each rank's leaves in the order of order[] that owner[]
- * gives it) and every rank's drying wall time; the other ranks keep their own. Its return also
- * tells rank 0 that every leaf file is written, as each rank sends only after writing its own. */
-static int world_gather( const litter_world* w, litter_result* results, const long* order, const int* owner,
-						 long leaves, double wall_ms, double* rank_wall_ms )
-{
-	rank_wall_ms[0] = wall_ms;
-	if ( w->size == 1 )
-	{
-		return 0;
-	}
-#ifdef SERE_MPI
-	long mine = 0;
-	for ( long k = 0; k < leaves; ++k )
-	{
-		mine += owner[order[k]] == w->rank;
-	}
-	litter_result* packed = malloc( sizeof( litter_result ) * (size_t) ( mine > 0 ? mine : 1 ) );
-	int* counts = malloc( sizeof( int ) * (size_t) w->size );
-	int* displs = malloc( sizeof( int ) * (size_t) w->size );
-	litter_result* all = w->rank == 0 ? malloc( sizeof( litter_result ) * (size_t) leaves ) : NULL;
-	if ( packed == NULL || counts == NULL || displs == NULL || ( w->rank == 0 && all == NULL ) )
-	{
-		return -1;
-	}
-	long at = 0;
-	for ( long k = 0; k < leaves; ++k )
-	{
-		if ( owner[order[k]] == w->rank )
-		{
-			packed[at++] = results[order[k]];
-		}
-	}
-	for ( int r = 0; r < w->size; ++r )
-	{
-		counts[r] = 0;
-	}
-	for ( long k = 0; k < leaves; ++k )
-	{
-		counts[owner[k]] += (int) sizeof( litter_result );
-	}
-	for ( int r = 0, sum = 0; r < w->size; sum += counts[r], ++r )
-	{
-		displs[r] = sum;
-	}
-	MPI_Gatherv( packed, (int) ( sizeof( litter_result ) * (size_t) mine ), MPI_BYTE, all, counts, displs, MPI_BYTE, 0,
-				 MPI_COMM_WORLD );
-	MPI_Gather( &wall_ms, 1, MPI_DOUBLE, rank_wall_ms, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD );
-	if ( w->rank == 0 )
-	{
-		/* each rank's block holds its leaves in the order it was given them */
-		for ( int r = 0; r < w->size; ++r )
-		{
-			long next = displs[r] / (long) sizeof( litter_result );
-			for ( long k = 0; k < leaves; ++k )
-			{
-				if ( owner[order[k]] == r )
-				{
-					results[order[k]] = all[next++];
-				}
-			}
-		}
-	}
-	free( all ), free( displs ), free( counts ), free( packed );
-#else
-	/* one process holds every result already */
-	(void) results, (void) order, (void) owner, (void) leaves;
-#endif
-	return 0;
-}
-
-/* A leaf and what it costs, for dealing out. */
-typedef struct litter_cost
-{
-	long cost, index;
-} litter_cost;
-
-/* Falling cost, ties by index: the order in which the leaves are dealt out. */
-static int by_cost( const void* a, const void* b )
-{
-	const litter_cost *x = a, *y = b;
-	return x->cost != y->cost ? ( x->cost < y->cost ) - ( x->cost > y->cost )
-							  : ( x->index > y->index ) - ( x->index < y->index );
-}
-
 /* Deals the leaves to the ranks, statically and the same on every rank: the costliest first,
  * each to the least loaded rank (ties to the lowest rank), so that the ranks finish together
  * without talking to each other. order[] gets the dealing order, owner[] each leaf's rank. */
@@ -331,7 +135,9 @@ static int share_leaves( const litter_options* o, int ranks, long* order, int* o
 {
 	long leaves = o->leaves;
 	long* load = calloc( (size_t) ranks, sizeof( long ) );
-	litter_cost* costs = malloc( sizeof( litter_cost ) * (size_t) leaves );
+	/* the costliest first (the complement turns the larger cost into the smaller key), ties by
+	 * index: the order in which the leaves are dealt out */
+	sere_sort_item* costs = malloc( sizeof( sere_sort_item ) * (size_t) leaves );
 	if ( load == NULL || costs == NULL )
 	{
 		free( load ), free( costs );
@@ -339,9 +145,9 @@ static int share_leaves( const litter_options* o, int ranks, long* order, int* o
 	}
 	for ( long i = 0; i < leaves; ++i )
 	{
-		costs[i] = ( litter_cost ){ leaf_cost( o, i ), i };
+		costs[i] = ( sere_sort_item ){ ~(uint64_t) leaf_cost( o, i ), (int32_t) i, 0 };
 	}
-	qsort( costs, (size_t) leaves, sizeof( litter_cost ), by_cost );
+	sere_sort_items( costs, (int32_t) leaves );
 	for ( long k = 0; k < leaves; ++k )
 	{
 		int least = 0;
@@ -351,7 +157,7 @@ static int share_leaves( const litter_options* o, int ranks, long* order, int* o
 		}
 		order[k] = costs[k].index;
 		owner[costs[k].index] = least;
-		load[least] += costs[k].cost;
+		load[least] += (long) ~costs[k].key;
 	}
 	free( costs ), free( load );
 	return 0;
@@ -537,6 +343,100 @@ static int leaf_fail( litter_result* r, const char* text )
 	return -1;
 }
 
+/* The built leaf dried as sere run dries it: face down when the preset says so, resting on
+ * the ground, shaped (Jeong Sec. 3.1), then stepped until a layer ran dry (Sec. 6) or the cap.
+ * *sim is the caller's to destroy, whatever the status. */
+static sere_status dry_model( const litter_options* o, const sere_sim_params* params, sere_model* model,
+							  sere_leaf_sim** sim, long* frames, int* desiccated )
+{
+	if ( params->face_down != 0.0 )
+	{
+		sere_model_mirror_z( model );
+	}
+	sere_model_rest_on( model, (float) params->ground );
+	*sim = NULL;
+	sere_status status = sere_leaf_create( model, sim );
+	sere_leaf_params leaf = sere_run_leaf_params( params );
+	if ( status == SERE_OK && ( params->crease != 0.0 || params->curl != 0.0 ) )
+	{
+		sere_pbd_params shaping = leaf.pbd;
+		shaping.max_iterations = 2000;
+		status = sere_leaf_shape_initial( *sim, (float) params->crease, (float) params->curl, &shaping );
+	}
+	long frame = 0;
+	*desiccated = 0;
+	while ( status == SERE_OK && frame < o->frames && !*desiccated )
+	{
+		sere_leaf_stats stats;
+		status = sere_leaf_step( *sim, &leaf, &stats );
+		frame += status == SERE_OK;
+		*desiccated = status == SERE_OK && stats.desiccated;
+	}
+	*frames = frame;
+	return status;
+}
+
+/* The dried leaf's triangle layer into the scene: scaled (z too, so it stays on the ground),
+ * turned about z, moved, and colored by its relative water content (Jeong Sec. 6). */
+static sere_status place_leaf( const litter_draw* d, const sere_model* model, const sere_leaf_sim* sim, litter_mesh* m )
+{
+	int32_t n = model->triangle_particles;
+	if ( mesh_alloc( m, n, model->triangle_count ) != 0 )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	float* rwc = malloc( sizeof( float ) * (size_t) model->p.capacity );
+	if ( rwc == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	sere_leaf_relative_water( sim, rwc );
+	double c = cos( d->angle ), s = sin( d->angle );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double x = d->scale * model->p.x[i], y = d->scale * model->p.y[i];
+		m->x[i] = (float) ( c * x - s * y + d->x );
+		m->y[i] = (float) ( s * x + c * y + d->y );
+		m->z[i] = (float) ( d->scale * model->p.z[i] );
+		m->rwc[i] = rwc[i];
+		float rgb[3];
+		sere_render_dry_color( rwc[i], rgb );
+		for ( int k = 0; k < 3; ++k )
+		{
+			m->rgb[3 * i + k] = (uint8_t) lrintf( 255.0f * rgb[k] );
+		}
+	}
+	memcpy( m->tri, model->tri, sizeof( int32_t ) * 3 * (size_t) model->triangle_count );
+	free( rwc );
+	return SERE_OK;
+}
+
+/* A PLY file of m with comment in its header, written atomically; 0, or -1 with errno set. */
+static int write_ply( const char* path, const char* comment, const litter_mesh* m )
+{
+	char header[2048];
+	ply_header( header, sizeof( header ), comment, m->vertices, m->triangles );
+	sere_atomic_file file;
+	FILE* f = sere_atomic_open( &file, path );
+	if ( f == NULL )
+	{
+		return -1;
+	}
+	fputs( header, f );
+	ply_body( f, m );
+	ply_faces( f, m, 0 );
+	return sere_atomic_commit( &file );
+}
+
+/* The leaf's own PLY file, its run in the header comment; 0, or -1 with errno set. */
+static int write_leaf( const litter_options* o, long index, const litter_result* r, const litter_mesh* m )
+{
+	char path[4200], comment[256];
+	leaf_path( path, sizeof( path ), o, index );
+	leaf_comment( comment, sizeof( comment ), o, index, r->frames, r->desiccated, r->ms );
+	return write_ply( path, comment, m );
+}
+
 /* Dries leaf index as sere run would (harness/cli/cmd_run.c) on the ground, places it in the scene
  * and writes its file; 0, or -1 with the reason in r->error. */
 static int dry_leaf( const litter_options* o, long index, litter_result* r )
@@ -575,94 +475,30 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	{
 		return leaf_fail( r, err );
 	}
-	if ( params.face_down != 0.0 )
-	{
-		sere_model_mirror_z( &model );
-	}
-	sere_model_rest_on( &model, (float) params.ground );
 	sere_leaf_sim* sim = NULL;
-	sere_status status = sere_leaf_create( &model, &sim );
-	sere_leaf_params leaf = sere_run_leaf_params( &params );
-	if ( status == SERE_OK && ( params.crease != 0.0 || params.curl != 0.0 ) )
-	{
-		/* Sec. 3.1, as sere run shapes a leaf before it dries */
-		sere_pbd_params shaping = leaf.pbd;
-		shaping.max_iterations = 2000;
-		status = sere_leaf_shape_initial( sim, (float) params.crease, (float) params.curl, &shaping );
-	}
-	/* sere run --until-dry's rule: on until a layer ran dry (Sec. 6), or the cap */
-	long frame = 0;
-	int desiccated = 0;
-	while ( status == SERE_OK && frame < o->frames && !desiccated )
-	{
-		sere_leaf_stats stats;
-		status = sere_leaf_step( sim, &leaf, &stats );
-		frame += status == SERE_OK;
-		desiccated = status == SERE_OK && stats.desiccated;
-	}
-	int32_t n = model.triangle_particles;
+	long frame;
+	int desiccated;
+	sere_status status = dry_model( o, &params, &model, &sim, &frame, &desiccated );
 	litter_mesh m = { 0 };
-	if ( status == SERE_OK && mesh_alloc( &m, n, model.triangle_count ) != 0 )
-	{
-		status = SERE_ERR_MEMORY;
-	}
-	float* rwc = status == SERE_OK ? malloc( sizeof( float ) * (size_t) model.p.capacity ) : NULL;
-	if ( status == SERE_OK && rwc == NULL )
-	{
-		status = SERE_ERR_MEMORY;
-	}
+	status = status == SERE_OK ? place_leaf( &d, &model, sim, &m ) : status;
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
 	if ( status != SERE_OK )
 	{
 		snprintf( err, sizeof( err ), "frame %ld: %s", frame + 1, sere_status_text( status ) );
 		mesh_free( &m );
-		sere_leaf_destroy( sim );
-		sere_model_destroy( &model );
 		return leaf_fail( r, err );
 	}
-	sere_leaf_relative_water( sim, rwc );
-	/* into the scene: scaled (z too, so it stays on the ground), turned about z, moved */
-	double c = cos( d.angle ), s = sin( d.angle );
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		double x = d.scale * model.p.x[i], y = d.scale * model.p.y[i];
-		m.x[i] = (float) ( c * x - s * y + d.x );
-		m.y[i] = (float) ( s * x + c * y + d.y );
-		m.z[i] = (float) ( d.scale * model.p.z[i] );
-		m.rwc[i] = rwc[i];
-		float rgb[3];
-		sere_render_dry_color( rwc[i], rgb );
-		for ( int k = 0; k < 3; ++k )
-		{
-			m.rgb[3 * i + k] = (uint8_t) lrintf( 255.0f * rgb[k] );
-		}
-	}
-	memcpy( m.tri, model.tri, sizeof( int32_t ) * 3 * (size_t) model.triangle_count );
-	free( rwc );
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
 	r->ms = 1000.0 * ( sere_now() - start );
 	r->frames = frame;
 	r->desiccated = desiccated;
 	r->vertices = m.vertices, r->triangles = m.triangles;
-
-	leaf_path( path, sizeof( path ), o, index );
-	char comment[256], header[2048];
-	leaf_comment( comment, sizeof( comment ), o, index, frame, desiccated, r->ms );
-	ply_header( header, sizeof( header ), comment, m.vertices, m.triangles );
-	sere_atomic_file file;
-	FILE* f = sere_atomic_open( &file, path );
-	int failed = f == NULL;
-	if ( f != NULL )
-	{
-		fputs( header, f );
-		ply_body( f, &m );
-		ply_faces( f, &m, 0 );
-		failed = sere_atomic_commit( &file ) != 0;
-	}
+	int failed = write_leaf( o, index, r, &m ) != 0;
 	int error = errno;
 	mesh_free( &m );
 	if ( failed )
 	{
+		leaf_path( path, sizeof( path ), o, index );
 		snprintf( err, sizeof( err ), "cannot write %s: %s", path, strerror( error ) );
 		return leaf_fail( r, err );
 	}
@@ -713,20 +549,10 @@ static int mesh_append( litter_mesh* scene, const litter_mesh* leaf )
 
 static int write_scene_ply( const char* path, const litter_options* o, const litter_mesh* scene )
 {
-	char comment[256], header[2048];
+	char comment[256];
 	snprintf( comment, sizeof( comment ), "sere litter seed %ld leaves %ld preset %s points %ld frames_max %ld",
 			  o->seed, o->leaves, o->species >= 0 ? preset_names[o->species] : "drawn", o->points, o->frames );
-	ply_header( header, sizeof( header ), comment, scene->vertices, scene->triangles );
-	sere_atomic_file file;
-	FILE* f = sere_atomic_open( &file, path );
-	if ( f == NULL )
-	{
-		return -1;
-	}
-	fputs( header, f );
-	ply_body( f, scene );
-	ply_faces( f, scene, 0 );
-	return sere_atomic_commit( &file );
+	return write_ply( path, comment, scene );
 }
 
 /* Where rank 0's time went, in seconds from the common start (the barrier after the deal). */
@@ -834,6 +660,153 @@ static void progress_leaf( litter_progress* p, const litter_options* o, const li
 			 ranks, minutes, left );
 }
 
+/* This rank's leaves, one per thread, in dealing order (costliest first, so the cheap ones
+ * fill in at the end): each reused from an earlier run's file, or dried. The leaves that failed. */
+static long dry_share( const litter_options* o, const litter_world* w, const long* order, const int* owner,
+					   litter_result* results, int bound, double start )
+{
+	litter_progress progress = { start, start, 0, 0, 0, 0 };
+	for ( long i = 0; i < o->leaves; ++i )
+	{
+		progress.leaves += owner[i] == w->rank;
+		progress.cost += owner[i] == w->rank ? leaf_cost( o, i ) : 0;
+	}
+#pragma omp parallel for schedule( dynamic, 1 ) num_threads( bound )
+	for ( long k = 0; k < o->leaves; ++k )
+	{
+		long i = order[k];
+		if ( owner[i] != w->rank )
+		{
+			continue;
+		}
+		litter_result* r = results + i;
+		r->rank = w->rank;
+		if ( read_leaf( o, i, NULL, r ) == 0 )
+		{
+			r->state = LITTER_RESUMED;
+		}
+		else if ( dry_leaf( o, i, r ) != 0 )
+		{
+			litter_draw d = draw_leaf( o, i );
+			fprintf( stderr, "sere litter: leaf %ld (%s, %s) failed: %s\n", i, species_names[d.species],
+					 preset_names[d.species], r->error );
+		}
+		if ( w->rank == 0 )
+		{
+#pragma omp critical( litter_progress )
+			progress_leaf( &progress, o, w, leaf_cost( o, i ) );
+		}
+	}
+	long failed = 0;
+	for ( long i = 0; i < o->leaves; ++i )
+	{
+		failed += owner[i] == w->rank && results[i].state == LITTER_FAILED;
+	}
+	return failed;
+}
+
+/* The scene from the leaf files alone, in index order: a resumed run reads exactly the bytes an
+ * uninterrupted one does, and so does a run on any number of ranks. The leaves that failed. */
+static long read_scene( const litter_options* o, litter_result* results, litter_mesh* scene )
+{
+	long failed = 0;
+	for ( long i = 0; i < o->leaves; ++i )
+	{
+		litter_result* r = results + i;
+		litter_mesh leaf = { 0 };
+		if ( r->state != LITTER_FAILED && ( read_leaf( o, i, &leaf, r ) != 0 || mesh_append( scene, &leaf ) != 0 ) )
+		{
+			char path[4200];
+			leaf_path( path, sizeof( path ), o, i );
+			snprintf( r->error, sizeof( r->error ), "cannot read back %s (changed during the run, or out of memory)",
+					  path );
+			r->state = LITTER_FAILED;
+			fprintf( stderr, "sere litter: leaf %ld failed: %s\n", i, r->error );
+		}
+		mesh_free( &leaf );
+		failed += r->state == LITTER_FAILED;
+	}
+	return failed;
+}
+
+/* litter.png: the scene seen from above at the longest-drying leaf's frame; with no leaf to
+ * show, no picture of an earlier run is left beside this run's empty scene. 0, or -1 with a
+ * message in err. */
+static int write_scene_png( const char* path, const litter_options* o, const litter_result* results,
+							const litter_mesh* scene, long failed, char* err, size_t err_size )
+{
+	if ( scene->vertices == 0 )
+	{
+		remove( path );
+		return 0;
+	}
+	double water = 0.0;
+	for ( int32_t i = 0; i < scene->vertices; ++i )
+	{
+		water += scene->rwc[i];
+	}
+	long frames = 0;
+	for ( long i = 0; i < o->leaves; ++i )
+	{
+		frames = results[i].state != LITTER_FAILED && results[i].frames > frames ? results[i].frames : frames;
+	}
+	sere_leafpics_frame frame = {
+		scene->x, scene->y, scene->z, scene->rwc, scene->vertices, (int) frames, water / scene->vertices
+	};
+	char title[160];
+	snprintf( title, sizeof( title ), "litter: %ld leaves, seed %ld", o->leaves - failed, o->seed );
+	return sere_leafpics_view( path, title, &frame, scene->tri, scene->triangles, 0.0f, 1200, err, err_size );
+}
+
+/* litter.ply, litter.glb and litter.png; 0, or 1 after printing what failed. */
+static int write_scene_files( const litter_options* o, const litter_result* results, const litter_mesh* scene,
+							  long failed )
+{
+	char path[4200], err[1024];
+	int status = 0;
+	snprintf( path, sizeof( path ), "%s/litter.ply", o->out );
+	if ( write_scene_ply( path, o, scene ) != 0 )
+	{
+		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
+		status = 1;
+	}
+	snprintf( path, sizeof( path ), "%s/litter.glb", o->out );
+	sere_glb_mesh glb = { scene->x, scene->y, scene->z, scene->rgb, scene->vertices, scene->tri, scene->triangles };
+	if ( scene->vertices == 0 )
+	{
+		/* glTF has no empty mesh; and no scene of an earlier run is left beside this one */
+		remove( path );
+	}
+	else if ( sere_write_glb( path, &glb, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere litter: %s\n", err );
+		status = 1;
+	}
+	snprintf( path, sizeof( path ), "%s/litter.png", o->out );
+	if ( write_scene_png( path, o, results, scene, failed, err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "sere litter: %s\n", err );
+		status = 1;
+	}
+	return status;
+}
+
+/* A chosen --frames stops leaves early on purpose; the default cap should not, so the leaves it
+ * stopped before they dried are told on stderr. */
+static void warn_wet( const litter_options* o, const litter_result* results )
+{
+	long wet = 0;
+	for ( long i = 0; i < o->leaves; ++i )
+	{
+		wet += results[i].state != LITTER_FAILED && !results[i].desiccated;
+	}
+	if ( wet > 0 && !o->frames_given )
+	{
+		fprintf( stderr, "sere litter: %ld lea%s reached the %ld-frame cap before drying (--frames F raises it)\n", wet,
+				 wet == 1 ? "f" : "ves", o->frames );
+	}
+}
+
 int sere_cmd_litter( int argc, char** argv )
 {
 	litter_options o = { "out/litter", -1, 1, 600, LITTER_FRAME_CAP, -1, 0, 60 };
@@ -881,7 +854,7 @@ int sere_cmd_litter( int argc, char** argv )
 		return 1;
 	}
 	litter_world w;
-	if ( world_init( &w ) != 0 )
+	if ( litter_world_init( &w ) != 0 )
 	{
 		fprintf( stderr, "sere litter: MPI did not start\n" );
 		return 1;
@@ -895,7 +868,7 @@ int sere_cmd_litter( int argc, char** argv )
 	{
 		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
 		free( rank_wall_ms ), free( owner ), free( order ), free( results );
-		return world_abort( &w );
+		return litter_world_abort( &w );
 	}
 	/* the ranks on this machine share its cores, each its own run of them, unless told */
 	int per_rank = sere_topo_cores() / w.local_size;
@@ -904,50 +877,14 @@ int sere_cmd_litter( int argc, char** argv )
 	/* one leaf per thread: the kernels' own regions then run on one thread each (their results
 	 * do not depend on the count), and a small leaf is not cut into slivers of work */
 	omp_set_max_active_levels( 1 );
-	world_barrier( &w );
+	litter_world_barrier( &w );
 	double start = sere_now();
-	litter_progress progress = { start, start, 0, 0, 0, 0 };
-	for ( long i = 0; i < o.leaves; ++i )
-	{
-		progress.leaves += owner[i] == w.rank;
-		progress.cost += owner[i] == w.rank ? leaf_cost( &o, i ) : 0;
-	}
-	/* this rank's leaves in dealing order, costliest first, so the cheap ones fill in at the end */
-#pragma omp parallel for schedule( dynamic, 1 ) num_threads( bound )
-	for ( long k = 0; k < o.leaves; ++k )
-	{
-		long i = order[k];
-		if ( owner[i] != w.rank )
-		{
-			continue;
-		}
-		litter_result* r = results + i;
-		r->rank = w.rank;
-		if ( read_leaf( &o, i, NULL, r ) == 0 )
-		{
-			r->state = LITTER_RESUMED;
-		}
-		else if ( dry_leaf( &o, i, r ) != 0 )
-		{
-			litter_draw d = draw_leaf( &o, i );
-			fprintf( stderr, "sere litter: leaf %ld (%s, %s) failed: %s\n", i, species_names[d.species],
-					 preset_names[d.species], r->error );
-		}
-		if ( w.rank == 0 )
-		{
-#pragma omp critical( litter_progress )
-			progress_leaf( &progress, &o, &w, leaf_cost( &o, i ) );
-		}
-	}
-	long failed = 0;
-	for ( long i = 0; i < o.leaves; ++i )
-	{
-		failed += owner[i] == w.rank && results[i].state == LITTER_FAILED;
-	}
-	if ( world_gather( &w, results, order, owner, o.leaves, 1000.0 * ( sere_now() - start ), rank_wall_ms ) != 0 )
+	long failed = dry_share( &o, &w, order, owner, results, bound, start );
+	if ( litter_world_gather( &w, results, order, owner, o.leaves, 1000.0 * ( sere_now() - start ), rank_wall_ms ) !=
+		 0 )
 	{
 		fprintf( stderr, "sere litter: out of memory for %ld leaves\n", o.leaves );
-		return world_abort( &w );
+		return litter_world_abort( &w );
 	}
 	double gathered = sere_now() - start, slowest = 0.0;
 	for ( int r = 0; w.rank == 0 && r < w.size; ++r )
@@ -958,87 +895,15 @@ int sere_cmd_litter( int argc, char** argv )
 	if ( w.rank != 0 )
 	{
 		free( rank_wall_ms ), free( results );
-		return world_finish( &w, failed > 0 );
+		return litter_world_finish( &w, failed > 0 );
 	}
-	/* The scene from the leaf files alone, in index order: a resumed run reads exactly the bytes
-	 * an uninterrupted one does, and so does a run on any number of ranks. */
 	litter_mesh scene = { 0 };
-	failed = 0;
-	for ( long i = 0; i < o.leaves; ++i )
-	{
-		litter_result* r = results + i;
-		litter_mesh leaf = { 0 };
-		if ( r->state != LITTER_FAILED && ( read_leaf( &o, i, &leaf, r ) != 0 || mesh_append( &scene, &leaf ) != 0 ) )
-		{
-			leaf_path( path, sizeof( path ), &o, i );
-			snprintf( r->error, sizeof( r->error ), "cannot read back %s (changed during the run, or out of memory)",
-					  path );
-			r->state = LITTER_FAILED;
-			fprintf( stderr, "sere litter: leaf %ld failed: %s\n", i, r->error );
-		}
-		mesh_free( &leaf );
-		failed += r->state == LITTER_FAILED;
-	}
+	failed = read_scene( &o, results, &scene );
 	int status = failed > 0;
-	long wet = 0;
-	for ( long i = 0; i < o.leaves; ++i )
+	warn_wet( &o, results );
+	if ( write_scene_files( &o, results, &scene, failed ) != 0 )
 	{
-		wet += results[i].state != LITTER_FAILED && !results[i].desiccated;
-	}
-	if ( wet > 0 && !o.frames_given )
-	{
-		/* a chosen --frames stops leaves early on purpose; the default cap should not */
-		fprintf( stderr, "sere litter: %ld lea%s reached the %ld-frame cap before drying (--frames F raises it)\n", wet,
-				 wet == 1 ? "f" : "ves", o.frames );
-	}
-	snprintf( path, sizeof( path ), "%s/litter.ply", o.out );
-	if ( write_scene_ply( path, &o, &scene ) != 0 )
-	{
-		fprintf( stderr, "sere litter: cannot write %s: %s\n", path, strerror( errno ) );
 		status = 1;
-	}
-	snprintf( path, sizeof( path ), "%s/litter.glb", o.out );
-	sere_glb_mesh glb = { scene.x, scene.y, scene.z, scene.rgb, scene.vertices, scene.tri, scene.triangles };
-	if ( scene.vertices == 0 )
-	{
-		/* glTF has no empty mesh; and no scene of an earlier run is left beside this one */
-		remove( path );
-	}
-	else if ( sere_write_glb( path, &glb, err, sizeof( err ) ) != 0 )
-	{
-		fprintf( stderr, "sere litter: %s\n", err );
-		status = 1;
-	}
-	snprintf( path, sizeof( path ), "%s/litter.png", o.out );
-	if ( scene.vertices == 0 )
-	{
-		/* no leaf to show: no picture of an earlier run left beside this run's empty scene */
-		remove( path );
-	}
-	else
-	{
-		double water = 0.0;
-		for ( int32_t i = 0; i < scene.vertices; ++i )
-		{
-			water += scene.rwc[i];
-		}
-		/* the caption's frame: the longest-drying leaf's */
-		long frames = 0;
-		for ( long i = 0; i < o.leaves; ++i )
-		{
-			frames = results[i].state != LITTER_FAILED && results[i].frames > frames ? results[i].frames : frames;
-		}
-		sere_leafpics_frame frame = {
-			scene.x, scene.y, scene.z, scene.rwc, scene.vertices, (int) frames, water / scene.vertices
-		};
-		char title[160];
-		snprintf( title, sizeof( title ), "litter: %ld leaves, seed %ld", o.leaves - failed, o.seed );
-		if ( sere_leafpics_view( path, title, &frame, scene.tri, scene.triangles, 0.0f, 1200, err, sizeof( err ) ) !=
-			 0 )
-		{
-			fprintf( stderr, "sere litter: %s\n", err );
-			status = 1;
-		}
 	}
 	double seconds = sere_now() - start;
 	litter_times times = { seconds, gathered - slowest, seconds - gathered };
@@ -1055,5 +920,5 @@ int sere_cmd_litter( int argc, char** argv )
 			o.out, o.out, o.out );
 	mesh_free( &scene );
 	free( rank_wall_ms ), free( results );
-	return world_finish( &w, status );
+	return litter_world_finish( &w, status );
 }

@@ -2,6 +2,7 @@
  * points and a mask map with its mass-spring deformation levels, a tree from an L-system, and
  * the Markov chain of leaf states stepped once a day under a temperature/humidity schedule. */
 #define _POSIX_C_SOURCE 200809L
+#include "cli/cmd_season_shared.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -19,375 +20,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_STATES	   SERE_MARKOV_MAX_STATES
-#define MAX_TRANSITION 512
-#define MAX_SCHEDULE   4096
-#define MAX_DAYS	   100000
-#define NAME_SIZE	   32
-#define PI			   3.14159265358979323846
+#define PI 3.14159265358979323846
 /* Leaf length in tree units (the first branch segment is 1 long). */
 #define LEAF_SIZE 0.34f
 /* Sides of the prism drawn for a branch segment. */
 #define BRANCH_SIDES 6
-
-/* ------------------------------------------------------------------------------------------- */
-/* The chain file (data/seasons/maple.chain describes the format). */
-
-typedef struct chain_file
-{
-	int32_t state_count;
-	char name[MAX_STATES][NAME_SIZE];
-	uint8_t rgb[MAX_STATES][3];
-	int32_t level[MAX_STATES];
-	int fallen[MAX_STATES];
-	double stay[4 * MAX_STATES];
-	int32_t transition_count;
-	sere_markov_transition transitions[MAX_TRANSITION];
-	int32_t initial;
-	int have_corners;
-	sere_markov_chain chain;
-} chain_file;
-
-static int fail_line( const char* path, int line, const char* format, ... ) __attribute__( ( format( printf, 3, 4 ) ) );
-
-static int fail_line( const char* path, int line, const char* format, ... )
-{
-	char what[512];
-	va_list args;
-	va_start( args, format );
-	vsnprintf( what, sizeof( what ), format, args );
-	va_end( args );
-	if ( line > 0 )
-	{
-		fprintf( stderr, "sere season: %s:%d: %s\n", path, line, what );
-	}
-	else
-	{
-		fprintf( stderr, "sere season: %s: %s\n", path, what );
-	}
-	return -1;
-}
-
-static int find_state( const chain_file* c, const char* name )
-{
-	for ( int32_t s = 0; s < c->state_count; ++s )
-	{
-		if ( strcmp( c->name[s], name ) == 0 )
-		{
-			return s;
-		}
-	}
-	return -1;
-}
-
-/* Splits a line into at most max words (comments after '#' dropped); returns the count. */
-static int split_words( char* line, char** words, int max )
-{
-	char* hash = strchr( line, '#' );
-	if ( hash != NULL )
-	{
-		*hash = '\0';
-	}
-	int n = 0;
-	for ( char *save = NULL, *w = strtok_r( line, " \t\r\n", &save ); w != NULL;
-		  w = strtok_r( NULL, " \t\r\n", &save ) )
-	{
-		if ( n == max )
-		{
-			return max + 1;
-		}
-		words[n++] = w;
-	}
-	return n;
-}
-
-static int number( const char* text, double* value )
-{
-	char* end;
-	errno = 0;
-	*value = strtod( text, &end );
-	return *text != '\0' && *end == '\0' && errno == 0 && isfinite( *value );
-}
-
-/* The next line of f, of any length, into *text (getline's buffer); 1, or 0 at the end, or -1
- * after printing "PATH:LINE: ..." for a NUL byte or "PATH: cannot read: ..." for an error. */
-static int next_line( FILE* f, const char* path, int line, char** text, size_t* capacity )
-{
-	errno = 0;
-	ssize_t got = getline( text, capacity, f );
-	if ( got < 0 )
-	{
-		return ferror( f ) ? fail_line( path, 0, "cannot read: %s", strerror( errno != 0 ? errno : EIO ) ) : 0;
-	}
-	if ( memchr( *text, '\0', (size_t) got ) != NULL )
-	{
-		return fail_line( path, line, "a NUL byte (this is not a text file)" );
-	}
-	return 1;
-}
-
-static int probability_list( char** words, double* out, const char* path, int line, const char* what )
-{
-	for ( int k = 0; k < 4; ++k )
-	{
-		if ( !number( words[k], &out[k] ) || out[k] < 0.0 || out[k] > 1.0 )
-		{
-			return fail_line( path, line, "%s: '%s' is not a probability in [0, 1]", what, words[k] );
-		}
-	}
-	return 0;
-}
-
-static int read_chain( const char* path, chain_file* c )
-{
-	memset( c, 0, sizeof( *c ) );
-	c->initial = -1;
-	FILE* f = fopen( path, "r" );
-	if ( f == NULL )
-	{
-		return fail_line( path, 0, "cannot open: %s", strerror( errno ) );
-	}
-	char* text = NULL;
-	size_t capacity = 0;
-	int line = 0, bad = 0, more;
-	while ( !bad && ( more = next_line( f, path, line + 1, &text, &capacity ) ) != 0 )
-	{
-		line += 1;
-		if ( more < 0 )
-		{
-			bad = -1;
-			break;
-		}
-		char* w[16];
-		int n = split_words( text, w, 15 );
-		if ( n == 0 )
-		{
-			continue;
-		}
-		if ( strcmp( w[0], "corners" ) == 0 )
-		{
-			double v[4];
-			if ( n != 5 || !number( w[1], &v[0] ) || !number( w[2], &v[1] ) || !number( w[3], &v[2] ) ||
-				 !number( w[4], &v[3] ) )
-			{
-				bad = fail_line( path, line, "expected 'corners COLD WARM DRY WET' (four numbers)" );
-			}
-			else if ( !( v[0] < v[1] ) || !( v[2] < v[3] ) )
-			{
-				bad = fail_line( path, line, "corners need COLD < WARM and DRY < WET" );
-			}
-			else
-			{
-				c->chain.cold = v[0], c->chain.warm = v[1], c->chain.dry = v[2], c->chain.wet = v[3];
-				c->have_corners = 1;
-			}
-		}
-		else if ( strcmp( w[0], "state" ) == 0 )
-		{
-			int fallen = n == 11 && strcmp( w[6], "fallen" ) == 0;
-			double rgb[3], level;
-			if ( n != 10 && !fallen )
-			{
-				bad = fail_line( path, line,
-								 "expected 'state NAME R G B LEVEL [fallen] STAY_WC STAY_WW STAY_DC STAY_DW'" );
-			}
-			else if ( c->state_count == MAX_STATES )
-			{
-				bad = fail_line( path, line, "more than %d states", MAX_STATES );
-			}
-			else if ( strlen( w[1] ) >= NAME_SIZE || find_state( c, w[1] ) >= 0 )
-			{
-				bad = fail_line( path, line, "state name '%s' is %s", w[1],
-								 strlen( w[1] ) >= NAME_SIZE ? "too long" : "used twice" );
-			}
-			else if ( !number( w[2], &rgb[0] ) || !number( w[3], &rgb[1] ) || !number( w[4], &rgb[2] ) || rgb[0] < 0 ||
-					  rgb[0] > 255 || rgb[1] < 0 || rgb[1] > 255 || rgb[2] < 0 || rgb[2] > 255 )
-			{
-				bad = fail_line( path, line, "state '%s': the color needs three values in 0..255", w[1] );
-			}
-			else if ( !number( w[5], &level ) || level < 0 || level > 63 || level != floor( level ) )
-			{
-				bad = fail_line( path, line, "state '%s': LEVEL '%s' is not a whole number in 0..63", w[1], w[5] );
-			}
-			else if ( probability_list( w + ( fallen ? 7 : 6 ), c->stay + 4 * c->state_count, path, line, w[1] ) == 0 )
-			{
-				int32_t s = c->state_count++;
-				snprintf( c->name[s], NAME_SIZE, "%s", w[1] );
-				for ( int k = 0; k < 3; ++k )
-				{
-					c->rgb[s][k] = (uint8_t) lround( rgb[k] );
-				}
-				c->level[s] = (int32_t) level;
-				c->fallen[s] = fallen;
-			}
-			else
-			{
-				bad = -1;
-			}
-		}
-		else if ( strcmp( w[0], "transition" ) == 0 )
-		{
-			int from = n == 7 ? find_state( c, w[1] ) : -1, to = n == 7 ? find_state( c, w[2] ) : -1;
-			if ( n != 7 )
-			{
-				bad = fail_line( path, line, "expected 'transition FROM TO G_WC G_WW G_DC G_DW'" );
-			}
-			else if ( from < 0 || to < 0 )
-			{
-				bad = fail_line( path, line, "unknown state '%s' (states are declared before their transitions)",
-								 from < 0 ? w[1] : w[2] );
-			}
-			else if ( c->transition_count == MAX_TRANSITION )
-			{
-				bad = fail_line( path, line, "more than %d transitions", MAX_TRANSITION );
-			}
-			else
-			{
-				sere_markov_transition* t = &c->transitions[c->transition_count];
-				t->from = from, t->to = to;
-				bad = probability_list( w + 3, t->weight, path, line, "transition" );
-				c->transition_count += bad == 0;
-			}
-		}
-		else if ( strcmp( w[0], "initial" ) == 0 )
-		{
-			c->initial = n == 2 ? find_state( c, w[1] ) : -1;
-			if ( c->initial < 0 )
-			{
-				bad = fail_line( path, line, "expected 'initial NAME' with a declared state" );
-			}
-		}
-		else
-		{
-			bad = fail_line( path, line, "unknown keyword '%s' (corners, state, transition, initial)", w[0] );
-		}
-	}
-	free( text );
-	fclose( f );
-	if ( bad )
-	{
-		return -1;
-	}
-	if ( c->state_count == 0 || !c->have_corners || c->initial < 0 )
-	{
-		return fail_line( path, 0, "missing %s",
-						  c->state_count == 0 ? "states"
-						  : !c->have_corners  ? "'corners'"
-											  : "'initial'" );
-	}
-	c->chain.state_count = c->state_count;
-	c->chain.stay = c->stay;
-	c->chain.transition_count = c->transition_count;
-	c->chain.transitions = c->transitions;
-	sere_status status = sere_markov_validate( &c->chain );
-	if ( status != SERE_OK )
-	{
-		return fail_line( path, 0,
-						  "not a usable chain (%s): a transition from a state to itself, one given twice, or more than "
-						  "%d successors of a state",
-						  sere_status_text( status ), SERE_MARKOV_MAX_OUTCOMES - 1 );
-	}
-	return 0;
-}
-
-/* ------------------------------------------------------------------------------------------- */
-/* The schedule: days with temperature and humidity, linear in between; labels name seasons. */
-
-typedef struct schedule
-{
-	int32_t count;
-	int32_t day[MAX_SCHEDULE];
-	double temperature[MAX_SCHEDULE];
-	double humidity[MAX_SCHEDULE];
-	char label[MAX_SCHEDULE][NAME_SIZE];
-} schedule;
-
-static int read_schedule( const char* path, schedule* s )
-{
-	memset( s, 0, sizeof( *s ) );
-	FILE* f = fopen( path, "r" );
-	if ( f == NULL )
-	{
-		return fail_line( path, 0, "cannot open: %s", strerror( errno ) );
-	}
-	char* text = NULL;
-	size_t capacity = 0;
-	int line = 0, bad = 0, more;
-	while ( !bad && ( more = next_line( f, path, line + 1, &text, &capacity ) ) != 0 )
-	{
-		line += 1;
-		if ( more < 0 )
-		{
-			bad = -1;
-			break;
-		}
-		char* w[8];
-		int n = split_words( text, w, 5 );
-		if ( n == 0 )
-		{
-			continue;
-		}
-		double day, t, h;
-		if ( n < 3 || n > 4 || !number( w[0], &day ) || !number( w[1], &t ) || !number( w[2], &h ) )
-		{
-			bad = fail_line( path, line, "expected 'DAY TEMPERATURE HUMIDITY [LABEL]'" );
-		}
-		else if ( day != floor( day ) || day < 0 || day > MAX_DAYS || ( s->count > 0 && day <= s->day[s->count - 1] ) ||
-				  ( s->count == 0 && day != 0 ) )
-		{
-			bad = fail_line( path, line, "day %s: days are whole numbers from 0 (the first line) to %d, increasing",
-							 w[0], MAX_DAYS );
-		}
-		else if ( t < -90.0 || t > 70.0 )
-		{
-			bad = fail_line( path, line, "temperature %s deg C is outside [-90, 70]", w[1] );
-		}
-		else if ( h < 0.0 || h > 1.0 )
-		{
-			bad = fail_line( path, line, "humidity %s is outside [0, 1] (relative humidity as a fraction)", w[2] );
-		}
-		else if ( s->count == MAX_SCHEDULE )
-		{
-			bad = fail_line( path, line, "more than %d lines", MAX_SCHEDULE );
-		}
-		else if ( n == 4 && strlen( w[3] ) >= NAME_SIZE )
-		{
-			bad = fail_line( path, line, "label '%s' is longer than %d characters", w[3], NAME_SIZE - 1 );
-		}
-		else
-		{
-			s->day[s->count] = (int32_t) day;
-			s->temperature[s->count] = t;
-			s->humidity[s->count] = h;
-			snprintf( s->label[s->count], NAME_SIZE, "%s", n == 4 ? w[3] : "" );
-			s->count += 1;
-		}
-	}
-	free( text );
-	fclose( f );
-	if ( !bad && s->count < 2 )
-	{
-		bad = fail_line( path, 0, "a schedule needs at least two days" );
-	}
-	return bad ? -1 : 0;
-}
-
-static void weather( const schedule* s, int32_t day, double* t, double* h )
-{
-	int32_t k = 0;
-	while ( k + 1 < s->count && s->day[k + 1] <= day )
-	{
-		k += 1;
-	}
-	if ( k + 1 == s->count )
-	{
-		*t = s->temperature[k], *h = s->humidity[k];
-		return;
-	}
-	double a = (double) ( day - s->day[k] ) / (double) ( s->day[k + 1] - s->day[k] );
-	*t = s->temperature[k] + a * ( s->temperature[k + 1] - s->temperature[k] );
-	*h = s->humidity[k] + a * ( s->humidity[k + 1] - s->humidity[k] );
-}
 
 /* ------------------------------------------------------------------------------------------- */
 /* Options. */
@@ -829,6 +466,393 @@ static int write_distribution_png( const char* path, const chain_file* c, const 
 
 /* ------------------------------------------------------------------------------------------- */
 
+/* One run: the inputs, the leaf and the tree, and the daily shares of every state, exact
+ * (propagated) and sampled (the leaves stepped). */
+typedef struct season_run
+{
+	chain_file chain;
+	schedule plan;
+	int32_t days;
+	int threads;
+	sere_season_leaf leaf;
+	double leaf_seconds;
+	sere_tree tree;
+	int32_t label_count;
+	int32_t label_day[MAX_SCHEDULE];
+	char label[MAX_SCHEDULE][NAME_SIZE];
+	uint8_t* states;
+	double* exact;	 /* (days + 1) x states */
+	double* sampled; /* (days + 1) x states */
+	double* P;
+	int64_t* counts;
+	uint8_t* snapshots; /* the leaves' states on each labeled day */
+	sere_markov_day* day_table;
+	double step_seconds, worst, crown;
+	int64_t tree_vertices, tree_triangles;
+} season_run;
+
+/* The chain and the schedule (or the constant weather); 0, or 2 after printing why. */
+static int read_inputs( const options* o, season_run* r )
+{
+	char path_buffer[4096];
+	if ( season_read_chain( data_file( o->chain, path_buffer, sizeof( path_buffer ) ), &r->chain ) != 0 )
+	{
+		return 2;
+	}
+	if ( o->have_weather )
+	{
+		memset( &r->plan, 0, sizeof( r->plan ) );
+		r->plan.count = 2;
+		r->plan.day[1] = (int32_t) o->days;
+		r->plan.temperature[0] = r->plan.temperature[1] = o->temperature;
+		r->plan.humidity[0] = r->plan.humidity[1] = o->humidity;
+		snprintf( r->plan.label[0], NAME_SIZE, "start" );
+		snprintf( r->plan.label[1], NAME_SIZE, "end" );
+	}
+	else if ( season_read_schedule( data_file( o->schedule, path_buffer, sizeof( path_buffer ) ), &r->plan ) != 0 )
+	{
+		return 2;
+	}
+	r->days = r->plan.day[r->plan.count - 1];
+	return 0;
+}
+
+/* The leaf with as many deformation levels as the chain's states use (Tang Sec. 4), and the
+ * L-system tree; 0, or 2 after printing why (nothing then to free). */
+static int grow_leaf_and_tree( const options* o, season_run* r )
+{
+	int32_t levels = 1;
+	for ( int32_t s = 0; s < r->chain.state_count; ++s )
+	{
+		levels = r->chain.level[s] + 1 > levels ? r->chain.level[s] + 1 : levels;
+	}
+	sere_season_leaf_options lo = sere_season_leaf_options_default();
+	lo.keys_path = o->silhouette != NULL ? NULL : o->keys;
+	lo.silhouette_path = o->silhouette;
+	lo.mask_path = o->mask;
+	lo.outline_samples = (int32_t) o->samples;
+	lo.levels = levels;
+	lo.steps_per_level = (int32_t) o->steps;
+	lo.meshopt_iterations = (int32_t) o->optimize;
+	char err[1024];
+	double t0 = sere_now();
+	if ( sere_season_leaf_build( &lo, &r->leaf, err, sizeof( err ) ) != SERE_OK )
+	{
+		fprintf( stderr, "sere season: %s\n", err );
+		return 2;
+	}
+	r->leaf_seconds = sere_now() - t0;
+
+	sere_lsystem_params lp = sere_lsystem_params_default();
+	lp.iterations = (int32_t) o->iterations;
+	lp.seed = (uint64_t) o->seed;
+	sere_status status = sere_tree_grow( &lp, &r->tree );
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "sere season: the L-system tree cannot grow (%s)\n", sere_status_text( status ) );
+		sere_season_leaf_free( &r->leaf );
+		return 2;
+	}
+	if ( r->tree.leaf_count > o->leaves )
+	{
+		fprintf( stderr, "sere season: --leaves %lld is fewer than the tree's %d leaves\n", o->leaves,
+				 r->tree.leaf_count );
+	}
+	else if ( sere_mkdirs( o->out ) != 0 )
+	{
+		fprintf( stderr, "sere season: cannot create %s: %s\n", o->out, strerror( errno ) );
+	}
+	else
+	{
+		return 0;
+	}
+	sere_tree_destroy( &r->tree );
+	sere_season_leaf_free( &r->leaf );
+	return 2;
+}
+
+/* The labeled days of the schedule and the arrays of the run; 0, or 1 after printing why. */
+static int prepare_days( const options* o, season_run* r )
+{
+	const int32_t S = r->chain.state_count;
+	for ( int32_t k = 0; k < r->plan.count; ++k )
+	{
+		if ( r->plan.label[k][0] != '\0' )
+		{
+			r->label_day[r->label_count] = r->plan.day[k];
+			snprintf( r->label[r->label_count], NAME_SIZE, "%s", r->plan.label[k] );
+			r->label_count += 1;
+		}
+	}
+	r->states = malloc( (size_t) o->leaves );
+	r->exact = malloc( sizeof( double ) * (size_t) S * ( (size_t) r->days + 1 ) );
+	r->sampled = malloc( sizeof( double ) * (size_t) S * ( (size_t) r->days + 1 ) );
+	r->P = malloc( sizeof( double ) * (size_t) S * (size_t) S );
+	r->counts = malloc( sizeof( int64_t ) * (size_t) S );
+	r->snapshots = malloc( (size_t) ( r->label_count > 0 ? r->label_count : 1 ) * (size_t) r->tree.leaf_count + 1 );
+	r->day_table = malloc( sizeof( sere_markov_day ) );
+	if ( r->states == NULL || r->exact == NULL || r->sampled == NULL || r->P == NULL || r->counts == NULL ||
+		 r->snapshots == NULL || r->day_table == NULL )
+	{
+		fprintf( stderr, "sere season: out of memory for %lld leaves\n", o->leaves );
+		return 1;
+	}
+	memset( r->states, r->chain.initial, (size_t) o->leaves );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		r->exact[s] = r->sampled[s] = s == r->chain.initial;
+	}
+	return 0;
+}
+
+/* Day by day: the exact shares propagated by the day's matrix (Tang Eq. 5–6 under the day's
+ * weather) and every leaf stepped by the same chain; the states kept on labeled days. 0, or 1
+ * after printing why. */
+static int step_days( const options* o, season_run* r )
+{
+	const int32_t S = r->chain.state_count;
+	const int64_t N = o->leaves;
+	sere_progress progress;
+	sere_progress_begin( &progress, "days", r->days );
+	int32_t next_label = 0;
+	for ( int32_t d = 0; d <= r->days; ++d )
+	{
+		while ( next_label < r->label_count && r->label_day[next_label] == d )
+		{
+			memcpy( r->snapshots + (size_t) next_label * (size_t) r->tree.leaf_count, r->states,
+					(size_t) r->tree.leaf_count );
+			next_label += 1;
+		}
+		if ( d == r->days )
+		{
+			break;
+		}
+		double temperature, humidity;
+		season_weather( &r->plan, d, &temperature, &humidity );
+		if ( sere_markov_matrix( &r->chain.chain, temperature, humidity, r->P ) != SERE_OK ||
+			 sere_markov_day_prepare( &r->chain.chain, temperature, humidity, r->day_table ) != SERE_OK )
+		{
+			fprintf( stderr, "sere season: day %d: no transition matrix for %g deg C, humidity %g\n", d, temperature,
+					 humidity );
+			return 1;
+		}
+		sere_markov_propagate( r->P, S, r->exact + (size_t) d * S, r->exact + (size_t) ( d + 1 ) * S );
+		double t1 = sere_now();
+		sere_status status = sere_markov_advance( r->day_table, r->states, N, 0, (uint64_t) o->seed, d, r->counts );
+		r->step_seconds += sere_now() - t1;
+		if ( status != SERE_OK )
+		{
+			fprintf( stderr, "sere season: day %d: stepping the leaves failed (%s)\n", d, sere_status_text( status ) );
+			return 1;
+		}
+		for ( int32_t s = 0; s < S; ++s )
+		{
+			r->sampled[(size_t) ( d + 1 ) * S + s] = (double) r->counts[s] / (double) N;
+		}
+		sere_progress_update( &progress, d + 1 );
+	}
+	sere_progress_end( &progress );
+	return 0;
+}
+
+/* distribution.csv: the weather and both shares of every state, day by day; also the largest
+ * gap between them. 0, or 1 after printing why. */
+static int write_distribution_csv( const options* o, season_run* r )
+{
+	const int32_t S = r->chain.state_count;
+	char path[4096];
+	snprintf( path, sizeof( path ), "%s/distribution.csv", o->out );
+	sere_atomic_file csv;
+	FILE* f = sere_atomic_open( &csv, path );
+	if ( f == NULL )
+	{
+		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
+		return 1;
+	}
+	fprintf( f, "day,temperature,humidity" );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		fprintf( f, ",exact_%s", r->chain.name[s] );
+	}
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		fprintf( f, ",sampled_%s", r->chain.name[s] );
+	}
+	fprintf( f, "\n" );
+	for ( int32_t d = 0; d <= r->days; ++d )
+	{
+		double temperature, humidity;
+		season_weather( &r->plan, d, &temperature, &humidity );
+		fprintf( f, "%d,%.4g,%.4g", d, temperature, humidity );
+		for ( int k = 0; k < 2; ++k )
+		{
+			for ( int32_t s = 0; s < S; ++s )
+			{
+				fprintf( f, ",%.8f", ( k == 0 ? r->exact : r->sampled )[(size_t) d * S + s] );
+			}
+		}
+		fprintf( f, "\n" );
+		for ( int32_t s = 0; s < S; ++s )
+		{
+			r->worst = fmax( r->worst, fabs( r->exact[(size_t) d * S + s] - r->sampled[(size_t) d * S + s] ) );
+		}
+	}
+	if ( sere_atomic_commit( &csv ) != 0 )
+	{
+		fprintf( stderr, "sere season: cannot write %s\n", path );
+		return 1;
+	}
+	return 0;
+}
+
+/* The tree on every labeled day as PLY; 0, or 1 after printing why. */
+static int write_trees( const options* o, season_run* r )
+{
+	for ( int32_t k = 0; k < r->tree.leaf_count; ++k )
+	{
+		r->crown = fmax( r->crown, hypot( r->tree.leaf_x[k], r->tree.leaf_y[k] ) );
+	}
+	for ( int32_t k = 0; k < r->label_count; ++k )
+	{
+		scene s = { 0 };
+		if ( build_scene( &r->tree, &r->leaf, &r->chain, r->snapshots + (size_t) k * (size_t) r->tree.leaf_count,
+						  r->crown, (uint64_t) o->seed, &s ) != 0 )
+		{
+			return 1;
+		}
+		char path[4096];
+		sere_vertex_property property = { "state", s.state };
+		snprintf( path, sizeof( path ), "%s/tree_%.31s.ply", o->out, r->label[k] );
+		int written =
+			sere_write_ply( path, s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, s.rgb, &property, 1 );
+		r->tree_vertices = s.vertex_count, r->tree_triangles = s.triangle_count;
+		scene_free( &s );
+		if ( written != 0 )
+		{
+			fprintf( stderr, "sere season: cannot write %s\n", path );
+			return 1;
+		}
+	}
+	return 0;
+}
+
+/* season_*.png, the seasons contact sheet, the leaf's levels and the distribution plot; 0, or
+ * 1 after printing why. */
+static int write_pictures( const options* o, season_run* r )
+{
+	char path[4096], err[1024];
+	season_pictures pictures = {
+		&r->tree, &r->leaf,		  &r->chain, r->snapshots,		 r->label_day,
+		r->label, r->label_count, r->crown,	 (uint64_t) o->seed, { -35.0, 12.0, { 0, 0, 0 }, 0.0, 24.0 }
+	};
+	/* fit the view on the summer tree, with the ground under the crown in the picture */
+	scene s = { 0 };
+	if ( r->label_count > 0 &&
+		 build_scene( &r->tree, &r->leaf, &r->chain, r->snapshots, r->crown, (uint64_t) o->seed, &s ) == 0 )
+	{
+		sere_render_mesh mesh = { s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, NULL, s.rgb, { 0 } };
+		sere_render_fit_view( &mesh, (double) o->size, (double) o->size, &pictures.view, err, sizeof( err ) );
+		scene_free( &s );
+	}
+	for ( int32_t k = 0; k < r->label_count; ++k )
+	{
+		snprintf( path, sizeof( path ), "%s/season_%.31s.png", o->out, r->label[k] );
+		if ( write_season_png( &pictures, k, path, (int) o->size, err, sizeof( err ) ) != 0 )
+		{
+			fprintf( stderr, "sere season: %s\n", err );
+			return 1;
+		}
+	}
+	pictures.view.scale *= 400.0 / (double) o->size;
+	sere_render_sheet sheet = { "Seasons of a maple (seed 002): Markov chain of leaf states over an L-system tree",
+								r->label_count < 4 ? r->label_count : 3,
+								r->label_count,
+								400,
+								400,
+								draw_season,
+								&pictures };
+	snprintf( path, sizeof( path ), "%s/seasons.png", o->out );
+	int failed = r->label_count > 0 && sere_render_contact_sheet( path, &sheet, err, sizeof( err ) ) != 0;
+	level_pictures lv = { &r->leaf, { -30.0, 35.0, { 0, 0, 0 }, 0.0, 12.0 } };
+	sere_render_sheet levels_sheet = { "The leaf's deformation levels (mass-spring model; color: mass by Tang Eq. 3, "
+									   "dark blue lightest, yellow heaviest)",
+									   r->leaf.level_count,
+									   r->leaf.level_count,
+									   320,
+									   320,
+									   draw_level,
+									   &lv };
+	snprintf( path, sizeof( path ), "%s/leaf_levels.png", o->out );
+	failed = failed || sere_render_contact_sheet( path, &levels_sheet, err, sizeof( err ) ) != 0;
+	snprintf( path, sizeof( path ), "%s/distribution.png", o->out );
+	failed =
+		failed || write_distribution_png( path, &r->chain, r->exact, r->sampled, r->days, err, sizeof( err ) ) != 0;
+	if ( failed )
+	{
+		fprintf( stderr, "sere season: %s\n", err );
+		return 1;
+	}
+	return 0;
+}
+
+/* summary.json: the sizes, the speed and the final shares; 0, or 1 after printing why. */
+static int write_summary( const options* o, const season_run* r )
+{
+	const int32_t S = r->chain.state_count;
+	char path[4096];
+	snprintf( path, sizeof( path ), "%s/summary.json", o->out );
+	sere_atomic_file json;
+	FILE* f = sere_atomic_open( &json, path );
+	if ( f == NULL )
+	{
+		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
+		return 1;
+	}
+	fprintf( f, "{\n  \"leaves\": %lld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %lld,\n", o->leaves, r->days,
+			 r->threads, o->seed );
+	fprintf( f,
+			 "  \"leaf\": { \"vertices\": %d, \"triangles\": %d, \"levels\": %d, \"build_s\": %.4f },\n"
+			 "  \"tree\": { \"segments\": %d, \"leaves\": %d, \"vertices\": %lld, \"triangles\": %lld },\n",
+			 r->leaf.vertex_count, r->leaf.triangle_count, r->leaf.level_count, r->leaf_seconds, r->tree.segment_count,
+			 r->tree.leaf_count, (long long) r->tree_vertices, (long long) r->tree_triangles );
+	fprintf( f, "  \"markov_ms_per_day\": %.5f,\n  \"leaves_per_second\": %.6g,\n", 1e3 * r->step_seconds / r->days,
+			 (double) o->leaves * r->days / r->step_seconds );
+	fprintf( f, "  \"max_abs_sampled_minus_exact\": %.3g,\n  \"final\": {", r->worst );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		char name_json[6 * NAME_SIZE];
+		fprintf( f, "%s\n    \"%s\": { \"exact\": %.6f, \"sampled\": %.6f }", s > 0 ? "," : "",
+				 sere_json_escape( name_json, sizeof( name_json ), r->chain.name[s] ),
+				 r->exact[(size_t) r->days * S + s], r->sampled[(size_t) r->days * S + s] );
+	}
+	fprintf( f, "\n  }\n}\n" );
+	if ( sere_atomic_commit( &json ) != 0 )
+	{
+		fprintf( stderr, "sere season: cannot write %s\n", path );
+		return 1;
+	}
+	return 0;
+}
+
+static void print_report( const options* o, const season_run* r )
+{
+	const int32_t S = r->chain.state_count;
+	printf( "leaf     %d vertices, %d triangles after %lld optimization iterations, %d deformation levels (%.2f s)\n",
+			r->leaf.vertex_count, r->leaf.triangle_count, o->optimize, r->leaf.level_count, r->leaf_seconds );
+	printf( "tree     %d branch segments, %d leaves (L-system, %lld iterations)\n", r->tree.segment_count,
+			r->tree.leaf_count, o->iterations );
+	printf( "chain    %d states, %lld leaves, %d days, %d threads: %.3f ms per day (%.3g leaves/s)\n", S, o->leaves,
+			r->days, r->threads, 1e3 * r->step_seconds / r->days, (double) o->leaves * r->days / r->step_seconds );
+	printf( "day %-4d", r->days );
+	for ( int32_t s = 0; s < S; ++s )
+	{
+		printf( " %s %.3f", r->chain.name[s], r->sampled[(size_t) r->days * S + s] );
+	}
+	printf( "\n         largest |sampled - exact| share over all days and states: %.2g\n", r->worst );
+	printf( "wrote    %s/{distribution.csv,summary.json,tree_*.ply%s}\n", o->out,
+			o->pictures ? ",season_*.png,seasons.png,leaf_levels.png,distribution.png" : "" );
+}
+
 int sere_cmd_season( int argc, char** argv )
 {
 	options o;
@@ -837,349 +861,34 @@ int sere_cmd_season( int argc, char** argv )
 	{
 		return parsed == 1 ? 0 : 2;
 	}
-	char path_buffer[4096];
-	static chain_file chain;
-	static schedule plan;
-	if ( read_chain( data_file( o.chain, path_buffer, sizeof( path_buffer ) ), &chain ) != 0 )
+	/* Static: the chain and the schedule hold fixed tables too large for the stack. */
+	static season_run run;
+	season_run* r = &run;
+	memset( r, 0, sizeof( *r ) );
+	int rc = read_inputs( &o, r );
+	if ( rc != 0 )
 	{
-		return 2;
+		return rc;
 	}
-	if ( o.have_weather )
+	r->threads = sere_topo_bind( (int) o.threads, NULL );
+	rc = grow_leaf_and_tree( &o, r );
+	if ( rc != 0 )
 	{
-		memset( &plan, 0, sizeof( plan ) );
-		plan.count = 2;
-		plan.day[1] = (int32_t) o.days;
-		plan.temperature[0] = plan.temperature[1] = o.temperature;
-		plan.humidity[0] = plan.humidity[1] = o.humidity;
-		snprintf( plan.label[0], NAME_SIZE, "start" );
-		snprintf( plan.label[1], NAME_SIZE, "end" );
+		return rc;
 	}
-	else if ( read_schedule( data_file( o.schedule, path_buffer, sizeof( path_buffer ) ), &plan ) != 0 )
+	rc = prepare_days( &o, r );
+	rc = rc != 0 ? rc : step_days( &o, r );
+	rc = rc != 0 ? rc : write_distribution_csv( &o, r );
+	rc = rc != 0 ? rc : write_trees( &o, r );
+	rc = rc != 0 || !o.pictures ? rc : write_pictures( &o, r );
+	rc = rc != 0 ? rc : write_summary( &o, r );
+	if ( rc == 0 )
 	{
-		return 2;
+		print_report( &o, r );
 	}
-	const int32_t days = plan.day[plan.count - 1];
-	int threads = sere_topo_bind( (int) o.threads, NULL );
-
-	int32_t levels = 1;
-	for ( int32_t s = 0; s < chain.state_count; ++s )
-	{
-		levels = chain.level[s] + 1 > levels ? chain.level[s] + 1 : levels;
-	}
-	sere_season_leaf_options lo = sere_season_leaf_options_default();
-	lo.keys_path = o.silhouette != NULL ? NULL : o.keys;
-	lo.silhouette_path = o.silhouette;
-	lo.mask_path = o.mask;
-	lo.outline_samples = (int32_t) o.samples;
-	lo.levels = levels;
-	lo.steps_per_level = (int32_t) o.steps;
-	lo.meshopt_iterations = (int32_t) o.optimize;
-	sere_season_leaf leaf;
-	char err[1024];
-	double t0 = sere_now();
-	if ( sere_season_leaf_build( &lo, &leaf, err, sizeof( err ) ) != SERE_OK )
-	{
-		fprintf( stderr, "sere season: %s\n", err );
-		return 2;
-	}
-	const double leaf_seconds = sere_now() - t0;
-
-	sere_lsystem_params lp = sere_lsystem_params_default();
-	lp.iterations = (int32_t) o.iterations;
-	lp.seed = (uint64_t) o.seed;
-	sere_tree tree;
-	sere_status status = sere_tree_grow( &lp, &tree );
-	if ( status != SERE_OK )
-	{
-		fprintf( stderr, "sere season: the L-system tree cannot grow (%s)\n", sere_status_text( status ) );
-		sere_season_leaf_free( &leaf );
-		return 2;
-	}
-	if ( tree.leaf_count > o.leaves )
-	{
-		fprintf( stderr, "sere season: --leaves %lld is fewer than the tree's %d leaves\n", o.leaves, tree.leaf_count );
-		sere_tree_destroy( &tree );
-		sere_season_leaf_free( &leaf );
-		return 2;
-	}
-	if ( sere_mkdirs( o.out ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot create %s: %s\n", o.out, strerror( errno ) );
-		sere_tree_destroy( &tree );
-		sere_season_leaf_free( &leaf );
-		return 2;
-	}
-
-	const int32_t S = chain.state_count;
-	const int64_t N = o.leaves;
-	int32_t label_count = 0;
-	static int32_t label_day[MAX_SCHEDULE];
-	static char label[MAX_SCHEDULE][NAME_SIZE];
-	for ( int32_t k = 0; k < plan.count; ++k )
-	{
-		if ( plan.label[k][0] != '\0' )
-		{
-			label_day[label_count] = plan.day[k];
-			snprintf( label[label_count], NAME_SIZE, "%s", plan.label[k] );
-			label_count += 1;
-		}
-	}
-	uint8_t* states = malloc( (size_t) N );
-	double* exact = malloc( sizeof( double ) * (size_t) S * ( (size_t) days + 1 ) );
-	double* sampled = malloc( sizeof( double ) * (size_t) S * ( (size_t) days + 1 ) );
-	double* P = malloc( sizeof( double ) * (size_t) S * (size_t) S );
-	int64_t* counts = malloc( sizeof( int64_t ) * (size_t) S );
-	uint8_t* snapshots = malloc( (size_t) ( label_count > 0 ? label_count : 1 ) * (size_t) tree.leaf_count + 1 );
-	sere_markov_day* day_table = malloc( sizeof( sere_markov_day ) );
-	int rc = 0;
-	if ( states == NULL || exact == NULL || sampled == NULL || P == NULL || counts == NULL || snapshots == NULL ||
-		 day_table == NULL )
-	{
-		fprintf( stderr, "sere season: out of memory for %lld leaves\n", o.leaves );
-		rc = 1;
-		goto done;
-	}
-	memset( states, chain.initial, (size_t) N );
-	for ( int32_t s = 0; s < S; ++s )
-	{
-		exact[s] = sampled[s] = s == chain.initial;
-	}
-	double step_seconds = 0.0;
-	sere_progress progress;
-	sere_progress_begin( &progress, "days", days );
-	int32_t next_label = 0;
-	for ( int32_t d = 0; d <= days; ++d )
-	{
-		while ( next_label < label_count && label_day[next_label] == d )
-		{
-			memcpy( snapshots + (size_t) next_label * (size_t) tree.leaf_count, states, (size_t) tree.leaf_count );
-			next_label += 1;
-		}
-		if ( d == days )
-		{
-			break;
-		}
-		double temperature, humidity;
-		weather( &plan, d, &temperature, &humidity );
-		if ( sere_markov_matrix( &chain.chain, temperature, humidity, P ) != SERE_OK ||
-			 sere_markov_day_prepare( &chain.chain, temperature, humidity, day_table ) != SERE_OK )
-		{
-			fprintf( stderr, "sere season: day %d: no transition matrix for %g deg C, humidity %g\n", d, temperature,
-					 humidity );
-			rc = 1;
-			goto done;
-		}
-		sere_markov_propagate( P, S, exact + (size_t) d * S, exact + (size_t) ( d + 1 ) * S );
-		double t1 = sere_now();
-		status = sere_markov_advance( day_table, states, N, 0, (uint64_t) o.seed, d, counts );
-		step_seconds += sere_now() - t1;
-		if ( status != SERE_OK )
-		{
-			fprintf( stderr, "sere season: day %d: stepping the leaves failed (%s)\n", d, sere_status_text( status ) );
-			rc = 1;
-			goto done;
-		}
-		for ( int32_t s = 0; s < S; ++s )
-		{
-			sampled[(size_t) ( d + 1 ) * S + s] = (double) counts[s] / (double) N;
-		}
-		sere_progress_update( &progress, d + 1 );
-	}
-	sere_progress_end( &progress );
-
-	/* distribution.csv */
-	char path[4096];
-	snprintf( path, sizeof( path ), "%s/distribution.csv", o.out );
-	sere_atomic_file csv;
-	FILE* f = sere_atomic_open( &csv, path );
-	if ( f == NULL )
-	{
-		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
-		rc = 1;
-		goto done;
-	}
-	fprintf( f, "day,temperature,humidity" );
-	for ( int32_t s = 0; s < S; ++s )
-	{
-		fprintf( f, ",exact_%s", chain.name[s] );
-	}
-	for ( int32_t s = 0; s < S; ++s )
-	{
-		fprintf( f, ",sampled_%s", chain.name[s] );
-	}
-	fprintf( f, "\n" );
-	double worst = 0.0;
-	for ( int32_t d = 0; d <= days; ++d )
-	{
-		double temperature, humidity;
-		weather( &plan, d, &temperature, &humidity );
-		fprintf( f, "%d,%.4g,%.4g", d, temperature, humidity );
-		for ( int k = 0; k < 2; ++k )
-		{
-			for ( int32_t s = 0; s < S; ++s )
-			{
-				fprintf( f, ",%.8f", ( k == 0 ? exact : sampled )[(size_t) d * S + s] );
-			}
-		}
-		fprintf( f, "\n" );
-		for ( int32_t s = 0; s < S; ++s )
-		{
-			worst = fmax( worst, fabs( exact[(size_t) d * S + s] - sampled[(size_t) d * S + s] ) );
-		}
-	}
-	if ( sere_atomic_commit( &csv ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot write %s\n", path );
-		rc = 1;
-		goto done;
-	}
-
-	/* the tree on every labeled day: PLY, and the pictures */
-	double crown = 0.0;
-	for ( int32_t k = 0; k < tree.leaf_count; ++k )
-	{
-		crown = fmax( crown, hypot( tree.leaf_x[k], tree.leaf_y[k] ) );
-	}
-	int64_t tree_vertices = 0, tree_triangles = 0;
-	for ( int32_t k = 0; k < label_count; ++k )
-	{
-		scene s = { 0 };
-		if ( build_scene( &tree, &leaf, &chain, snapshots + (size_t) k * (size_t) tree.leaf_count, crown,
-						  (uint64_t) o.seed, &s ) != 0 )
-		{
-			rc = 1;
-			goto done;
-		}
-		sere_vertex_property property = { "state", s.state };
-		snprintf( path, sizeof( path ), "%s/tree_%.31s.ply", o.out, label[k] );
-		int written =
-			sere_write_ply( path, s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, s.rgb, &property, 1 );
-		tree_vertices = s.vertex_count, tree_triangles = s.triangle_count;
-		scene_free( &s );
-		if ( written != 0 )
-		{
-			fprintf( stderr, "sere season: cannot write %s\n", path );
-			rc = 1;
-			goto done;
-		}
-	}
-	if ( o.pictures )
-	{
-		season_pictures pictures = {
-			&tree, &leaf,		&chain, snapshots,		   label_day,
-			label, label_count, crown,	(uint64_t) o.seed, { -35.0, 12.0, { 0, 0, 0 }, 0.0, 24.0 }
-		};
-		/* fit the view on the summer tree, with the ground under the crown in the picture */
-		scene s = { 0 };
-		if ( label_count > 0 && build_scene( &tree, &leaf, &chain, snapshots, crown, (uint64_t) o.seed, &s ) == 0 )
-		{
-			sere_render_mesh mesh = { s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, NULL, s.rgb, { 0 } };
-			sere_render_fit_view( &mesh, (double) o.size, (double) o.size, &pictures.view, err, sizeof( err ) );
-			scene_free( &s );
-		}
-		for ( int32_t k = 0; k < label_count && rc == 0; ++k )
-		{
-			snprintf( path, sizeof( path ), "%s/season_%.31s.png", o.out, label[k] );
-			if ( write_season_png( &pictures, k, path, (int) o.size, err, sizeof( err ) ) != 0 )
-			{
-				fprintf( stderr, "sere season: %s\n", err );
-				rc = 1;
-			}
-		}
-		pictures.view.scale *= 400.0 / (double) o.size;
-		sere_render_sheet sheet = { "Seasons of a maple (seed 002): Markov chain of leaf states over an L-system tree",
-									label_count < 4 ? label_count : 3,
-									label_count,
-									400,
-									400,
-									draw_season,
-									&pictures };
-		snprintf( path, sizeof( path ), "%s/seasons.png", o.out );
-		if ( rc == 0 && label_count > 0 && sere_render_contact_sheet( path, &sheet, err, sizeof( err ) ) != 0 )
-		{
-			fprintf( stderr, "sere season: %s\n", err );
-			rc = 1;
-		}
-		level_pictures lv = { &leaf, { -30.0, 35.0, { 0, 0, 0 }, 0.0, 12.0 } };
-		sere_render_sheet levels_sheet = {
-			"The leaf's deformation levels (mass-spring model; color: mass by Tang Eq. 3, "
-			"dark blue lightest, yellow heaviest)",
-			leaf.level_count,
-			leaf.level_count,
-			320,
-			320,
-			draw_level,
-			&lv
-		};
-		snprintf( path, sizeof( path ), "%s/leaf_levels.png", o.out );
-		if ( rc == 0 && sere_render_contact_sheet( path, &levels_sheet, err, sizeof( err ) ) != 0 )
-		{
-			fprintf( stderr, "sere season: %s\n", err );
-			rc = 1;
-		}
-		snprintf( path, sizeof( path ), "%s/distribution.png", o.out );
-		if ( rc == 0 && write_distribution_png( path, &chain, exact, sampled, days, err, sizeof( err ) ) != 0 )
-		{
-			fprintf( stderr, "sere season: %s\n", err );
-			rc = 1;
-		}
-		if ( rc != 0 )
-		{
-			goto done;
-		}
-	}
-
-	snprintf( path, sizeof( path ), "%s/summary.json", o.out );
-	sere_atomic_file json;
-	f = sere_atomic_open( &json, path );
-	if ( f == NULL )
-	{
-		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
-		rc = 1;
-		goto done;
-	}
-	fprintf( f, "{\n  \"leaves\": %lld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %lld,\n", o.leaves, days,
-			 threads, o.seed );
-	fprintf( f,
-			 "  \"leaf\": { \"vertices\": %d, \"triangles\": %d, \"levels\": %d, \"build_s\": %.4f },\n"
-			 "  \"tree\": { \"segments\": %d, \"leaves\": %d, \"vertices\": %lld, \"triangles\": %lld },\n",
-			 leaf.vertex_count, leaf.triangle_count, leaf.level_count, leaf_seconds, tree.segment_count,
-			 tree.leaf_count, (long long) tree_vertices, (long long) tree_triangles );
-	fprintf( f, "  \"markov_ms_per_day\": %.5f,\n  \"leaves_per_second\": %.6g,\n", 1e3 * step_seconds / days,
-			 (double) N * days / step_seconds );
-	fprintf( f, "  \"max_abs_sampled_minus_exact\": %.3g,\n  \"final\": {", worst );
-	for ( int32_t s = 0; s < S; ++s )
-	{
-		char name_json[6 * NAME_SIZE];
-		fprintf( f, "%s\n    \"%s\": { \"exact\": %.6f, \"sampled\": %.6f }", s > 0 ? "," : "",
-				 sere_json_escape( name_json, sizeof( name_json ), chain.name[s] ), exact[(size_t) days * S + s],
-				 sampled[(size_t) days * S + s] );
-	}
-	fprintf( f, "\n  }\n}\n" );
-	if ( sere_atomic_commit( &json ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot write %s\n", path );
-		rc = 1;
-		goto done;
-	}
-	printf( "leaf     %d vertices, %d triangles after %lld optimization iterations, %d deformation levels (%.2f s)\n",
-			leaf.vertex_count, leaf.triangle_count, o.optimize, leaf.level_count, leaf_seconds );
-	printf( "tree     %d branch segments, %d leaves (L-system, %lld iterations)\n", tree.segment_count, tree.leaf_count,
-			o.iterations );
-	printf( "chain    %d states, %lld leaves, %d days, %d threads: %.3f ms per day (%.3g leaves/s)\n", S, o.leaves,
-			days, threads, 1e3 * step_seconds / days, (double) N * days / step_seconds );
-	printf( "day %-4d", days );
-	for ( int32_t s = 0; s < S; ++s )
-	{
-		printf( " %s %.3f", chain.name[s], sampled[(size_t) days * S + s] );
-	}
-	printf( "\n         largest |sampled - exact| share over all days and states: %.2g\n", worst );
-	printf( "wrote    %s/{distribution.csv,summary.json,tree_*.ply%s}\n", o.out,
-			o.pictures ? ",season_*.png,seasons.png,leaf_levels.png,distribution.png" : "" );
-
-done:
-	free( states ), free( exact ), free( sampled ), free( P ), free( counts ), free( snapshots ), free( day_table );
-	sere_tree_destroy( &tree );
-	sere_season_leaf_free( &leaf );
+	free( r->states ), free( r->exact ), free( r->sampled ), free( r->P ), free( r->counts ), free( r->snapshots );
+	free( r->day_table );
+	sere_tree_destroy( &r->tree );
+	sere_season_leaf_free( &r->leaf );
 	return rc;
 }

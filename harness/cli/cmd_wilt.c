@@ -260,7 +260,7 @@ typedef struct wilt_run
 	sere_skeleton skeleton;
 	sere_plant* plant;
 	sere_bvh* check_bvh;
-	depth_item* order;
+	wilt_picture picture;
 	char** names;
 	double* times;
 	int32_t written;
@@ -278,7 +278,7 @@ static void wilt_run_free( wilt_run* r )
 	sere_skeleton_destroy( &r->skeleton );
 	sere_plant_destroy( r->plant );
 	sere_bvh_destroy( r->check_bvh );
-	free( r->order );
+	wilt_picture_free( &r->picture );
 	for ( int32_t k = 0; k < r->written; ++k )
 	{
 		free( r->names[k] );
@@ -288,8 +288,8 @@ static void wilt_run_free( wilt_run* r )
 }
 
 /* Writes one frame's files; 0 on success, else -1 with a message printed. */
-static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, double time, const camera* cam,
-						const float* stem, float* droop, float* leaf_t )
+static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, double time, const float* stem, float* droop,
+						float* leaf_t )
 {
 	const sere_plant* p = r->plant;
 	char path[4096];
@@ -338,10 +338,11 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 	if ( o->png )
 	{
 		snprintf( path, sizeof( path ), "%s/frame_%04lld.png", o->out, (long long) frame );
-		if ( wilt_render_png( path, cam, p, stem, r->order,
-							  o->frames > 1 ? (double) frame / ( o->frames - 1 ) : 1.0 ) != 0 )
+		char err[4400];
+		if ( wilt_picture_png( path, &r->picture, p, stem, o->frames > 1 ? (double) frame / ( o->frames - 1 ) : 1.0,
+							   err, sizeof( err ) ) != 0 )
 		{
-			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
+			fprintf( stderr, "sere wilt: %s\n", err );
 			return -1;
 		}
 	}
@@ -501,19 +502,24 @@ static int run_frames( const wilt_options* o, wilt_run* r, const float stem[5], 
 	int64_t pictures = ( o->frames - 1 ) / o->every + 1 + ( ( o->frames - 1 ) % o->every != 0 );
 	float* droop = calloc( (size_t) plant->vertex_count, sizeof( float ) );
 	float* leaf_t = calloc( (size_t) plant->vertex_count, sizeof( float ) );
-	r->order = malloc( (size_t) plant->triangle_count * sizeof( depth_item ) );
 	r->names = calloc( (size_t) pictures, sizeof( char* ) );
 	r->times = calloc( (size_t) pictures, sizeof( double ) );
-	if ( droop == NULL || leaf_t == NULL || r->order == NULL || r->names == NULL || r->times == NULL )
+	if ( droop == NULL || leaf_t == NULL || r->names == NULL || r->times == NULL )
 	{
 		fprintf( stderr, "sere wilt: out of memory\n" );
 		free( droop );
 		free( leaf_t );
 		return 1;
 	}
-	camera cam;
-	wilt_camera_fit( &cam, o->view[0] * PI / 180.0, o->view[1] * PI / 180.0, (int) o->size[0], (int) o->size[1],
-					 plant );
+	char err[256];
+	if ( o->png && wilt_picture_fit( &r->picture, o->view[0], o->view[1], (int) o->size[0], (int) o->size[1], plant,
+									 err, sizeof( err ) ) != 0 )
+	{
+		fprintf( stderr, "%s\n", err );
+		free( droop );
+		free( leaf_t );
+		return 1;
+	}
 	sere_progress progress;
 	sere_progress_begin( &progress, "wilt", o->frames );
 	int failed = 0;
@@ -539,7 +545,7 @@ static int run_frames( const wilt_options* o, wilt_run* r, const float stem[5], 
 		if ( o->out != NULL && ( frame % o->every == 0 || frame == o->frames - 1 ) )
 		{
 			double t1 = sere_now();
-			failed = write_frame( o, r, frame, time, &cam, stem, droop, leaf_t ) != 0;
+			failed = write_frame( o, r, frame, time, stem, droop, leaf_t ) != 0;
 			s->output += sere_now() - t1;
 		}
 		sere_progress_update( &progress, frame + 1 );

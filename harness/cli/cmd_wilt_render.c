@@ -1,202 +1,100 @@
-/* sere wilt — pictures: a shaded orthographic view of the plant drawn back to front. */
+/* sere wilt — pictures through harness/render: the leaves as one mesh colored by each leaf's
+ * wilting, the stem and petioles as segments, and a progress bar; no camera or painter here. */
 #include "cli/cmd_wilt_shared.h"
 #include "common/io.h"
 
-#include <cairo.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
-/* ------------------------------------------------------------------------------------------- */
-/* Pictures: a shaded orthographic view drawn back to front. */
+/* Pixels over the plant kept for the progress bar. */
+#define BAR_ROOM 30
 
-static double dot3( const double* a, const double* b )
+/* A leaf's colour for its wilting parameter t (0 fresh, 1 fully wilted; the leaves start from
+ * the lowest to the highest, Lu Sec. 7): green turning yellow-brown. */
+static void leaf_color( double t, float rgb[3] )
 {
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+	double w = 0.85 * t;
+	rgb[0] = (float) ( 0.20 + 0.42 * w );
+	rgb[1] = (float) ( 0.52 - 0.04 * w );
+	rgb[2] = (float) ( 0.16 + 0.02 * w );
 }
 
-/* Fits the view to the rest plant and to its mirror image below each leaf's base, the room that
- * drooping leaves reach. */
-void wilt_camera_fit( camera* c, double azimuth, double elevation, int width, int height, const sere_plant* plant )
+int wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int width, int height,
+					  const sere_plant* plant, char* err, size_t err_size )
 {
-	double ca = cos( azimuth ), sa = sin( azimuth ), ce = cos( elevation ), se = sin( elevation );
-	double toward[3] = { ce * ca, ce * sa, se };
-	double right[3] = { -sa, ca, 0.0 };
-	double up[3] = { -se * ca, -se * sa, ce };
-	memcpy( c->toward, toward, sizeof( toward ) );
-	memcpy( c->right, right, sizeof( right ) );
-	memcpy( c->up, up, sizeof( up ) );
-	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+	int32_t n = plant->vertex_count;
+	pic->width = width;
+	pic->height = height;
+	pic->rgb = malloc( 3 * (size_t) n * sizeof( float ) );
+	float* room = malloc( 6 * (size_t) n * sizeof( float ) );
+	if ( pic->rgb == NULL || room == NULL )
+	{
+		free( room );
+		return sere_fail( err, err_size, "sere wilt: out of memory for the pictures" );
+	}
+	/* Each leaf vertex at rest and mirrored below its leaf's base, a little deeper than the
+	 * mirror image: the lowest a drooping leaf can reach. */
+	float* x = room;
+	float* y = room + 2 * n;
+	float* z = room + 4 * n;
 	for ( int32_t k = 0; k < plant->leaf_count; ++k )
 	{
 		double root = plant->joints.z[plant->joint_first[k]];
 		for ( int32_t i = plant->vertex_first[k]; i < plant->vertex_first[k + 1]; ++i )
 		{
-			for ( int mirror = 0; mirror < 2; ++mirror )
-			{
-				double z = mirror ? 2.0 * root - plant->rz[i] - 0.2 * fabs( plant->rz[i] - root ) : plant->rz[i];
-				double p[3] = { plant->rx[i], plant->ry[i], z };
-				double u = dot3( p, right ), v = dot3( p, up );
-				umin = fmin( umin, u );
-				umax = fmax( umax, u );
-				vmin = fmin( vmin, v );
-				vmax = fmax( vmax, v );
-			}
+			x[2 * i] = x[2 * i + 1] = plant->rx[i];
+			y[2 * i] = y[2 * i + 1] = plant->ry[i];
+			z[2 * i] = plant->rz[i];
+			z[2 * i + 1] = (float) ( 2.0 * root - plant->rz[i] - 0.2 * fabs( plant->rz[i] - root ) );
 		}
 	}
-	double span = fmax( ( umax - umin ) / width, ( vmax - vmin ) / ( height - 40 ) );
-	c->scale = 1.0 / ( 1.1 * fmax( span, 1e-9 ) );
-	c->u0 = 0.5 * ( umin + umax ) - 0.5 * width / c->scale;
-	c->v0 = 0.5 * ( vmin + vmax ) + 0.5 * ( height - 30 ) / c->scale;
-	c->width = width;
-	c->height = height;
+	/* render's azimuth 0 looks along +y from the -y side; wilt's 0 looks from +x. */
+	pic->view = ( sere_render_view ){ .azimuth = azimuth + 90.0, .elevation = elevation, .margin = 0.05 * width };
+	sere_render_mesh points = { .x = x, .y = y, .z = z, .vertex_count = 2 * plant->vertex_first[plant->leaf_count] };
+	int result = sere_render_fit_view( &points, width, height - BAR_ROOM, &pic->view, err, err_size );
+	free( room );
+	return result;
 }
 
-static void camera_project( const camera* c, const double p[3], double* sx, double* sy )
+void wilt_picture_free( wilt_picture* pic )
 {
-	*sx = ( dot3( p, c->right ) - c->u0 ) * c->scale;
-	*sy = 30.0 + ( c->v0 - dot3( p, c->up ) ) * c->scale;
+	free( pic->rgb );
+	pic->rgb = NULL;
 }
 
-static int depth_order( const void* a, const void* b )
+/* The stem from the lowest leaf base to the top, then the petioles from the stem to each leaf
+ * base, under the leaves. */
+static int draw_stem( cairo_t* cr, const wilt_picture* pic, const sere_plant* plant, const float* stem_top )
 {
-	const depth_item* p = a;
-	const depth_item* q = b;
-	if ( p->depth != q->depth )
+	double h = pic->height - BAR_ROOM;
+	double stem[6] = { 0.0, 0.0, stem_top[3], 0.0, 0.0, stem_top[2] };
+	sere_render_segments segments = {
+		stem, 1, { 0.35f, 0.42f, 0.18f }, fmax( 2.0, 0.012 * pic->view.scale * ( stem_top[2] - stem_top[3] + 1.0 ) )
+	};
+	sere_render_segments_draw( cr, 0.0, BAR_ROOM, pic->width, h, &pic->view, &segments );
+	double* petioles = malloc( 6 * (size_t) plant->leaf_count * sizeof( double ) );
+	if ( petioles == NULL )
 	{
-		return p->depth < q->depth ? -1 : 1;
+		return -1;
 	}
-	return ( p->triangle > q->triangle ) - ( p->triangle < q->triangle );
-}
-
-static cairo_status_t write_stream( void* closure, const unsigned char* data, unsigned int length )
-{
-	return fwrite( data, 1, length, (FILE*) closure ) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
-}
-
-/* The plant as it stands: stem and petioles, then leaves back to front, Lambert-shaded on both
- * sides, green turning yellow-brown with each leaf's wilting parameter. A bar at the top left
- * shows how far the run has gone, with one swatch per leaf (bottom leaf first) in its colour; no
- * text, so no font machinery. */
-/* Stem from the lowest leaf base to the top, petioles from the stem to each leaf base. */
-static void draw_stem( cairo_t* cr, const camera* c, const sere_plant* plant, const float* stem_top )
-{
-	cairo_set_source_rgb( cr, 0.35, 0.42, 0.18 );
-	cairo_set_line_cap( cr, CAIRO_LINE_CAP_ROUND );
-	double bottom[3] = { 0.0, 0.0, stem_top[3] }, top[3] = { 0.0, 0.0, stem_top[2] };
-	double sx, sy;
-	cairo_set_line_width( cr, fmax( 2.0, 0.012 * c->scale * ( stem_top[2] - stem_top[3] + 1.0 ) ) );
-	camera_project( c, bottom, &sx, &sy );
-	cairo_move_to( cr, sx, sy );
-	camera_project( c, top, &sx, &sy );
-	cairo_line_to( cr, sx, sy );
-	cairo_stroke( cr );
-	cairo_set_line_width( cr, 2.0 );
 	for ( int32_t k = 0; k < plant->leaf_count; ++k )
 	{
 		int32_t root = plant->joint_first[k];
-		double base[3] = { plant->joints.x[root], plant->joints.y[root], plant->joints.z[root] };
-		double node[3] = { 0.0, 0.0, base[2] - 0.3 * stem_top[4] };
-		camera_project( c, node, &sx, &sy );
-		cairo_move_to( cr, sx, sy );
-		camera_project( c, base, &sx, &sy );
-		cairo_line_to( cr, sx, sy );
-		cairo_stroke( cr );
+		double* p = petioles + 6 * k;
+		p[0] = p[1] = 0.0;
+		p[2] = plant->joints.z[root] - 0.3 * stem_top[4];
+		p[3] = plant->joints.x[root], p[4] = plant->joints.y[root], p[5] = plant->joints.z[root];
 	}
+	segments.xyz = petioles;
+	segments.count = plant->leaf_count;
+	segments.width = 2.0;
+	sere_render_segments_draw( cr, 0.0, BAR_ROOM, pic->width, h, &pic->view, &segments );
+	free( petioles );
+	return 0;
 }
 
-/* The triangles far to near (painter's order) by the depth of their corners' sum. */
-static void sort_by_depth( const camera* c, const sere_plant* plant, depth_item* order )
-{
-	for ( int32_t t = 0; t < plant->triangle_count; ++t )
-	{
-		const int32_t* v = plant->tri + 3 * t;
-		double d = 0.0;
-		for ( int k = 0; k < 3; ++k )
-		{
-			double p[3] = { plant->x[v[k]], plant->y[v[k]], plant->z[v[k]] };
-			d += dot3( p, c->toward );
-		}
-		order[t].depth = (float) d;
-		order[t].triangle = t;
-	}
-	qsort( order, (size_t) plant->triangle_count, sizeof( depth_item ), depth_order );
-}
-
-/* One triangle filled in its leaf's colour (greener to browner with the leaf's wilting), shaded
- * two-sided by the light direction. */
-static void draw_triangle( cairo_t* cr, const camera* c, const sere_plant* plant, int32_t t, int32_t leaf,
-						   const double light[3] )
-{
-	const int32_t* v = plant->tri + 3 * t;
-	double p[3][3];
-	for ( int k = 0; k < 3; ++k )
-	{
-		p[k][0] = plant->x[v[k]];
-		p[k][1] = plant->y[v[k]];
-		p[k][2] = plant->z[v[k]];
-	}
-	double e1[3] = { p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2] };
-	double e2[3] = { p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2] };
-	double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
-	double nl = sqrt( dot3( n, n ) );
-	double shade = nl > 0.0 ? 0.3 + 0.7 * fabs( dot3( n, light ) ) / nl : 0.3;
-	double w = 0.85 * plant->leaf_t[leaf];
-	double rgb[3] = { ( 0.20 + 0.42 * w ) * shade, ( 0.52 - 0.04 * w ) * shade, ( 0.16 + 0.02 * w ) * shade };
-	cairo_set_source_rgb( cr, rgb[0], rgb[1], rgb[2] );
-	for ( int k = 0; k < 3; ++k )
-	{
-		double sx, sy;
-		camera_project( c, p[k], &sx, &sy );
-		if ( k == 0 )
-		{
-			cairo_move_to( cr, sx, sy );
-		}
-		else
-		{
-			cairo_line_to( cr, sx, sy );
-		}
-	}
-	cairo_close_path( cr );
-	/* The thin stroke in the fill colour hides the antialiasing seams between triangles. */
-	cairo_fill_preserve( cr );
-	cairo_stroke( cr );
-}
-
-/* The leaves, far to near, lit from above the camera and a little to its left. */
-static void draw_leaves( cairo_t* cr, const camera* c, const sere_plant* plant, depth_item* order )
-{
-	double light[3];
-	for ( int a = 0; a < 3; ++a )
-	{
-		light[a] = c->toward[a] + 0.8 * c->up[a] - 0.3 * c->right[a];
-	}
-	double ll = sqrt( dot3( light, light ) );
-	for ( int a = 0; a < 3; ++a )
-	{
-		light[a] /= ll;
-	}
-	sort_by_depth( c, plant, order );
-	cairo_set_line_width( cr, 0.6 );
-	cairo_set_line_join( cr, CAIRO_LINE_JOIN_ROUND );
-	int32_t leaf = 0;
-	for ( int32_t o = 0; o < plant->triangle_count; ++o )
-	{
-		int32_t t = order[o].triangle;
-		while ( leaf > 0 && t < plant->triangle_first[leaf] )
-		{
-			--leaf;
-		}
-		while ( t >= plant->triangle_first[leaf + 1] )
-		{
-			++leaf;
-		}
-		draw_triangle( cr, c, plant, t, leaf, light );
-	}
-}
-
-/* The progress bar and one swatch per leaf in its current colour. */
+/* The progress bar and one swatch per leaf (bottom leaf first) in its current colour; no text,
+ * so no font machinery. */
 static void draw_progress( cairo_t* cr, const sere_plant* plant, double progress )
 {
 	cairo_set_source_rgb( cr, 0.75, 0.78, 0.8 );
@@ -208,44 +106,62 @@ static void draw_progress( cairo_t* cr, const sere_plant* plant, double progress
 	double swatch = fmin( 10.0, 160.0 / plant->leaf_count );
 	for ( int32_t k = 0; k < plant->leaf_count; ++k )
 	{
-		double w = 0.85 * plant->leaf_t[k];
-		cairo_set_source_rgb( cr, 0.20 + 0.42 * w, 0.52 - 0.04 * w, 0.16 + 0.02 * w );
+		float rgb[3];
+		leaf_color( plant->leaf_t[k], rgb );
+		cairo_set_source_rgb( cr, rgb[0], rgb[1], rgb[2] );
 		cairo_rectangle( cr, 12.0 + k * swatch, 20.0, 0.8 * swatch, 6.0 );
 		cairo_fill( cr );
 	}
 }
 
-int wilt_render_png( const char* path, const camera* c, const sere_plant* plant, const float* stem_top,
-					 depth_item* order, double progress )
+int wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* plant, const float* stem_top,
+					  double progress, char* err, size_t err_size )
 {
-	cairo_surface_t* surface = cairo_image_surface_create( CAIRO_FORMAT_RGB24, c->width, c->height );
-	cairo_t* cr = cairo_create( surface );
-	cairo_pattern_t* sky = cairo_pattern_create_linear( 0, 0, 0, c->height );
+	for ( int32_t k = 0; k < plant->leaf_count; ++k )
+	{
+		float rgb[3];
+		leaf_color( plant->leaf_t[k], rgb );
+		for ( int32_t i = plant->vertex_first[k]; i < plant->vertex_first[k + 1]; ++i )
+		{
+			pic->rgb[3 * i] = rgb[0], pic->rgb[3 * i + 1] = rgb[1], pic->rgb[3 * i + 2] = rgb[2];
+		}
+	}
+	sere_render_canvas canvas;
+	if ( sere_render_canvas_create( &canvas, pic->width, pic->height, err, err_size ) != 0 )
+	{
+		return -1;
+	}
+	cairo_t* cr = canvas.cr;
+	cairo_pattern_t* sky = cairo_pattern_create_linear( 0, 0, 0, pic->height );
 	cairo_pattern_add_color_stop_rgb( sky, 0.0, 0.86, 0.91, 0.97 );
 	cairo_pattern_add_color_stop_rgb( sky, 1.0, 0.99, 0.99, 0.97 );
 	cairo_set_source( cr, sky );
 	cairo_paint( cr );
 	cairo_pattern_destroy( sky );
-	draw_stem( cr, c, plant, stem_top );
-	draw_leaves( cr, c, plant, order );
-	draw_progress( cr, plant, progress );
-	cairo_surface_flush( surface );
-
-	sere_atomic_file file;
-	FILE* out = sere_atomic_open( &file, path );
-	int result = -1;
-	if ( out != NULL )
+	sere_render_mesh leaves = { .x = plant->x,
+								.y = plant->y,
+								.z = plant->z,
+								.vertex_count = plant->vertex_count,
+								.triangles = plant->tri,
+								.triangle_count = plant->triangle_count,
+								.rgb = pic->rgb };
+	/* A leaf is a thin sheet: both faces lit alike, a third of the light ambient. */
+	sere_render_style style = { .ambient = 0.3 };
+	int result = draw_stem( cr, pic, plant, stem_top );
+	if ( result != 0 )
 	{
-		if ( cairo_surface_write_to_png_stream( surface, write_stream, out ) == CAIRO_STATUS_SUCCESS )
-		{
-			result = sere_atomic_commit( &file );
-		}
-		else
-		{
-			sere_atomic_abort( &file );
-		}
+		sere_fail( err, err_size, "sere wilt: out of memory for the picture" );
 	}
-	cairo_destroy( cr );
-	cairo_surface_destroy( surface );
+	else
+	{
+		result = sere_render_mesh_draw( cr, 0.0, BAR_ROOM, pic->width, pic->height - BAR_ROOM, &leaves, &pic->view,
+										&style, err, err_size );
+	}
+	if ( result == 0 )
+	{
+		draw_progress( cr, plant, progress );
+		result = sere_render_canvas_write_png( &canvas, path, err, err_size );
+	}
+	sere_render_canvas_destroy( &canvas );
 	return result;
 }

@@ -1,7 +1,8 @@
-/* sere wilt — private to the cmd_wilt*.c files: the skeleton file reader and the picture
- * renderer that `sere wilt` uses (seed 003: Lu, Zhao, Guo 2009). */
+/* sere wilt — private to the cmd_wilt*.c files: the skeleton file reader and the pictures that
+ * `sere wilt` draws with harness/render (seed 003: Lu, Zhao, Guo 2009). */
 #pragma once
 
+#include "render/render.h"
 #include "wilt/skeleton.h"
 
 #include <stddef.h>
@@ -31,18 +32,14 @@ typedef struct skeleton_file
 	double vein_bend[MAX_VEINS];
 } skeleton_file;
 
-typedef struct camera
+/* What every picture of a run shares: the view fitted once to the rest plant, so the later
+ * frames keep frame 0's scale and the drooping shows, and the per-vertex colors' scratch. */
+typedef struct wilt_picture
 {
-	double right[3], up[3], toward[3]; /* toward: from the scene to the eye */
-	double scale, u0, v0;			   /* screen = ((p·right − u0) · scale, (v0 − p·up) · scale) */
+	sere_render_view view;
 	int width, height;
-} camera;
-
-typedef struct depth_item
-{
-	float depth;
-	int32_t triangle;
-} depth_item;
+	float* rgb; /* 3 per plant vertex */
+} wilt_picture;
 
 /* Frees the point lists of a loaded skeleton file. */
 void wilt_skeleton_free( skeleton_file* s );
@@ -54,11 +51,14 @@ int wilt_skeleton_load( const char* name, skeleton_file* s, char* err, size_t er
 /* "FILE:LINE: " for a problem the kernels found, located by curve or vein and point. */
 void wilt_skeleton_where( const skeleton_file* s, const sere_skeleton_check* check, int veins, char* out, size_t size );
 
-/* Fits the view to the rest plant and to its mirror image below each leaf's base, the room that
- * drooping leaves reach. */
-void wilt_camera_fit( camera* c, double azimuth, double elevation, int width, int height, const sere_plant* plant );
+/* Fits the view (azimuth and elevation in degrees: the eye's direction from +x toward +y, and
+ * above the ground) to the rest plant and to its mirror image below each leaf's base, the room
+ * that drooping leaves reach. 0, or -1 with one line in err. */
+int wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int width, int height,
+					  const sere_plant* plant, char* err, size_t err_size );
+void wilt_picture_free( wilt_picture* pic );
 
-/* The plant as a PNG at path, written atomically: sky, stem and petioles, the leaves far to near
- * and a progress bar; order is scratch of triangle_count items. 0 on success. */
-int wilt_render_png( const char* path, const camera* c, const sere_plant* plant, const float* stem_top,
-					 depth_item* order, double progress );
+/* The plant as a PNG at path, written atomically through harness/render: sky, stem and
+ * petioles, the leaves (far to near) and a progress bar. 0, or -1 with one line in err. */
+int wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* plant, const float* stem_top,
+					  double progress, char* err, size_t err_size );

@@ -2,6 +2,7 @@
  * point kept for messages. */
 #include "cli/cmd_wilt_shared.h"
 #include "common/params.h"
+#include "core/array.h"
 
 #include <errno.h>
 #include <math.h>
@@ -32,14 +33,10 @@ static int point_push( point_list* p, double x, double y, int32_t line )
 {
 	if ( p->count == p->capacity )
 	{
-		int32_t capacity = p->capacity > 0 ? 2 * p->capacity : 16;
-		double* xy = realloc( p->xy, 2 * (size_t) capacity * sizeof( double ) );
-		if ( xy == NULL )
-		{
-			return -1;
-		}
-		p->xy = xy;
-		int32_t* lines = realloc( p->line, (size_t) capacity * sizeof( int32_t ) );
+		int32_t capacity = sere_array_capacity( p->capacity, (int64_t) p->count + 1, 16 );
+		double* xy = capacity > 0 ? sere_array_resize( p->xy, capacity, 2 * sizeof( double ) ) : NULL;
+		p->xy = xy != NULL ? xy : p->xy;
+		int32_t* lines = xy != NULL ? sere_array_resize( p->line, capacity, sizeof( int32_t ) ) : NULL;
 		if ( lines == NULL )
 		{
 			return -1;

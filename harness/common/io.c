@@ -1,6 +1,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "common/io.h"
 
+#include "core/array.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -332,15 +334,10 @@ int sere_pvd_append( sere_pvd_series* series, const char* path, const char* file
 {
 	if ( series->count == series->capacity )
 	{
-		int32_t capacity = series->capacity > 0 ? 2 * series->capacity : 64;
-		char** files = realloc( series->files, sizeof( char* ) * (size_t) capacity );
-		if ( files == NULL )
-		{
-			errno = ENOMEM;
-			return -1;
-		}
-		series->files = files;
-		double* times = realloc( series->times, sizeof( double ) * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( series->capacity, (int64_t) series->count + 1, 64 );
+		char** files = capacity > 0 ? sere_array_resize( series->files, capacity, sizeof( char* ) ) : NULL;
+		series->files = files != NULL ? files : series->files;
+		double* times = files != NULL ? sere_array_resize( series->times, capacity, sizeof( double ) ) : NULL;
 		if ( times == NULL )
 		{
 			errno = ENOMEM;

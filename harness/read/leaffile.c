@@ -1,6 +1,7 @@
 #include "read/leaffile.h"
 
 #include "common/io.h"
+#include "core/array.h"
 
 #include <errno.h>
 #include <math.h>
@@ -283,18 +284,14 @@ static int reserve( void** array, size_t element, int32_t* capacity, int64_t nee
 	{
 		return 0;
 	}
-	int64_t grown = *capacity > 0 ? *capacity : 16;
-	while ( grown < need )
-	{
-		grown *= 2;
-	}
-	void* bigger = realloc( *array, element * (size_t) grown );
+	int32_t grown = sere_array_capacity( *capacity, need, 16 );
+	void* bigger = grown > 0 ? sere_array_resize( *array, grown, element ) : NULL;
 	if ( bigger == NULL )
 	{
 		return -1;
 	}
 	*array = bigger;
-	*capacity = (int32_t) ( grown < INT32_MAX ? grown : INT32_MAX );
+	*capacity = grown;
 	return 0;
 }
 

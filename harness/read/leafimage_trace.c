@@ -1,6 +1,8 @@
 /* sere harness — Tracing: the silhouette's outline by marching squares. */
 #include "read/leafimage_shared.h"
 
+#include "core/array.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -24,8 +26,8 @@ static int push( points* p, double x, double y )
 {
 	if ( p->count == p->capacity )
 	{
-		int32_t capacity = p->capacity > 0 ? 2 * p->capacity : 1024;
-		double* xy = realloc( p->xy, sizeof( double ) * 2 * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( p->capacity, (int64_t) p->count + 1, 1024 );
+		double* xy = capacity > 0 ? sere_array_resize( p->xy, capacity, 2 * sizeof( double ) ) : NULL;
 		if ( xy == NULL )
 		{
 			return -1;

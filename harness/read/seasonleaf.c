@@ -3,6 +3,7 @@
 #include "read/seasonleaf.h"
 
 #include "common/params.h"
+#include "core/array.h"
 #include "mesh/bspline.h"
 #include "mesh/meshopt.h"
 #include "mesh/triangulate.h"
@@ -140,8 +141,8 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 		{
 			if ( n == capacity )
 			{
-				capacity = capacity > 0 ? 2 * capacity : 64;
-				double* grown = realloc( points, sizeof( double ) * 2 * (size_t) capacity );
+				capacity = sere_array_capacity( capacity, (int64_t) n + 1, 64 );
+				double* grown = capacity > 0 ? sere_array_resize( points, capacity, 2 * sizeof( double ) ) : NULL;
 				if ( grown == NULL )
 				{
 					status = failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", path );
@@ -382,18 +383,8 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, char
 			   : failf( err, err_size, status, "leaf: the mass-spring model failed (%s)", sere_status_text( status ) );
 }
 
-sere_status sere_season_leaf_build( const sere_season_leaf_options* options, sere_season_leaf* leaf, char* err,
-									size_t err_size )
+static sere_status check_options( const sere_season_leaf_options* options, char* err, size_t err_size )
 {
-	if ( err != NULL && err_size > 0 )
-	{
-		err[0] = '\0';
-	}
-	if ( options == NULL || leaf == NULL )
-	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "leaf: no options or no leaf to fill" );
-	}
-	memset( leaf, 0, sizeof( *leaf ) );
 	if ( options->outline_samples < 8 || options->outline_samples > 20000 )
 	{
 		return failf( err, err_size, SERE_ERR_ARGUMENT, "outline samples: %d is outside [8, 20000]",
@@ -421,11 +412,172 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	{
 		return failf( err, err_size, SERE_ERR_ARGUMENT, "leaf: no mask map" );
 	}
+	return SERE_OK;
+}
 
+/* Pixels (y down) to leaf units (y up): the petiole (key point 0) at the origin, the leaf 1 long
+ * (the largest distance from the petiole to a key point), counter-clockwise with the petiole
+ * staying first. Frees keys; -1 when out of memory. */
+static int to_leaf_units( double* keys, int32_t key_count, double** kx_out, double** ky_out, double* base_x,
+						  double* base_y, double* scale_out, double* twice_area_out )
+{
+	const double base_px = keys[0], base_py = keys[1];
+	double scale = 0.0, twice_area = 0.0;
+	for ( int32_t i = 0; i < key_count; ++i )
+	{
+		scale = fmax( scale, hypot( keys[2 * i] - base_px, keys[2 * i + 1] - base_py ) );
+	}
+	double* kx = malloc( sizeof( double ) * (size_t) key_count );
+	double* ky = malloc( sizeof( double ) * (size_t) key_count );
+	if ( kx == NULL || ky == NULL )
+	{
+		free( keys ), free( kx ), free( ky );
+		return -1;
+	}
+	for ( int32_t i = 0; i < key_count; ++i )
+	{
+		kx[i] = ( keys[2 * i] - base_px ) / scale;
+		ky[i] = ( base_py - keys[2 * i + 1] ) / scale;
+	}
+	free( keys );
+	for ( int32_t i = 0, j = key_count - 1; i < key_count; j = i++ )
+	{
+		twice_area += kx[j] * ky[i] - kx[i] * ky[j];
+	}
+	/* counter-clockwise, the petiole staying first */
+	for ( int32_t i = 1, j = key_count - 1; twice_area < 0.0 && i < j; ++i, --j )
+	{
+		double t = kx[i];
+		kx[i] = kx[j], kx[j] = t;
+		t = ky[i];
+		ky[i] = ky[j], ky[j] = t;
+	}
+	*kx_out = kx, *ky_out = ky;
+	*base_x = base_px, *base_y = base_py;
+	*scale_out = scale, *twice_area_out = twice_area;
+	return 0;
+}
+
+/* The leaf's arrays from the optimized mesh: triangles, texture coordinates in the image
+ * (frame: the petiole's pixel x, y, pixels per leaf unit, image width, height), rest positions
+ * and masses from the mask's gray under each vertex (Tang Eq. 3). */
+static sere_status fill_leaf( sere_season_leaf* leaf, const sere_meshopt_mesh* m, int32_t levels, const float* gray,
+							  int32_t mask_w, int32_t mask_h, const double frame[6], const char* mask, char* err,
+							  size_t err_size )
+{
+	const double base_px = frame[0], base_py = frame[1], scale = frame[2], width = frame[3], height = frame[4];
+	const int32_t n = m->vertex_count;
+	leaf->vertex_count = n;
+	leaf->triangle_count = m->triangle_count;
+	leaf->level_count = levels;
+	leaf->tri = malloc( sizeof( int32_t ) * 3 * (size_t) m->triangle_count );
+	leaf->u = malloc( sizeof( float ) * (size_t) n );
+	leaf->v = malloc( sizeof( float ) * (size_t) n );
+	leaf->mass = malloc( sizeof( float ) * (size_t) n );
+	leaf->xyz = calloc( 3 * (size_t) n * (size_t) levels, sizeof( float ) );
+	float* vertex_gray = malloc( sizeof( float ) * (size_t) n );
+	if ( leaf->tri == NULL || leaf->u == NULL || leaf->v == NULL || leaf->mass == NULL || leaf->xyz == NULL ||
+		 vertex_gray == NULL )
+	{
+		free( vertex_gray );
+		return failf( err, err_size, SERE_ERR_MEMORY, "leaf: out of memory for %d vertices", n );
+	}
+	memcpy( leaf->tri, m->tri, sizeof( int32_t ) * 3 * (size_t) m->triangle_count );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		double px = base_px + m->x[i] * scale, py = base_py - m->y[i] * scale;
+		leaf->u[i] = (float) ( px / width );
+		leaf->v[i] = (float) ( 1.0 - py / height );
+		vertex_gray[i] = sample_gray( gray, mask_w, mask_h, px, py );
+		leaf->xyz[3 * i] = (float) m->x[i];
+		leaf->xyz[3 * i + 1] = (float) m->y[i];
+	}
+	sere_status status = sere_massspring_mass_from_gray( vertex_gray, n, MASS_MIN, MASS_MAX, leaf->mass );
+	free( vertex_gray );
+	if ( status != SERE_OK )
+	{
+		return failf( err, err_size, status, "%s: the mask gives no masses (%s)", mask, sere_status_text( status ) );
+	}
+	return SERE_OK;
+}
+
+/* The outline as a mesh: the closed B-spline through the key points sampled evenly into sx, sy,
+ * triangulated, and optimized with triangles of the boundary's spacing. */
+static sere_status outline_mesh( const double* kx, const double* ky, int32_t key_count, int32_t samples, double area,
+								 int32_t iterations, const char* source, sere_bspline* spline, double* sx, double* sy,
+								 sere_triangulation* triangulation, sere_meshopt** mo, char* err, size_t err_size )
+{
+	sere_status status = sere_bspline_fit( kx, ky, key_count, spline );
+	if ( status != SERE_OK )
+	{
+		failf( err, err_size, status, "%s: the key points give no B-spline (%s: two consecutive points equal?)", source,
+			   sere_status_text( status ) );
+		return status;
+	}
+	status = sere_bspline_sample( spline, samples, sx, sy, NULL );
+	if ( status == SERE_OK )
+	{
+		/* sample 0 is key point 0, the petiole, up to the rounding of the spline's solve: make it
+		 * exact, so the leaf hangs from the origin */
+		sx[0] = kx[0], sy[0] = ky[0];
+		sere_cdt_input input = { sx, sy, samples, samples, NULL, 0 };
+		status = sere_triangulate( &input, triangulation );
+	}
+	if ( status != SERE_OK || triangulation->merged_count > 0 )
+	{
+		status = status != SERE_OK ? status : SERE_ERR_GEOMETRY;
+		failf( err, err_size, status,
+			   "%s: the B-spline through the key points crosses itself at %d samples; move the key points apart or "
+			   "sample more",
+			   source, samples );
+		return status;
+	}
+	/* edge length of the even outline sampling: the triangles aim at the boundary's spacing */
+	const double h = spline->length / samples;
+	int64_t capacity = 4 * (int64_t) ( area / ( h * h ) ) + 4 * (int64_t) samples + 64;
+	if ( capacity > SERE_MESHOPT_MAX_VERTICES )
+	{
+		status = SERE_ERR_CAPACITY;
+		failf( err, err_size, status, "outline samples: %d samples would make more than %d vertices", samples,
+			   SERE_MESHOPT_MAX_VERTICES );
+		return status;
+	}
+	status = sere_meshopt_create( (int32_t) capacity, mo );
+	if ( status == SERE_OK )
+	{
+		sere_meshopt_params mp = sere_meshopt_params_default( h );
+		mp.iterations = iterations;
+		status = sere_meshopt_run( *mo, sx, sy, samples, samples, triangulation->tri, triangulation->triangle_count,
+								   &mp, NULL );
+	}
+	if ( status != SERE_OK )
+	{
+		failf( err, err_size, status, "%s: mesh optimization failed (%s)", source, sere_status_text( status ) );
+		return status;
+	}
+	return status;
+}
+
+sere_status sere_season_leaf_build( const sere_season_leaf_options* options, sere_season_leaf* leaf, char* err,
+									size_t err_size )
+{
+	if ( err != NULL && err_size > 0 )
+	{
+		err[0] = '\0';
+	}
+	if ( options == NULL || leaf == NULL )
+	{
+		return failf( err, err_size, SERE_ERR_ARGUMENT, "leaf: no options or no leaf to fill" );
+	}
+	memset( leaf, 0, sizeof( *leaf ) );
+	sere_status status = check_options( options, err, err_size );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
 	char keys_buffer[4096], mask_buffer[4096];
 	double* keys = NULL;
 	int32_t key_count = 0, width = 0, height = 0;
-	sere_status status;
 	const char* source;
 	if ( options->keys_path != NULL )
 	{
@@ -450,38 +602,12 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 		return status;
 	}
 
-	/* Pixels (y down) to leaf units (y up): the petiole (key point 0) at the origin, the leaf
-	 * 1 long (the largest distance from the petiole to a key point). */
-	const double base_px = keys[0], base_py = keys[1];
-	double scale = 0.0, twice_area = 0.0;
-	for ( int32_t i = 0; i < key_count; ++i )
+	double base_px, base_py, scale, twice_area;
+	double* kx = NULL;
+	double* ky = NULL;
+	if ( to_leaf_units( keys, key_count, &kx, &ky, &base_px, &base_py, &scale, &twice_area ) != 0 )
 	{
-		scale = fmax( scale, hypot( keys[2 * i] - base_px, keys[2 * i + 1] - base_py ) );
-	}
-	double* kx = malloc( sizeof( double ) * (size_t) key_count );
-	double* ky = malloc( sizeof( double ) * (size_t) key_count );
-	if ( kx == NULL || ky == NULL )
-	{
-		free( keys ), free( kx ), free( ky );
 		return failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", source );
-	}
-	for ( int32_t i = 0; i < key_count; ++i )
-	{
-		kx[i] = ( keys[2 * i] - base_px ) / scale;
-		ky[i] = ( base_py - keys[2 * i + 1] ) / scale;
-	}
-	free( keys );
-	for ( int32_t i = 0, j = key_count - 1; i < key_count; j = i++ )
-	{
-		twice_area += kx[j] * ky[i] - kx[i] * ky[j];
-	}
-	/* counter-clockwise, the petiole staying first */
-	for ( int32_t i = 1, j = key_count - 1; twice_area < 0.0 && i < j; ++i, --j )
-	{
-		double t = kx[i];
-		kx[i] = kx[j], kx[j] = t;
-		t = ky[i];
-		ky[i] = ky[j], ky[j] = t;
 	}
 
 	sere_bspline spline = { 0 };
@@ -491,53 +617,12 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	sere_triangulation triangulation = { 0 };
 	sere_meshopt* mo = NULL;
 	float* gray = NULL;
-	status = sx != NULL && sy != NULL ? sere_bspline_fit( kx, ky, key_count, &spline ) : SERE_ERR_MEMORY;
+	status = sx != NULL && sy != NULL
+				 ? outline_mesh( kx, ky, key_count, samples, 0.5 * fabs( twice_area ), options->meshopt_iterations,
+								 source, &spline, sx, sy, &triangulation, &mo, err, err_size )
+				 : failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", source );
 	if ( status != SERE_OK )
 	{
-		failf( err, err_size, status, "%s: the key points give no B-spline (%s: two consecutive points equal?)", source,
-			   sere_status_text( status ) );
-		goto done;
-	}
-	status = sere_bspline_sample( &spline, samples, sx, sy, NULL );
-	if ( status == SERE_OK )
-	{
-		/* sample 0 is key point 0, the petiole, up to the rounding of the spline's solve: make it
-		 * exact, so the leaf hangs from the origin */
-		sx[0] = kx[0], sy[0] = ky[0];
-		sere_cdt_input input = { sx, sy, samples, samples, NULL, 0 };
-		status = sere_triangulate( &input, &triangulation );
-	}
-	if ( status != SERE_OK || triangulation.merged_count > 0 )
-	{
-		status = status != SERE_OK ? status : SERE_ERR_GEOMETRY;
-		failf( err, err_size, status,
-			   "%s: the B-spline through the key points crosses itself at %d samples; move the key points apart or "
-			   "sample more",
-			   source, samples );
-		goto done;
-	}
-	/* edge length of the even outline sampling: the triangles aim at the boundary's spacing */
-	const double h = spline.length / samples;
-	double area = 0.5 * fabs( twice_area );
-	int64_t capacity = 4 * (int64_t) ( area / ( h * h ) ) + 4 * (int64_t) samples + 64;
-	if ( capacity > SERE_MESHOPT_MAX_VERTICES )
-	{
-		status = SERE_ERR_CAPACITY;
-		failf( err, err_size, status, "outline samples: %d samples would make more than %d vertices", samples,
-			   SERE_MESHOPT_MAX_VERTICES );
-		goto done;
-	}
-	status = sere_meshopt_create( (int32_t) capacity, &mo );
-	if ( status == SERE_OK )
-	{
-		sere_meshopt_params mp = sere_meshopt_params_default( h );
-		mp.iterations = options->meshopt_iterations;
-		status = sere_meshopt_run( mo, sx, sy, samples, samples, triangulation.tri, triangulation.triangle_count, &mp,
-								   NULL );
-	}
-	if ( status != SERE_OK )
-	{
-		failf( err, err_size, status, "%s: mesh optimization failed (%s)", source, sere_status_text( status ) );
 		goto done;
 	}
 	sere_meshopt_mesh mesh = sere_meshopt_result( mo );
@@ -560,38 +645,10 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 		goto done;
 	}
 
-	const int32_t n = mesh.vertex_count, levels = options->levels;
-	leaf->vertex_count = n;
-	leaf->triangle_count = mesh.triangle_count;
-	leaf->level_count = levels;
-	leaf->tri = malloc( sizeof( int32_t ) * 3 * (size_t) mesh.triangle_count );
-	leaf->u = malloc( sizeof( float ) * (size_t) n );
-	leaf->v = malloc( sizeof( float ) * (size_t) n );
-	leaf->mass = malloc( sizeof( float ) * (size_t) n );
-	leaf->xyz = calloc( 3 * (size_t) n * (size_t) levels, sizeof( float ) );
-	float* vertex_gray = malloc( sizeof( float ) * (size_t) n );
-	if ( leaf->tri == NULL || leaf->u == NULL || leaf->v == NULL || leaf->mass == NULL || leaf->xyz == NULL ||
-		 vertex_gray == NULL )
-	{
-		free( vertex_gray );
-		status = failf( err, err_size, SERE_ERR_MEMORY, "leaf: out of memory for %d vertices", n );
-		goto done;
-	}
-	memcpy( leaf->tri, mesh.tri, sizeof( int32_t ) * 3 * (size_t) mesh.triangle_count );
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		double px = base_px + mesh.x[i] * scale, py = base_py - mesh.y[i] * scale;
-		leaf->u[i] = (float) ( px / width );
-		leaf->v[i] = (float) ( 1.0 - py / height );
-		vertex_gray[i] = sample_gray( gray, mask_w, mask_h, px, py );
-		leaf->xyz[3 * i] = (float) mesh.x[i];
-		leaf->xyz[3 * i + 1] = (float) mesh.y[i];
-	}
-	status = sere_massspring_mass_from_gray( vertex_gray, n, MASS_MIN, MASS_MAX, leaf->mass );
-	free( vertex_gray );
+	const double frame[6] = { base_px, base_py, scale, width, height, 0.0 };
+	status = fill_leaf( leaf, &mesh, options->levels, gray, mask_w, mask_h, frame, mask, err, err_size );
 	if ( status != SERE_OK )
 	{
-		failf( err, err_size, status, "%s: the mask gives no masses (%s)", mask, sere_status_text( status ) );
 		goto done;
 	}
 	status = deform( leaf, options->steps_per_level, err, err_size );

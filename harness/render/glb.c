@@ -21,6 +21,41 @@ static void put_u32( FILE* f, uint32_t value )
 	fwrite( &value, sizeof( value ), 1, f );
 }
 
+/* Unit vertex normals: the area-weighted sum of the triangles' normals around each vertex. */
+static void vertex_normals( const sere_glb_mesh* m, float* normal )
+{
+	int32_t n = m->vertex_count, t = m->triangle_count;
+	for ( int32_t f = 0; f < t; ++f )
+	{
+		const int32_t* v = m->tri + 3 * f;
+		double ax = m->x[v[1]] - m->x[v[0]], ay = m->y[v[1]] - m->y[v[0]], az = m->z[v[1]] - m->z[v[0]];
+		double bx = m->x[v[2]] - m->x[v[0]], by = m->y[v[2]] - m->y[v[0]], bz = m->z[v[2]] - m->z[v[0]];
+		/* the cross product's length is twice the area: an area-weighted sum */
+		double c[3] = { ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx };
+		for ( int corner = 0; corner < 3; ++corner )
+		{
+			for ( int k = 0; k < 3; ++k )
+			{
+				normal[3 * v[corner] + k] += (float) c[k];
+			}
+		}
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		float* a = normal + 3 * i;
+		double length = sqrt( (double) a[0] * a[0] + (double) a[1] * a[1] + (double) a[2] * a[2] );
+		if ( length > 0.0 && isfinite( length ) )
+		{
+			a[0] = (float) ( a[0] / length ), a[1] = (float) ( a[1] / length ), a[2] = (float) ( a[2] / length );
+		}
+		else
+		{
+			/* glTF normals must be unit: a vertex whose triangles cancel faces up */
+			a[0] = 0.0f, a[1] = 0.0f, a[2] = 1.0f;
+		}
+	}
+}
+
 int sere_write_glb( const char* path, const sere_glb_mesh* m, char* err, size_t err_size )
 {
 	int32_t n = m->vertex_count, t = m->triangle_count;
@@ -60,35 +95,7 @@ int sere_write_glb( const char* path, const sere_glb_mesh* m, char* err, size_t 
 			color[3 * i + k] = linear_of( m->rgb[3 * i + k] );
 		}
 	}
-	for ( int32_t f = 0; f < t; ++f )
-	{
-		const int32_t* v = m->tri + 3 * f;
-		double ax = m->x[v[1]] - m->x[v[0]], ay = m->y[v[1]] - m->y[v[0]], az = m->z[v[1]] - m->z[v[0]];
-		double bx = m->x[v[2]] - m->x[v[0]], by = m->y[v[2]] - m->y[v[0]], bz = m->z[v[2]] - m->z[v[0]];
-		/* the cross product's length is twice the area: an area-weighted sum */
-		double c[3] = { ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx };
-		for ( int corner = 0; corner < 3; ++corner )
-		{
-			for ( int k = 0; k < 3; ++k )
-			{
-				normal[3 * v[corner] + k] += (float) c[k];
-			}
-		}
-	}
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		float* a = normal + 3 * i;
-		double length = sqrt( (double) a[0] * a[0] + (double) a[1] * a[1] + (double) a[2] * a[2] );
-		if ( length > 0.0 && isfinite( length ) )
-		{
-			a[0] = (float) ( a[0] / length ), a[1] = (float) ( a[1] / length ), a[2] = (float) ( a[2] / length );
-		}
-		else
-		{
-			/* glTF normals must be unit: a vertex whose triangles cancel faces up */
-			a[0] = 0.0f, a[1] = 0.0f, a[2] = 1.0f;
-		}
-	}
+	vertex_normals( m, normal );
 	char json[4096];
 	int length =
 		snprintf( json, sizeof( json ),

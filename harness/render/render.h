@@ -127,6 +127,20 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 void sere_render_project( const sere_render_view* view, double x0, double y0, double w, double h, double x, double y,
 						  double z, double* sx, double* sy );
 
+/* Segments between points of their own (x, y, z of both ends, 6 doubles a segment), not mesh
+ * vertices: a plant's stem and petioles. Drawn with the view's projection (fitted) into the
+ * region (x0, y0, w, h) over what is already there, without occlusion, with round caps. */
+typedef struct sere_render_segments
+{
+	const double* xyz;
+	int32_t count;
+	float rgb[3];
+	double width; /* pixels */
+} sere_render_segments;
+
+void sere_render_segments_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_view* view,
+								const sere_render_segments* segments );
+
 /* The paper's blend (Sec. 6): fresh green at relative water content 1, dry brown at 0,
  * linear between, clamped to [0, 1]; NaN counts as dry. */
 void sere_render_dry_color( double relative_water, float rgb[3] );

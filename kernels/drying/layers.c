@@ -1,6 +1,9 @@
 #include "drying/layers.h"
 
+#include "core/array.h"
+
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -101,23 +104,6 @@ static uint32_t spread16( uint32_t v )
 	return v;
 }
 
-typedef struct keyed
-{
-	uint64_t key;
-	int32_t index;
-} keyed;
-
-static int compare_keyed( const void* pa, const void* pb )
-{
-	const keyed* a = pa;
-	const keyed* b = pb;
-	if ( a->key != b->key )
-	{
-		return a->key < b->key ? -1 : 1;
-	}
-	return ( a->index > b->index ) - ( a->index < b->index );
-}
-
 static uint64_t morton_key( double x, double y, double x0, double y0, double scale )
 {
 	uint32_t ix = (uint32_t) fmin( 65535.0, fmax( 0.0, ( x - x0 ) * scale ) );
@@ -157,24 +143,6 @@ static int has_key( const uint64_t* sorted, int32_t count, uint64_t key )
 	return lo < count && sorted[lo] == key;
 }
 
-/* Springs of one kind sorted by (a, b) so each color batch reads nearby particles. */
-typedef struct spring_entry
-{
-	int32_t a, b;
-	uint8_t kind;
-} spring_entry;
-
-static int compare_spring( const void* pa, const void* pb )
-{
-	const spring_entry* a = pa;
-	const spring_entry* b = pb;
-	if ( a->a != b->a )
-	{
-		return a->a < b->a ? -1 : 1;
-	}
-	return ( a->b > b->b ) - ( a->b < b->b );
-}
-
 static sere_status validate_mesh( const sere_plane_mesh* mesh )
 {
 	if ( mesh == NULL || mesh->x == NULL || mesh->y == NULL || mesh->tri == NULL || mesh->point_count < 3 ||
@@ -211,17 +179,12 @@ static sere_status validate_mesh( const sere_plane_mesh* mesh )
 	return SERE_OK;
 }
 
-sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_layer_params* params, sere_model* model )
+/* Triangle particles in Morton order of their plane position; triangles in Morton order of their
+ * centroid, so their Voronoi particles follow that order; tri_new holds the renumbered corners. */
+static void morton_order( const sere_plane_mesh* mesh, sere_sort_item* order, int32_t* new_of_old, int32_t* tri_new )
 {
-	memset( model, 0, sizeof( *model ) );
-	sere_status status = validate_mesh( mesh );
-	if ( status != SERE_OK || params == NULL )
-	{
-		return status != SERE_OK ? status : SERE_ERR_ARGUMENT;
-	}
 	const int32_t n = mesh->point_count;
 	const int32_t f = mesh->triangle_count;
-
 	double x0 = mesh->x[0], x1 = mesh->x[0], y0 = mesh->y[0], y1 = mesh->y[0];
 	for ( int32_t i = 1; i < n; ++i )
 	{
@@ -231,43 +194,23 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 		y1 = fmax( y1, mesh->y[i] );
 	}
 	double scale = 65535.0 / fmax( fmax( x1 - x0, y1 - y0 ), 1e-300 );
-
-	keyed* order = malloc( sizeof( keyed ) * (size_t) ( n > f ? n : f ) );
-	int32_t* new_of_old = malloc( sizeof( int32_t ) * (size_t) n );
-	int32_t* tri_new = malloc( sizeof( int32_t ) * 3 * (size_t) f );
-	int32_t edge_capacity = 3 * f;
-	uint64_t* edges = malloc( sizeof( uint64_t ) * (size_t) edge_capacity );
-	uint64_t* veins =
-		malloc( sizeof( uint64_t ) * (size_t) ( mesh->vein_segment_count > 0 ? mesh->vein_segment_count : 1 ) );
-	spring_entry* entries = NULL;
-	if ( !order || !new_of_old || !tri_new || !edges || !veins )
-	{
-		status = SERE_ERR_MEMORY;
-		goto done;
-	}
-
-	/* Triangle particles in Morton order of their plane position. */
 	for ( int32_t i = 0; i < n; ++i )
 	{
-		order[i].key = morton_key( mesh->x[i], mesh->y[i], x0, y0, scale );
-		order[i].index = i;
+		order[i] = ( sere_sort_item ){ morton_key( mesh->x[i], mesh->y[i], x0, y0, scale ), i, 0 };
 	}
-	qsort( order, (size_t) n, sizeof( keyed ), compare_keyed );
+	sere_sort_items( order, n );
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		new_of_old[order[i].index] = i;
 	}
-
-	/* Triangles in Morton order of their centroid; their Voronoi particles follow that order. */
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		const int32_t* v = mesh->tri + 3 * t;
 		double cx = ( mesh->x[v[0]] + mesh->x[v[1]] + mesh->x[v[2]] ) / 3.0;
 		double cy = ( mesh->y[v[0]] + mesh->y[v[1]] + mesh->y[v[2]] ) / 3.0;
-		order[t].key = morton_key( cx, cy, x0, y0, scale );
-		order[t].index = t;
+		order[t] = ( sere_sort_item ){ morton_key( cx, cy, x0, y0, scale ), t, 0 };
 	}
-	qsort( order, (size_t) f, sizeof( keyed ), compare_keyed );
+	sere_sort_items( order, f );
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		const int32_t* v = mesh->tri + 3 * order[t].index;
@@ -276,91 +219,107 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 			tri_new[3 * t + k] = new_of_old[v[k]];
 		}
 	}
+}
 
-	/* Undirected edges with the triangles on each side: key = edge, sorted, then counted. */
+/* Each directed half-edge paired with its twin: (undirected edge key, triangle) records sorted,
+ * so the two triangles of an interior edge stand side by side. The mesh must be a disk: no edge
+ * in three triangles, no holes, no unused points, the boundary its outline (Euler: n + f - e = 1). */
+static sere_status pair_half_edges( const sere_plane_mesh* mesh, const int32_t* tri_new, sere_sort_item* half,
+									int32_t* unique, int32_t* interior )
+{
+	const int32_t f = mesh->triangle_count;
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		for ( int k = 0; k < 3; ++k )
 		{
-			edges[3 * t + k] = edge_key( tri_new[3 * t + k], tri_new[3 * t + ( k + 1 ) % 3] );
+			half[3 * t + k] =
+				( sere_sort_item ){ edge_key( tri_new[3 * t + k], tri_new[3 * t + ( k + 1 ) % 3] ), t, 0 };
 		}
 	}
-	for ( int32_t s = 0; s < mesh->vein_segment_count; ++s )
-	{
-		veins[s] = edge_key( new_of_old[mesh->vein_segments[2 * s]], new_of_old[mesh->vein_segments[2 * s + 1]] );
-	}
-	qsort( veins, (size_t) mesh->vein_segment_count, sizeof( uint64_t ), compare_u64 );
-
-	/* Pair each directed half-edge with its twin: sort (edge key, triangle) records. */
-	keyed* half = malloc( sizeof( keyed ) * (size_t) edge_capacity );
-	if ( half == NULL )
-	{
-		status = SERE_ERR_MEMORY;
-		goto done;
-	}
-	for ( int32_t e = 0; e < edge_capacity; ++e )
-	{
-		half[e].key = edges[e];
-		half[e].index = e / 3;
-	}
-	qsort( half, (size_t) edge_capacity, sizeof( keyed ), compare_keyed );
-
-	int32_t unique = 0, interior = 0, boundary_edges = 0;
-	for ( int32_t e = 0; e < edge_capacity; )
+	sere_sort_items( half, 3 * f );
+	int32_t boundary_edges = 0;
+	*unique = 0;
+	*interior = 0;
+	for ( int32_t e = 0; e < 3 * f; )
 	{
 		int32_t run = 1;
-		while ( e + run < edge_capacity && half[e + run].key == half[e].key )
+		while ( e + run < 3 * f && half[e + run].key == half[e].key )
 		{
 			++run;
 		}
 		if ( run > 2 )
 		{
-			free( half );
-			status = SERE_ERR_GEOMETRY; /* a non-manifold edge: not a disk */
-			goto done;
+			return SERE_ERR_GEOMETRY;
 		}
-		unique += 1;
-		interior += run == 2;
+		*unique += 1;
+		*interior += run == 2;
 		boundary_edges += run == 1;
 		e += run;
 	}
-	if ( boundary_edges != mesh->boundary_count || n + f - unique != 1 )
-	{
-		free( half );
-		status = SERE_ERR_GEOMETRY; /* holes, unused points or a boundary that is not the outline */
-		goto done;
-	}
+	return boundary_edges == mesh->boundary_count && mesh->point_count + f - *unique == 1 ? SERE_OK : SERE_ERR_GEOMETRY;
+}
 
-	const int32_t particle_count = n + f;
-	const int32_t spring_count = unique + interior + 3 * f;
-	if ( !alloc_particles( &model->p, particle_count ) || !alloc_springs( &model->s, spring_count ) )
+/* T springs (one per edge), V springs (one per interior edge, joining the Voronoi particles of
+ * the two triangles; a vein flag when it crosses a vein T spring, Jeong Fig. 5d) and L springs
+ * (corner to Voronoi particle), each kind sorted by its (a, b) key so each color batch reads
+ * nearby particles; an entry's value is its spring kind. */
+static void spring_entries( sere_model* model, const sere_sort_item* half, const uint64_t* veins, int32_t vein_segments,
+							sere_sort_item* entries )
+{
+	const int32_t n = model->triangle_particles;
+	const int32_t f = model->triangle_count;
+	int32_t t_count = 0, v_count = 0;
+	for ( int32_t e = 0; e < 3 * f; )
 	{
-		free( half );
-		status = SERE_ERR_MEMORY;
-		goto done;
+		int32_t run = ( e + 1 < 3 * f && half[e + 1].key == half[e].key ) ? 2 : 1;
+		uint8_t vein = has_key( veins, vein_segments, half[e].key ) ? SERE_SPRING_VEIN : 0;
+		entries[t_count++] = ( sere_sort_item ){ half[e].key, 0, SERE_SPRING_T | vein };
+		if ( vein )
+		{
+			model->tri_vein[half[e].index] = 1;
+			if ( run == 2 )
+			{
+				model->tri_vein[half[e + 1].index] = 1;
+			}
+		}
+		e += run;
 	}
-	model->triangle_particles = n;
-	model->triangle_count = f;
-	model->boundary_count = mesh->boundary_count;
-	model->base = new_of_old[mesh->base];
-	model->tri = sere_alloc( sizeof( int32_t ) * 3 * (size_t) f );
-	model->h = sere_alloc( sizeof( float ) * (size_t) sere_pad( f ) );
-	model->tri_vein = sere_alloc( (size_t) sere_pad( f ) );
-	model->boundary = sere_alloc( (size_t) sere_pad( n ) );
-	model->vein = sere_alloc( (size_t) sere_pad( n ) );
-	model->u = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
-	model->v = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
-	model->d = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
-	entries = malloc( sizeof( spring_entry ) * (size_t) spring_count );
-	if ( !model->tri || !model->h || !model->tri_vein || !model->boundary || !model->vein || !model->u || !model->v ||
-		 !model->d || !entries )
+	for ( int32_t e = 0; e < 3 * f; )
 	{
-		free( half );
-		status = SERE_ERR_MEMORY;
-		goto done;
+		int32_t run = ( e + 1 < 3 * f && half[e + 1].key == half[e].key ) ? 2 : 1;
+		if ( run == 2 )
+		{
+			uint8_t vein = has_key( veins, vein_segments, half[e].key ) ? SERE_SPRING_VEIN : 0;
+			entries[t_count + v_count++] =
+				( sere_sort_item ){ edge_key( n + half[e].index, n + half[e + 1].index ), 0, SERE_SPRING_V | vein };
+		}
+		e += run;
 	}
-	memcpy( model->tri, tri_new, sizeof( int32_t ) * 3 * (size_t) f );
+	int32_t l_first = t_count + v_count;
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		for ( int k = 0; k < 3; ++k )
+		{
+			entries[l_first + 3 * t + k] =
+				( sere_sort_item ){ edge_key( model->tri[3 * t + k], n + t ), 0, SERE_SPRING_L };
+		}
+	}
+	sere_sort_items( entries, t_count );
+	sere_sort_items( entries + t_count, v_count );
+	sere_sort_items( entries + l_first, 3 * f );
+	model->t_springs = t_count;
+	model->v_springs = v_count;
+	model->l_springs = 3 * f;
+}
 
+/* Particles at the mesh points (renumbered) and Voronoi particles at centroid + h·n (Jeong
+ * Fig. 5e; the plane mesh is counter-clockwise, so its normal is +z); springs at their rest
+ * lengths. SERE_ERR_GEOMETRY for a zero-length spring. */
+static sere_status place_particles( sere_model* model, const sere_plane_mesh* mesh, const int32_t* new_of_old,
+									const sere_sort_item* entries, const sere_layer_params* params )
+{
+	const int32_t n = model->triangle_particles;
+	const int32_t f = model->triangle_count;
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		int32_t j = new_of_old[i];
@@ -375,54 +334,6 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 		model->vein[new_of_old[mesh->vein_segments[2 * s]]] = 1;
 		model->vein[new_of_old[mesh->vein_segments[2 * s + 1]]] = 1;
 	}
-
-	/* T springs (one per edge) and V springs (one per interior edge, joining the Voronoi
-	 * particles of the two triangles; a vein flag when it crosses a vein T spring, Fig. 5d). */
-	int32_t t_count = 0, v_count = 0, vein_count = 0;
-	for ( int32_t e = 0; e < edge_capacity; )
-	{
-		int32_t run = ( e + 1 < edge_capacity && half[e + 1].key == half[e].key ) ? 2 : 1;
-		uint64_t key = half[e].key;
-		uint8_t vein = has_key( veins, mesh->vein_segment_count, key ) ? SERE_SPRING_VEIN : 0;
-		entries[t_count++] = ( spring_entry ){ (int32_t) ( key >> 32 ), (int32_t) ( key & 0xffffffffu ),
-											   (uint8_t) ( SERE_SPRING_T | vein ) };
-		if ( vein )
-		{
-			model->tri_vein[half[e].index] = 1;
-			if ( run == 2 )
-			{
-				model->tri_vein[half[e + 1].index] = 1;
-			}
-		}
-		e += run;
-	}
-	for ( int32_t e = 0; e < edge_capacity; )
-	{
-		int32_t run = ( e + 1 < edge_capacity && half[e + 1].key == half[e].key ) ? 2 : 1;
-		if ( run == 2 )
-		{
-			uint8_t vein = has_key( veins, mesh->vein_segment_count, half[e].key ) ? SERE_SPRING_VEIN : 0;
-			int32_t va = n + half[e].index, vb = n + half[e + 1].index;
-			entries[t_count + v_count++] =
-				( spring_entry ){ va < vb ? va : vb, va < vb ? vb : va, (uint8_t) ( SERE_SPRING_V | vein ) };
-		}
-		e += run;
-	}
-	free( half );
-	int32_t l_first = t_count + v_count;
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		for ( int k = 0; k < 3; ++k )
-		{
-			entries[l_first + 3 * t + k] = ( spring_entry ){ model->tri[3 * t + k], n + t, SERE_SPRING_L };
-		}
-	}
-	qsort( entries, (size_t) t_count, sizeof( spring_entry ), compare_spring );
-	qsort( entries + t_count, (size_t) v_count, sizeof( spring_entry ), compare_spring );
-	qsort( entries + l_first, (size_t) ( 3 * f ), sizeof( spring_entry ), compare_spring );
-
-	/* Voronoi particles at centroid + h·n (Fig. 5e); the plane mesh is counter-clockwise, so
-	 * its normal is +z. */
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		const int32_t* v = model->tri + 3 * t;
@@ -432,42 +343,112 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 		model->p.y[n + t] = ( model->p.y[v[0]] + model->p.y[v[1]] + model->p.y[v[2]] ) / 3.0f;
 		model->p.z[n + t] = h;
 	}
-	for ( int32_t i = 0; i < particle_count; ++i )
+	for ( int32_t i = 0; i < n + f; ++i )
 	{
 		model->p.px[i] = model->p.x[i];
 		model->p.py[i] = model->p.y[i];
 		model->p.pz[i] = model->p.z[i];
 	}
-	for ( int32_t s = 0; s < spring_count; ++s )
+	int32_t vein_count = 0;
+	for ( int32_t s = 0; s < model->s.count; ++s )
 	{
-		const spring_entry* e = entries + s;
-		model->s.a[s] = e->a;
-		model->s.b[s] = e->b;
-		model->s.kind[s] = e->kind;
-		vein_count += ( e->kind & SERE_SPRING_VEIN ) != 0;
-		float dx = model->p.x[e->b] - model->p.x[e->a];
-		float dy = model->p.y[e->b] - model->p.y[e->a];
-		float dz = model->p.z[e->b] - model->p.z[e->a];
+		int32_t a = (int32_t) ( entries[s].key >> 32 ), b = (int32_t) ( entries[s].key & 0xffffffffu );
+		model->s.a[s] = a;
+		model->s.b[s] = b;
+		model->s.kind[s] = (uint8_t) entries[s].value;
+		vein_count += ( entries[s].value & SERE_SPRING_VEIN ) != 0;
+		float dx = model->p.x[b] - model->p.x[a];
+		float dy = model->p.y[b] - model->p.y[a];
+		float dz = model->p.z[b] - model->p.z[a];
 		float length = sqrtf( dx * dx + dy * dy + dz * dz );
 		if ( !( length > 0.0f ) )
 		{
-			status = SERE_ERR_GEOMETRY;
-			goto done;
+			return SERE_ERR_GEOMETRY;
 		}
 		model->s.rest[s] = length;
 		model->s.rest0[s] = length;
 	}
-	model->t_springs = t_count;
-	model->v_springs = v_count;
-	model->l_springs = 3 * f;
 	model->vein_springs = vein_count;
-	status = sere_model_assign_masses( model, params );
+	return SERE_OK;
+}
+
+static bool alloc_model_arrays( sere_model* model, int32_t n, int32_t f, int32_t spring_count )
+{
+	if ( !alloc_particles( &model->p, n + f ) || !alloc_springs( &model->s, spring_count ) )
+	{
+		return false;
+	}
+	model->tri = sere_alloc( sizeof( int32_t ) * 3 * (size_t) f );
+	model->h = sere_alloc( sizeof( float ) * (size_t) sere_pad( f ) );
+	model->tri_vein = sere_alloc( (size_t) sere_pad( f ) );
+	model->boundary = sere_alloc( (size_t) sere_pad( n ) );
+	model->vein = sere_alloc( (size_t) sere_pad( n ) );
+	model->u = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	model->v = sere_alloc( sizeof( float ) * (size_t) sere_pad( n ) );
+	model->d = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
+	return model->tri && model->h && model->tri_vein && model->boundary && model->vein && model->u && model->v &&
+		   model->d;
+}
+
+sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_layer_params* params, sere_model* model )
+{
+	memset( model, 0, sizeof( *model ) );
+	sere_status status = validate_mesh( mesh );
+	if ( status != SERE_OK || params == NULL )
+	{
+		return status != SERE_OK ? status : SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = mesh->point_count;
+	const int32_t f = mesh->triangle_count;
+	sere_sort_item* order = malloc( sizeof( sere_sort_item ) * (size_t) ( n > f ? n : f ) );
+	int32_t* new_of_old = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t* tri_new = malloc( sizeof( int32_t ) * 3 * (size_t) f );
+	sere_sort_item* half = malloc( sizeof( sere_sort_item ) * 3 * (size_t) f );
+	uint64_t* veins =
+		malloc( sizeof( uint64_t ) * (size_t) ( mesh->vein_segment_count > 0 ? mesh->vein_segment_count : 1 ) );
+	sere_sort_item* entries = NULL;
+	if ( !order || !new_of_old || !tri_new || !half || !veins )
+	{
+		status = SERE_ERR_MEMORY;
+		goto done;
+	}
+	morton_order( mesh, order, new_of_old, tri_new );
+	for ( int32_t s = 0; s < mesh->vein_segment_count; ++s )
+	{
+		veins[s] = edge_key( new_of_old[mesh->vein_segments[2 * s]], new_of_old[mesh->vein_segments[2 * s + 1]] );
+	}
+	qsort( veins, (size_t) mesh->vein_segment_count, sizeof( uint64_t ), compare_u64 );
+
+	int32_t unique, interior;
+	status = pair_half_edges( mesh, tri_new, half, &unique, &interior );
+	if ( status != SERE_OK )
+	{
+		goto done;
+	}
+	const int32_t spring_count = unique + interior + 3 * f;
+	entries = malloc( sizeof( sere_sort_item ) * (size_t) spring_count );
+	if ( entries == NULL || !alloc_model_arrays( model, n, f, spring_count ) )
+	{
+		status = SERE_ERR_MEMORY;
+		goto done;
+	}
+	model->triangle_particles = n;
+	model->triangle_count = f;
+	model->boundary_count = mesh->boundary_count;
+	model->base = new_of_old[mesh->base];
+	memcpy( model->tri, tri_new, sizeof( int32_t ) * 3 * (size_t) f );
+	spring_entries( model, half, veins, mesh->vein_segment_count, entries );
+	status = place_particles( model, mesh, new_of_old, entries, params );
+	if ( status == SERE_OK )
+	{
+		status = sere_model_assign_masses( model, params );
+	}
 
 done:
 	free( order );
 	free( new_of_old );
 	free( tri_new );
-	free( edges );
+	free( half );
 	free( veins );
 	free( entries );
 	if ( status != SERE_OK )

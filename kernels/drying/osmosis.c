@@ -182,38 +182,11 @@ const double* sere_osmosis_solution( const sere_osmosis* o )
 	return o->c;
 }
 
-sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
-							   const double* M, double* w, double* m, const sere_osmosis_params* params,
-							   sere_osmosis_report* report )
+/* Spring lengths |l_ij| and E_i = Σ_j |l_ij| (Jeong Eq. 3) at the current positions;
+ * SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
+static sere_status spring_lengths( sere_osmosis* o, const float* x, const float* y, const float* z )
 {
-	memset( report, 0, sizeof( *report ) );
-	if ( o == NULL || params == NULL || !( params->dt > 0.0 ) || params->lambda_min < 0.0 || params->lambda_max < 0.0 ||
-		 !isfinite( params->water_rate ) || ( params->supply_count > 0 && params->supply == NULL ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	const int32_t first = o->first, n = o->count;
-	const double dt = params->dt;
-	double water = 0.0;
-	int bad = 0;
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		water += w[first + i];
-		bad |= !( M[first + i] > 0.0 ) || !isfinite( M[first + i] ) || !isfinite( w[first + i] );
-	}
-	report->water_before = water;
-	report->water_after = water;
-	if ( bad )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	if ( water <= 0.0 && params->supply_count == 0 )
-	{
-		report->stopped = 1; /* Sec. 6: a desiccated layer stops flowing */
-		return SERE_OK;
-	}
-
-	/* Spring lengths |l_ij| and E_i = Σ_j |l_ij| (Jeong Eq. 3) at the current positions. */
+	const int32_t n = o->count;
 	int nonfinite = 0;
 #pragma omp parallel for schedule( static ) reduction( | : nonfinite )
 	for ( int32_t s = 0; s < o->spring_count; ++s )
@@ -237,7 +210,17 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		}
 		o->edge_sum[i] = e;
 	}
+	return SERE_OK;
+}
 
+/* The system of Jeong Eq. 8–9 for the new concentrations (made symmetric, as the mode says),
+ * its right-hand side and the initial guess; returns the largest Σ_j |a_ij| / a_ii, which
+ * picks the preconditioner. */
+static double assemble( sere_osmosis* o, const float* tau, const double* M, const double* w,
+						const sere_osmosis_params* params )
+{
+	const int32_t first = o->first, n = o->count;
+	const double dt = params->dt;
 	/* Assembly of Jeong Eq. 9, (I − Δt L°) w' = w + r Δt, in c = w/M with row i scaled by E_i/2
 	 * (docs/DESIGN.md §6), one row per iteration: every row gathers from its own entries (no
 	 * atomics, the same result for any thread count). */
@@ -295,6 +278,45 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		o->last2[i] = o->last[i];
 		o->last[i] = now;
 	}
+	return offdiag;
+}
+
+sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
+							   const double* M, double* w, double* m, const sere_osmosis_params* params,
+							   sere_osmosis_report* report )
+{
+	memset( report, 0, sizeof( *report ) );
+	if ( o == NULL || params == NULL || !( params->dt > 0.0 ) || params->lambda_min < 0.0 || params->lambda_max < 0.0 ||
+		 !isfinite( params->water_rate ) || ( params->supply_count > 0 && params->supply == NULL ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t first = o->first, n = o->count;
+	const double dt = params->dt;
+	double water = 0.0;
+	int bad = 0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		water += w[first + i];
+		bad |= !( M[first + i] > 0.0 ) || !isfinite( M[first + i] ) || !isfinite( w[first + i] );
+	}
+	report->water_before = water;
+	report->water_after = water;
+	if ( bad )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( water <= 0.0 && params->supply_count == 0 )
+	{
+		report->stopped = 1; /* Sec. 6: a desiccated layer stops flowing */
+		return SERE_OK;
+	}
+
+	if ( spring_lengths( o, x, y, z ) != SERE_OK )
+	{
+		return SERE_ERR_GEOMETRY;
+	}
+	double offdiag = assemble( o, tau, M, w, params );
 	for ( int32_t k = 0; k < params->supply_count; ++k )
 	{
 		int32_t i = params->supply[k] - first;

@@ -1,5 +1,6 @@
 #include "mesh/sample.h"
 
+#include "core/array.h"
 #include "core/geometry.h"
 
 #include <math.h>
@@ -28,26 +29,17 @@ static int point_push( point_list* list, double x, double y, uint8_t vein )
 {
 	if ( list->count == list->capacity )
 	{
-		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 256;
-		double* nx = realloc( list->x, sizeof( double ) * (size_t) capacity );
-		if ( nx != NULL )
-		{
-			list->x = nx;
-		}
-		double* ny = realloc( list->y, sizeof( double ) * (size_t) capacity );
-		if ( ny != NULL )
-		{
-			list->y = ny;
-		}
-		uint8_t* nv = realloc( list->vein, (size_t) capacity );
-		if ( nv != NULL )
-		{
-			list->vein = nv;
-		}
-		if ( nx == NULL || ny == NULL || nv == NULL )
+		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
+		double* nx = capacity > 0 ? sere_array_resize( list->x, capacity, sizeof( double ) ) : NULL;
+		list->x = nx != NULL ? nx : list->x;
+		double* ny = nx != NULL ? sere_array_resize( list->y, capacity, sizeof( double ) ) : NULL;
+		list->y = ny != NULL ? ny : list->y;
+		uint8_t* nv = ny != NULL ? sere_array_resize( list->vein, capacity, 1 ) : NULL;
+		if ( nv == NULL )
 		{
 			return -1;
 		}
+		list->vein = nv;
 		list->capacity = capacity;
 	}
 	list->x[list->count] = x;
@@ -66,8 +58,8 @@ static int segment_push( segment_list* list, int32_t a, int32_t b )
 {
 	if ( list->count == list->capacity )
 	{
-		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 256;
-		int32_t* pairs = realloc( list->pairs, sizeof( int32_t ) * 2 * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
+		int32_t* pairs = capacity > 0 ? sere_array_resize( list->pairs, capacity, 2 * sizeof( int32_t ) ) : NULL;
 		if ( pairs == NULL )
 		{
 			return -1;
@@ -245,24 +237,6 @@ static double nearest_segment2( const grid* g, const double* sx, const double* s
 	return best;
 }
 
-typedef struct anchor
-{
-	double a;	   /* arc length on the vein */
-	int32_t child; /* the vein branching here, or -1 for the end points */
-	int32_t vertex;
-} anchor;
-
-static int compare_anchor( const void* pa, const void* pb )
-{
-	const anchor* a = pa;
-	const anchor* b = pb;
-	if ( a->a != b->a )
-	{
-		return a->a < b->a ? -1 : 1;
-	}
-	return ( a->child > b->child ) - ( a->child < b->child );
-}
-
 static sere_status place_veins( const sere_leaf_shape* shape, double spacing, point_list* points,
 								segment_list* segments )
 {
@@ -275,8 +249,9 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 	double** lengths = calloc( (size_t) veins, sizeof( double* ) );
 	double* branch_at = malloc( sizeof( double ) * (size_t) veins );
 	int32_t* start_vertex = malloc( sizeof( int32_t ) * (size_t) veins );
-	anchor* anchors = malloc( sizeof( anchor ) * ( (size_t) veins + 2 ) );
-	if ( !lengths || !branch_at || !start_vertex || !anchors )
+	/* The veins branching off one vein, keyed by where along it they branch, ties by index. */
+	sere_sort_item* branches = malloc( sizeof( sere_sort_item ) * (size_t) veins );
+	if ( !lengths || !branch_at || !start_vertex || !branches )
 	{
 		status = SERE_ERR_MEMORY;
 		goto done;
@@ -311,16 +286,14 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 		const double* s = lengths[v];
 		double total = s[vein->count - 1];
 		int32_t count = 0;
-		anchors[count++] = ( anchor ){ 0.0, -1, start_vertex[v] };
 		for ( int32_t c = v + 1; c < veins; ++c )
 		{
 			if ( shape->veins[c].parent == v )
 			{
-				anchors[count++] = ( anchor ){ fmin( branch_at[c], total ), c, -1 };
+				branches[count++] = ( sere_sort_item ){ sere_sort_key_double( fmin( branch_at[c], total ) ), c, 0 };
 			}
 		}
-		anchors[count++] = ( anchor ){ total, -1, -1 };
-		qsort( anchors + 1, (size_t) ( count - 2 ), sizeof( anchor ), compare_anchor );
+		sere_sort_items( branches, count );
 		if ( start_vertex[v] < 0 )
 		{
 			status = SERE_ERR_GEOMETRY;
@@ -328,16 +301,18 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 		}
 		int32_t previous = start_vertex[v];
 		double previous_a = 0.0;
-		for ( int32_t k = 1; k < count; ++k )
+		/* The anchors after the vein's start: each branch point, then the vein's end. */
+		for ( int32_t k = 0; k <= count; ++k )
 		{
-			double a = anchors[k].a;
+			int32_t child = k < count ? branches[k].index : -1;
+			double a = k < count ? fmin( branch_at[child], total ) : total;
 			/* Branches closer than half a spacing to the previous anchor share its vertex. */
-			if ( a - previous_a < 0.5 * spacing && k < count - 1 )
+			if ( a - previous_a < 0.5 * spacing && k < count )
 			{
-				start_vertex[anchors[k].child] = previous;
+				start_vertex[child] = previous;
 				continue;
 			}
-			if ( k == count - 1 && a - previous_a < 0.5 * spacing )
+			if ( k == count && a - previous_a < 0.5 * spacing )
 			{
 				break; /* the vein ends within half a spacing of its last vertex */
 			}
@@ -355,17 +330,17 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 				previous = vertex;
 			}
 			previous_a = a;
-			if ( anchors[k].child >= 0 )
+			if ( child >= 0 )
 			{
-				start_vertex[anchors[k].child] = previous;
+				start_vertex[child] = previous;
 			}
 		}
 		/* Children that merged into the vein's end anchor. */
-		for ( int32_t k = 1; k < count; ++k )
+		for ( int32_t k = 0; k < count; ++k )
 		{
-			if ( anchors[k].child >= 0 && start_vertex[anchors[k].child] < 0 )
+			if ( start_vertex[branches[k].index] < 0 )
 			{
-				start_vertex[anchors[k].child] = previous;
+				start_vertex[branches[k].index] = previous;
 			}
 		}
 	}
@@ -380,7 +355,7 @@ done:
 	free( lengths );
 	free( branch_at );
 	free( start_vertex );
-	free( anchors );
+	free( branches );
 	return status;
 }
 
@@ -393,6 +368,178 @@ void sere_samples_destroy( sere_samples* samples )
 	memset( samples, 0, sizeof( *samples ) );
 }
 
+/* Every constraint segment stored in each cell of the grid its bounding box covers (segments
+ * are about one spacing long, so a few cells each); the grid's items are slots, and *slot_x,
+ * *slot_y hold each slot's segment end points so the query reads them directly. */
+static sere_status bucket_segments( grid* segment_grid, const double* flat_x, const double* flat_y,
+									int32_t segment_count, int32_t cells_per_segment, double** slot_x_out,
+									double** slot_y_out )
+{
+	/* Store every segment in each cell its bounding box covers (segments are about one
+	 * spacing long, so a few cells each); a larger segment is split into more slots. */
+	int32_t slot = 0;
+	int32_t* slot_segment = malloc( sizeof( int32_t ) * (size_t) segment_count * (size_t) cells_per_segment );
+	if ( slot_segment == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t k = 0; k < segment_count; ++k )
+	{
+		int32_t c0 = grid_cell( segment_grid, fmin( flat_x[2 * k], flat_x[2 * k + 1] ),
+								fmin( flat_y[2 * k], flat_y[2 * k + 1] ) );
+		int32_t c1 = grid_cell( segment_grid, fmax( flat_x[2 * k], flat_x[2 * k + 1] ),
+								fmax( flat_y[2 * k], flat_y[2 * k + 1] ) );
+		for ( int32_t j = c0 / segment_grid->nx; j <= c1 / segment_grid->nx; ++j )
+		{
+			for ( int32_t i = c0 % segment_grid->nx; i <= c1 % segment_grid->nx; ++i )
+			{
+				if ( slot < segment_grid->capacity )
+				{
+					slot_segment[slot] = k;
+					grid_insert( segment_grid, j * segment_grid->nx + i, slot++ );
+				}
+			}
+		}
+	}
+	/* Segment coordinates indexed by slot, so the query reads them directly. */
+	double* slot_x = malloc( sizeof( double ) * 2 * (size_t) ( slot > 0 ? slot : 1 ) );
+	double* slot_y = malloc( sizeof( double ) * 2 * (size_t) ( slot > 0 ? slot : 1 ) );
+	if ( slot_x == NULL || slot_y == NULL )
+	{
+		free( slot_segment ), free( slot_x ), free( slot_y );
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t k = 0; k < slot; ++k )
+	{
+		int32_t q = slot_segment[k];
+		slot_x[2 * k] = flat_x[2 * q], slot_x[2 * k + 1] = flat_x[2 * q + 1];
+		slot_y[2 * k] = flat_y[2 * q], slot_y[2 * k + 1] = flat_y[2 * q + 1];
+	}
+	free( slot_segment );
+	*slot_x_out = slot_x;
+	*slot_y_out = slot_y;
+	return SERE_OK;
+}
+
+/* Mitchell's best candidate: of several uniform candidates inside the outline keep the one
+ * farthest from every placed point and, weighted, from every constraint segment; fill points. */
+static sere_status best_candidates( const sere_sample_params* params, int32_t fill, const double* polygon, int32_t b,
+									point_list* points, grid* point_grid, const grid* segment_grid,
+									const double* slot_x, const double* slot_y, double x0, double y0, double x1,
+									double y1 )
+{
+	const int32_t candidates = params->candidates > 0 ? params->candidates : 24;
+	uint64_t state = params->seed ^ 0x5eedull;
+	int32_t attempts_left = fill * candidates * 64 + 1024;
+	for ( int32_t placed = 0; placed < fill; ++placed )
+	{
+		double best_score = -1.0, best_x = 0.0, best_y = 0.0;
+		for ( int32_t c = 0; c < candidates && attempts_left > 0; --attempts_left )
+		{
+			double cx = x0 + ( x1 - x0 ) * sere_splitmix_unit( &state );
+			double cy = y0 + ( y1 - y0 ) * sere_splitmix_unit( &state );
+			if ( !sere_point_in_polygon( polygon, b, cx, cy ) )
+			{
+				continue;
+			}
+			c += 1;
+			double dp = sqrt( nearest_point2( point_grid, points, cx, cy, 2 ) );
+			double ds = sqrt( nearest_segment2( segment_grid, slot_x, slot_y, cx, cy ) );
+			double score = fmin( dp, 1.5 * ds );
+			if ( score > best_score )
+			{
+				best_score = score, best_x = cx, best_y = cy;
+			}
+		}
+		if ( best_score < 0.0 )
+		{
+			return SERE_ERR_GEOMETRY; /* no point inside the outline could be found */
+		}
+		int32_t k = point_push( points, best_x, best_y, 0 );
+		if ( k < 0 )
+		{
+			return SERE_ERR_MEMORY;
+		}
+		grid_insert( point_grid, grid_cell( point_grid, best_x, best_y ), k );
+	}
+	return SERE_OK;
+}
+
+/* The samples handed out in sere_alloc'd arrays. */
+static sere_status copy_out( const point_list* points, const segment_list* segments, int32_t b, sere_samples* out )
+{
+	out->point_count = points->count;
+	out->boundary_count = b;
+	out->segment_count = segments->count;
+	out->x = sere_alloc( sizeof( double ) * (size_t) points->count );
+	out->y = sere_alloc( sizeof( double ) * (size_t) points->count );
+	out->vein = sere_alloc( (size_t) points->count );
+	out->segments = sere_alloc( sizeof( int32_t ) * 2 * (size_t) ( segments->count > 0 ? segments->count : 1 ) );
+	if ( !out->x || !out->y || !out->vein || !out->segments )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	memcpy( out->x, points->x, sizeof( double ) * (size_t) points->count );
+	memcpy( out->y, points->y, sizeof( double ) * (size_t) points->count );
+	memcpy( out->vein, points->vein, (size_t) points->count );
+	if ( segments->count > 0 )
+	{
+		memcpy( out->segments, segments->pairs, sizeof( int32_t ) * 2 * (size_t) segments->count );
+	}
+	return SERE_OK;
+}
+
+/* Outline: b points at equal arc length, the base first (it lies on the outline). 0, or -1 when
+ * out of memory. */
+static int place_outline( const sere_leaf_shape* shape, const double* outline_s, double perimeter, int32_t b,
+						  point_list* points )
+{
+	double base_a = project_on( shape->outline_xy, outline_s, shape->outline_count, shape->outline_count, shape->base_x,
+								shape->base_y );
+	for ( int32_t k = 0; k < b; ++k )
+	{
+		double a = fmod( base_a + perimeter * k / b, perimeter );
+		double px, py;
+		point_at( shape->outline_xy, outline_s, shape->outline_count, shape->outline_count, a, &px, &py );
+		if ( point_push( points, px, py, k == 0 && shape->vein_count > 0 ) < 0 )
+		{
+			return -1;
+		}
+	}
+	return 0;
+}
+
+/* The first b points (the resampled outline) as a polygon, and its box x0, y0, x1, y1; NULL with
+ * *status set when out of memory or a vein point lies outside the resampled outline. */
+static double* outline_polygon( const point_list* points, int32_t b, double box[4], sere_status* status )
+{
+	double* polygon = malloc( sizeof( double ) * 2 * (size_t) b );
+	if ( polygon == NULL )
+	{
+		*status = SERE_ERR_MEMORY;
+		return NULL;
+	}
+	double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+	for ( int32_t k = 0; k < b; ++k )
+	{
+		polygon[2 * k] = points->x[k];
+		polygon[2 * k + 1] = points->y[k];
+		x0 = fmin( x0, points->x[k] ), x1 = fmax( x1, points->x[k] );
+		y0 = fmin( y0, points->y[k] ), y1 = fmax( y1, points->y[k] );
+	}
+	for ( int32_t k = b; k < points->count; ++k )
+	{
+		if ( !sere_point_in_polygon( polygon, b, points->x[k], points->y[k] ) )
+		{
+			free( polygon );
+			*status = SERE_ERR_GEOMETRY; /* a vein point outside the resampled outline */
+			return NULL;
+		}
+	}
+	box[0] = x0, box[1] = y0, box[2] = x1, box[3] = y1;
+	return polygon;
+}
+
 sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_params* params, sere_samples* out )
 {
 	memset( out, 0, sizeof( *out ) );
@@ -403,7 +550,6 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	}
 	const int32_t n_target = params->point_count;
 	const int32_t b = params->boundary_count;
-	const int32_t candidates = params->candidates > 0 ? params->candidates : 24;
 	const double area = fabs( sere_shape_area( shape ) );
 	const double perimeter = sere_shape_perimeter( shape );
 	if ( !( area > 0.0 ) || !isfinite( area ) )
@@ -422,25 +568,16 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	grid point_grid = { 0 }, segment_grid = { 0 };
 	sere_status status = SERE_OK;
 
-	/* Outline: B points at equal arc length, the base first (it lies on the outline). */
 	outline_s = arc_lengths( shape->outline_xy, shape->outline_count, 1 );
 	if ( outline_s == NULL )
 	{
 		status = SERE_ERR_MEMORY;
 		goto fail;
 	}
-	double base_a = project_on( shape->outline_xy, outline_s, shape->outline_count, shape->outline_count, shape->base_x,
-								shape->base_y );
-	for ( int32_t k = 0; k < b; ++k )
+	if ( place_outline( shape, outline_s, perimeter, b, &points ) != 0 )
 	{
-		double a = fmod( base_a + perimeter * k / b, perimeter );
-		double px, py;
-		point_at( shape->outline_xy, outline_s, shape->outline_count, shape->outline_count, a, &px, &py );
-		if ( point_push( &points, px, py, k == 0 && shape->vein_count > 0 ) < 0 )
-		{
-			status = SERE_ERR_MEMORY;
-			goto fail;
-		}
+		status = SERE_ERR_MEMORY;
+		goto fail;
 	}
 	status = place_veins( shape, spacing, &points, &segments );
 	if ( status != SERE_OK )
@@ -456,29 +593,13 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	}
 
 	/* The resampled outline polygon, for the inside test and segment distances. */
-	double* polygon = malloc( sizeof( double ) * 2 * (size_t) b );
+	double box[4];
+	double* polygon = outline_polygon( &points, b, box, &status );
 	if ( polygon == NULL )
 	{
-		status = SERE_ERR_MEMORY;
 		goto fail;
 	}
-	double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-	for ( int32_t k = 0; k < b; ++k )
-	{
-		polygon[2 * k] = points.x[k];
-		polygon[2 * k + 1] = points.y[k];
-		x0 = fmin( x0, points.x[k] ), x1 = fmax( x1, points.x[k] );
-		y0 = fmin( y0, points.y[k] ), y1 = fmax( y1, points.y[k] );
-	}
-	for ( int32_t k = b; k < points.count; ++k )
-	{
-		if ( !sere_point_in_polygon( polygon, b, points.x[k], points.y[k] ) )
-		{
-			free( polygon );
-			status = SERE_ERR_GEOMETRY; /* a vein point outside the resampled outline */
-			goto fail;
-		}
-	}
+	const double x0 = box[0], y0 = box[1], x1 = box[2], y1 = box[3];
 
 	/* Constraint segments (outline edges, vein segments) bucketed by the cells they touch. */
 	int32_t segment_count = b + segments.count;
@@ -500,116 +621,30 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 		seg_x[2 * k] = points.x[a], seg_y[2 * k] = points.y[a];
 		seg_x[2 * k + 1] = points.x[c], seg_y[2 * k + 1] = points.y[c];
 	}
-	double* flat_x = seg_x;
-	double* flat_y = seg_y;
-	/* Store every segment in each cell its bounding box covers (segments are about one
-	 * spacing long, so a few cells each); a larger segment is split into more slots. */
-	int32_t slot = 0;
-	int32_t* slot_segment = malloc( sizeof( int32_t ) * (size_t) segment_count * (size_t) cells_per_segment );
-	if ( slot_segment == NULL )
+	double *slot_x = NULL, *slot_y = NULL;
+	if ( bucket_segments( &segment_grid, seg_x, seg_y, segment_count, cells_per_segment, &slot_x, &slot_y ) != SERE_OK )
 	{
 		free( polygon );
 		status = SERE_ERR_MEMORY;
 		goto fail;
 	}
-	for ( int32_t k = 0; k < segment_count; ++k )
-	{
-		int32_t c0 = grid_cell( &segment_grid, fmin( flat_x[2 * k], flat_x[2 * k + 1] ),
-								fmin( flat_y[2 * k], flat_y[2 * k + 1] ) );
-		int32_t c1 = grid_cell( &segment_grid, fmax( flat_x[2 * k], flat_x[2 * k + 1] ),
-								fmax( flat_y[2 * k], flat_y[2 * k + 1] ) );
-		for ( int32_t j = c0 / segment_grid.nx; j <= c1 / segment_grid.nx; ++j )
-		{
-			for ( int32_t i = c0 % segment_grid.nx; i <= c1 % segment_grid.nx; ++i )
-			{
-				if ( slot < segment_grid.capacity )
-				{
-					slot_segment[slot] = k;
-					grid_insert( &segment_grid, j * segment_grid.nx + i, slot++ );
-				}
-			}
-		}
-	}
-	/* Segment coordinates indexed by slot, so the query reads them directly. */
-	double* slot_x = malloc( sizeof( double ) * 2 * (size_t) ( slot > 0 ? slot : 1 ) );
-	double* slot_y = malloc( sizeof( double ) * 2 * (size_t) ( slot > 0 ? slot : 1 ) );
-	if ( slot_x == NULL || slot_y == NULL )
-	{
-		free( polygon ), free( slot_segment ), free( slot_x ), free( slot_y );
-		status = SERE_ERR_MEMORY;
-		goto fail;
-	}
-	for ( int32_t k = 0; k < slot; ++k )
-	{
-		int32_t q = slot_segment[k];
-		slot_x[2 * k] = flat_x[2 * q], slot_x[2 * k + 1] = flat_x[2 * q + 1];
-		slot_y[2 * k] = flat_y[2 * q], slot_y[2 * k + 1] = flat_y[2 * q + 1];
-	}
-	free( slot_segment );
 	for ( int32_t k = 0; k < points.count; ++k )
 	{
 		grid_insert( &point_grid, grid_cell( &point_grid, points.x[k], points.y[k] ), k );
 	}
 
-	/* Mitchell's best candidate: of several uniform candidates inside the outline keep the
-	 * one farthest from every placed point and, weighted, from every constraint segment. */
-	uint64_t state = params->seed ^ 0x5eedull;
-	int32_t attempts_left = fill * candidates * 64 + 1024;
-	for ( int32_t placed = 0; placed < fill; ++placed )
-	{
-		double best_score = -1.0, best_x = 0.0, best_y = 0.0;
-		for ( int32_t c = 0; c < candidates && attempts_left > 0; --attempts_left )
-		{
-			double cx = x0 + ( x1 - x0 ) * sere_splitmix_unit( &state );
-			double cy = y0 + ( y1 - y0 ) * sere_splitmix_unit( &state );
-			if ( !sere_point_in_polygon( polygon, b, cx, cy ) )
-			{
-				continue;
-			}
-			c += 1;
-			double dp = sqrt( nearest_point2( &point_grid, &points, cx, cy, 2 ) );
-			double ds = sqrt( nearest_segment2( &segment_grid, slot_x, slot_y, cx, cy ) );
-			double score = fmin( dp, 1.5 * ds );
-			if ( score > best_score )
-			{
-				best_score = score, best_x = cx, best_y = cy;
-			}
-		}
-		if ( best_score < 0.0 )
-		{
-			free( polygon ), free( slot_x ), free( slot_y );
-			status = SERE_ERR_GEOMETRY; /* no point inside the outline could be found */
-			goto fail;
-		}
-		int32_t k = point_push( &points, best_x, best_y, 0 );
-		if ( k < 0 )
-		{
-			free( polygon ), free( slot_x ), free( slot_y );
-			status = SERE_ERR_MEMORY;
-			goto fail;
-		}
-		grid_insert( &point_grid, grid_cell( &point_grid, best_x, best_y ), k );
-	}
+	status = best_candidates( params, fill, polygon, b, &points, &point_grid, &segment_grid, slot_x, slot_y, x0, y0, x1,
+							  y1 );
 	free( polygon ), free( slot_x ), free( slot_y );
-
-	out->point_count = points.count;
-	out->boundary_count = b;
-	out->segment_count = segments.count;
-	out->x = sere_alloc( sizeof( double ) * (size_t) points.count );
-	out->y = sere_alloc( sizeof( double ) * (size_t) points.count );
-	out->vein = sere_alloc( (size_t) points.count );
-	out->segments = sere_alloc( sizeof( int32_t ) * 2 * (size_t) ( segments.count > 0 ? segments.count : 1 ) );
-	if ( !out->x || !out->y || !out->vein || !out->segments )
+	if ( status != SERE_OK )
 	{
-		status = SERE_ERR_MEMORY;
 		goto fail;
 	}
-	memcpy( out->x, points.x, sizeof( double ) * (size_t) points.count );
-	memcpy( out->y, points.y, sizeof( double ) * (size_t) points.count );
-	memcpy( out->vein, points.vein, (size_t) points.count );
-	if ( segments.count > 0 )
+
+	status = copy_out( &points, &segments, b, out );
+	if ( status != SERE_OK )
 	{
-		memcpy( out->segments, segments.pairs, sizeof( int32_t ) * 2 * (size_t) segments.count );
+		goto fail;
 	}
 	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
 	free( seg_x ), free( seg_y );

@@ -272,18 +272,10 @@ static int32_t vein_of_point( const sere_leaf_shape* shape, int32_t point )
 	return -1;
 }
 
-sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check* check )
+/* The points: enough of them on the outline, all finite, the veins' ranges valid, no point
+ * repeated at once; *extent is the outline's larger side, the scale of the tolerance. */
+static sere_status check_points( const sere_leaf_shape* shape, sere_shape_check* check, double* extent )
 {
-	check->problem = SERE_SHAPE_OK;
-	check->vein = -1;
-	check->point = -1;
-	check->other = -1;
-	if ( shape == NULL || shape->outline_count < 0 || shape->vein_count < 0 || shape->vein_point_count < 0 ||
-		 ( shape->outline_count > 0 && shape->outline_xy == NULL ) ||
-		 ( shape->vein_count > 0 && ( shape->veins == NULL || shape->vein_xy == NULL ) ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
 	const int32_t n = shape->outline_count;
 	const double* xy = shape->outline_xy;
 	if ( n < 3 )
@@ -339,65 +331,17 @@ sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check*
 			}
 		}
 	}
-	const double tolerance = SERE_SHAPE_TOLERANCE * fmax( x1 - x0, y1 - y0 );
-	const double base[2] = { shape->base_x, shape->base_y };
+	*extent = fmax( x1 - x0, y1 - y0 );
+	return SERE_OK;
+}
 
-	/* Every pair of pieces that meet: outline edges, then vein segments. */
-	int32_t count = n;
-	for ( int32_t v = 0; v < shape->vein_count; ++v )
-	{
-		count += shape->veins[v].count - 1;
-	}
-	segment* segments = malloc( sizeof( segment ) * (size_t) count );
-	if ( segments == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		int32_t j = ( i + 1 ) % n;
-		segments[i] = ( segment ){ .a = xy + 2 * i, .b = xy + 2 * j, .vein = -1, .k = i, .end = j };
-	}
-	for ( int32_t v = 0, s = n; v < shape->vein_count; ++v )
-	{
-		const sere_vein* vein = shape->veins + v;
-		for ( int32_t k = 0; k + 1 < vein->count; ++k, ++s )
-		{
-			const double* p = shape->vein_xy + 2 * ( vein->first + k );
-			segments[s] = ( segment ){ .a = p, .b = p + 2, .vein = v, .k = k, .end = vein->first + k + 1 };
-		}
-	}
-	crossing outline_best = { SERE_SHAPE_OK, -1, -1 }, vein_best = { SERE_SHAPE_OK, -1, -1 };
-	sere_status status = find_crossings( segments, count, n, tolerance, &outline_best, &vein_best );
-	const crossing* found = outline_best.problem != SERE_SHAPE_OK ? &outline_best : &vein_best;
-	int32_t point = found->problem != SERE_SHAPE_OK ? segments[found->later].end : -1;
-	int32_t other = found->problem != SERE_SHAPE_OK ? segments[found->earlier].end : -1;
-	int32_t vein = found->problem != SERE_SHAPE_OK ? segments[found->later].vein : -1;
-	free( segments );
-	if ( status != SERE_OK )
-	{
-		return status;
-	}
-	if ( outline_best.problem != SERE_SHAPE_OK )
-	{
-		check->other = other;
-		return fail( check, SERE_SHAPE_SELF_INTERSECTING, -1, point );
-	}
-
-	/* A simple polygon has a non-zero signed area whose sign is its orientation. */
-	if ( sere_shape_area( shape ) < 0.0 )
-	{
-		return fail( check, SERE_SHAPE_CLOCKWISE, -1, -1 );
-	}
-	double nearest = INFINITY;
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		nearest = fmin( nearest, sere_point_segment_distance( base, xy + 2 * i, xy + 2 * ( ( i + 1 ) % n ) ) );
-	}
-	if ( nearest > tolerance )
-	{
-		return fail( check, SERE_SHAPE_BASE_OFF_OUTLINE, -1, -1 );
-	}
+/* Each vein starts at the base (a main vein) or on its parent, within the tolerance, and its
+ * other points lie inside the outline. */
+static sere_status check_vein_roots( const sere_leaf_shape* shape, const double base[2], double tolerance,
+									 sere_shape_check* check )
+{
+	const int32_t n = shape->outline_count;
+	const double* xy = shape->outline_xy;
 	for ( int32_t v = 0; v < shape->vein_count; ++v )
 	{
 		const sere_vein* vn = shape->veins + v;
@@ -427,6 +371,93 @@ sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check*
 				return fail( check, SERE_SHAPE_VEIN_OUTSIDE, v, vn->first + k );
 			}
 		}
+	}
+	return SERE_OK;
+}
+
+sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check* check )
+{
+	check->problem = SERE_SHAPE_OK;
+	check->vein = -1;
+	check->point = -1;
+	check->other = -1;
+	if ( shape == NULL || shape->outline_count < 0 || shape->vein_count < 0 || shape->vein_point_count < 0 ||
+		 ( shape->outline_count > 0 && shape->outline_xy == NULL ) ||
+		 ( shape->vein_count > 0 && ( shape->veins == NULL || shape->vein_xy == NULL ) ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = shape->outline_count;
+	const double* xy = shape->outline_xy;
+	double extent;
+	sere_status status = check_points( shape, check, &extent );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	const double tolerance = SERE_SHAPE_TOLERANCE * extent;
+	const double base[2] = { shape->base_x, shape->base_y };
+
+	/* Every pair of pieces that meet: outline edges, then vein segments. */
+	int32_t count = n;
+	for ( int32_t v = 0; v < shape->vein_count; ++v )
+	{
+		count += shape->veins[v].count - 1;
+	}
+	segment* segments = malloc( sizeof( segment ) * (size_t) count );
+	if ( segments == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		int32_t j = ( i + 1 ) % n;
+		segments[i] = ( segment ){ .a = xy + 2 * i, .b = xy + 2 * j, .vein = -1, .k = i, .end = j };
+	}
+	for ( int32_t v = 0, s = n; v < shape->vein_count; ++v )
+	{
+		const sere_vein* vein = shape->veins + v;
+		for ( int32_t k = 0; k + 1 < vein->count; ++k, ++s )
+		{
+			const double* p = shape->vein_xy + 2 * ( vein->first + k );
+			segments[s] = ( segment ){ .a = p, .b = p + 2, .vein = v, .k = k, .end = vein->first + k + 1 };
+		}
+	}
+	crossing outline_best = { SERE_SHAPE_OK, -1, -1 }, vein_best = { SERE_SHAPE_OK, -1, -1 };
+	status = find_crossings( segments, count, n, tolerance, &outline_best, &vein_best );
+	const crossing* found = outline_best.problem != SERE_SHAPE_OK ? &outline_best : &vein_best;
+	int32_t point = found->problem != SERE_SHAPE_OK ? segments[found->later].end : -1;
+	int32_t other = found->problem != SERE_SHAPE_OK ? segments[found->earlier].end : -1;
+	int32_t vein = found->problem != SERE_SHAPE_OK ? segments[found->later].vein : -1;
+	free( segments );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	if ( outline_best.problem != SERE_SHAPE_OK )
+	{
+		check->other = other;
+		return fail( check, SERE_SHAPE_SELF_INTERSECTING, -1, point );
+	}
+
+	/* A simple polygon has a non-zero signed area whose sign is its orientation. */
+	if ( sere_shape_area( shape ) < 0.0 )
+	{
+		return fail( check, SERE_SHAPE_CLOCKWISE, -1, -1 );
+	}
+	double nearest = INFINITY;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		nearest = fmin( nearest, sere_point_segment_distance( base, xy + 2 * i, xy + 2 * ( ( i + 1 ) % n ) ) );
+	}
+	if ( nearest > tolerance )
+	{
+		return fail( check, SERE_SHAPE_BASE_OFF_OUTLINE, -1, -1 );
+	}
+	status = check_vein_roots( shape, base, tolerance, check );
+	if ( status != SERE_OK )
+	{
+		return status;
 	}
 	/* Points inside, but a segment may still cut through a notch of the outline or another vein. */
 	if ( vein_best.problem != SERE_SHAPE_OK )

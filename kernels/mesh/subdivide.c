@@ -1,5 +1,7 @@
 #include "mesh/subdivide.h"
 
+#include "core/array.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,24 +44,6 @@ void sere_tri_mesh_destroy( sere_tri_mesh* mesh )
 	memset( mesh, 0, sizeof( *mesh ) );
 }
 
-/* A triangle corner's edge, keyed by its sorted endpoints so both triangles of an edge meet. */
-typedef struct edge_slot
-{
-	uint64_t key;
-	int32_t slot; /* 3 * triangle + corner: the edge from corner to corner + 1 */
-} edge_slot;
-
-static int edge_slot_order( const void* a, const void* b )
-{
-	const edge_slot* p = a;
-	const edge_slot* q = b;
-	if ( p->key != q->key )
-	{
-		return p->key < q->key ? -1 : 1;
-	}
-	return ( p->slot > q->slot ) - ( p->slot < q->slot );
-}
-
 static double distance( const sere_tri_mesh* m, int32_t a, int32_t b )
 {
 	double dx = (double) m->x[a] - (double) m->x[b];
@@ -77,11 +61,64 @@ static int32_t* put( int32_t* out, int32_t a, int32_t b, int32_t c )
 }
 
 /* One pass. mid[slot] receives the midpoint vertex of each corner's edge or -1. */
+/* Each triangle with its cut edges' midpoints (mid: per corner slot, -1 for an edge kept
+ * whole) as one, two, three or four triangles of out, in input order. */
+static void split_triangles( const sere_tri_mesh* in, const int32_t* mid, sere_tri_mesh* out )
+{
+	int32_t f = in->triangle_count;
+	int32_t* o = out->tri;
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		const int32_t* c = in->tri + 3 * t;
+		const int32_t* m = mid + 3 * t;
+		int cut = ( m[0] >= 0 ) + ( m[1] >= 0 ) + ( m[2] >= 0 );
+		if ( cut == 0 )
+		{
+			o = put( o, c[0], c[1], c[2] );
+		}
+		else if ( cut == 3 )
+		{
+			o = put( o, c[0], m[0], m[2] );
+			o = put( o, m[0], c[1], m[1] );
+			o = put( o, m[2], m[1], c[2] );
+			o = put( o, m[0], m[1], m[2] );
+		}
+		else if ( cut == 1 )
+		{
+			int k = m[0] >= 0 ? 0 : ( m[1] >= 0 ? 1 : 2 );
+			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
+			o = put( o, a, m[k], d );
+			o = put( o, m[k], b, d );
+		}
+		else
+		{
+			/* Edge k (a→b) stays whole; b→d and d→a are cut at mb and md. The corner at d is one
+			 * triangle; the quad a, b, mb, md is cut along its shorter diagonal. */
+			int k = m[0] < 0 ? 0 : ( m[1] < 0 ? 1 : 2 );
+			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
+			int32_t mb = m[( k + 1 ) % 3], md = m[( k + 2 ) % 3];
+			o = put( o, mb, d, md );
+			if ( distance( out, a, mb ) <= distance( out, b, md ) )
+			{
+				o = put( o, a, b, mb );
+				o = put( o, a, mb, md );
+			}
+			else
+			{
+				o = put( o, a, b, md );
+				o = put( o, b, mb, md );
+			}
+		}
+	}
+}
+
 static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, sere_tri_mesh* out, int* changed )
 {
 	int32_t f = in->triangle_count;
 	int32_t slots = 3 * f;
-	edge_slot* edges = malloc( (size_t) ( slots > 0 ? slots : 1 ) * sizeof( edge_slot ) );
+	/* A triangle corner's edge keyed by its sorted endpoints so both triangles of an edge meet;
+	 * the index is the slot 3 * triangle + corner, the edge from corner to corner + 1. */
+	sere_sort_item* edges = malloc( (size_t) ( slots > 0 ? slots : 1 ) * sizeof( sere_sort_item ) );
 	int32_t* mid = malloc( (size_t) ( slots > 0 ? slots : 1 ) * sizeof( int32_t ) );
 	if ( edges == NULL || mid == NULL )
 	{
@@ -95,9 +132,9 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		uint32_t a = (uint32_t) in->tri[3 * t + k];
 		uint32_t b = (uint32_t) in->tri[3 * t + ( k + 1 ) % 3];
 		edges[s].key = a < b ? ( (uint64_t) a << 32 ) | b : ( (uint64_t) b << 32 ) | a;
-		edges[s].slot = s;
+		edges[s].index = s;
 	}
-	qsort( edges, (size_t) slots, sizeof( edge_slot ), edge_slot_order );
+	sere_sort_items( edges, slots );
 
 	/* Midpoints are numbered in sorted edge order, so the result depends only on the input. */
 	int64_t next = in->vertex_count;
@@ -117,7 +154,7 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		}
 		for ( int32_t q = s; q < e; ++q )
 		{
-			mid[edges[q].slot] = m;
+			mid[edges[q].index] = m;
 		}
 		s = e;
 	}
@@ -168,50 +205,7 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		}
 	}
 
-	int32_t* o = out->tri;
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		const int32_t* c = in->tri + 3 * t;
-		const int32_t* m = mid + 3 * t;
-		int cut = ( m[0] >= 0 ) + ( m[1] >= 0 ) + ( m[2] >= 0 );
-		if ( cut == 0 )
-		{
-			o = put( o, c[0], c[1], c[2] );
-		}
-		else if ( cut == 3 )
-		{
-			o = put( o, c[0], m[0], m[2] );
-			o = put( o, m[0], c[1], m[1] );
-			o = put( o, m[2], m[1], c[2] );
-			o = put( o, m[0], m[1], m[2] );
-		}
-		else if ( cut == 1 )
-		{
-			int k = m[0] >= 0 ? 0 : ( m[1] >= 0 ? 1 : 2 );
-			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
-			o = put( o, a, m[k], d );
-			o = put( o, m[k], b, d );
-		}
-		else
-		{
-			/* Edge k (a→b) stays whole; b→d and d→a are cut at mb and md. The corner at d is one
-			 * triangle; the quad a, b, mb, md is cut along its shorter diagonal. */
-			int k = m[0] < 0 ? 0 : ( m[1] < 0 ? 1 : 2 );
-			int32_t a = c[k], b = c[( k + 1 ) % 3], d = c[( k + 2 ) % 3];
-			int32_t mb = m[( k + 1 ) % 3], md = m[( k + 2 ) % 3];
-			o = put( o, mb, d, md );
-			if ( distance( out, a, mb ) <= distance( out, b, md ) )
-			{
-				o = put( o, a, b, mb );
-				o = put( o, a, mb, md );
-			}
-			else
-			{
-				o = put( o, a, b, md );
-				o = put( o, b, mb, md );
-			}
-		}
-	}
+	split_triangles( in, mid, out );
 	*changed = next > in->vertex_count;
 	free( edges );
 	free( mid );

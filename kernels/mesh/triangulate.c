@@ -1,5 +1,7 @@
 #include "mesh/triangulate.h"
 
+#include "core/array.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,19 +77,11 @@ static int grow( mesh* m, int32_t extra )
 		return 0;
 	}
 	int32_t capacity = 2 * ( m->count + extra );
-	int32_t* v = realloc( m->v, sizeof( int32_t ) * 3 * (size_t) capacity );
-	if ( v == NULL )
-	{
-		return -1;
-	}
-	m->v = v;
-	int32_t* n = realloc( m->n, sizeof( int32_t ) * 3 * (size_t) capacity );
-	if ( n == NULL )
-	{
-		return -1;
-	}
-	m->n = n;
-	uint8_t* fixed = realloc( m->fixed, 3 * (size_t) capacity );
+	int32_t* v = sere_array_resize( m->v, capacity, 3 * sizeof( int32_t ) );
+	m->v = v != NULL ? v : m->v;
+	int32_t* n = v != NULL ? sere_array_resize( m->n, capacity, 3 * sizeof( int32_t ) ) : NULL;
+	m->n = n != NULL ? n : m->n;
+	uint8_t* fixed = n != NULL ? sere_array_resize( m->fixed, capacity, 3 ) : NULL;
 	if ( fixed == NULL )
 	{
 		return -1;
@@ -101,8 +95,8 @@ static int push( mesh* m, int32_t value )
 {
 	if ( m->stack_count == m->stack_capacity )
 	{
-		int32_t capacity = m->stack_capacity > 0 ? 2 * m->stack_capacity : 1024;
-		int32_t* stack = realloc( m->stack, sizeof( int32_t ) * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( m->stack_capacity, (int64_t) m->stack_count + 1, 1024 );
+		int32_t* stack = capacity > 0 ? sere_array_resize( m->stack, capacity, sizeof( int32_t ) ) : NULL;
 		if ( stack == NULL )
 		{
 			return -1;
@@ -376,8 +370,8 @@ static int edge_push( edge_list* list, int32_t x, int32_t y )
 {
 	if ( list->count == list->capacity )
 	{
-		int32_t capacity = list->capacity > 0 ? 2 * list->capacity : 64;
-		int32_t* e = realloc( list->e, sizeof( int32_t ) * 2 * (size_t) capacity );
+		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 64 );
+		int32_t* e = capacity > 0 ? sere_array_resize( list->e, capacity, 2 * sizeof( int32_t ) ) : NULL;
 		if ( e == NULL )
 		{
 			return -1;
@@ -525,23 +519,6 @@ static sere_status insert_segment( mesh* m, int32_t* vt, int32_t a, int32_t b, e
 	return mark_fixed( m, vt, a, b ) ? SERE_OK : SERE_ERR_GEOMETRY;
 }
 
-typedef struct sorted_point
-{
-	uint64_t key;
-	int32_t index;
-} sorted_point;
-
-static int compare_sorted( const void* pa, const void* pb )
-{
-	const sorted_point* a = pa;
-	const sorted_point* b = pb;
-	if ( a->key != b->key )
-	{
-		return a->key < b->key ? -1 : 1;
-	}
-	return ( a->index > b->index ) - ( a->index < b->index );
-}
-
 static uint64_t spread32( uint64_t v )
 {
 	v &= 0xffffffffull;
@@ -599,7 +576,7 @@ sere_status sere_triangulate( const sere_cdt_input* input, sere_triangulation* o
 	edge_list crossing = { 0 };
 	int32_t* vt = NULL;
 	uint8_t* exterior = NULL;
-	sorted_point* order = malloc( sizeof( sorted_point ) * (size_t) n );
+	sere_sort_item* order = malloc( sizeof( sere_sort_item ) * (size_t) n );
 	m.p = malloc( sizeof( ipoint ) * ( (size_t) n + 3 ) );
 	vt = malloc( sizeof( int32_t ) * ( (size_t) n + 3 ) );
 	out->vertex_map = malloc( sizeof( int32_t ) * (size_t) n );
@@ -618,7 +595,7 @@ sere_status sere_triangulate( const sere_cdt_input* input, sere_triangulation* o
 	}
 	/* Morton order: each insertion starts its walk next to the previous point. Equal keys are
 	 * equal snapped points: the first in input order represents them. */
-	qsort( order, (size_t) n, sizeof( sorted_point ), compare_sorted );
+	sere_sort_items( order, n );
 	for ( int32_t k = 0; k < n; ++k )
 	{
 		int32_t i = order[k].index;

@@ -168,6 +168,48 @@ void sere_tree_destroy( sere_tree* tree )
 	memset( tree, 0, sizeof( *tree ) );
 }
 
+/* F and f: the turtle moves one step along its heading; F also draws the branch segment ns
+ * (the radius tapering by the radius ratio along it). Returns the segments drawn, 0 or 1. */
+static int move_forward( turtle* t, int draw, const sere_lsystem_params* params, sere_tree* tree, int32_t ns )
+{
+	double end[3];
+	for ( int k = 0; k < 3; ++k )
+	{
+		end[k] = t->p[k] + t->length * t->h[k];
+	}
+	if ( draw )
+	{
+		tree->x0[ns] = (float) t->p[0], tree->y0[ns] = (float) t->p[1], tree->z0[ns] = (float) t->p[2];
+		tree->x1[ns] = (float) end[0], tree->y1[ns] = (float) end[1], tree->z1[ns] = (float) end[2];
+		tree->r0[ns] = (float) t->radius;
+		tree->r1[ns] = (float) ( t->radius * params->radius_ratio );
+	}
+	memcpy( t->p, end, sizeof( end ) );
+	return draw;
+}
+
+/* L: leaf nl at the turtle, its blade along the heading flattened onto the ground plane (the
+ * left vector when the heading is vertical), turned at random, then tilted down by the droop. */
+static void add_leaf( const turtle* t, uint64_t seed, int64_t i, double droop, sere_tree* tree, int32_t nl )
+{
+	double d[3] = { t->h[0], t->h[1], 0.0 };
+	if ( d[0] * d[0] + d[1] * d[1] < 1e-6 )
+	{
+		d[0] = t->l[0], d[1] = t->l[1];
+	}
+	normalize( d );
+	double yaw = 0.7 * jitter( seed, i, 1 ), c = cos( yaw ), sn = sin( yaw );
+	double dx = c * d[0] - sn * d[1], dy = sn * d[0] + c * d[1];
+	double dir[3] = { cos( droop ) * dx, cos( droop ) * dy, -sin( droop ) };
+	/* the face normal: +z made orthogonal to the blade direction */
+	double nrm[3] = { -dir[2] * dir[0], -dir[2] * dir[1], 1.0 - dir[2] * dir[2] };
+	normalize( nrm );
+	tree->leaf_x[nl] = (float) t->p[0], tree->leaf_y[nl] = (float) t->p[1], tree->leaf_z[nl] = (float) t->p[2];
+	tree->leaf_dirx[nl] = (float) dir[0], tree->leaf_diry[nl] = (float) dir[1];
+	tree->leaf_dirz[nl] = (float) dir[2];
+	tree->leaf_nx[nl] = (float) nrm[0], tree->leaf_ny[nl] = (float) nrm[1], tree->leaf_nz[nl] = (float) nrm[2];
+}
+
 sere_status sere_tree_grow( const sere_lsystem_params* params, sere_tree* tree )
 {
 	if ( tree == NULL || params == NULL )
@@ -239,23 +281,8 @@ sere_status sere_tree_grow( const sere_lsystem_params* params, sere_tree* tree )
 		{
 			case 'F':
 			case 'f':
-			{
-				double end[3];
-				for ( int k = 0; k < 3; ++k )
-				{
-					end[k] = t.p[k] + t.length * t.h[k];
-				}
-				if ( s[i] == 'F' )
-				{
-					tree->x0[ns] = (float) t.p[0], tree->y0[ns] = (float) t.p[1], tree->z0[ns] = (float) t.p[2];
-					tree->x1[ns] = (float) end[0], tree->y1[ns] = (float) end[1], tree->z1[ns] = (float) end[2];
-					tree->r0[ns] = (float) t.radius;
-					tree->r1[ns] = (float) ( t.radius * params->radius_ratio );
-					ns += 1;
-				}
-				memcpy( t.p, end, sizeof( end ) );
+				ns += move_forward( &t, s[i] == 'F', params, tree, ns );
 				break;
-			}
 			case '+':
 				rotate_pair( t.h, t.l, angle + turn );
 				break;
@@ -288,29 +315,8 @@ sere_status sere_tree_grow( const sere_lsystem_params* params, sere_tree* tree )
 				t = stack[--top];
 				break;
 			case 'L':
-			{
-				/* the heading flattened onto the ground plane (the left vector when the heading is
-				 * vertical), turned at random, then tilted down by the droop */
-				double d[3] = { t.h[0], t.h[1], 0.0 };
-				if ( d[0] * d[0] + d[1] * d[1] < 1e-6 )
-				{
-					d[0] = t.l[0], d[1] = t.l[1];
-				}
-				normalize( d );
-				double yaw = 0.7 * jitter( params->seed, i, 1 ), c = cos( yaw ), sn = sin( yaw );
-				double dx = c * d[0] - sn * d[1], dy = sn * d[0] + c * d[1];
-				double dir[3] = { cos( droop ) * dx, cos( droop ) * dy, -sin( droop ) };
-				/* the face normal: +z made orthogonal to the blade direction */
-				double nrm[3] = { -dir[2] * dir[0], -dir[2] * dir[1], 1.0 - dir[2] * dir[2] };
-				normalize( nrm );
-				tree->leaf_x[nl] = (float) t.p[0], tree->leaf_y[nl] = (float) t.p[1], tree->leaf_z[nl] = (float) t.p[2];
-				tree->leaf_dirx[nl] = (float) dir[0], tree->leaf_diry[nl] = (float) dir[1];
-				tree->leaf_dirz[nl] = (float) dir[2];
-				tree->leaf_nx[nl] = (float) nrm[0], tree->leaf_ny[nl] = (float) nrm[1],
-				tree->leaf_nz[nl] = (float) nrm[2];
-				nl += 1;
+				add_leaf( &t, params->seed, i, droop, tree, nl++ );
 				break;
-			}
 			default:
 				break;
 		}

@@ -1,8 +1,10 @@
 #include "season/massspring.h"
 
+#include "core/array.h"
 #include "solve/color.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -102,28 +104,6 @@ void sere_massspring_destroy( sere_massspring* ms )
 	sere_free( ms->xrec );
 	sere_free( ms->vrec );
 	free( ms );
-}
-
-/* One triangle side: the undirected edge (lo, hi), the triangle it belongs to and the vertex
- * opposite it there. */
-typedef struct side
-{
-	int32_t lo, hi, triangle, opposite;
-} side;
-
-static int compare_sides( const void* pa, const void* pb )
-{
-	const side* a = pa;
-	const side* b = pb;
-	if ( a->lo != b->lo )
-	{
-		return a->lo < b->lo ? -1 : 1;
-	}
-	if ( a->hi != b->hi )
-	{
-		return a->hi < b->hi ? -1 : 1;
-	}
-	return ( a->triangle > b->triangle ) - ( a->triangle < b->triangle );
 }
 
 static float distance( const float* x, const float* y, const float* z, int32_t i, int32_t j )
@@ -292,14 +272,9 @@ static sere_status sweep_order( sere_massspring* ms, const int32_t* sa, const in
 	return SERE_OK;
 }
 
-sere_status sere_massspring_create( const float* x, const float* y, const float* z, int32_t vertex_count,
-									const int32_t* tri, int32_t triangle_count, sere_massspring** out )
+static sere_status validate_input( const float* x, const float* y, const float* z, int32_t vertex_count,
+								   const int32_t* tri, int32_t triangle_count )
 {
-	if ( out == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	*out = NULL;
 	if ( x == NULL || y == NULL || z == NULL || tri == NULL || vertex_count < 3 || triangle_count < 1 )
 	{
 		return SERE_ERR_ARGUMENT;
@@ -326,108 +301,177 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 			return SERE_ERR_ARGUMENT;
 		}
 	}
+	return SERE_OK;
+}
 
-	/* Sec. 4.2, steps 1–3: every pair of adjacent particles joined once. Sorting the triangle
-	 * sides groups each edge's one (boundary) or two (interior) sides together. */
-	side* sides = malloc( 3 * (size_t) triangle_count * sizeof( side ) );
-	if ( sides == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
+/* Tang Sec. 4.2, steps 1–3: every pair of adjacent particles joined once. The triangle sides,
+ * keyed by their undirected edge (lo << 32 | hi) with the triangle as index and the opposite
+ * vertex as value, sorted so each edge's one (boundary) or two (interior) sides stand together.
+ * A manifold mesh has no edge in three triangles and no two triangles on the same three points. */
+static sere_status sorted_sides( const int32_t* tri, int32_t triangle_count, sere_sort_item* sides, int32_t* edges,
+								 int32_t* hinges )
+{
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		for ( int k = 0; k < 3; ++k )
 		{
-			int32_t p = tri[3 * t + ( k + 1 ) % 3], q = tri[3 * t + ( k + 2 ) % 3];
-			sides[3 * t + k] = ( side ){ p < q ? p : q, p < q ? q : p, t, tri[3 * t + k] };
+			uint32_t p = (uint32_t) tri[3 * t + ( k + 1 ) % 3], q = (uint32_t) tri[3 * t + ( k + 2 ) % 3];
+			uint64_t key = p < q ? ( (uint64_t) p << 32 ) | q : ( (uint64_t) q << 32 ) | p;
+			sides[3 * t + k] = ( sere_sort_item ){ key, t, tri[3 * t + k] };
 		}
 	}
-	qsort( sides, 3 * (size_t) triangle_count, sizeof( side ), compare_sides );
-
 	int32_t side_count = 3 * triangle_count;
-	int32_t edges = 0, hinges = 0;
+	sere_sort_items( sides, side_count );
+	*edges = 0;
+	*hinges = 0;
 	sere_status status = SERE_OK;
 	for ( int32_t k = 0; k < side_count; )
 	{
 		int32_t run = 1;
-		while ( k + run < side_count && sides[k + run].lo == sides[k].lo && sides[k + run].hi == sides[k].hi )
+		while ( k + run < side_count && sides[k + run].key == sides[k].key )
 		{
 			++run;
 		}
-		if ( run > 2 || ( run == 2 && sides[k].opposite == sides[k + 1].opposite ) )
+		if ( run > 2 || ( run == 2 && sides[k].value == sides[k + 1].value ) )
 		{
 			status = SERE_ERR_GEOMETRY;
 		}
-		edges += 1;
-		hinges += run == 2;
+		*edges += 1;
+		*hinges += run == 2;
 		k += run;
 	}
+	return status;
+}
 
+static bool alloc_springs( sere_massspring* ms, int32_t edges, int32_t hinges, int32_t vertex_count )
+{
+	int32_t total = sere_pad( edges + hinges );
+	ms->vertex_count = vertex_count;
+	ms->structural_count = edges;
+	ms->flexion_count = hinges;
+	ms->a = sere_alloc( (size_t) total * sizeof( int32_t ) );
+	ms->b = sere_alloc( (size_t) total * sizeof( int32_t ) );
+	ms->rest0 = sere_alloc( (size_t) total * sizeof( float ) );
+	ms->fx = sere_alloc( (size_t) total * sizeof( float ) );
+	ms->fy = sere_alloc( (size_t) total * sizeof( float ) );
+	ms->fz = sere_alloc( (size_t) total * sizeof( float ) );
+	ms->incidence_offsets = sere_alloc( (size_t) sere_pad( vertex_count + 1 ) * sizeof( int32_t ) );
+	ms->incidence = sere_alloc( 2 * (size_t) total * sizeof( int32_t ) );
+	ms->incidence_sign = sere_alloc( 2 * (size_t) total * sizeof( float ) );
+	ms->xrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
+	ms->vrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
+	return ms->a != NULL && ms->b != NULL && ms->rest0 != NULL && ms->fx != NULL && ms->fy != NULL && ms->fz != NULL &&
+		   ms->incidence_offsets != NULL && ms->incidence != NULL && ms->incidence_sign != NULL && ms->xrec != NULL &&
+		   ms->vrec != NULL;
+}
+
+/* One structural spring per edge (into sa, sb, srest, colored and ordered later) and one flexion
+ * spring per interior edge, across the hinge between the two opposite vertices (into ms). */
+static sere_status fill_springs( sere_massspring* ms, const sere_sort_item* sides, int32_t side_count, const float* x,
+								 const float* y, const float* z, int32_t* sa, int32_t* sb, float* srest )
+{
+	sere_status status = SERE_OK;
+	int32_t e = 0, h = ms->structural_count;
+	for ( int32_t k = 0; k < side_count; )
+	{
+		int32_t run = k + 1 < side_count && sides[k + 1].key == sides[k].key ? 2 : 1;
+		sa[e] = (int32_t) ( sides[k].key >> 32 );
+		sb[e] = (int32_t) ( sides[k].key & 0xffffffffu );
+		srest[e] = distance( x, y, z, sa[e], sb[e] );
+		if ( !( srest[e] > 0.0f ) )
+		{
+			status = SERE_ERR_GEOMETRY;
+		}
+		++e;
+		if ( run == 2 )
+		{
+			int32_t c = sides[k].value, d = sides[k + 1].value;
+			ms->a[h] = c < d ? c : d;
+			ms->b[h] = c < d ? d : c;
+			ms->rest0[h] = distance( x, y, z, c, d );
+			if ( !( ms->rest0[h] > 0.0f ) )
+			{
+				status = SERE_ERR_GEOMETRY;
+			}
+			++h;
+		}
+		k += run;
+	}
+	return status;
+}
+
+/* Each vertex's springs (CSR), with the sign of the spring's force there: the force f of spring
+ * s pulls a toward b, +f at a and −f at b. */
+static sere_status build_incidence( sere_massspring* ms )
+{
+	int32_t total = ms->structural_count + ms->flexion_count;
+	int32_t vertex_count = ms->vertex_count;
+	int32_t* offsets = ms->incidence_offsets;
+	for ( int32_t s = 0; s < total; ++s )
+	{
+		++offsets[ms->a[s] + 1];
+		++offsets[ms->b[s] + 1];
+	}
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		offsets[i + 1] += offsets[i];
+	}
+	int32_t* fill = malloc( (size_t) vertex_count * sizeof( int32_t ) );
+	if ( fill == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	memcpy( fill, offsets, (size_t) vertex_count * sizeof( int32_t ) );
+	for ( int32_t s = 0; s < total; ++s )
+	{
+		ms->incidence[fill[ms->a[s]]] = s;
+		ms->incidence_sign[fill[ms->a[s]]++] = 1.0f;
+		ms->incidence[fill[ms->b[s]]] = s;
+		ms->incidence_sign[fill[ms->b[s]]++] = -1.0f;
+	}
+	free( fill );
+	return SERE_OK;
+}
+
+sere_status sere_massspring_create( const float* x, const float* y, const float* z, int32_t vertex_count,
+									const int32_t* tri, int32_t triangle_count, sere_massspring** out )
+{
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*out = NULL;
+	sere_status status = validate_input( x, y, z, vertex_count, tri, triangle_count );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	sere_sort_item* sides = malloc( 3 * (size_t) triangle_count * sizeof( sere_sort_item ) );
+	if ( sides == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	int32_t edges, hinges;
+	status = sorted_sides( tri, triangle_count, sides, &edges, &hinges );
 	sere_massspring* ms = status == SERE_OK ? calloc( 1, sizeof( sere_massspring ) ) : NULL;
 	int32_t* sa = NULL;
 	int32_t* sb = NULL;
 	float* srest = NULL;
 	sere_coloring coloring = { 0 };
-	if ( status == SERE_OK && ms == NULL )
-	{
-		status = SERE_ERR_MEMORY;
-	}
 	if ( status == SERE_OK )
 	{
-		int32_t total = sere_pad( edges + hinges );
-		ms->vertex_count = vertex_count;
-		ms->structural_count = edges;
-		ms->flexion_count = hinges;
-		ms->a = sere_alloc( (size_t) total * sizeof( int32_t ) );
-		ms->b = sere_alloc( (size_t) total * sizeof( int32_t ) );
-		ms->rest0 = sere_alloc( (size_t) total * sizeof( float ) );
-		ms->fx = sere_alloc( (size_t) total * sizeof( float ) );
-		ms->fy = sere_alloc( (size_t) total * sizeof( float ) );
-		ms->fz = sere_alloc( (size_t) total * sizeof( float ) );
-		ms->incidence_offsets = sere_alloc( (size_t) sere_pad( vertex_count + 1 ) * sizeof( int32_t ) );
-		ms->incidence = sere_alloc( 2 * (size_t) total * sizeof( int32_t ) );
-		ms->incidence_sign = sere_alloc( 2 * (size_t) total * sizeof( float ) );
-		ms->xrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
-		ms->vrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
 		sa = malloc( (size_t) edges * sizeof( int32_t ) );
 		sb = malloc( (size_t) edges * sizeof( int32_t ) );
 		srest = malloc( (size_t) edges * sizeof( float ) );
-		if ( ms->a == NULL || ms->b == NULL || ms->rest0 == NULL || ms->fx == NULL || ms->fy == NULL ||
-			 ms->fz == NULL || ms->incidence_offsets == NULL || ms->incidence == NULL || ms->incidence_sign == NULL ||
-			 ms->xrec == NULL || ms->vrec == NULL || sa == NULL || sb == NULL || srest == NULL )
+		if ( ms == NULL || !alloc_springs( ms, edges, hinges, vertex_count ) || sa == NULL || sb == NULL ||
+			 srest == NULL )
 		{
 			status = SERE_ERR_MEMORY;
 		}
 	}
 	if ( status == SERE_OK )
 	{
-		int32_t e = 0, h = edges;
-		for ( int32_t k = 0; k < side_count; )
-		{
-			int32_t run =
-				k + 1 < side_count && sides[k + 1].lo == sides[k].lo && sides[k + 1].hi == sides[k].hi ? 2 : 1;
-			sa[e] = sides[k].lo;
-			sb[e] = sides[k].hi;
-			srest[e] = distance( x, y, z, sa[e], sb[e] );
-			if ( !( srest[e] > 0.0f ) )
-			{
-				status = SERE_ERR_GEOMETRY;
-			}
-			++e;
-			if ( run == 2 )
-			{
-				int32_t c = sides[k].opposite, d = sides[k + 1].opposite;
-				ms->a[h] = c < d ? c : d;
-				ms->b[h] = c < d ? d : c;
-				ms->rest0[h] = distance( x, y, z, c, d );
-				if ( !( ms->rest0[h] > 0.0f ) )
-				{
-					status = SERE_ERR_GEOMETRY;
-				}
-				++h;
-			}
-			k += run;
-		}
+		status = fill_springs( ms, sides, 3 * triangle_count, x, y, z, sa, sb, srest );
 	}
 	free( sides );
 	if ( status == SERE_OK )
@@ -440,36 +484,7 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 	}
 	if ( status == SERE_OK )
 	{
-
-		int32_t total = edges + hinges;
-		int32_t* offsets = ms->incidence_offsets;
-		for ( int32_t s = 0; s < total; ++s )
-		{
-			++offsets[ms->a[s] + 1];
-			++offsets[ms->b[s] + 1];
-		}
-		for ( int32_t i = 0; i < vertex_count; ++i )
-		{
-			offsets[i + 1] += offsets[i];
-		}
-		int32_t* fill = malloc( (size_t) vertex_count * sizeof( int32_t ) );
-		if ( fill == NULL )
-		{
-			status = SERE_ERR_MEMORY;
-		}
-		else
-		{
-			memcpy( fill, offsets, (size_t) vertex_count * sizeof( int32_t ) );
-			for ( int32_t s = 0; s < total; ++s )
-			{
-				/* The force f of spring s pulls a toward b: +f at a, −f at b. */
-				ms->incidence[fill[ms->a[s]]] = s;
-				ms->incidence_sign[fill[ms->a[s]]++] = 1.0f;
-				ms->incidence[fill[ms->b[s]]] = s;
-				ms->incidence_sign[fill[ms->b[s]]++] = -1.0f;
-			}
-			free( fill );
-		}
+		status = build_incidence( ms );
 	}
 	sere_coloring_destroy( &coloring );
 	free( sa );
@@ -740,15 +755,9 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 	*strain_out = strain;
 }
 
-sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* p,
-								  const sere_massspring_params* params, sere_massspring_report* report )
+/* Every particle finite and no inverse mass negative. */
+static sere_status check_particles( const sere_massspring_particles* p )
 {
-	if ( ms == NULL || p == NULL || params == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL ||
-		 p->z == NULL || p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL ||
-		 !params_valid( params ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
 	int bad = 0, negative = 0;
 #pragma omp parallel for schedule( static ) reduction( | : bad, negative )
 	for ( int32_t i = 0; i < p->count; ++i )
@@ -761,9 +770,40 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 	{
 		return SERE_ERR_NONFINITE;
 	}
-	if ( negative )
+	return negative ? SERE_ERR_ARGUMENT : SERE_OK;
+}
+
+/* The velocities the sweeps left (in the packed records) become the particles', and the
+ * particles move by them (Tang Eq. 1: x ← x + v Δt with the new v). Called inside the parallel
+ * region: its loop is shared among the team. */
+static void advance_positions( const sere_massspring* ms, sere_massspring_particles* p, float dt )
+{
+	const float* restrict vr = ms->vrec;
+#pragma omp for schedule( static )
+	for ( int32_t i = 0; i < p->count; ++i )
+	{
+		p->vx[i] = vr[4 * i];
+		p->vy[i] = vr[4 * i + 1];
+		p->vz[i] = vr[4 * i + 2];
+		p->x[i] = p->x[i] + vr[4 * i] * dt;
+		p->y[i] = p->y[i] + vr[4 * i + 1] * dt;
+		p->z[i] = p->z[i] + vr[4 * i + 2] * dt;
+	}
+}
+
+sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* p,
+								  const sere_massspring_params* params, sere_massspring_report* report )
+{
+	if ( ms == NULL || p == NULL || params == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL ||
+		 p->z == NULL || p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL ||
+		 !params_valid( params ) )
 	{
 		return SERE_ERR_ARGUMENT;
+	}
+	sere_status status = check_particles( p );
+	if ( status != SERE_OK )
+	{
+		return status;
 	}
 
 	const float keep = 1.0f - params->shrink;
@@ -856,17 +896,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 			final_strain = fmaxf( final_strain, own_strain );
 		}
 
-		const float* restrict vr = ms->vrec;
-#pragma omp for schedule( static )
-		for ( int32_t i = 0; i < p->count; ++i )
-		{
-			p->vx[i] = vr[4 * i];
-			p->vy[i] = vr[4 * i + 1];
-			p->vz[i] = vr[4 * i + 2];
-			p->x[i] = p->x[i] + vr[4 * i] * dt;
-			p->y[i] = p->y[i] + vr[4 * i + 1] * dt;
-			p->z[i] = p->z[i] + vr[4 * i + 2] * dt;
-		}
+		advance_positions( ms, p, dt );
 	}
 
 	if ( report != NULL )

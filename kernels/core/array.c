@@ -1,0 +1,59 @@
+#include "core/array.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int32_t sere_array_capacity( int32_t capacity, int64_t need, int32_t first )
+{
+	if ( need > INT32_MAX )
+	{
+		return -1;
+	}
+	if ( need <= capacity )
+	{
+		return capacity;
+	}
+	int64_t grown = capacity > 0 ? capacity : first;
+	while ( grown < need )
+	{
+		grown *= 2;
+	}
+	return (int32_t) ( grown < INT32_MAX ? grown : INT32_MAX );
+}
+
+void* sere_array_resize( void* array, int32_t count, size_t element )
+{
+	if ( count < 0 || ( element > 0 && (size_t) count > SIZE_MAX / element ) )
+	{
+		return NULL;
+	}
+	return realloc( array, (size_t) count * element );
+}
+
+static int compare_items( const void* pa, const void* pb )
+{
+	const sere_sort_item* a = pa;
+	const sere_sort_item* b = pb;
+	if ( a->key != b->key )
+	{
+		return a->key < b->key ? -1 : 1;
+	}
+	return ( a->index > b->index ) - ( a->index < b->index );
+}
+
+void sere_sort_items( sere_sort_item* items, int32_t count )
+{
+	if ( count > 1 )
+	{
+		qsort( items, (size_t) count, sizeof( sere_sort_item ), compare_items );
+	}
+}
+
+uint64_t sere_sort_key_double( double d )
+{
+	/* Adding 0.0 turns -0 into +0, so the two zeros compare equal here as they do as doubles. */
+	double positive_zero = d + 0.0;
+	uint64_t bits;
+	memcpy( &bits, &positive_zero, sizeof( bits ) );
+	return ( bits >> 63 ) != 0 ? ~bits : bits | ( 1ull << 63 );
+}

@@ -1,0 +1,38 @@
+/* sere — the one growable-array step and the one sort of (key, index) pairs shared by every room. */
+#pragma once
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
+/* The capacity a growable array needs to hold need elements: capacity itself when it already
+ * does, otherwise doubled (starting from first when the array is empty) until it does. -1 when
+ * need is past INT32_MAX, so a caller's int32_t counts never wrap. */
+int32_t sere_array_capacity( int32_t capacity, int64_t need, int32_t first );
+
+/* realloc for count elements of element bytes, the byte count checked for overflow. NULL on
+ * failure, and then array is still the caller's, unchanged. */
+void* sere_array_resize( void* array, int32_t count, size_t element );
+
+/* A sort key and the index of what it belongs to; value rides along unsorted. */
+typedef struct sere_sort_item
+{
+	uint64_t key;
+	int32_t index;
+	int32_t value;
+} sere_sort_item;
+
+/* Sorts by key, equal keys by index: a total order, so the answer is the same on every C
+ * library whatever its qsort does with ties. */
+void sere_sort_items( sere_sort_item* items, int32_t count );
+
+/* A key whose unsigned order is the order of the finite double d (-0 and +0 one key). */
+uint64_t sere_sort_key_double( double d );
+
+#ifdef __cplusplus
+}
+#endif

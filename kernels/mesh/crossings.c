@@ -1,0 +1,453 @@
+#include "mesh/measure.h"
+
+#include "mesh/internal/measure_shared.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Edge–triangle crossings: the exact segment–triangle test and the grid that finds the pairs
+ * worth testing. */
+
+bool sere_segment_crosses_triangle( const double p_in[3], const double q_in[3], const double a[3], const double b[3],
+									const double c[3] )
+{
+	/* The edge volumes round differently from either end, so take the ends in a fixed
+	 * (lexicographic) order: then the answer does not depend on how the caller orders them. */
+	bool swap = p_in[0] != q_in[0] ? p_in[0] > q_in[0] : ( p_in[1] != q_in[1] ? p_in[1] > q_in[1] : p_in[2] > q_in[2] );
+	const double* p = swap ? q_in : p_in;
+	const double* q = swap ? p_in : q_in;
+	/* Boxes first: every true crossing has overlapping boxes, and requiring it here makes the
+	 * answers on near-degenerate input (where the volumes below are rounding noise) the same
+	 * for the brute force and for the grid, which never looks at pairs with disjoint boxes. */
+	for ( int k = 0; k < 3; ++k )
+	{
+		double lo = p[k] < q[k] ? p[k] : q[k], hi = p[k] < q[k] ? q[k] : p[k];
+		double tlo = a[k] < b[k] ? a[k] : b[k], thi = a[k] < b[k] ? b[k] : a[k];
+		tlo = c[k] < tlo ? c[k] : tlo, thi = c[k] > thi ? c[k] : thi;
+		if ( tlo > hi || thi < lo )
+		{
+			return false;
+		}
+	}
+	double ab[3], ac[3], n[3], ap[3], aq[3];
+	sub3( b, a, ab );
+	sub3( c, a, ac );
+	cross3( ab, ac, n );
+	sub3( p, a, ap );
+	sub3( q, a, aq );
+	double side_p = dot3( n, ap ), side_q = dot3( n, aq );
+	if ( !( ( side_p > 0.0 && side_q < 0.0 ) || ( side_p < 0.0 && side_q > 0.0 ) ) )
+	{
+		return false;
+	}
+	/* The edge volumes are antisymmetric in the edge's ends (the cross product negates exactly),
+	 * so the two triangles of a shared edge see the same volume with opposite signs there. */
+	double d[3], pa[3], pb[3], pc[3], w[3];
+	sub3( q, p, d );
+	sub3( a, p, pa );
+	sub3( b, p, pb );
+	sub3( c, p, pc );
+	cross3( pa, pb, w );
+	double s0 = dot3( d, w );
+	cross3( pb, pc, w );
+	double s1 = dot3( d, w );
+	cross3( pc, pa, w );
+	double s2 = dot3( d, w );
+	return ( s0 > 0.0 && s1 > 0.0 && s2 > 0.0 ) || ( s0 < 0.0 && s1 < 0.0 && s2 < 0.0 );
+}
+
+typedef struct crossing_box
+{
+	float lo[3], hi[3];
+} crossing_box;
+
+/* A triangle as listed in one grid cell, with everything the edge loop reads before the
+ * predicate, so a cell's candidates are one contiguous stream. */
+typedef struct crossing_entry
+{
+	float lo[3], hi[3]; /* its box */
+	int32_t v[3];		/* its corners */
+	int32_t cell[3];	/* the cell of its box's low corner */
+} crossing_entry;
+
+struct sere_crossings
+{
+	int32_t triangle_count;
+	int32_t vertex_count;
+	int32_t edge_count;
+	int32_t* tri;
+	int32_t *edge_a, *edge_b;
+	crossing_box* box; /* per triangle, at the current positions */
+	/* The grid: the triangles overlapping cell c are entry[cell_start[c] .. cell_start[c + 1] − 1] */
+	int32_t cell_capacity;
+	int32_t entry_capacity;
+	int32_t* cell_start;
+	crossing_entry* entry;
+};
+
+/* A uniform grid over the bounds of the triangles; cell coordinates clamp to the grid, so the
+ * map from a coordinate to its cell is monotone, which the one-cell-per-pair rule relies on. */
+typedef struct crossing_grid
+{
+	double lo[3];
+	double inv_h;
+	int32_t n[3];
+} crossing_grid;
+
+static inline int32_t grid_cell( const crossing_grid* g, int axis, float x )
+{
+	double c = floor( ( (double) x - g->lo[axis] ) * g->inv_h );
+	if ( !( c > 0.0 ) )
+	{
+		return 0;
+	}
+	return c >= (double) ( g->n[axis] - 1 ) ? g->n[axis] - 1 : (int32_t) c;
+}
+
+static int compare_u64( const void* a, const void* b )
+{
+	uint64_t u = *(const uint64_t*) a, v = *(const uint64_t*) b;
+	return ( u > v ) - ( u < v );
+}
+
+/* The unique undirected edges of the triangles, sorted by (smaller end, larger end), without
+ * edges whose two ends are one index. Returns the count, or −1 when allocation fails; *a, *b are
+ * then NULL. Shared with the reference twin's contract (it extracts the same set). */
+static int32_t unique_edges( const int32_t* tri, int32_t triangle_count, int32_t** a, int32_t** b )
+{
+	*a = NULL, *b = NULL;
+	size_t capacity = 3 * (size_t) triangle_count;
+	uint64_t* key = malloc( sizeof( uint64_t ) * ( capacity > 0 ? capacity : 1 ) );
+	if ( key == NULL )
+	{
+		return -1;
+	}
+	size_t count = 0;
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		for ( int k = 0; k < 3; ++k )
+		{
+			uint32_t i = (uint32_t) tri[3 * (size_t) t + k], j = (uint32_t) tri[3 * (size_t) t + ( k + 1 ) % 3];
+			if ( i != j )
+			{
+				key[count++] = i < j ? ( (uint64_t) i << 32 ) | j : ( (uint64_t) j << 32 ) | i;
+			}
+		}
+	}
+	qsort( key, count, sizeof( uint64_t ), compare_u64 );
+	size_t unique = 0;
+	for ( size_t k = 0; k < count; ++k )
+	{
+		if ( unique == 0 || key[k] != key[unique - 1] )
+		{
+			key[unique++] = key[k];
+		}
+	}
+	*a = sere_alloc( sizeof( int32_t ) * (size_t) sere_pad( (int32_t) unique + 1 ) );
+	*b = sere_alloc( sizeof( int32_t ) * (size_t) sere_pad( (int32_t) unique + 1 ) );
+	if ( *a == NULL || *b == NULL )
+	{
+		sere_free( *a );
+		sere_free( *b );
+		*a = NULL, *b = NULL;
+		free( key );
+		return -1;
+	}
+	for ( size_t k = 0; k < unique; ++k )
+	{
+		( *a )[k] = (int32_t) ( key[k] >> 32 );
+		( *b )[k] = (int32_t) ( key[k] & 0xffffffffu );
+	}
+	free( key );
+	return (int32_t) unique;
+}
+
+void sere_crossings_destroy( sere_crossings* c )
+{
+	if ( c == NULL )
+	{
+		return;
+	}
+	sere_free( c->tri );
+	sere_free( c->edge_a );
+	sere_free( c->edge_b );
+	sere_free( c->box );
+	sere_free( c->cell_start );
+	sere_free( c->entry );
+	free( c );
+}
+
+sere_status sere_crossings_create( const int32_t* tri, int32_t triangle_count, int32_t vertex_count,
+								   sere_crossings** out )
+{
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*out = NULL;
+	/* 3 T triangle indices and 8 T + 64 grid entries must fit in int32 */
+	if ( tri == NULL || triangle_count <= 0 || vertex_count <= 0 || triangle_count > ( INT32_MAX - 64 ) / 8 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	for ( size_t k = 0; k < 3 * (size_t) triangle_count; ++k )
+	{
+		if ( tri[k] < 0 || tri[k] >= vertex_count )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
+	sere_crossings* c = calloc( 1, sizeof( sere_crossings ) );
+	if ( c == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	c->triangle_count = triangle_count;
+	c->vertex_count = vertex_count;
+	/* A sheet of T triangles of the mean size fills about T / 2 cells of that size, and a
+	 * triangle's box overlaps up to 2 × 2 × 2 of them; four times those leave room for a
+	 * crumpled sheet before the count has to coarsen the grid. */
+	c->cell_capacity = 4 * triangle_count + 64;
+	c->entry_capacity = 8 * triangle_count + 64;
+	size_t tri_bytes = sizeof( int32_t ) * 3 * (size_t) triangle_count;
+	c->tri = sere_alloc( tri_bytes );
+	c->box = sere_alloc( sizeof( crossing_box ) * (size_t) triangle_count );
+	c->cell_start = sere_alloc( sizeof( int32_t ) * ( (size_t) c->cell_capacity + 1 ) );
+	c->entry = sere_alloc( sizeof( crossing_entry ) * (size_t) c->entry_capacity );
+	int failed = c->tri == NULL || c->box == NULL || c->cell_start == NULL || c->entry == NULL;
+	if ( failed )
+	{
+		sere_crossings_destroy( c );
+		return SERE_ERR_MEMORY;
+	}
+	memcpy( c->tri, tri, tri_bytes );
+	c->edge_count = unique_edges( tri, triangle_count, &c->edge_a, &c->edge_b );
+	if ( c->edge_count < 0 )
+	{
+		sere_crossings_destroy( c );
+		return SERE_ERR_MEMORY;
+	}
+	*out = c;
+	return SERE_OK;
+}
+
+/* Boxes of the triangles and the grid for them; false when a used position is not finite. */
+static bool crossings_boxes( sere_crossings* c, const float* x, const float* y, const float* z, crossing_grid* g )
+{
+	int32_t tc = c->triangle_count;
+	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+	double side_sum = 0.0;
+	/* Sequential: a few operations per triangle, and the grid (not that it could change the
+	 * count) is then the same for any thread count. */
+	for ( int32_t t = 0; t < tc; ++t )
+	{
+		const int32_t* v = c->tri + 3 * (size_t) t;
+		float p[3][3] = { { x[v[0]], y[v[0]], z[v[0]] }, { x[v[1]], y[v[1]], z[v[1]] }, { x[v[2]], y[v[2]], z[v[2]] } };
+		float blo[3], bhi[3];
+		float longest = 0.0f;
+		for ( int a = 0; a < 3; ++a )
+		{
+			/* checked before fminf, which would pass over a NaN */
+			if ( !isfinite( p[0][a] ) || !isfinite( p[1][a] ) || !isfinite( p[2][a] ) )
+			{
+				return false;
+			}
+			blo[a] = fminf( p[0][a], fminf( p[1][a], p[2][a] ) );
+			bhi[a] = fmaxf( p[0][a], fmaxf( p[1][a], p[2][a] ) );
+			lo[a] = fminf( lo[a], blo[a] );
+			hi[a] = fmaxf( hi[a], bhi[a] );
+			longest = fmaxf( longest, bhi[a] - blo[a] );
+		}
+		c->box[t] = ( crossing_box ){ { blo[0], blo[1], blo[2] }, { bhi[0], bhi[1], bhi[2] } };
+		side_sum += longest;
+	}
+	double extent[3], largest = 0.0;
+	for ( int a = 0; a < 3; ++a )
+	{
+		g->lo[a] = lo[a];
+		extent[a] = (double) hi[a] - lo[a];
+		largest = fmax( largest, extent[a] );
+	}
+	/* Cells the size of the mean triangle's longest box side, so a typical box overlaps a few
+	 * cells and a cell holds a few triangles. */
+	double h = side_sum / tc;
+	if ( !( h > 0.0 ) )
+	{
+		h = largest > 0.0 ? largest : 1.0;
+	}
+	for ( ;; )
+	{
+		double cells = 1.0;
+		for ( int a = 0; a < 3; ++a )
+		{
+			double n = floor( extent[a] / h ) + 1.0;
+			cells *= n;
+			g->n[a] = n < (double) c->cell_capacity ? (int32_t) n : c->cell_capacity;
+		}
+		g->inv_h = 1.0 / h;
+		if ( cells > (double) c->cell_capacity )
+		{
+			/* too many cells for the buffer: grow the cell by the missing volume factor */
+			h *= 1.01 * cbrt( cells / (double) c->cell_capacity );
+			continue;
+		}
+		int64_t entries = 0;
+		for ( int32_t t = 0; t < tc && entries <= c->entry_capacity; ++t )
+		{
+			const crossing_box* b = c->box + t;
+			int64_t covered = 1;
+			for ( int a = 0; a < 3; ++a )
+			{
+				covered *= grid_cell( g, a, b->hi[a] ) - grid_cell( g, a, b->lo[a] ) + 1;
+			}
+			entries += covered;
+		}
+		if ( entries > c->entry_capacity )
+		{
+			/* a few huge triangles (slivers flung far out) cover too many cells: coarsen; at
+			 * one cell for everything there are exactly T entries, which always fit */
+			h *= 1.5;
+			continue;
+		}
+		return true;
+	}
+}
+
+/* Counting sort of (cell, triangle) entries: cell_start[c] first counts the entries of cells
+ * up to c, then each entry is placed by decrementing it, which leaves the start of every cell. */
+static void crossings_fill( sere_crossings* c, const crossing_grid* g )
+{
+	int32_t cells = g->n[0] * g->n[1] * g->n[2];
+	memset( c->cell_start, 0, sizeof( int32_t ) * ( (size_t) cells + 1 ) );
+	for ( int pass = 0; pass < 2; ++pass )
+	{
+		for ( int32_t t = 0; t < c->triangle_count; ++t )
+		{
+			const crossing_box* b = c->box + t;
+			int32_t x0 = grid_cell( g, 0, b->lo[0] ), x1 = grid_cell( g, 0, b->hi[0] );
+			int32_t y0 = grid_cell( g, 1, b->lo[1] ), y1 = grid_cell( g, 1, b->hi[1] );
+			int32_t z0 = grid_cell( g, 2, b->lo[2] ), z1 = grid_cell( g, 2, b->hi[2] );
+			const int32_t* v = c->tri + 3 * (size_t) t;
+			crossing_entry entry = {
+				{ b->lo[0], b->lo[1], b->lo[2] }, { b->hi[0], b->hi[1], b->hi[2] }, { v[0], v[1], v[2] }, { x0, y0, z0 }
+			};
+			for ( int32_t k = z0; k <= z1; ++k )
+			{
+				for ( int32_t j = y0; j <= y1; ++j )
+				{
+					for ( int32_t i = x0; i <= x1; ++i )
+					{
+						int32_t cell = ( k * g->n[1] + j ) * g->n[0] + i;
+						if ( pass == 0 )
+						{
+							c->cell_start[cell] += 1;
+						}
+						else
+						{
+							c->entry[--c->cell_start[cell]] = entry;
+						}
+					}
+				}
+			}
+		}
+		if ( pass == 0 )
+		{
+			for ( int32_t cell = 1; cell <= cells; ++cell )
+			{
+				c->cell_start[cell] += c->cell_start[cell - 1];
+			}
+		}
+	}
+}
+
+sere_status sere_crossings_count( sere_crossings* c, const float* x, const float* y, const float* z, int64_t* count )
+{
+	if ( count != NULL )
+	{
+		*count = 0;
+	}
+	if ( c == NULL || x == NULL || y == NULL || z == NULL || count == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	crossing_grid grid;
+	if ( !crossings_boxes( c, x, y, z, &grid ) )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	crossings_fill( c, &grid );
+	const crossing_grid* g = &grid;
+	const sere_crossings* w = c;
+	int64_t total = 0;
+#pragma omp parallel for schedule( dynamic, 256 ) reduction( + : total )
+	for ( int32_t e = 0; e < w->edge_count; ++e )
+	{
+		int32_t ea = w->edge_a[e], eb = w->edge_b[e];
+		float elo[3] = { fminf( x[ea], x[eb] ), fminf( y[ea], y[eb] ), fminf( z[ea], z[eb] ) };
+		float ehi[3] = { fmaxf( x[ea], x[eb] ), fmaxf( y[ea], y[eb] ), fmaxf( z[ea], z[eb] ) };
+		double p[3] = { x[ea], y[ea], z[ea] }, q[3] = { x[eb], y[eb], z[eb] };
+		int32_t x0 = grid_cell( g, 0, elo[0] ), x1 = grid_cell( g, 0, ehi[0] );
+		int32_t y0 = grid_cell( g, 1, elo[1] ), y1 = grid_cell( g, 1, ehi[1] );
+		int32_t z0 = grid_cell( g, 2, elo[2] ), z1 = grid_cell( g, 2, ehi[2] );
+		int64_t found = 0;
+		for ( int32_t k = z0; k <= z1; ++k )
+		{
+			for ( int32_t j = y0; j <= y1; ++j )
+			{
+				for ( int32_t i = x0; i <= x1; ++i )
+				{
+					int32_t cell = ( k * g->n[1] + j ) * g->n[0] + i;
+					for ( int32_t s = w->cell_start[cell]; s < w->cell_start[cell + 1]; ++s )
+					{
+						const crossing_entry* t = w->entry + s;
+						/* The pair is tested only in the cell holding the low corner of the
+						 * overlap of the two boxes: that corner lies in both boxes, so exactly
+						 * one cell both visit contains it; grid_cell is monotone, so its cell is
+						 * the larger of the two low cells on each axis. */
+						if ( ( x0 > t->cell[0] ? x0 : t->cell[0] ) != i || ( y0 > t->cell[1] ? y0 : t->cell[1] ) != j ||
+							 ( z0 > t->cell[2] ? z0 : t->cell[2] ) != k )
+						{
+							continue;
+						}
+						if ( t->lo[0] > ehi[0] || t->hi[0] < elo[0] || t->lo[1] > ehi[1] || t->hi[1] < elo[1] ||
+							 t->lo[2] > ehi[2] || t->hi[2] < elo[2] )
+						{
+							continue;
+						}
+						const int32_t* v = t->v;
+						if ( v[0] == ea || v[1] == ea || v[2] == ea || v[0] == eb || v[1] == eb || v[2] == eb )
+						{
+							continue;
+						}
+						double a[3] = { x[v[0]], y[v[0]], z[v[0]] };
+						double b[3] = { x[v[1]], y[v[1]], z[v[1]] };
+						double cc[3] = { x[v[2]], y[v[2]], z[v[2]] };
+						found += sere_segment_crosses_triangle( p, q, a, b, cc );
+					}
+				}
+			}
+		}
+		total += found;
+	}
+	*count = total;
+	return SERE_OK;
+}
+
+sere_status sere_count_crossings( const float* x, const float* y, const float* z, int32_t vertex_count,
+								  const int32_t* tri, int32_t triangle_count, int64_t* count )
+{
+	if ( count != NULL )
+	{
+		*count = 0;
+	}
+	sere_crossings* c;
+	sere_status status = sere_crossings_create( tri, triangle_count, vertex_count, &c );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	status = sere_crossings_count( c, x, y, z, count );
+	sere_crossings_destroy( c );
+	return status;
+}
