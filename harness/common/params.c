@@ -122,80 +122,58 @@ const sere_param* sere_params_table( int* count )
 	return table;
 }
 
-static double read_at( const sere_sim_params* params, size_t offset, sere_param_type type )
+/* One member of any type the table holds, copied in and out of the struct by its size. */
+typedef union member
 {
-	const char* at = (const char*) params + offset;
-	switch ( type )
-	{
-		case SERE_PARAM_DOUBLE:
-		{
-			double v;
-			memcpy( &v, at, sizeof( v ) );
-			return v;
-		}
-		case SERE_PARAM_FLOAT:
-		{
-			float v;
-			memcpy( &v, at, sizeof( v ) );
-			return v;
-		}
-		case SERE_PARAM_INT32:
-		{
-			int32_t v;
-			memcpy( &v, at, sizeof( v ) );
-			return v;
-		}
-		case SERE_PARAM_UINT32:
-		{
-			uint32_t v;
-			memcpy( &v, at, sizeof( v ) );
-			return v;
-		}
-		case SERE_PARAM_BOOL:
-		{
-			int v;
-			memcpy( &v, at, sizeof( v ) );
-			return v;
-		}
-	}
-	return NAN;
+	double d;
+	float f;
+	int32_t i;
+	uint32_t u;
+	int b;
+} member;
+
+static size_t member_size( sere_param_type type )
+{
+	return type == SERE_PARAM_DOUBLE ? sizeof( double ) : type == SERE_PARAM_BOOL ? sizeof( int ) : sizeof( float );
 }
 
-/* value is in range and whole where the type is: every cast below is exact but the float's,
- * which rounds the parsed double once, as the kernels always received it. */
+static double read_at( const sere_sim_params* params, size_t offset, sere_param_type type )
+{
+	member m;
+	memcpy( &m, (const char*) params + offset, member_size( type ) );
+	return type == SERE_PARAM_DOUBLE   ? m.d
+		   : type == SERE_PARAM_FLOAT  ? (double) m.f
+		   : type == SERE_PARAM_INT32  ? (double) m.i
+		   : type == SERE_PARAM_UINT32 ? (double) m.u
+									   : (double) m.b;
+}
+
+/* value is in range and whole where the type is: every conversion below is exact but the
+ * float's, which rounds the parsed double once, as the kernels always received it. */
 static void write_at( sere_sim_params* params, size_t offset, sere_param_type type, double value )
 {
-	char* at = (char*) params + offset;
-	switch ( type )
+	member m;
+	if ( type == SERE_PARAM_DOUBLE )
 	{
-		case SERE_PARAM_DOUBLE:
-			memcpy( at, &value, sizeof( value ) );
-			break;
-		case SERE_PARAM_FLOAT:
-		{
-			float v = (float) value;
-			memcpy( at, &v, sizeof( v ) );
-			break;
-		}
-		case SERE_PARAM_INT32:
-		{
-			int32_t v = (int32_t) value;
-			memcpy( at, &v, sizeof( v ) );
-			break;
-		}
-		case SERE_PARAM_UINT32:
-		{
-			uint32_t v = (uint32_t) value;
-			memcpy( at, &v, sizeof( v ) );
-			break;
-		}
-		case SERE_PARAM_BOOL:
-		{
-			int v = value != 0.0;
-			memcpy( at, &v, sizeof( v ) );
-			break;
-		}
+		m.d = value;
 	}
+	else if ( type == SERE_PARAM_FLOAT )
+	{
+		m.f = (float) value;
+	}
+	else if ( type == SERE_PARAM_INT32 )
+	{
+		m.i = (int32_t) value;
+	}
+	else if ( type == SERE_PARAM_UINT32 )
+	{
+		m.u = (uint32_t) value;
+	}
+	else
+	{
+		m.b = value != 0.0;
+	}
+	memcpy( (char*) params + offset, &m, member_size( type ) );
 }
 
 double sere_params_get( const sere_sim_params* params, const sere_param* row )
