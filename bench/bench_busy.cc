@@ -276,8 +276,8 @@ struct crumpled
 		x = x0, y = y0, z = z0;
 		vx.assign( n, 0.0f ), vy.assign( n, 0.0f ), vz.assign( n, 0.0f );
 		inv_m.assign( n, 1.0f );
-		params.thickness =
-			static_cast<float>( sere_sim_params_default().collision_thickness * sere_leaf_thickness_scale( model ) );
+		params.thickness = static_cast<float>( sere_params_decimal( sere_sim_params_default().leaf.collide.thickness ) *
+											   sere_leaf_thickness_scale( model ) );
 		params.rounds = 1;
 		if ( sere_bvh_create( model->tri, model->triangle_count, n, x.data(), y.data(), z.data(), &bvh ) != SERE_OK ||
 			 sere_collide_create( bvh, 0, &collide ) != SERE_OK )

@@ -102,7 +102,7 @@ const sere_model* dense_model()
 	}
 	sere_leaf_sim* sim = nullptr;
 	sere_status status = sere_leaf_create( &model, &sim );
-	sere_leaf_params leaf = sere_run_leaf_params( &params );
+	sere_leaf_params& leaf = params.leaf;
 	sere_leaf_stats stats = {};
 	int frames = 0;
 	while ( status == SERE_OK && !stats.desiccated && frames < kDryFrameCap )
@@ -146,7 +146,7 @@ struct Scene
 		: model( shape == kDried   ? sere_bench_dried_model( SERE_BENCH_MAPLE, kDriedFrames )
 				 : shape == kDense ? dense_model()
 								   : sere_bench_model( SERE_BENCH_MAPLE ) ),
-		  thickness( (float) sere_sim_params_default().collision_thickness * sere_leaf_thickness_scale( model ) ),
+		  thickness( sere_sim_params_default().leaf.collide.thickness * sere_leaf_thickness_scale( model ) ),
 		  n( model->triangle_particles ), f( model->triangle_count ), tri( model->tri, model->tri + 3 * (size_t) f ),
 		  x( n + f ), y( n + f ), z( n + f ), vx( n + f ), vy( n + f ), vz( n + f ), inv_m( n ), h( f )
 	{

@@ -87,7 +87,7 @@ const sere_model* sere_bench_dried_model( sere_bench_leaf which, int frames )
 	}
 	sere_leaf_sim* sim = nullptr;
 	sere_status status = sere_leaf_create( &dried[k], &sim );
-	sere_leaf_params leaf = sere_run_leaf_params( &params );
+	const sere_leaf_params& leaf = params.leaf;
 	sere_leaf_stats stats;
 	for ( int f = 0; f < frames && status == SERE_OK; ++f )
 	{

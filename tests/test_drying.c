@@ -57,11 +57,11 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 	cr_assert_eq(
 		sere_harness_build( path, -1, -1, points, &params, &model, &report, name, sizeof( name ), err, sizeof( err ) ),
 		0, "%s", err );
-	if ( params.face_down != 0.0 )
+	if ( params.face_down )
 	{
 		sere_model_mirror_z( &model );
 	}
-	sere_model_rest_on( &model, (float) params.ground );
+	sere_model_rest_on( &model, params.leaf.ground );
 	double rest = 0.0;
 	for ( int32_t k = 0; k < model.t_springs; ++k )
 	{
@@ -70,14 +70,14 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 	run->spacing = rest / model.t_springs;
 	sere_leaf_sim* sim;
 	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
-	sere_leaf_params leaf_params = sere_run_leaf_params( &params );
+	const sere_leaf_params* leaf_params = &params.leaf;
 	sere_leaf veins; /* for the measures along and across the main veins */
 	cr_assert_eq( sere_leaf_load( path, &veins, err, sizeof( err ) ), 0, "%s", err );
-	sere_shape_input in = sere_leaf_shape_input( &model, params.ground );
+	sere_shape_input in = sere_leaf_shape_input( &model, sere_params_decimal( params.leaf.ground ) );
 	in.veins = &veins.file.shape;
 	cr_assert_eq( sere_shape_measure( &in, &run->fresh ), SERE_OK );
 	sere_watch* watch;
-	cr_assert_eq( sere_watch_create( &model, params.ground, &watch ), SERE_OK );
+	cr_assert_eq( sere_watch_create( &model, sere_params_decimal( params.leaf.ground ), &watch ), SERE_OK );
 	run->length = sere_watch_length( watch );
 	run->normal_z_min = 1.0;
 	run->gap_max = -INFINITY;
@@ -91,11 +91,11 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 			before[3 * i] = model.p.x[i], before[3 * i + 1] = model.p.y[i], before[3 * i + 2] = model.p.z[i];
 		}
 		sere_leaf_stats stats;
-		cr_assert_eq( sere_leaf_step( sim, &leaf_params, &stats ), SERE_OK, "%s frame %d", preset, frame );
+		cr_assert_eq( sere_leaf_step( sim, leaf_params, &stats ), SERE_OK, "%s frame %d", preset, frame );
 		/* resting: on the ground (to float rounding of the clamp) before and after the frame */
-		for ( int32_t i = 0; isfinite( params.ground ) && i < count; ++i )
+		for ( int32_t i = 0; isfinite( params.leaf.ground ) && i < count; ++i )
 		{
-			if ( before[3 * i + 2] - params.ground < 1e-6 && model.p.z[i] - params.ground < 1e-6 )
+			if ( before[3 * i + 2] - params.leaf.ground < 1e-6 && model.p.z[i] - params.leaf.ground < 1e-6 )
 			{
 				run->contact_slide += hypot( model.p.x[i] - before[3 * i], model.p.y[i] - before[3 * i + 1] );
 			}
@@ -117,7 +117,7 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 		}
 	}
 	free( before );
-	in = sere_leaf_shape_input( &model, params.ground );
+	in = sere_leaf_shape_input( &model, sere_params_decimal( params.leaf.ground ) );
 	in.veins = &veins.file.shape;
 	cr_assert_eq( sere_shape_measure( &in, &run->dry ), SERE_OK );
 	sere_leaf_free( &veins );

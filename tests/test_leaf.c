@@ -244,7 +244,7 @@ static int stall_run( float stall, int frames, float* xyz, int32_t* iterations, 
 	sere_leaf_params params = drying_params( -0.2, -1.0, 1.0 );
 	params.pbd.max_iterations = 100;
 	params.pbd.compliance = 0.0f; /* the stall rule belongs to the paper's hard constraints */
-	params.pbd_stall = stall;
+	params.pbd.stall = stall;
 	int stalled = 0;
 	*iterations = 0;
 	*capped = 0;

@@ -349,26 +349,27 @@ static int leaf_fail( litter_result* r, const char* text )
 static sere_status dry_model( const litter_options* o, const sere_sim_params* params, sere_model* model,
 							  sere_leaf_sim** sim, long* frames, int* desiccated )
 {
-	if ( params->face_down != 0.0 )
+	if ( params->face_down )
 	{
 		sere_model_mirror_z( model );
 	}
-	sere_model_rest_on( model, (float) params->ground );
+	sere_model_rest_on( model, params->leaf.ground );
 	*sim = NULL;
 	sere_status status = sere_leaf_create( model, sim );
-	sere_leaf_params leaf = sere_run_leaf_params( params );
-	if ( status == SERE_OK && ( params->crease != 0.0 || params->curl != 0.0 ) )
+	if ( status == SERE_OK && ( params->crease != 0.0f || params->curl != 0.0f ) )
 	{
-		sere_pbd_params shaping = leaf.pbd;
+		/* Sec. 3.1, as sere run shapes a leaf before it dries */
+		sere_pbd_params shaping = params->leaf.pbd;
 		shaping.max_iterations = 2000;
-		status = sere_leaf_shape_initial( *sim, (float) params->crease, (float) params->curl, &shaping );
+		status = sere_leaf_shape_initial( *sim, params->crease, params->curl, &shaping );
 	}
+	/* sere run --until-dry's rule: on until a layer ran dry (Sec. 6), or the cap */
 	long frame = 0;
 	*desiccated = 0;
 	while ( status == SERE_OK && frame < o->frames && !*desiccated )
 	{
 		sere_leaf_stats stats;
-		status = sere_leaf_step( *sim, &leaf, &stats );
+		status = sere_leaf_step( *sim, &params->leaf, &stats );
 		frame += status == SERE_OK;
 		*desiccated = status == SERE_OK && stats.desiccated;
 	}
@@ -457,9 +458,9 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 		return leaf_fail( r, err );
 	}
 	/* the litter lies on the ground whatever the preset says: under gravity, on z = 0 */
-	params.gravity[0] = 0.0, params.gravity[1] = 0.0, params.gravity[2] = -9.8;
-	params.ground = 0.0;
-	params.seed = (double) d.sample_seed;
+	params.leaf.gravity[0] = 0.0f, params.leaf.gravity[1] = 0.0f, params.leaf.gravity[2] = -9.8f;
+	params.leaf.ground = 0.0f;
+	params.seed = d.sample_seed;
 	char relative[64];
 	snprintf( relative, sizeof( relative ), "leaves/%s.leaf", species_names[d.species] );
 	if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )

@@ -73,7 +73,7 @@ int sere_cmd_model( int argc, char** argv )
 		return 2;
 	}
 
-	params.seed = (double) seed;
+	params.seed = (uint32_t) seed;
 	sere_model model;
 	sere_build_report report;
 	char name[128];

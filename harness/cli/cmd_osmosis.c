@@ -154,7 +154,7 @@ int sere_cmd_osmosis( int argc, char** argv )
 	}
 	if ( conservative >= 0 )
 	{
-		params.conservative = conservative;
+		params.leaf.osmosis.mode = conservative ? SERE_OSMOSIS_CONSERVATIVE : SERE_OSMOSIS_PAPER;
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
 	sere_model model;
@@ -174,22 +174,22 @@ int sere_cmd_osmosis( int argc, char** argv )
 		status = sere_osmosis_create( model.triangle_particles, model.triangle_count, model.s.a + model.t_springs,
 									  model.s.b + model.t_springs, model.v_springs, &v_layer );
 	}
-	sere_osmosis_params op = sere_osmosis_params_default();
-	op.dt = params.dt;
-	op.lambda_min = params.lambda_min;
-	op.lambda_max = params.lambda_max;
-	op.mode = params.conservative != 0.0 ? SERE_OSMOSIS_CONSERVATIVE : SERE_OSMOSIS_PAPER;
+	/* The leaf's osmosis settings at the leaf's time step, solved to the stand-alone solver's own
+	 * tolerance (the leaf loosens its CG stop, kernels/drying/leaf.c), at dt as written */
+	sere_osmosis_params op = params.leaf.osmosis;
+	op.tolerance = sere_osmosis_params_default().tolerance;
+	op.dt = sere_params_decimal( params.leaf.dt );
 	printf( "%s: %d particles, %s mode, %d threads\nstep  cg_T  residual_T  water_T       cg_V  residual_V  water_V\n",
 			name, model.p.count, op.mode == SERE_OSMOSIS_PAPER ? "paper" : "conservative", bound );
 	for ( long long step = 1; step <= steps && status == SERE_OK; ++step )
 	{
 		sere_osmosis_report rt, rv;
-		op.water_rate = params.water_rate_t;
+		op.water_rate = params.leaf.water_rate_t;
 		status = sere_osmosis_step( t_layer, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
 									model.p.m, &op, &rt );
 		if ( status == SERE_OK )
 		{
-			op.water_rate = params.water_rate_v;
+			op.water_rate = params.leaf.water_rate_v;
 			status = sere_osmosis_step( v_layer, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
 										model.p.m, &op, &rv );
 		}

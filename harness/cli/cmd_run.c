@@ -60,45 +60,6 @@ static void run_help( void )
 	printf( "Interrupting (Ctrl-C) stops after the current frame and still writes the summary and pictures.\n" );
 }
 
-sere_leaf_params sere_run_leaf_params( const sere_sim_params* s )
-{
-	sere_leaf_params p = sere_leaf_params_default();
-	p.dt = (float) s->dt;
-	p.gravity[0] = (float) s->gravity[0];
-	p.gravity[1] = (float) s->gravity[1];
-	p.gravity[2] = (float) s->gravity[2];
-	p.ground = (float) s->ground;
-	p.damping = (float) s->damping;
-	p.water_rate_t = s->water_rate_t;
-	p.water_rate_v = s->water_rate_v;
-	p.osmosis.lambda_min = s->lambda_min;
-	p.osmosis.lambda_max = s->lambda_max;
-	p.osmosis.mode = s->conservative != 0.0 ? SERE_OSMOSIS_CONSERVATIVE : SERE_OSMOSIS_PAPER;
-	p.shrink.sigma_vein = s->sigma_vein;
-	p.shrink.sigma_surf = s->sigma_surf;
-	p.shrink.alpha = s->alpha;
-	p.shrink.m_min = s->layer.m_min;
-	p.shrink.min_length_ratio = s->min_length_ratio;
-	p.pbd.stiffness = (float) s->stiffness;
-	p.pbd.tolerance = (float) s->strain_tolerance;
-	p.pbd.max_iterations = (int32_t) s->max_iterations;
-	p.pbd.compliance = (float) s->compliance;
-	p.vein_compliance = (float) s->vein_compliance;
-	p.voronoi_compliance = (float) s->voronoi_compliance;
-	p.local_stop = s->local_stop != 0.0;
-	p.link_compliance = (float) s->link_compliance;
-	p.friction_static = (float) s->friction_static;
-	p.friction_kinetic = (float) s->friction_kinetic;
-	p.pbd_stall = (float) s->pbd_stall;
-	p.pbd.chebyshev_rho = (float) s->chebyshev_rho;
-	p.collide.thickness = (float) s->collision_thickness;
-	p.collisions = s->collision_thickness > 0.0;
-	p.scale_thickness = s->collision_scaling != 0.0;
-	p.restore_measured = s->restore_measured != 0.0;
-	p.soften = s->soften != 0.0;
-	return p;
-}
-
 static double leaf_area( const sere_model* model )
 {
 	const sere_particles* p = &model->p;
@@ -365,7 +326,6 @@ typedef struct run_state
 	sere_model model;
 	int have_model;
 	sere_leaf_sim* sim;
-	sere_leaf_params leaf_params;
 	sere_shape shape_fresh, shape_dry;
 	sere_watch* watch;
 	sere_watch_frame watched;
@@ -394,7 +354,7 @@ typedef struct run_state
 /* The shape measures' input for the leaf as it is now. */
 static sere_shape_input run_shape_input( const run_state* r )
 {
-	sere_shape_input in = sere_leaf_shape_input( &r->model, r->o->params.ground );
+	sere_shape_input in = sere_leaf_shape_input( &r->model, sere_params_decimal( r->o->params.leaf.ground ) );
 	in.veins = &r->leaf.file.shape;
 	return in;
 }
@@ -434,24 +394,23 @@ static int run_open_leaf( run_state* r )
 		return 1;
 	}
 	remove_old_frames( frames_dir );
-	if ( o->params.face_down != 0.0 )
+	if ( o->params.face_down )
 	{
 		sere_model_mirror_z( &r->model );
 	}
-	sere_model_rest_on( &r->model, (float) o->params.ground );
+	sere_model_rest_on( &r->model, o->params.leaf.ground );
 	sere_status status = sere_leaf_create( &r->model, &r->sim );
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "sere run: %s\n", sere_status_text( status ) );
 		return 1;
 	}
-	r->leaf_params = sere_run_leaf_params( &o->params );
 	/* the fresh shape, and a watch on crossings, drift, the ground and turning over */
 	sere_shape_input shape_input = run_shape_input( r );
 	status = sere_shape_measure( &shape_input, &r->shape_fresh );
 	if ( status == SERE_OK )
 	{
-		status = sere_watch_create( &r->model, o->params.ground, &r->watch );
+		status = sere_watch_create( &r->model, sere_params_decimal( o->params.leaf.ground ), &r->watch );
 	}
 	if ( status != SERE_OK )
 	{
@@ -459,12 +418,12 @@ static int run_open_leaf( run_state* r )
 		return 1;
 	}
 	r->shape_dry = r->shape_fresh;
-	if ( o->params.crease != 0.0 || o->params.curl != 0.0 )
+	if ( o->params.crease != 0.0f || o->params.curl != 0.0f )
 	{
 		/* Sec. 3.1: creases along the veins and a curled blade before drying starts. */
-		sere_pbd_params shaping = r->leaf_params.pbd;
+		sere_pbd_params shaping = o->params.leaf.pbd;
 		shaping.max_iterations = 2000;
-		status = sere_leaf_shape_initial( r->sim, (float) o->params.crease, (float) o->params.curl, &shaping );
+		status = sere_leaf_shape_initial( r->sim, o->params.crease, o->params.curl, &shaping );
 		if ( status != SERE_OK )
 		{
 			fprintf( stderr, "sere run: initial shaping: %s\n", sere_status_text( status ) );
@@ -513,7 +472,7 @@ static int run_step( run_state* r, long long frame, const sere_progress* progres
 {
 	const run_options* o = r->o;
 	sere_leaf_stats next;
-	r->status = sere_leaf_step( r->sim, &r->leaf_params, &next );
+	r->status = sere_leaf_step( r->sim, &o->params.leaf, &next );
 	if ( r->status != SERE_OK )
 	{
 		fprintf( stderr, "\nsere run: frame %lld: %s\n", frame, sere_status_text( r->status ) );
@@ -544,18 +503,18 @@ static int run_step( run_state* r, long long frame, const sere_progress* progres
 	r->onset_tip = r->onset_tip < 0 && fabs( w->roll_tip ) >= kRollOnset ? frame : r->onset_tip;
 	r->onset_base = r->onset_base < 0 && fabs( w->roll_base ) >= kRollOnset ? frame : r->onset_base;
 	double area = leaf_area( &r->model );
-	r->curve_t[frame] = frame * o->params.dt;
+	r->curve_t[frame] = frame * sere_params_decimal( o->params.leaf.dt );
 	r->curve_rwc[frame] = s->relative_water;
 	r->curve_area[frame] = area / r->area0;
 	fprintf( r->csv,
 			 "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,"
 			 "%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
-			 frame, frame * o->params.dt, s->water_t, s->water_v, s->relative_water, area, area / r->area0,
-			 s->max_strain, s->residual, s->pbd_converged, s->grounded, (long long) w->crossings, w->drift,
-			 w->mass_drift, w->ground_gap, w->normal_z, w->tilt_degrees, w->roll_tip, w->roll_base, s->cg_iterations_t,
-			 s->cg_iterations_v, s->pbd_iterations, s->pbd_hit_cap, s->pbd_stalled, s->contacts, s->edge_contacts,
-			 s->unresolved, s->collision_thickness, s->desiccated, s->osmosis_ms, s->dynamics_ms, s->collisions_ms,
-			 s->total_ms );
+			 frame, frame * sere_params_decimal( o->params.leaf.dt ), s->water_t, s->water_v, s->relative_water, area,
+			 area / r->area0, s->max_strain, s->residual, s->pbd_converged, s->grounded, (long long) w->crossings,
+			 w->drift, w->mass_drift, w->ground_gap, w->normal_z, w->tilt_degrees, w->roll_tip, w->roll_base,
+			 s->cg_iterations_t, s->cg_iterations_v, s->pbd_iterations, s->pbd_hit_cap, s->pbd_stalled, s->contacts,
+			 s->edge_contacts, s->unresolved, s->collision_thickness, s->desiccated, s->osmosis_ms, s->dynamics_ms,
+			 s->collisions_ms, s->total_ms );
 	if ( fflush( r->csv ) != 0 )
 	{
 		snprintf( r->failure, sizeof( r->failure ), "cannot write %s: %s", r->csv_path, strerror( errno ) );
@@ -564,8 +523,8 @@ static int run_step( run_state* r, long long frame, const sere_progress* progres
 	}
 	sere_leaf_relative_water( r->sim, r->rwc );
 	if ( ( frame % o->every == 0 || frame == o->frames ) &&
-		 write_frame( o->out, (int) frame, frame * o->params.dt, &r->model, r->rwc, &r->pvd, r->failure,
-					  sizeof( r->failure ) ) != 0 )
+		 write_frame( o->out, (int) frame, frame * sere_params_decimal( o->params.leaf.dt ), &r->model, r->rwc, &r->pvd,
+					  r->failure, sizeof( r->failure ) ) != 0 )
 	{
 		run_fail_output( r, progress );
 		return -1;
@@ -649,8 +608,9 @@ static int run_frames( run_state* r )
 		sere_progress_update( &progress, frame );
 		if ( dry )
 		{
-			if ( frame % o->every != 0 && write_frame( o->out, (int) frame, frame * o->params.dt, &r->model, r->rwc,
-													   &r->pvd, r->failure, sizeof( r->failure ) ) != 0 )
+			if ( frame % o->every != 0 &&
+				 write_frame( o->out, (int) frame, frame * sere_params_decimal( o->params.leaf.dt ), &r->model, r->rwc,
+							  &r->pvd, r->failure, sizeof( r->failure ) ) != 0 )
 			{
 				run_fail_output( r, &progress );
 			}
@@ -714,7 +674,7 @@ static void run_pictures( run_state* r )
 				shot->x, shot->y, shot->z, shot->rwc, n, (int) shot->frame, shot->frame > 0 ? shot->relative_water : 1.0
 			};
 		}
-		const float ground = (float) o->params.ground;
+		const float ground = o->params.leaf.ground;
 		snprintf( title, sizeof( title ), "%s, preset %s: fresh, middle and dry in 3D (oblique) and from above",
 				  r->name, preset );
 		snprintf( picture, sizeof( picture ), "%s/drying3d.png", o->out );
@@ -773,15 +733,16 @@ static void run_summary_members( const run_state* r, FILE* summary, long long co
 			 interrupted ? "true" : "false", r->bound, r->model.p.count, r->model.s.count, r->model.triangle_count,
 			 r->done > 0 ? r->stats.relative_water : 1.0, r->curve_area[r->done > 0 ? r->done : 0],
 			 r->sum_osmosis / frames_done, r->sum_dynamics / frames_done, r->sum_collisions / frames_done,
-			 r->sum_total / frames_done, params->strain_tolerance, (int) params->max_iterations, r->cap_hits, r->stalls,
-			 r->max_pbd_iterations );
+			 r->sum_total / frames_done, params->leaf.pbd.tolerance, params->leaf.pbd.max_iterations, r->cap_hits,
+			 r->stalls, r->max_pbd_iterations );
 	/* the frame rule and what a user looks for, over the whole run (docs/DESIGN.md, measures) */
 	fprintf( summary,
 			 "  \"pbd_rule\": \"%s\",\n  \"converged_frames\": %lld,\n  \"crossings_max\": %lld,\n"
 			 "  \"crossing_frames\": %lld,\n  \"drift_max\": %.6g,\n  \"mass_drift_max\": %.6g,\n"
 			 "  \"tilt_max_degrees\": %.4g,\n  \"ground_gap_max\": ",
-			 params->compliance > 0.0 ? "xpbd residual" : "paper (max |C/l| < lambda_C or the cap)", r->converged,
-			 (long long) r->crossings_max, r->crossing_frames, r->drift_max, r->mass_drift_max, r->tilt_max );
+			 params->leaf.pbd.compliance > 0.0f ? "xpbd residual" : "paper (max |C/l| < lambda_C or the cap)",
+			 r->converged, (long long) r->crossings_max, r->crossing_frames, r->drift_max, r->mass_drift_max,
+			 r->tilt_max );
 	json_number( summary, r->gap_max );
 	fprintf( summary, ",\n  \"roll_onset\": {\"threshold\": %g, \"tip_frame\": ", kRollOnset );
 	json_number( summary, r->onset_tip >= 0 ? (double) r->onset_tip : NAN );
@@ -834,11 +795,11 @@ static void run_print( const run_state* r )
 			r->sum_osmosis / frames_done, r->sum_dynamics / frames_done, r->sum_collisions / frames_done,
 			r->sum_total / frames_done );
 	printf( "  frames: %s stop %g, converged in %lld of %lld (cap %d)",
-			o->params.compliance > 0.0 ? "XPBD residual" : "paper |C/l|", o->params.strain_tolerance, r->converged,
-			r->done, (int) o->params.max_iterations );
-	if ( o->params.pbd_stall > 0.0 )
+			o->params.leaf.pbd.compliance > 0.0f ? "XPBD residual" : "paper |C/l|", o->params.leaf.pbd.tolerance,
+			r->converged, r->done, o->params.leaf.pbd.max_iterations );
+	if ( o->params.leaf.pbd.stall > 0.0f )
 	{
-		printf( ", stalled (pbd_stall %g) in %lld", o->params.pbd_stall, r->stalls );
+		printf( ", stalled (pbd_stall %g) in %lld", o->params.leaf.pbd.stall, r->stalls );
 	}
 	printf( "\n  shape: extent %.2f of fresh length, edge-triangle crossings %lld at most (in %lld frames), "
 			"drift %.3f L\n",

@@ -94,13 +94,12 @@ int sere_cmd_table1( int argc, char** argv )
 		}
 		sere_leaf_sim* sim;
 		sere_status status = sere_leaf_create( &model, &sim );
-		sere_leaf_params leaf = sere_run_leaf_params( &params );
 		double osmosis = 0, dynamics = 0, collisions = 0, total = 0;
 		long long cap_hits = 0, stalls = 0;
 		sere_leaf_stats stats;
 		for ( long long f = 0; f < frames && status == SERE_OK; ++f )
 		{
-			status = sere_leaf_step( sim, &leaf, &stats );
+			status = sere_leaf_step( sim, &params.leaf, &stats );
 			osmosis += stats.osmosis_ms, dynamics += stats.dynamics_ms;
 			collisions += stats.collisions_ms, total += stats.total_ms;
 			cap_hits += stats.pbd_hit_cap;
@@ -122,8 +121,9 @@ int sere_cmd_table1( int argc, char** argv )
 				"%lld, "
 				"\"threads\": %d}",
 				k ? ", " : "", row->leaf, model.p.count, model.s.count, osmosis, dynamics, collisions, total,
-				row->osmosis, row->dynamics, row->collisions, row->total, params.strain_tolerance,
-				(int) params.max_iterations, cap_hits, params.pbd_stall, stalls, params.compliance, frames, bound );
+				row->osmosis, row->dynamics, row->collisions, row->total, params.leaf.pbd.tolerance,
+				params.leaf.pbd.max_iterations, cap_hits, params.leaf.pbd.stall, stalls, params.leaf.pbd.compliance,
+				frames, bound );
 		}
 		else
 		{
@@ -131,7 +131,7 @@ int sere_cmd_table1( int argc, char** argv )
 				"%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld",
 				row->leaf, model.p.count, model.s.count, osmosis, row->osmosis, dynamics, row->dynamics, collisions,
 				row->collisions, total, row->total, row->total / total, cap_hits, frames );
-			if ( params.pbd_stall > 0.0 )
+			if ( params.leaf.pbd.stall > 0.0f )
 			{
 				printf( ", stalled %lld/%lld", stalls, frames );
 			}

@@ -13,135 +13,187 @@
 #define SERE_DATA_DIR "/usr/local/share/sere"
 #endif
 
+/* Every kernel parameter's default is its kernel's *_default(); only the harness's own settings
+ * get theirs here. */
 sere_sim_params sere_sim_params_default( void )
 {
 	sere_sim_params p = {
 		.layer = sere_layer_params_default(),
-		.dt = 0.002,
-		.gravity = { 0.0, 0.0, 0.0 },
-		.damping = 0.1,
-		.ground = -INFINITY,
-		.lambda_min = 0.1,
-		.lambda_max = 0.1,
-		.water_rate_t = -0.1,
-		.water_rate_v = -0.1,
-		.sigma_vein = 0.5,
-		.sigma_surf = 0.5,
-		.alpha = 1.3,
-		.min_length_ratio = 0.2,
-		.stiffness = 1.0,
-		.strain_tolerance = 1e-3,
-		.compliance = 4e-6,
-		.vein_compliance = 0.1,
-		.voronoi_compliance = 1.0,
-		.link_compliance = 1.0,
+		.leaf = sere_leaf_params_default(),
+		.crease = 0.0f,
+		.curl = 0.0f,
 		.face_down = 0,
-		.local_stop = 0,
-		.friction_static = 0.8,
-		.friction_kinetic = 0.6,
-		.max_iterations = 200,
-		.chebyshev_rho = 0.0,
-		.pbd_stall = 0.0,
-		.collision_thickness = 0.004,
-		.collision_scaling = 1,
-		.restore_measured = 1,
-		.conservative = 0,
-		.soften = 0,
-		.crease = 0.0,
-		.curl = 0.0,
 		.seed = 1,
 	};
 	return p;
 }
 
-typedef struct key_info
-{
-	const char* name;
-	size_t offset;
-	double lo, hi;
-	int integer;
-	const char* help;
-} key_info;
+/* The osmosis mode is set through an int-sized row: paper 0, conservative 1. */
+_Static_assert( sizeof( sere_osmosis_mode ) == sizeof( int ), "the conservative row writes an int" );
+_Static_assert( SERE_OSMOSIS_PAPER == 0 && SERE_OSMOSIS_CONSERVATIVE == 1, "the conservative row is 0/1" );
 
-#define KEY( field, lo, hi, integer, help )                                                                            \
+#define AT( member ) offsetof( sere_sim_params, member )
+#define ROW( name, symbol, type, member, lo, hi, doc )                                                                 \
 	{                                                                                                                  \
-#field, offsetof( sere_sim_params, field ), lo, hi, integer, help                                              \
-	}
-#define LKEY( name, field, lo, hi, help )                                                                              \
-	{                                                                                                                  \
-		name, offsetof( sere_sim_params, layer ) + offsetof( sere_layer_params, field ), lo, hi, 0, help               \
+		name, symbol, SERE_PARAM_##type, AT( member ), 0, lo, hi, doc                                                  \
 	}
 
-static const key_info keys[] = {
-	LKEY( "h_vein", h_vein, -1.0, 1.0, "Voronoi offset of vein triangles (Fig. 5e, Table 2)" ),
-	LKEY( "h_surf", h_surf, -1.0, 1.0, "Voronoi offset of the other triangles" ),
-	LKEY( "omega_vein", omega_vein, 1e-6, 1e6, "shortest-path weight of vein springs (Sec. 3.3)" ),
-	LKEY( "omega_surf", omega_surf, 1e-6, 1e6, "shortest-path weight of surface springs" ),
-	LKEY( "D", D, 1e-3, 100.0, "exponent of Jeong Eq. 1" ),
-	LKEY( "m_min", m_min, 1e-6, 1e6, "lower mass of Jeong Eq. 2" ),
-	LKEY( "m_max", m_max, 1e-6, 1e6, "upper mass of Jeong Eq. 2" ),
-	LKEY( "mu0", mu0, 0.0, 0.999, "initial water ratio w = mu0 m" ),
-	KEY( dt, 1e-6, 1.0, 0, "time step" ),
-	{ "gravity_x", offsetof( sere_sim_params, gravity ), -1e3, 1e3, 0, "gravity, x" },
-	{ "gravity_y", offsetof( sere_sim_params, gravity ) + sizeof( double ), -1e3, 1e3, 0, "gravity, y" },
-	{ "gravity_z", offsetof( sere_sim_params, gravity ) + 2 * sizeof( double ), -1e3, 1e3, 0,
-	  "gravity, z (the leaf's normal at rest is +z)" },
-	KEY( damping, 0.0, 1.0, 0, "fraction of every velocity removed per frame (PBD damping)" ),
-	KEY( ground, -INFINITY, 1e3, 0, "height of the supporting plane (z); -inf for none" ),
-	KEY( lambda_min, 0.0, 1e6, 0, "diffusion coefficient at tau = 0 (Jeong Eq. 8)" ),
-	KEY( lambda_max, 0.0, 1e6, 0, "diffusion coefficient at tau = 1" ),
-	KEY( water_rate_t, -1e3, 1e3, 0, "signed water rate of the T layer (Table 2 w_loss^T; negative = losing)" ),
-	KEY( water_rate_v, -1e3, 1e3, 0, "signed water rate of the V layer (Table 2 w_loss^V)" ),
-	KEY( sigma_vein, -100.0, 100.0, 0, "shrinkage rate of vein springs (Jeong Eq. 12)" ),
-	KEY( sigma_surf, -100.0, 100.0, 0, "shrinkage rate of surface springs (Jeong Eq. 12)" ),
-	KEY( alpha, 0.1, 10.0, 0, "exponent of Jeong Eq. 12" ),
-	KEY( min_length_ratio, 0.0, 1.0, 0, "springs stop shrinking below this fraction of their rest length" ),
-	KEY( stiffness, 0.0, 1.0, 0, "PBD stiffness k (Sec. 5.2)" ),
-	KEY( strain_tolerance, 1e-9, 1.0, 0,
-		 "the frame's stop: max |C + compliance/dt^2 lambda|/l (XPBD) or max |C/l| (lambda_C, compliance 0) below it" ),
-	KEY( compliance, 0.0, 1.0, 0,
+static const sere_param table[] = {
+	ROW( "h_vein", "h_vein", DOUBLE, layer.h_vein, -1.0, 1.0, "Voronoi offset of vein triangles (Fig. 5e, Table 2)" ),
+	ROW( "h_surf", "h_surf", DOUBLE, layer.h_surf, -1.0, 1.0, "Voronoi offset of the other triangles" ),
+	ROW( "omega_vein", "ω_vein", DOUBLE, layer.omega_vein, 1e-6, 1e6,
+		 "shortest-path weight of vein springs (Sec. 3.3)" ),
+	ROW( "omega_surf", "ω_surf", DOUBLE, layer.omega_surf, 1e-6, 1e6, "shortest-path weight of surface springs" ),
+	ROW( "D", "D", DOUBLE, layer.D, 1e-3, 100.0, "exponent of Jeong Eq. 1" ),
+	/* Jeong Eq. 2's lower mass is also Sec. 5.1's shrinkage stop: one value in both structs */
+	{ "m_min", "m_min", SERE_PARAM_DOUBLE, AT( layer.m_min ), AT( leaf.shrink.m_min ), 1e-6, 1e6,
+	  "lower mass of Jeong Eq. 2; a spring stops shrinking below it (Sec. 5.1)" },
+	ROW( "m_max", "m_max", DOUBLE, layer.m_max, 1e-6, 1e6, "upper mass of Jeong Eq. 2" ),
+	ROW( "mu0", "μ₀", DOUBLE, layer.mu0, 0.0, 0.999, "initial water ratio w = mu0 m" ),
+	ROW( "dt", "Δt", FLOAT, leaf.dt, 1e-6, 1.0, "time step" ),
+	ROW( "gravity_x", "g_x", FLOAT, leaf.gravity[0], -1e3, 1e3, "gravity, x" ),
+	ROW( "gravity_y", "g_y", FLOAT, leaf.gravity[1], -1e3, 1e3, "gravity, y" ),
+	ROW( "gravity_z", "g_z", FLOAT, leaf.gravity[2], -1e3, 1e3, "gravity, z (the leaf's normal at rest is +z)" ),
+	ROW( "damping", "", FLOAT, leaf.damping, 0.0, 1.0, "fraction of every velocity removed per frame (PBD damping)" ),
+	ROW( "ground", "", FLOAT, leaf.ground, -INFINITY, 1e3, "height of the supporting plane (z); -inf for none" ),
+	ROW( "lambda_min", "λ_min", DOUBLE, leaf.osmosis.lambda_min, 0.0, 1e6,
+		 "diffusion coefficient at tau = 0 (Jeong Eq. 8)" ),
+	ROW( "lambda_max", "λ_max", DOUBLE, leaf.osmosis.lambda_max, 0.0, 1e6, "diffusion coefficient at tau = 1" ),
+	ROW( "conservative", "", BOOL, leaf.osmosis.mode, 0.0, 1.0,
+		 "osmosis weights: 0 = paper (Jeong Eq. 8), 1 = conservative" ),
+	ROW( "water_rate_t", "w_loss^T", DOUBLE, leaf.water_rate_t, -1e3, 1e3,
+		 "signed water rate of the T layer (Table 2 w_loss^T; negative = losing)" ),
+	ROW( "water_rate_v", "w_loss^V", DOUBLE, leaf.water_rate_v, -1e3, 1e3,
+		 "signed water rate of the V layer (Table 2 w_loss^V)" ),
+	ROW( "sigma_vein", "σ_v", DOUBLE, leaf.shrink.sigma_vein, -100.0, 100.0,
+		 "shrinkage rate of vein springs (Jeong Eq. 12)" ),
+	ROW( "sigma_surf", "σ_s", DOUBLE, leaf.shrink.sigma_surf, -100.0, 100.0,
+		 "shrinkage rate of surface springs (Jeong Eq. 12)" ),
+	ROW( "alpha", "α", DOUBLE, leaf.shrink.alpha, 0.1, 10.0, "exponent of Jeong Eq. 12" ),
+	ROW( "min_length_ratio", "l_min", DOUBLE, leaf.shrink.min_length_ratio, 0.0, 1.0,
+		 "springs stop shrinking below this fraction of their rest length" ),
+	ROW( "stiffness", "k", FLOAT, leaf.pbd.stiffness, 0.0, 1.0, "PBD stiffness k (Sec. 5.2)" ),
+	ROW( "strain_tolerance", "λ_C", FLOAT, leaf.pbd.tolerance, 1e-9, 1.0,
+		 "the frame's stop: max |C + compliance/dt^2 lambda|/l (XPBD) or max |C/l| (lambda_C, compliance 0) below "
+		 "it" ),
+	ROW( "max_iterations", "", INT32, leaf.pbd.max_iterations, 1.0, 1e5, "PBD iteration cap" ),
+	ROW( "compliance", "", FLOAT, leaf.pbd.compliance, 0.0, 1.0,
 		 "XPBD compliance of the blade's springs (each frame an XPBD step); 0 = the paper's PBD (Table 1 rule)" ),
-	KEY( vein_compliance, 0.0, 1e3, 0, "compliance weight of vein springs relative to the blade (stiffer below 1)" ),
-	KEY( voronoi_compliance, 0.0, 1e6, 0, "compliance weight of the Voronoi layer's non-vein springs" ),
-	KEY( local_stop, 0.0, 1.0, 1,
-		 "Sec. 6 stop where a layer runs dry: a particle whose neighbour in the other layer is dry keeps its water "
-		 "(1)" ),
-	KEY( face_down, 0.0, 1.0, 1,
-		 "1: the leaf lies with its Voronoi side (+h) down (mirrored through z): the faster-drying layer on top" ),
-	KEY( link_compliance, 0.0, 1e3, 0, "compliance weight of the L (thickness) springs relative to the blade" ),
-	KEY( friction_static, 0.0, 10.0, 0, "static Coulomb friction of the ground contact" ),
-	KEY( friction_kinetic, 0.0, 10.0, 0, "kinetic Coulomb friction of the ground contact" ),
-	KEY( max_iterations, 1.0, 1e5, 1, "PBD iteration cap" ),
-	KEY( chebyshev_rho, 0.0, 0.99, 0,
+	ROW( "chebyshev_rho", "ρ", FLOAT, leaf.pbd.chebyshev_rho, 0.0, 0.99,
 		 "Chebyshev semi-iteration of the XPBD sweeps (Wang 2015) with this spectral radius after 5 plain sweeps; 0 = "
 		 "off (0.9: a third to a half fewer sweeps, shapes not bitwise those of the plain sweeps)" ),
-	KEY( pbd_stall, 0.0, 0.999, 0,
+	ROW( "pbd_stall", "", FLOAT, leaf.pbd.stall, 0.0, 0.999,
 		 "0 = the paper's PBD stop; s > 0: also stop when 10 sweeps lower max |C/l| by less than the fraction s" ),
-	KEY( collision_thickness, 0.0, 1.0, 0, "self-collision proximity distance (at rest when collision_scaling = 1)" ),
-	KEY( collision_scaling, 0.0, 1.0, 1,
+	ROW( "vein_compliance", "", FLOAT, leaf.vein_compliance, 0.0, 1e3,
+		 "compliance weight of vein springs relative to the blade (stiffer below 1)" ),
+	ROW( "voronoi_compliance", "", FLOAT, leaf.voronoi_compliance, 0.0, 1e6,
+		 "compliance weight of the Voronoi layer's non-vein springs" ),
+	ROW( "link_compliance", "", FLOAT, leaf.link_compliance, 0.0, 1e3,
+		 "compliance weight of the L (thickness) springs relative to the blade" ),
+	ROW( "friction_static", "", FLOAT, leaf.friction_static, 0.0, 10.0,
+		 "static Coulomb friction of the ground contact" ),
+	ROW( "friction_kinetic", "", FLOAT, leaf.friction_kinetic, 0.0, 10.0,
+		 "kinetic Coulomb friction of the ground contact" ),
+	ROW( "collisions", "", BOOL, leaf.collisions, 0.0, 1.0,
+		 "self-collision pass of the triangle layer (1); it is off as well when collision_thickness = 0" ),
+	ROW( "collision_thickness", "", FLOAT, leaf.collide.thickness, 0.0, 1.0,
+		 "self-collision proximity distance (at rest when collision_scaling = 1)" ),
+	ROW( "collision_scaling", "", BOOL, leaf.scale_thickness, 0.0, 1.0,
 		 "collision thickness shrinks with the triangle layer (sum of T rest lengths / at rest) (1) or stays fixed "
 		 "(0)" ),
-	KEY( restore_measured, 0.0, 1.0, 1, "Jeong Eq. 14 with the measured thickness (1) or the rest h (0)" ),
-	KEY( conservative, 0.0, 1.0, 1, "osmosis weights: 0 = paper (Jeong Eq. 8), 1 = conservative" ),
-	KEY( soften, 0.0, 1.0, 1, "scale PBD stiffness by relative water content (Sec. 7)" ),
-	KEY( crease, -0.5, 0.5, 0, "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
-	KEY( curl, -0.5, 0.5, 0, "initial shaping (Sec. 3.1): lengthen the other Voronoi springs by this fraction" ),
-	KEY( seed, 0.0, 4294967295.0, 1, "sampling seed" ),
+	ROW( "restore_measured", "ĥ", BOOL, leaf.restore_measured, 0.0, 1.0,
+		 "Jeong Eq. 14 with the measured thickness (1) or the rest h (0)" ),
+	ROW( "soften", "", BOOL, leaf.soften, 0.0, 1.0, "scale PBD stiffness by relative water content (Sec. 7)" ),
+	ROW( "local_stop", "", BOOL, leaf.local_stop, 0.0, 1.0,
+		 "Sec. 6 stop where a layer runs dry: a particle whose neighbour in the other layer is dry keeps its water "
+		 "(1)" ),
+	ROW( "crease", "", FLOAT, crease, -0.5, 0.5,
+		 "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
+	ROW( "curl", "", FLOAT, curl, -0.5, 0.5,
+		 "initial shaping (Sec. 3.1): lengthen the other Voronoi springs by this fraction" ),
+	ROW( "face_down", "", BOOL, face_down, 0.0, 1.0,
+		 "1: the leaf lies with its Voronoi side (+h) down (mirrored through z): the faster-drying layer on top" ),
+	ROW( "seed", "", UINT32, seed, 0.0, 4294967295.0, "sampling seed" ),
 };
 
-static const key_info* find_key( const char* name, size_t length )
+const sere_param* sere_params_table( int* count )
 {
-	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )
+	*count = (int) ( sizeof( table ) / sizeof( table[0] ) );
+	return table;
+}
+
+/* One member of any type the table holds, copied in and out of the struct by its size. */
+typedef union member
+{
+	double d;
+	float f;
+	int32_t i;
+	uint32_t u;
+	int b;
+} member;
+
+static size_t member_size( sere_param_type type )
+{
+	return type == SERE_PARAM_DOUBLE ? sizeof( double ) : type == SERE_PARAM_BOOL ? sizeof( int ) : sizeof( float );
+}
+
+static double read_at( const sere_sim_params* params, size_t offset, sere_param_type type )
+{
+	member m;
+	memcpy( &m, (const char*) params + offset, member_size( type ) );
+	return type == SERE_PARAM_DOUBLE   ? m.d
+		   : type == SERE_PARAM_FLOAT  ? (double) m.f
+		   : type == SERE_PARAM_INT32  ? (double) m.i
+		   : type == SERE_PARAM_UINT32 ? (double) m.u
+									   : (double) m.b;
+}
+
+/* value is in range and whole where the type is: every conversion below is exact but the
+ * float's, which rounds the parsed double once, as the kernels always received it. */
+static void write_at( sere_sim_params* params, size_t offset, sere_param_type type, double value )
+{
+	member m;
+	if ( type == SERE_PARAM_DOUBLE )
 	{
-		if ( strlen( keys[i].name ) == length && strncmp( keys[i].name, name, length ) == 0 )
+		m.d = value;
+	}
+	else if ( type == SERE_PARAM_FLOAT )
+	{
+		m.f = (float) value;
+	}
+	else if ( type == SERE_PARAM_INT32 )
+	{
+		m.i = (int32_t) value;
+	}
+	else if ( type == SERE_PARAM_UINT32 )
+	{
+		m.u = (uint32_t) value;
+	}
+	else
+	{
+		m.b = value != 0.0;
+	}
+	memcpy( (char*) params + offset, &m, member_size( type ) );
+}
+
+double sere_params_get( const sere_sim_params* params, const sere_param* row )
+{
+	return read_at( params, row->offset, row->type );
+}
+
+static const sere_param* find_key( const char* name, size_t length )
+{
+	for ( size_t i = 0; i < sizeof( table ) / sizeof( table[0] ); ++i )
+	{
+		if ( strlen( table[i].name ) == length && strncmp( table[i].name, name, length ) == 0 )
 		{
-			return keys + i;
+			return table + i;
 		}
 	}
 	return NULL;
 }
 
-static int parse_value( const key_info* key, const char* text, double* value, char* err, size_t err_size )
+static int parse_value( const sere_param* key, const char* text, double* value, char* err, size_t err_size )
 {
 	char* end = NULL;
 	errno = 0;
@@ -160,7 +212,7 @@ static int parse_value( const key_info* key, const char* text, double* value, ch
 		snprintf( err, err_size, "%s = %g is out of range [%g, %g]", key->name, v, key->lo, key->hi );
 		return -1;
 	}
-	if ( key->integer && v != floor( v ) )
+	if ( key->type != SERE_PARAM_DOUBLE && key->type != SERE_PARAM_FLOAT && v != floor( v ) )
 	{
 		snprintf( err, err_size, "%s must be a whole number, not %g", key->name, v );
 		return -1;
@@ -183,7 +235,7 @@ int sere_params_set( sere_sim_params* params, const char* assignment, char* err,
 	{
 		--length;
 	}
-	const key_info* key = find_key( name, length );
+	const sere_param* key = find_key( name, length );
 	if ( key == NULL )
 	{
 		snprintf( err, err_size, "unknown parameter '%.*s' (sere run --help lists them)", (int) length, name );
@@ -199,7 +251,11 @@ int sere_params_set( sere_sim_params* params, const char* assignment, char* err,
 	{
 		return -1;
 	}
-	memcpy( (char*) params + key->offset, &value, sizeof( double ) );
+	write_at( params, key->offset, key->type, value );
+	if ( key->also != 0 )
+	{
+		write_at( params, key->also, key->type, value );
+	}
 	if ( params->layer.m_max < params->layer.m_min )
 	{
 		snprintf( err, err_size, "m_max (%g) must not be below m_min (%g)", params->layer.m_max, params->layer.m_min );
@@ -346,34 +402,79 @@ int sere_params_apply( sere_sim_params* params, const char* preset, const char* 
 	return 0;
 }
 
-void sere_params_print_json( const sere_sim_params* params, FILE* f, const char* indent )
+/* The shortest text that reads back as the same value of row's type: a float row writes
+ * "0.002", not the double nearest 0.002f. */
+static void format_value( const sere_param* row, double value, char* text, size_t size )
 {
-	size_t count = sizeof( keys ) / sizeof( keys[0] );
-	for ( size_t i = 0; i < count; ++i )
+	if ( row->type != SERE_PARAM_FLOAT && row->type != SERE_PARAM_DOUBLE )
 	{
-		double value;
-		memcpy( &value, (const char*) params + keys[i].offset, sizeof( double ) );
-		const char* end = i + 1 < count ? ",\n" : "\n";
-		/* JSON has no infinity: the ground's −inf ("no plane") is written as null */
-		if ( isfinite( value ) )
+		snprintf( text, size, "%.0f", value );
+		return;
+	}
+	for ( int digits = 1; digits <= 17; ++digits )
+	{
+		snprintf( text, size, "%.*g", digits, value );
+		double back = strtod( text, NULL );
+		if ( row->type == SERE_PARAM_FLOAT ? (float) back == (float) value : back == value )
 		{
-			fprintf( f, "%s\"%s\": %.17g%s", indent, keys[i].name, value, end );
-		}
-		else
-		{
-			fprintf( f, "%s\"%s\": null%s", indent, keys[i].name, end );
+			return;
 		}
 	}
+}
+
+double sere_params_decimal( float value )
+{
+	static const sere_param as_float = { "", "", SERE_PARAM_FLOAT, 0, 0, 0.0, 0.0, "" };
+	char text[64];
+	format_value( &as_float, value, text, sizeof( text ) );
+	return isfinite( value ) ? strtod( text, NULL ) : (double) value;
+}
+
+void sere_params_print_json( const sere_sim_params* params, FILE* f, const char* indent )
+{
+	size_t count = sizeof( table ) / sizeof( table[0] );
+	for ( size_t i = 0; i < count; ++i )
+	{
+		double value = sere_params_get( params, table + i );
+		const char* end = i + 1 < count ? ",\n" : "\n";
+		/* JSON has no infinity: the ground's −inf ("no plane") is written as null */
+		char text[64] = "null";
+		if ( isfinite( value ) )
+		{
+			format_value( table + i, value, text, sizeof( text ) );
+		}
+		fprintf( f, "%s\"%s\": %s%s", indent, table[i].name, text, end );
+	}
+}
+
+static const char* type_name( sere_param_type type )
+{
+	switch ( type )
+	{
+		case SERE_PARAM_DOUBLE:
+			return "double";
+		case SERE_PARAM_FLOAT:
+			return "float";
+		case SERE_PARAM_INT32:
+			return "int32";
+		case SERE_PARAM_UINT32:
+			return "uint32";
+		case SERE_PARAM_BOOL:
+			return "bool";
+	}
+	return "?";
 }
 
 void sere_params_describe( FILE* f )
 {
 	sere_sim_params defaults = sere_sim_params_default();
-	for ( size_t i = 0; i < sizeof( keys ) / sizeof( keys[0] ); ++i )
+	for ( size_t i = 0; i < sizeof( table ) / sizeof( table[0] ); ++i )
 	{
-		double value;
-		memcpy( &value, (const char*) &defaults + keys[i].offset, sizeof( double ) );
-		fprintf( f, "  %-20s %s (default %g, range [%g, %g])\n", keys[i].name, keys[i].help, value, keys[i].lo,
-				 keys[i].hi );
+		const sere_param* row = table + i;
+		char value[64];
+		format_value( row, sere_params_get( &defaults, row ), value, sizeof( value ) );
+		fprintf( f, "  %-20s %s", row->name, row->doc );
+		fprintf( f, "\n  %-20s %s%s%s, default %s, range [%g, %g]\n", "", row->symbol,
+				 row->symbol[0] != '\0' ? ", " : "", type_name( row->type ), value, row->lo, row->hi );
 	}
 }

@@ -2,8 +2,10 @@
 #pragma once
 
 #include "drying/layers.h"
+#include "drying/leaf.h"
 
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #ifdef __cplusplus
@@ -11,41 +13,45 @@ extern "C"
 {
 #endif
 
+/* The kernels' own parameter structs, filled in place by the table in params.c, plus the few
+ * settings only the harness reads. A kernel parameter's default is its kernel's *_default(). */
 typedef struct sere_sim_params
 {
-	sere_layer_params layer; /* h_vein, h_surf, omega_*, D, m_min, m_max, mu0 */
-	double dt;
-	double gravity[3];
-	double damping; /* fraction of every velocity removed per frame */
-	double ground;	/* height of the supporting plane below the leaf (z), or -inf for none */
-	double lambda_min, lambda_max;
-	double water_rate_t; /* signed water rate of the T layer: Table 2's w_loss^T, −0.1 = losing 0.1 per unit time */
-	double water_rate_v; /* the same for the V layer */
-	double sigma_vein, sigma_surf;
-	double alpha;			   /* exponent of Jeong Eq. 12 (Sec. 5.1: ≈ 1.3) */
-	double min_length_ratio;   /* springs stop shrinking below this fraction of l⁰ */
-	double stiffness;		   /* PBD k ∈ [0, 1] */
-	double strain_tolerance;   /* the stop: max |C + α̃λ|/l (XPBD) or max |C/l| < λ_C (the paper, compliance 0) */
-	double compliance;		   /* XPBD compliance α of the blade's springs; 0 = the paper's hard PBD */
-	double vein_compliance;	   /* compliance weight of vein springs (α_vein = α · this) */
-	double voronoi_compliance; /* compliance weight of the Voronoi layer's other springs */
-	double link_compliance;	   /* compliance weight of the L springs */
-	double friction_static;	   /* Coulomb coefficients of the ground contact */
-	double friction_kinetic;
-	double max_iterations;		/* PBD iteration cap */
-	double chebyshev_rho;		/* Chebyshev semi-iteration of the XPBD sweeps (Wang 2015): 0 off, else ρ */
-	double pbd_stall;			/* 0: the paper's stop rule; s > 0: also stop when 10 sweeps gain less than s */
-	double collision_thickness; /* vertex–triangle proximity distance, leaf units (at rest when scaled) */
-	double collision_scaling;	/* the thickness shrinks with the triangle layer (1) or stays fixed (0) */
-	double restore_measured;	/* Jeong Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
-	double conservative;		/* osmosis: 0 = the paper's Jeong Eq. 8, 1 = conservative weights */
-	double soften;				/* Sec. 7: stiffness scaled by relative water content (1) or constant (0) */
-	double crease;				/* Sec. 3.1 initial shaping: Voronoi vein springs shortened by this fraction */
-	double curl;				/* ... and the other Voronoi springs lengthened by this fraction */
-	double local_stop;			/* Sec. 6 stop where a layer runs dry (1) or only for the whole leaf (0) */
-	double face_down;			/* the leaf lies on the face its Voronoi layer is offset to (+n): mirrored through z */
-	double seed;
+	sere_layer_params layer; /* the model builder's: h_vein, h_surf, omega_*, D, m_min, m_max, mu0 */
+	sere_leaf_params leaf;	 /* the drying kernel's, handed to sere_leaf_step as it is */
+	float crease;			 /* Sec. 3.1 initial shaping: Voronoi vein springs shortened by this fraction */
+	float curl;				 /* ... and the other Voronoi springs lengthened by this fraction */
+	int face_down;			 /* the leaf lies on the face its Voronoi layer is offset to (+n): mirrored through z */
+	uint32_t seed;			 /* sampling seed of the model builder */
 } sere_sim_params;
+
+typedef enum sere_param_type
+{
+	SERE_PARAM_DOUBLE,
+	SERE_PARAM_FLOAT,
+	SERE_PARAM_INT32,
+	SERE_PARAM_UINT32,
+	SERE_PARAM_BOOL, /* an int holding 0 or 1 (the kernels' flags are ints) */
+} sere_param_type;
+
+/* One row of the parameter table: the one place a parameter is named, typed, placed, bounded
+ * and documented. */
+typedef struct sere_param
+{
+	const char* name;	/* the key of presets, --set and summary.json */
+	const char* symbol; /* the paper's symbol, "" where the paper has none */
+	sere_param_type type;
+	size_t offset; /* where it lives in sere_sim_params */
+	size_t also;   /* a second place the same value lives (m_min: builder and shrink), or 0 */
+	double lo, hi; /* the accepted range, inclusive */
+	const char* doc;
+} sere_param;
+
+/* The table, count rows. */
+const sere_param* sere_params_table( int* count );
+
+/* The value of row in params, as a double (exact for every type the table holds). */
+double sere_params_get( const sere_sim_params* params, const sere_param* row );
 
 sere_sim_params sere_sim_params_default( void );
 
@@ -60,6 +66,11 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
  * --preset and --set options; 0 on success, else -1 with a one-line message. */
 int sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count, char* err,
 					   size_t err_size );
+
+/* The shortest decimal that reads back as value, as a double: the number a user wrote for a
+ * float parameter (0.002 for 0.002f), for the harness's time axis and measures, which were
+ * always computed in double from what was written. */
+double sere_params_decimal( float value );
 
 /* Writes every key = value, one per line, for summaries and --help. */
 void sere_params_print_json( const sere_sim_params* params, FILE* f, const char* indent );

@@ -49,7 +49,7 @@ int sere_harness_build_leaf( const sere_leaf* leaf, const char* path, long long 
 	snprintf( name, name_size, "%s", leaf->file.name );
 	sere_build_params build = sere_build_params_default();
 	build.layer = params->layer;
-	build.seed = (uint64_t) params->seed;
+	build.seed = params->seed;
 	if ( particles >= 0 && springs >= 0 )
 	{
 		if ( sere_counts_solve( particles, springs, &build.point_count, &build.boundary_count ) != SERE_OK )

@@ -24,9 +24,6 @@ int sere_harness_build_leaf( const sere_leaf* leaf, const char* path, long long 
 							 long long points, const sere_sim_params* params, sere_model* model,
 							 sere_build_report* report, char* name, size_t name_size, char* err, size_t err_size );
 
-/* The leaf-kernel parameters a set of named parameters stands for (harness/cli/cmd_run.c). */
-sere_leaf_params sere_run_leaf_params( const sere_sim_params* s );
-
 #ifdef __cplusplus
 }
 #endif

@@ -52,7 +52,6 @@ sere_leaf_params sere_leaf_params_default( void )
 		.scale_thickness = 1,
 		.restore_measured = 1,
 		.soften = 0,
-		.pbd_stall = 0.0f,
 		.local_stop = 0,
 	};
 	params.pbd.compliance = 4e-6f;
@@ -63,6 +62,9 @@ sere_leaf_params sere_leaf_params_default( void )
 	 * tree) and 21 to 12 (wisteria); ρ = 0.95 oscillated on the maple until the cap, ρ = 0.8–0.85
 	 * saved less. */
 	params.pbd.chebyshev_delay = 5;
+	/* A whole leaf of the harness's default 1500 points has longer edges than collide's
+	 * ~4700-vertex reference: 0.004 at rest, shrinking with the sheet (scale_thickness). */
+	params.collide.thickness = 0.004f;
 	params.osmosis.tolerance = 1e-8;
 	return params;
 }
@@ -260,47 +262,6 @@ float sere_leaf_thickness_scale( const sere_model* model )
 	return rest0 > 0.0 ? (float) ( rest / rest0 ) : 1.0f;
 }
 
-/* The paper's projection (lines 17–22) with the optional stall rule (sere_leaf_params.pbd_stall):
- * the cap's sweeps run in chunks of SERE_LEAF_STALL_WINDOW, and the frame stops when a chunk ends
- * with max |C/l| (of its last sweep) above (1 − stall) times the previous chunk's. Gauss–Seidel
- * state carries over between chunks, so without a stall the positions equal one call's. */
-static sere_status project_paper( sere_pbd* pbd, sere_particles* p, const sere_pbd_params* params, float stall,
-								  sere_pbd_report* report, int* stalled )
-{
-	*stalled = 0;
-	if ( stall <= 0.0f || params->linear_stiffness )
-	{
-		return sere_pbd_project( pbd, p->px, p->py, p->pz, p->inv_m, params, report );
-	}
-	sere_pbd_params chunk = *params;
-	int32_t done = 0;
-	float previous = INFINITY;
-	while ( done < params->max_iterations )
-	{
-		int32_t left = params->max_iterations - done;
-		chunk.max_iterations = left < SERE_LEAF_STALL_WINDOW ? left : SERE_LEAF_STALL_WINDOW;
-		sere_status status = sere_pbd_project( pbd, p->px, p->py, p->pz, p->inv_m, &chunk, report );
-		if ( status != SERE_OK )
-		{
-			return status;
-		}
-		done += report->iterations;
-		if ( !report->hit_cap )
-		{
-			break;
-		}
-		if ( report->max_strain > ( 1.0f - stall ) * previous )
-		{
-			*stalled = done < params->max_iterations;
-			break;
-		}
-		previous = report->max_strain;
-	}
-	report->iterations = done;
-	report->hit_cap = report->hit_cap && !*stalled;
-	return SERE_OK;
-}
-
 /* The bits of a non-negative float order as the float does: a maximum taken over them is the
  * float maximum, as an integer reduction, which every OpenMP runtime combines exactly (clang's
  * libomp gave a different float max for 1 and 2 threads over the same values). */
@@ -428,7 +389,8 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	sere_pbd_report report = { 0, 0.0f, 0 };
 	if ( pbd->compliance == 0.0f )
 	{
-		sere_status status = project_paper( sim->pbd, p, pbd, params->pbd_stall, &report, &stats->pbd_stalled );
+		sere_status status =
+			sere_pbd_project_stalling( sim->pbd, p->px, p->py, p->pz, p->inv_m, pbd, &report, &stats->pbd_stalled );
 		if ( ground )
 		{
 			ground_contact( p->pz, sim->push, p->count, params->ground );
@@ -567,7 +529,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 	stats->max_strain = largest_strain( model );
 	/* the start of the frame, before sere_pbd_finish moves it: where each contact's vertex was */
-	if ( params->collisions )
+	if ( params->collisions && params->collide.thickness > 0.0f )
 	{
 		memcpy( sim->x0, p->x, sizeof( float ) * (size_t) n );
 		memcpy( sim->y0, p->y, sizeof( float ) * (size_t) n );
@@ -586,7 +548,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 
 	/* Line 23: self-collision of the triangle layer; lines 24–27: the Voronoi particles of the
 	 * triangles it moved back on their normals (Jeong Eq. 14), with ĥ stored just before (Sec. 5.3). */
-	if ( params->collisions )
+	if ( params->collisions && params->collide.thickness > 0.0f )
 	{
 		status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat );
 		if ( status != SERE_OK )

@@ -16,9 +16,6 @@ extern "C"
 {
 #endif
 
-/* Sweeps per stall check of sere_leaf_params.pbd_stall. */
-#define SERE_LEAF_STALL_WINDOW 10
-
 typedef struct sere_leaf_params
 {
 	float dt;
@@ -40,18 +37,13 @@ typedef struct sere_leaf_params
 	float link_compliance;	  /* compliance weight of the L springs (thickness) */
 	float friction_static, friction_kinetic; /* Coulomb coefficients of the ground contact */
 	sere_collide_params collide;
-	int collisions; /* run the self-collision pass */
+	int collisions; /* run the self-collision pass (when collide.thickness > 0) */
 	/* 1: collide.thickness is the thickness at rest and shrinks with the triangle layer, times
 	 * sere_leaf_thickness_scale every frame, as the leaf's own thickness shrinks with its
 	 * springs (Sec. 5.1). 0: the thickness stays fixed. */
 	int scale_thickness;
 	int restore_measured; /* Jeong Eq. 14 with ĥ measured before collisions (1) or the rest h (0) */
 	int soften;			  /* Sec. 7: stiffness scaled by relative water content */
-	/* Paper mode only (pbd.compliance = 0). 0: project until max |C/l| < λ_C or the cap. s > 0:
-	 * also stop when a window of SERE_LEAF_STALL_WINDOW sweeps lowered max |C/l| by less than
-	 * the fraction s: once the shrunk layers disagree the hard constraints have no solution and
-	 * the residual has a floor above λ_C. */
-	float pbd_stall;
 	/* 1: Sec. 6's stop applied where a layer runs dry (a particle whose neighbour in the other
 	 * layer has run dry keeps its water and mass); 0: only for the whole leaf, when a whole layer
 	 * has run dry. */
@@ -71,7 +63,7 @@ typedef struct sere_leaf_stats
 	int pbd_converged; /* the residual reached pbd.tolerance (and the ground was met) before the cap */
 	int32_t grounded;  /* particles (either layer) touching the ground after the frame */
 	int pbd_hit_cap;
-	int pbd_stalled;		   /* stopped by the stall rule (pbd_stall), neither converged nor at the cap */
+	int pbd_stalled;		   /* stopped by the stall rule (pbd.stall), neither converged nor at the cap */
 	int32_t contacts;		   /* vertex–triangle contacts found */
 	int32_t edge_contacts;	   /* edge–edge contacts found */
 	int32_t unresolved;		   /* contacts of either kind still short of the thickness after the pass */

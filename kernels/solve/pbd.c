@@ -57,8 +57,46 @@ sere_pbd_params sere_pbd_params_default( void )
 		.warm = 0,
 		.chebyshev_rho = 0.0f,
 		.chebyshev_delay = 10,
+		.stall = 0.0f,
 	};
 	return params;
+}
+
+sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
+									   const sere_pbd_params* params, sere_pbd_report* report, int* stalled )
+{
+	*stalled = 0;
+	if ( params->stall <= 0.0f || params->linear_stiffness )
+	{
+		return sere_pbd_project( pbd, px, py, pz, inv_m, params, report );
+	}
+	sere_pbd_params window = *params;
+	int32_t done = 0;
+	float previous = INFINITY;
+	while ( done < params->max_iterations )
+	{
+		int32_t left = params->max_iterations - done;
+		window.max_iterations = left < SERE_PBD_STALL_WINDOW ? left : SERE_PBD_STALL_WINDOW;
+		sere_status status = sere_pbd_project( pbd, px, py, pz, inv_m, &window, report );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
+		done += report->iterations;
+		if ( !report->hit_cap )
+		{
+			break;
+		}
+		if ( report->max_strain > ( 1.0f - params->stall ) * previous )
+		{
+			*stalled = done < params->max_iterations;
+			break;
+		}
+		previous = report->max_strain;
+	}
+	report->iterations = done;
+	report->hit_cap = report->hit_cap && !*stalled;
+	return SERE_OK;
 }
 
 void sere_pbd_destroy( sere_pbd* pbd )

@@ -37,9 +37,17 @@ typedef struct sere_pbd_params
 	 * converged sweep's result is verified and returned as it is. The Jacobi variant refuses it. */
 	float chebyshev_rho;
 	int32_t chebyshev_delay; /* plain sweeps before the first extrapolation, ≥ 2 (default 10) */
+	/* Stall rule of sere_pbd_project_stalling, s ∈ [0, 1). 0 (the default): the paper's stop,
+	 * max |C/l| < λ_C or the cap. s > 0: also stop when a window of SERE_PBD_STALL_WINDOW sweeps
+	 * lowered max |C/l| by less than the fraction s: once the shrunk layers disagree the hard
+	 * constraints have no solution and the residual has a floor above λ_C. */
+	float stall;
 } sere_pbd_params;
 
-/* k = 1, λ_C = 1e-3, 200 sweeps, no compliance, dt = 0.002 (Table 2), ω = 1.5. */
+/* Sweeps per stall check of sere_pbd_params.stall. */
+#define SERE_PBD_STALL_WINDOW 10
+
+/* k = 1, λ_C = 1e-3, 200 sweeps, no compliance, dt = 0.002 (Table 2), ω = 1.5, no stall rule. */
 sere_pbd_params sere_pbd_params_default( void );
 
 typedef struct sere_pbd_report
@@ -120,6 +128,15 @@ void sere_pbd_predict( int32_t count, const float* x, const float* y, const floa
  * as they were passed in. */
 sere_status sere_pbd_project( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 							  const sere_pbd_params* params, sere_pbd_report* report );
+
+/* sere_pbd_project with the stall rule of params->stall (s > 0): the cap's sweeps run in
+ * windows of SERE_PBD_STALL_WINDOW, and the call stops when a window ends with max |C/l| (of its
+ * last sweep) above (1 − s) times the previous window's. Gauss–Seidel state carries over between
+ * windows, so without a stall the positions equal one sere_pbd_project call's. stalled is set
+ * when the rule stopped it, neither converged nor at the cap (report->hit_cap is then 0). With
+ * s = 0 or linear_stiffness this is sere_pbd_project. */
+sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
+									   const sere_pbd_params* params, sere_pbd_report* report, int* stalled );
 
 /* The Jacobi variant, for comparison: every sweep measures all constraints on the same
  * positions, stores each one's correction, then every particle gathers the corrections of its
