@@ -125,6 +125,12 @@ int sere_test_shell( const char* command, char* out, size_t out_size )
 	}
 	size_t used = fread( out, 1, out_size - 1, pipe );
 	out[used] = '\0';
+	/* Drain what did not fit: a command whose pipe closes early dies of SIGPIPE, and its
+	 * status would then say nothing about the command. */
+	char rest[4096];
+	while ( fread( rest, 1, sizeof( rest ), pipe ) > 0 )
+	{
+	}
 	int status = pclose( pipe );
 	return WIFEXITED( status ) ? WEXITSTATUS( status ) : 128;
 }

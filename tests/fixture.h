@@ -43,8 +43,8 @@ void sere_test_crumple_point( sere_test_crumple* field, double u, double v, doub
 const char* sere_test_bin( void );
 
 /* Runs command through the shell with its stdout captured into out (NUL terminated, cut at
- * out_size − 1); returns the exit status, 128 when it did not exit or could not start (out then
- * says so). */
+ * out_size − 1; the rest is read and dropped); returns the exit status, 128 when it did not exit or could not start
+ * (out then says so). */
 int sere_test_shell( const char* command, char* out, size_t out_size );
 
 /* Runs "BIN ARGS" through the shell with stdout captured into out and stderr discarded (for
