@@ -245,7 +245,7 @@ void BM_MassSpringReference( benchmark::State& state )
 	std::vector<float> fx( sc.n ), fy( sc.n ), fz( sc.n );
 	sere_massspring_report report{};
 	step_loop( state, sc, report, [&] {
-		return sere_massspring_step_ref( &sc.topology, &p, &sc.params, fx.data(), fy.data(), fz.data(), &report );
+		return sere_massspring_ref_step( &sc.topology, &p, &sc.params, fx.data(), fy.data(), fz.data(), &report );
 	} );
 }
 } // namespace

@@ -8,8 +8,8 @@
 static void BM_ModelBuildMaple( benchmark::State& state )
 {
 	char err[1024];
-	sere_leaf leaf;
-	if ( sere_leaf_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ) != 0 )
+	sere_leaf_source leaf;
+	if ( sere_leaf_source_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ) != 0 )
 	{
 		state.SkipWithError( err );
 		return;
@@ -30,6 +30,6 @@ static void BM_ModelBuildMaple( benchmark::State& state )
 	}
 	state.counters["points/s"] = benchmark::Counter( static_cast<double>( params.point_count ) * state.iterations(),
 													 benchmark::Counter::kIsRate );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 }
 BENCHMARK( BM_ModelBuildMaple )->ArgName( "relax" )->Arg( 0 )->Arg( 4 )->Unit( benchmark::kMillisecond );

@@ -52,7 +52,7 @@ struct Plant
 		for ( int pass = 0; pass < 2; ++pass )
 		{
 			sere_tri_mesh blade;
-			check( sere_blade_create( &leaf, spacing, &blade, nullptr ), "blade" );
+			check( sere_leaf_skeleton_mesh( &leaf, spacing, &blade, nullptr ), "blade" );
 			sere_tri_mesh_destroy( &mesh );
 			check( sere_subdivide( &blade, 1, 0.0f, &mesh ), "subdivide" );
 			sere_tri_mesh_destroy( &blade );

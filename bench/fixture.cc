@@ -37,8 +37,8 @@ const sere_model* sere_bench_model( sere_bench_leaf which )
 		return &models[k];
 	}
 	char err[1024];
-	sere_leaf leaf;
-	if ( sere_leaf_load( leaves[k].path, &leaf, err, sizeof( err ) ) != 0 )
+	sere_leaf_source leaf;
+	if ( sere_leaf_source_load( leaves[k].path, &leaf, err, sizeof( err ) ) != 0 )
 	{
 		std::fprintf( stderr, "sere-bench: %s (run from the repository root)\n", err );
 		std::exit( 1 );
@@ -51,7 +51,7 @@ const sere_model* sere_bench_model( sere_bench_leaf which )
 		std::exit( 1 );
 	}
 	sere_status status = sere_model_build( &leaf.file.shape, &params, &models[k], nullptr );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 	if ( status != SERE_OK )
 	{
 		std::fprintf( stderr, "sere-bench: %s: %s\n", leaves[k].path, sere_status_text( status ) );

@@ -253,14 +253,14 @@ int main( void )
 
 	/* Coloring on its own (what a solver with its own projection would use) ... */
 	sere_coloring coloring = { 0 };
-	sere_status status = sere_color_springs( c.a, c.b, c.count, c.n, &coloring );
+	sere_status status = sere_coloring_create( c.a, c.b, c.count, c.n, &coloring );
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "cloth: FAIL coloring: %s\n", sere_status_text( status ) );
 		cloth_free( &c );
 		return 1;
 	}
-	int failed = check_coloring( &coloring, c.a, c.b, c.count, c.n, "sere_color_springs" );
+	int failed = check_coloring( &coloring, c.a, c.b, c.count, c.n, "sere_coloring_create" );
 	printf( "cloth: sere %s (%s), %d particles, %d constraints in %d colors of %d-%d\n", sere_version(),
 			sere_simd_path(), c.n, c.count, coloring.color_count, coloring.min_batch, coloring.max_batch );
 

@@ -1,8 +1,8 @@
 /* sere fuzz — the .leaf reader (harness/read/leaffile.c, data/leaves/FORMAT.md).
  *
- * Every input is read with sere_leaf_read. A rejected input must come back with one line in err
+ * Every input is read with sere_leaf_file_read. A rejected input must come back with one line in err
  * and nothing to free. An accepted one must be a valid shape, and must survive the round trip
- * leaffile.h promises: sere_leaf_write, then sere_leaf_read, returns it bit for bit. */
+ * leaffile.h promises: sere_leaf_file_write, then sere_leaf_file_read, returns it bit for bit. */
 #define _GNU_SOURCE
 #include "fuzz.h"
 
@@ -44,7 +44,7 @@ int LLVMFuzzerTestOneInput( const uint8_t* data, size_t size )
 	const char* path = fuzz_file( data, size );
 	sere_leaf_file leaf;
 	char err[1024] = "";
-	sere_status status = sere_leaf_read( path, &leaf, err, sizeof( err ) );
+	sere_status status = sere_leaf_file_read( path, &leaf, err, sizeof( err ) );
 	if ( status != SERE_OK )
 	{
 		FUZZ_CHECK( err[0] != '\0' && strchr( err, '\n' ) == NULL );
@@ -58,15 +58,15 @@ int LLVMFuzzerTestOneInput( const uint8_t* data, size_t size )
 	/* The name is written when the writer can keep it (it refuses control characters the reader
 	 * lets through); the geometry always. */
 	const char* name = leaf.name;
-	status = sere_leaf_write( round_trip, shape, name, err, sizeof( err ) );
+	status = sere_leaf_file_write( round_trip, shape, name, err, sizeof( err ) );
 	if ( status == SERE_ERR_ARGUMENT && strstr( err, "the name must be" ) != NULL )
 	{
 		name = NULL;
-		status = sere_leaf_write( round_trip, shape, NULL, err, sizeof( err ) );
+		status = sere_leaf_file_write( round_trip, shape, NULL, err, sizeof( err ) );
 	}
 	FUZZ_CHECK( status == SERE_OK );
 	sere_leaf_file again;
-	status = sere_leaf_read( round_trip, &again, err, sizeof( err ) );
+	status = sere_leaf_file_read( round_trip, &again, err, sizeof( err ) );
 	FUZZ_CHECK( status == SERE_OK );
 	const sere_leaf_shape* back = &again.shape;
 	FUZZ_CHECK( name == NULL || strcmp( again.name, leaf.name ) == 0 );
@@ -77,7 +77,7 @@ int LLVMFuzzerTestOneInput( const uint8_t* data, size_t size )
 	FUZZ_CHECK( same_doubles( back->vein_xy, shape->vein_xy, 2 * shape->vein_point_count ) );
 	FUZZ_CHECK( shape->vein_count == 0 ||
 				memcmp( back->veins, shape->veins, sizeof( sere_vein ) * (size_t) shape->vein_count ) == 0 );
-	sere_leaf_file_free( &again );
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &again );
+	sere_leaf_file_destroy( &leaf );
 	return 0;
 }

@@ -75,7 +75,7 @@ int LLVMFuzzerTestOneInput( const uint8_t* data, size_t size )
 		FUZZ_CHECK( sere_shape_validate( &leaf.shape, &check ) == SERE_OK );
 		FUZZ_CHECK( map.width >= 1 && map.height >= 1 && map.pixels_per_unit > 0.0 );
 		FUZZ_CHECK( map.base_px >= 0.0 && map.base_px <= map.width && map.base_py >= 0.0 && map.base_py <= map.height );
-		sere_leaf_file_free( &leaf );
+		sere_leaf_file_destroy( &leaf );
 	}
 	else
 	{

@@ -38,6 +38,9 @@ Test( cli, bad_input_one_clear_line )
 	expect_error( "run data/leaves/maple.leaf --frames 2 --set dt=abc --out /tmp/sere-cli",
 				  "dt: 'abc' is not a number" );
 	expect_error( "run data/leaves/maple.leaf --bogus", "unknown option '--bogus'" );
+	/* one thread limit for every command and kernel: SERE_MAX_THREADS (core/base.h) */
+	expect_error( "table1 --threads 257", "--threads takes a whole number from 0 to 256" );
+	expect_error( "wilt --threads 257", "--threads takes a whole number from 0 to 256" );
 	expect_error( "model data/leaves/maple.leaf --particles 100 --springs 7", "no triangulation has 100 particles" );
 	expect_error( "frobnicate", "unknown command 'frobnicate'" );
 }

@@ -734,7 +734,7 @@ Test( collide, edge_contact_pushes_crossing_edges_back_to_their_side )
 		memcpy( x, x0, sizeof( x ) ), memcpy( y, y0, sizeof( y ) ), memcpy( z, z0, sizeof( z ) );
 		z[0] = z[1] = below, z[2] = 1.0f + below;
 		int64_t crossings = 0;
-		cr_assert_eq( sere_count_crossings( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
+		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
 		cr_assert_eq( crossings, 2 );
 		sere_bvh* bvh;
 		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
@@ -766,7 +766,7 @@ Test( collide, edge_contact_pushes_crossing_edges_back_to_their_side )
 		float p0[3] = { x[0], y[0], z[0] }, p1[3] = { x[1], y[1], z[1] };
 		float q0[3] = { x[3], y[3], z[3] }, q1[3] = { x[4], y[4], z[4] }, w[2];
 		cr_assert_float_eq( sqrtf( sere_closest_points_segments( p0, p1, q0, q1, w ) ), h, 1e-7f );
-		cr_assert_eq( sere_count_crossings( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
+		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
 		cr_assert_eq( crossings, history ? 0 : 2, "history %d: %lld crossings", history, (long long) crossings );
 		sere_collide_destroy( c );
 		sere_bvh_destroy( bvh );

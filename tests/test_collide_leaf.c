@@ -73,8 +73,8 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 	{
 		char path[128], err[1024];
 		snprintf( path, sizeof( path ), "data/leaves/%s.leaf", names[k] );
-		sere_leaf leaf;
-		cr_assert_eq( sere_leaf_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
+		sere_leaf_source leaf;
+		cr_assert_eq( sere_leaf_source_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
 		sere_build_params params = sere_build_params_default();
 		params.point_count = 900;
 		params.boundary_count = sere_boundary_for_points( sere_shape_area( &leaf.file.shape ),
@@ -161,7 +161,7 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 			sere_bvh_destroy( bvh );
 		}
 		sere_model_destroy( &m );
-		sere_leaf_free( &leaf );
+		sere_leaf_source_destroy( &leaf );
 	}
 }
 
@@ -171,9 +171,9 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
  * 1, 2 and 3 threads, and the lists are still the brute-force pair sets. */
 Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 {
-	sere_leaf leaf;
+	sere_leaf_source leaf;
 	char err[1024];
-	cr_assert_eq( sere_leaf_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_leaf_source_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ), 0, "%s", err );
 	sere_build_params params = sere_build_params_default();
 	params.point_count = 1500;
 	params.boundary_count =
@@ -269,5 +269,5 @@ Test( collide_leaf, crumpled_maple_identical_for_one_two_and_three_threads )
 	free( first ), free( first_contacts ), free( first_edges );
 	free( rest[0] ), free( rest[1] ), free( rest[2] );
 	sere_model_destroy( &m );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 }

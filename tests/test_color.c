@@ -76,7 +76,7 @@ Test( color, every_color_is_an_independent_set_on_a_large_mesh )
 	/* 150 × 100 cells: 45 151 particles, 180 000 springs (three and a half maples). */
 	graph g = double_layer( 150, 100 );
 	sere_coloring c;
-	cr_assert_eq( sere_color_springs( g.a, g.b, g.count, g.n, &c ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( g.a, g.b, g.count, g.n, &c ), SERE_OK );
 	int32_t* stamp = malloc( sizeof( int32_t ) * (size_t) g.n );
 	int32_t* seen = calloc( (size_t) g.count, sizeof( int32_t ) );
 	for ( int32_t i = 0; i < g.n; ++i )
@@ -130,8 +130,8 @@ Test( color, deterministic )
 {
 	graph g = double_layer( 40, 30 );
 	sere_coloring c1, c2;
-	cr_assert_eq( sere_color_springs( g.a, g.b, g.count, g.n, &c1 ), SERE_OK );
-	cr_assert_eq( sere_color_springs( g.a, g.b, g.count, g.n, &c2 ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( g.a, g.b, g.count, g.n, &c1 ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( g.a, g.b, g.count, g.n, &c2 ), SERE_OK );
 	cr_expect_eq( c1.color_count, c2.color_count );
 	cr_expect_eq( memcmp( c1.offsets, c2.offsets, sizeof( c1.offsets ) ), 0 );
 	cr_expect_eq( memcmp( c1.color, c2.color, sizeof( int32_t ) * (size_t) g.count ), 0 );
@@ -147,12 +147,12 @@ Test( color, small_cases_by_hand )
 	 * the lowest on a tie: square 0-1, 1-2, 2-3, 3-0 → 0, 1, 0, 1 (balanced: nothing moves). */
 	int32_t ta[3] = { 0, 1, 2 }, tb[3] = { 1, 2, 0 };
 	sere_coloring c;
-	cr_assert_eq( sere_color_springs( ta, tb, 3, 3, &c ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( ta, tb, 3, 3, &c ), SERE_OK );
 	cr_expect_eq( c.color_count, 3 );
 	cr_expect( c.min_batch == 1 && c.max_batch == 1 );
 	sere_coloring_destroy( &c );
 	int32_t sa[4] = { 0, 1, 2, 3 }, sb[4] = { 1, 2, 3, 0 };
-	cr_assert_eq( sere_color_springs( sa, sb, 4, 4, &c ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( sa, sb, 4, 4, &c ), SERE_OK );
 	cr_expect_eq( c.color_count, 2 );
 	int32_t expected[4] = { 0, 1, 0, 1 };
 	cr_expect_eq( memcmp( c.color, expected, sizeof( expected ) ), 0 );
@@ -160,7 +160,7 @@ Test( color, small_cases_by_hand )
 	/* Two disjoint springs share color 0, then a third meeting both opens color 1; a fourth,
 	 * free for both colors, takes the less used one (1). */
 	int32_t la[4] = { 0, 2, 1, 4 }, lb[4] = { 1, 3, 2, 5 };
-	cr_assert_eq( sere_color_springs( la, lb, 4, 6, &c ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( la, lb, 4, 6, &c ), SERE_OK );
 	int32_t balanced[4] = { 0, 0, 1, 1 };
 	cr_expect_eq( memcmp( c.color, balanced, sizeof( balanced ) ), 0 );
 	sere_coloring_destroy( &c );
@@ -170,7 +170,7 @@ Test( color, gather_puts_springs_in_color_order )
 {
 	graph g = double_layer( 30, 20 );
 	sere_coloring c;
-	cr_assert_eq( sere_color_springs( g.a, g.b, g.count, g.n, &c ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( g.a, g.b, g.count, g.n, &c ), SERE_OK );
 	float* rest = malloc( sizeof( float ) * (size_t) g.count );
 	uint8_t* kind = malloc( (size_t) g.count );
 	for ( int32_t s = 0; s < g.count; ++s )
@@ -216,15 +216,15 @@ Test( color, capacity_and_bad_input )
 		a[s] = 0, b[s] = s + 1;
 	}
 	sere_coloring c;
-	cr_assert_eq( sere_color_springs( a, b, SERE_MAX_COLORS, 66, &c ), SERE_OK );
+	cr_assert_eq( sere_coloring_create( a, b, SERE_MAX_COLORS, 66, &c ), SERE_OK );
 	cr_expect_eq( c.color_count, SERE_MAX_COLORS );
 	sere_coloring_destroy( &c );
-	cr_expect_eq( sere_color_springs( a, b, 65, 66, &c ), SERE_ERR_CAPACITY );
+	cr_expect_eq( sere_coloring_create( a, b, 65, 66, &c ), SERE_ERR_CAPACITY );
 	cr_expect( c.order == NULL && c.color == NULL && c.color_count == 0, "cleared after a failure" );
 	sere_coloring_destroy( &c );
 	int32_t self[1] = { 2 }, far[1] = { 66 };
-	cr_expect_eq( sere_color_springs( self, self, 1, 66, &c ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_color_springs( a, far, 1, 66, &c ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_color_springs( a, b, 0, 66, &c ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_color_springs( a, b, 1, 66, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_coloring_create( self, self, 1, 66, &c ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_coloring_create( a, far, 1, 66, &c ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_coloring_create( a, b, 0, 66, &c ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_coloring_create( a, b, 1, 66, NULL ), SERE_ERR_ARGUMENT );
 }

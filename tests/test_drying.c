@@ -71,8 +71,8 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 	sere_leaf_sim* sim;
 	cr_assert_eq( sere_leaf_create( &model, &sim ), SERE_OK );
 	const sere_leaf_params* leaf_params = &params.leaf;
-	sere_leaf veins; /* for the measures along and across the main veins */
-	cr_assert_eq( sere_leaf_load( path, &veins, err, sizeof( err ) ), 0, "%s", err );
+	sere_leaf_source veins; /* for the measures along and across the main veins */
+	cr_assert_eq( sere_leaf_source_load( path, &veins, err, sizeof( err ) ), 0, "%s", err );
 	sere_shape_input in = sere_leaf_shape_input( &model, sere_params_decimal( params.leaf.ground ) );
 	in.veins = &veins.file.shape;
 	cr_assert_eq( sere_shape_measure( &in, &run->fresh ), SERE_OK );
@@ -120,7 +120,7 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 	in = sere_leaf_shape_input( &model, sere_params_decimal( params.leaf.ground ) );
 	in.veins = &veins.file.shape;
 	cr_assert_eq( sere_shape_measure( &in, &run->dry ), SERE_OK );
-	sere_leaf_free( &veins );
+	sere_leaf_source_destroy( &veins );
 	run->vertices = model.triangle_particles;
 	run->x = malloc( sizeof( float ) * 3 * (size_t) run->vertices );
 	for ( int32_t i = 0; i < run->vertices; ++i )

@@ -20,8 +20,8 @@ static void small_leaf_layers( sere_model* model, const char* name, int32_t poin
 {
 	char path[256], err[1024];
 	snprintf( path, sizeof( path ), "data/leaves/%s.leaf", name );
-	sere_leaf leaf;
-	cr_assert_eq( sere_leaf_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
+	sere_leaf_source leaf;
+	cr_assert_eq( sere_leaf_source_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
 	sere_build_params params = sere_build_params_default();
 	params.point_count = points;
 	params.boundary_count = sere_boundary_for_points( sere_shape_area( &leaf.file.shape ),
@@ -30,7 +30,7 @@ static void small_leaf_layers( sere_model* model, const char* name, int32_t poin
 	params.layer.h_surf = h_surf;
 	params.layer.mu0 = 0.5;
 	cr_assert_eq( sere_model_build( &leaf.file.shape, &params, model, NULL ), SERE_OK );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 }
 
 /* The drying simulation of a model built by small_leaf or small_leaf_layers. */

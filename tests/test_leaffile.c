@@ -33,7 +33,7 @@ Test( leaffile, shipped_leaves_load_and_validate )
 		char path[256], err[1024];
 		snprintf( path, sizeof( path ), "data/leaves/%s.leaf", shipped[k] );
 		sere_leaf_file leaf;
-		cr_assert_eq( sere_leaf_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
+		cr_assert_eq( sere_leaf_file_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
 		const sere_leaf_shape* s = &leaf.shape;
 		cr_expect_str_eq( leaf.name, shipped[k] );
 		cr_expect_geq( s->outline_count, 500, "%s: a dense outline", shipped[k] );
@@ -52,7 +52,7 @@ Test( leaffile, shipped_leaves_load_and_validate )
 			const double* end = s->vein_xy + 2 * ( s->veins[v].first + s->veins[v].count - 1 );
 			cr_expect_gt( distance_to_outline( s, end ), 0.005, "%s vein %d ends at the margin", shipped[k], v );
 		}
-		sere_leaf_file_free( &leaf );
+		sere_leaf_file_destroy( &leaf );
 	}
 }
 
@@ -70,11 +70,11 @@ Test( leaffile, table1_leaves_suit_their_point_counts )
 		char path[256], err[1024];
 		snprintf( path, sizeof( path ), "data/leaves/%s.leaf", cases[k].name );
 		sere_leaf_file leaf;
-		cr_assert_eq( sere_leaf_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
+		cr_assert_eq( sere_leaf_file_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
 		double p = sere_shape_perimeter( &leaf.shape ), a = sere_shape_area( &leaf.shape );
 		cr_expect_geq( p * p / a, 0.8 * cases[k].target, "%s: %.1f", cases[k].name, p * p / a );
 		cr_expect_leq( p * p / a, 1.2 * cases[k].target, "%s: %.1f", cases[k].name, p * p / a );
-		sere_leaf_file_free( &leaf );
+		sere_leaf_file_destroy( &leaf );
 	}
 }
 
@@ -109,12 +109,12 @@ Test( leaffile, write_then_read_gives_identical_arrays )
 		snprintf( path, sizeof( path ), "data/leaves/%s.leaf", shipped[k] );
 		temporary_path( copy, sizeof( copy ), shipped[k] );
 		sere_leaf_file leaf, again;
-		cr_assert_eq( sere_leaf_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
-		cr_assert_eq( sere_leaf_write( copy, &leaf.shape, leaf.name, err, sizeof( err ) ), SERE_OK, "%s", err );
-		cr_assert_eq( sere_leaf_read( copy, &again, err, sizeof( err ) ), SERE_OK, "%s", err );
+		cr_assert_eq( sere_leaf_file_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
+		cr_assert_eq( sere_leaf_file_write( copy, &leaf.shape, leaf.name, err, sizeof( err ) ), SERE_OK, "%s", err );
+		cr_assert_eq( sere_leaf_file_read( copy, &again, err, sizeof( err ) ), SERE_OK, "%s", err );
 		expect_same( &leaf, &again, shipped[k] );
-		sere_leaf_file_free( &leaf );
-		sere_leaf_file_free( &again );
+		sere_leaf_file_destroy( &leaf );
+		sere_leaf_file_destroy( &again );
 		remove( copy );
 	}
 }
@@ -140,14 +140,14 @@ Test( leaffile, round_trip_is_exact_for_any_double )
 	cr_assert_eq( sere_shape_validate( &shape, &check ), SERE_OK, "%s", sere_shape_problem_text( check.problem ) );
 	char path[256], err[1024];
 	temporary_path( path, sizeof( path ), "exact" );
-	cr_assert_eq( sere_leaf_write( path, &shape, "a leaf with spaces", err, sizeof( err ) ), SERE_OK, "%s", err );
+	cr_assert_eq( sere_leaf_file_write( path, &shape, "a leaf with spaces", err, sizeof( err ) ), SERE_OK, "%s", err );
 	sere_leaf_file again;
-	cr_assert_eq( sere_leaf_read( path, &again, err, sizeof( err ) ), SERE_OK, "%s", err );
+	cr_assert_eq( sere_leaf_file_read( path, &again, err, sizeof( err ) ), SERE_OK, "%s", err );
 	cr_expect_str_eq( again.name, "a leaf with spaces" );
 	cr_expect_eq( memcmp( again.outline_xy, outline, sizeof( outline ) ), 0 );
 	cr_expect_eq( memcmp( again.vein_xy, points, sizeof( points ) ), 0 );
 	cr_expect_eq( memcmp( again.veins, vein, sizeof( vein ) ), 0 );
-	sere_leaf_file_free( &again );
+	sere_leaf_file_destroy( &again );
 	remove( path );
 }
 
@@ -159,28 +159,28 @@ Test( leaffile, writer_refuses_what_the_reader_would_not_return )
 	char path[256], err[1024];
 	temporary_path( path, sizeof( path ), "refused" );
 	remove( path );
-	cr_expect_eq( sere_leaf_write( path, &shape, "cw", err, sizeof( err ) ), SERE_ERR_GEOMETRY );
+	cr_expect_eq( sere_leaf_file_write( path, &shape, "cw", err, sizeof( err ) ), SERE_ERR_GEOMETRY );
 	cr_expect_not_null( strstr( err, "counter-clockwise" ), "%s", err );
 	shape.outline_xy = square;
 	const char* names[] = { "a#b", "two\nlines", " padded", "padded ", "tab\tinside" };
 	for ( size_t k = 0; k < sizeof( names ) / sizeof( names[0] ); ++k )
 	{
-		cr_expect_eq( sere_leaf_write( path, &shape, names[k], err, sizeof( err ) ), SERE_ERR_ARGUMENT, "'%s'",
+		cr_expect_eq( sere_leaf_file_write( path, &shape, names[k], err, sizeof( err ) ), SERE_ERR_ARGUMENT, "'%s'",
 					  names[k] );
 		cr_expect_not_null( strstr( err, path ), "%s", err );
 	}
 	cr_expect_neq( access( path, F_OK ), 0, "nothing written" );
 	/* No name: the reader falls back to the file name. */
-	cr_assert_eq( sere_leaf_write( path, &shape, NULL, err, sizeof( err ) ), SERE_OK, "%s", err );
+	cr_assert_eq( sere_leaf_file_write( path, &shape, NULL, err, sizeof( err ) ), SERE_OK, "%s", err );
 	char tmp[300];
 	snprintf( tmp, sizeof( tmp ), "%s.tmp", path );
 	cr_expect_neq( access( tmp, F_OK ), 0, "the temporary was renamed" );
 	sere_leaf_file again;
-	cr_assert_eq( sere_leaf_read( path, &again, err, sizeof( err ) ), SERE_OK, "%s", err );
+	cr_assert_eq( sere_leaf_file_read( path, &again, err, sizeof( err ) ), SERE_OK, "%s", err );
 	char stem[256];
 	snprintf( stem, sizeof( stem ), "sere-leaffile-refused-%ld", (long) getpid() );
 	cr_expect_str_eq( again.name, stem );
-	sere_leaf_file_free( &again );
+	sere_leaf_file_destroy( &again );
 	remove( path );
 }
 
@@ -206,7 +206,7 @@ Test( leaffile, reads_comments_blanks_tabs_crlf_and_any_order )
 	fputs( text, f );
 	fclose( f );
 	sere_leaf_file leaf;
-	cr_assert_eq( sere_leaf_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
+	cr_assert_eq( sere_leaf_file_read( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
 	cr_expect_str_eq( leaf.name, "oak  leaf" );
 	const double outline[8] = { 0, 0, 1, 0, 1, 1, 0, 1 }, vein[4] = { 0, 0, 0.5, 0.5 };
 	cr_expect_eq( leaf.shape.outline_count, 4 );
@@ -214,7 +214,7 @@ Test( leaffile, reads_comments_blanks_tabs_crlf_and_any_order )
 	cr_expect_eq( memcmp( leaf.vein_xy, vein, sizeof( vein ) ), 0 );
 	cr_expect_eq( leaf.outline_line[0], 9, "source lines are kept for messages" );
 	cr_expect_eq( leaf.vein_line[1], 6 );
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &leaf );
 	remove( path );
 }
 
@@ -274,7 +274,7 @@ Test( leaffile, bad_inputs_name_the_file_the_line_and_the_problem )
 		}
 		sere_leaf_file leaf;
 		memset( err, 0, sizeof( err ) );
-		sere_status status = sere_leaf_read( path, &leaf, err, sizeof( err ) );
+		sere_status status = sere_leaf_file_read( path, &leaf, err, sizeof( err ) );
 		cr_expect_eq( status, cases[k].status, "%s: status %d: %s", cases[k].file, (int) status, err );
 		cr_expect_eq( strncmp( err, where, strlen( where ) ), 0, "expected '%s' to start: %s", where, err );
 		cr_expect_not_null( strstr( err, cases[k].phrase ), "expected '%s' in: %s", cases[k].phrase, err );
@@ -289,7 +289,7 @@ Test( leaffile, a_short_error_buffer_is_not_overrun )
 	char err[16];
 	memset( err, 'x', sizeof( err ) );
 	sere_leaf_file leaf;
-	cr_expect_neq( sere_leaf_read( "tests/data/bad/veins_cross.leaf", &leaf, err, 8 ), SERE_OK );
+	cr_expect_neq( sere_leaf_file_read( "tests/data/bad/veins_cross.leaf", &leaf, err, 8 ), SERE_OK );
 	cr_expect_eq( strlen( err ), 7u );
 	cr_expect_eq( err[8], 'x' );
 }

@@ -203,7 +203,7 @@ Test( leafimage, example_matches_its_drawing )
 	cr_expect_eq( memcmp( again.vein_xy, leaf.vein_xy, sizeof( double ) * 2 * (size_t) leaf.shape.vein_point_count ),
 				  0 );
 	cr_expect_str_eq( again.name, "example_aux", "named like a .leaf file, without the extension" );
-	sere_leaf_file_free( &again );
+	sere_leaf_file_destroy( &again );
 
 	/* The traced leaf builds a model through the same path as a .leaf file. */
 	sere_build_params params = sere_build_params_default();
@@ -213,11 +213,12 @@ Test( leafimage, example_matches_its_drawing )
 	sere_model model;
 	cr_expect_eq( sere_model_build( &leaf.shape, &params, &model, NULL ), SERE_OK );
 	sere_model_destroy( &model );
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &leaf );
 
-	sere_leaf any;
-	cr_expect_eq( sere_leaf_load( path, &any, err, sizeof( err ) ), 0, "a .png goes through sere_leaf_load: %s", err );
-	sere_leaf_free( &any );
+	sere_leaf_source any;
+	cr_expect_eq( sere_leaf_source_load( path, &any, err, sizeof( err ) ), 0,
+				  "a .png goes through sere_leaf_source_load: %s", err );
+	sere_leaf_source_destroy( &any );
 }
 
 /* A scratch directory for the images the tests draw. */
@@ -378,7 +379,7 @@ Test( leafimage, bad_images_give_one_clear_line )
 	draw_leaf( scratch_path( &s, "ok.png", path, sizeof( path ) ), DRAW_BLADE | DRAW_MIDVEIN | DRAW_BASE );
 	cr_assert_eq( sere_leaf_from_png( path, &leaf, err, sizeof( err ) ), SERE_OK, "%s", err );
 	cr_expect_eq( leaf.shape.vein_count, 1 );
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &leaf );
 
 	draw_leaf( scratch_path( &s, "white.png", path, sizeof( path ) ), 0 );
 	expect_bad( path, "no leaf" );
@@ -515,8 +516,8 @@ Test( leafimage, color_types_and_backgrounds_read_alike )
 	free( rgba );
 	cr_assert_eq( sere_leaf_from_png( path, &other, err, sizeof( err ) ), SERE_OK, "%s", err );
 	expect_same_leaf( &reference, &other, "16-bit interlaced" );
-	sere_leaf_file_free( &other );
-	sere_leaf_file_free( &reference );
+	sere_leaf_file_destroy( &other );
+	sere_leaf_file_destroy( &reference );
 
 	/* An unantialiased ellipse: a binary rim has no coverage to place the crossings by, so the
 	 * smoothing has to remove the staircase (unsmoothed, the perimeter comes out 5% long; it
@@ -563,8 +564,8 @@ Test( leafimage, color_types_and_backgrounds_read_alike )
 	free( rgba );
 	cr_assert_eq( sere_leaf_from_png( path, &other, err, sizeof( err ) ), SERE_OK, "%s", err );
 	expect_same_leaf( &reference, &other, "palette" );
-	sere_leaf_file_free( &other );
-	sere_leaf_file_free( &reference );
+	sere_leaf_file_destroy( &other );
+	sere_leaf_file_destroy( &reference );
 
 	/* The antialiased ellipse on white and on transparency: both traced to its area and
 	 * perimeter within 0.5%, as the example (they land within 0.2%). */
@@ -582,7 +583,7 @@ Test( leafimage, color_types_and_backgrounds_read_alike )
 					   traced_perimeter, perimeter );
 		cr_expect_leq( hypot( map.base_px - 100.0, map.base_py - 280.0 ), 1.0 );
 		expect_invariants( &other, &map );
-		sere_leaf_file_free( &other );
+		sere_leaf_file_destroy( &other );
 	}
 	scratch_remove( &s );
 }
@@ -615,7 +616,7 @@ Test( leafimage, palmate_strokes_and_veins_reaching_the_margin )
 		}
 		cr_expect_leq( length, first_length );
 	}
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &leaf );
 
 	/* A secondary drawn right up to the margin is cut where it comes within the margin (1% of
 	 * the length; 2 px is less here) of the outline, so its end is exactly that far inside. */
@@ -632,7 +633,7 @@ Test( leafimage, palmate_strokes_and_veins_reaching_the_margin )
 	cr_expect_leq( fabs( distance_to_outline( &leaf.shape, end ) - margin ), 1e-9, "end %g from the outline",
 				   distance_to_outline( &leaf.shape, end ) );
 	cr_expect_gt( end[0] * map.pixels_per_unit, ELLIPSE_A - 5.0, "the cut removes only the last pixels" );
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &leaf );
 	scratch_remove( &s );
 }
 
@@ -667,7 +668,7 @@ Test( leafimage, the_midvein_is_the_longest_path )
 		}
 		cr_expect_eq( leaf.veins[1].parent, 0 );
 		cr_expect_eq( leaf.veins[1].order, 2 );
-		sere_leaf_file_free( &leaf );
+		sere_leaf_file_destroy( &leaf );
 	}
 	scratch_remove( &s );
 }
@@ -702,7 +703,7 @@ static uint64_t hash_image_result( const char* path )
 	h = fnv1a( h, &map.base_px, sizeof( map.base_px ) );
 	h = fnv1a( h, &map.base_py, sizeof( map.base_py ) );
 	h = fnv1a( h, &map.pixels_per_unit, sizeof( map.pixels_per_unit ) );
-	sere_leaf_file_free( &leaf );
+	sere_leaf_file_destroy( &leaf );
 	double* xy = NULL;
 	int32_t count = 0, width = 0, height = 0;
 	cr_assert_eq( sere_silhouette_from_png( path, &xy, &count, &width, &height, err, sizeof( err ) ), SERE_OK, "%s",

@@ -371,7 +371,7 @@ static void match_twin( int32_t n )
 	{
 		sere_massspring_report a, b;
 		cr_assert_eq( sere_massspring_step( ms, &p, &params, &a ), SERE_OK );
-		cr_assert_eq( sere_massspring_step_ref( &t, &q, &params, scratch, scratch + s.vertex_count,
+		cr_assert_eq( sere_massspring_ref_step( &t, &q, &params, scratch, scratch + s.vertex_count,
 												scratch + 2 * s.vertex_count, &b ),
 					  SERE_OK );
 		limited += a.limited;

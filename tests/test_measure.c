@@ -152,7 +152,7 @@ static void measure_crumple( measure_sheet* s, double amplitude, double noise, u
 static int64_t measure_fast_count( const measure_sheet* s )
 {
 	int64_t count = -1;
-	cr_assert_eq( sere_count_crossings( s->x, s->y, s->z, s->n, s->tri, s->triangles, &count ), SERE_OK );
+	cr_assert_eq( sere_crossings_count_once( s->x, s->y, s->z, s->n, s->tri, s->triangles, &count ), SERE_OK );
 	return count;
 }
 
@@ -204,7 +204,7 @@ Test( measure, crossings_match_brute_force_on_crumpled_sheets )
 			}
 		}
 		int64_t fast = measure_fast_count( &s );
-		int64_t ref = sere_ref_count_crossings( s.x, s.y, s.z, s.n, s.tri, s.triangles );
+		int64_t ref = sere_crossings_ref_count( s.x, s.y, s.z, s.n, s.tri, s.triangles );
 		cr_assert_eq(
 			fast, ref, "seed %llu (%d collapsed, %d pinched, %d shared, %d repeated): fast %lld, brute force %lld",
 			(unsigned long long) seed, collapsed, pinched, shared, repeated, (long long) fast, (long long) ref );
@@ -221,7 +221,7 @@ Test( measure, crossings_zero_on_flat_sheet )
 	measure_sheet_make( &s, 30, 20, 1.5, 1.0, 0.2, 1, 3 );
 	/* every volume against the plane z = 0 is exactly 0, so nothing may count */
 	cr_assert_eq( measure_fast_count( &s ), 0 );
-	cr_assert_eq( sere_ref_count_crossings( s.x, s.y, s.z, s.n, s.tri, s.triangles ), 0 );
+	cr_assert_eq( sere_crossings_ref_count( s.x, s.y, s.z, s.n, s.tri, s.triangles ), 0 );
 	measure_sheet_free( &s );
 }
 
@@ -253,7 +253,7 @@ Test( measure, crossings_on_sheet_folded_through_itself )
 		}
 	}
 	int64_t fast = measure_fast_count( &s );
-	int64_t ref = sere_ref_count_crossings( s.x, s.y, s.z, s.n, s.tri, s.triangles );
+	int64_t ref = sere_crossings_ref_count( s.x, s.y, s.z, s.n, s.tri, s.triangles );
 	cr_assert_eq( fast, ref );
 	/* The meeting line crosses each of the ny − 1 interior rows of edges of each sheet at one
 	 * edge, and the jitter keeps it off vertices and edges of the other sheet. */
@@ -267,7 +267,7 @@ Test( measure, crossings_on_sheet_folded_through_itself )
 		}
 	}
 	cr_assert_eq( measure_fast_count( &s ), 0 );
-	cr_assert_eq( sere_ref_count_crossings( s.x, s.y, s.z, s.n, s.tri, s.triangles ), 0 );
+	cr_assert_eq( sere_crossings_ref_count( s.x, s.y, s.z, s.n, s.tri, s.triangles ), 0 );
 	measure_sheet_free( &s );
 }
 
@@ -312,7 +312,7 @@ Test( measure, crossings_exact_when_the_grid_coarsens )
 		s.x[far[k]] = where[k][0], s.y[far[k]] = where[k][1], s.z[far[k]] = where[k][2];
 	}
 	int64_t fast = measure_fast_count( &s );
-	cr_assert_eq( fast, sere_ref_count_crossings( s.x, s.y, s.z, s.n, s.tri, s.triangles ) );
+	cr_assert_eq( fast, sere_crossings_ref_count( s.x, s.y, s.z, s.n, s.tri, s.triangles ) );
 	cr_assert_gt( fast, 0 );
 	measure_sheet_free( &s );
 }
@@ -728,7 +728,7 @@ Test( measure, dihedrals_and_area_match_reference )
 		double* ref = malloc( sizeof( double ) * (size_t) s.edges );
 		double ref_area;
 		cr_assert_eq( sere_shape_dihedrals( &in, fast ), SERE_OK );
-		sere_ref_shape_dihedrals( s.x, s.y, s.z, s.tri, s.triangles, s.edge_a, s.edge_b, s.edges, ref, &ref_area );
+		sere_shape_ref_dihedrals( s.x, s.y, s.z, s.tri, s.triangles, s.edge_a, s.edge_b, s.edges, ref, &ref_area );
 		int32_t large = 0;
 		for ( int32_t e = 0; e < s.edges; ++e )
 		{

@@ -12,11 +12,11 @@
 static const char* const shipped[] = { "maple", "plane",   "wisteria", "hibiscus",	"ginkgo",
 									   "grass", "hickory", "cucumber", "watermelon" };
 
-static void load( const char* name, sere_leaf* leaf )
+static void load( const char* name, sere_leaf_source* leaf )
 {
 	char path[256], err[1024];
 	snprintf( path, sizeof( path ), "data/leaves/%s.leaf", name );
-	cr_assert_eq( sere_leaf_load( path, leaf, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_leaf_source_load( path, leaf, err, sizeof( err ) ), 0, "%s", err );
 }
 
 Test( model, table1_counts_exact )
@@ -29,7 +29,7 @@ Test( model, table1_counts_exact )
 	} cases[] = { { "maple", 13197, 51102 }, { "plane", 15069, 59550 }, { "wisteria", 12750, 50436 } };
 	for ( size_t k = 0; k < sizeof( cases ) / sizeof( cases[0] ); ++k )
 	{
-		sere_leaf leaf;
+		sere_leaf_source leaf;
 		load( cases[k].name, &leaf );
 		sere_build_params params = sere_build_params_default();
 		cr_assert_eq(
@@ -46,7 +46,7 @@ Test( model, table1_counts_exact )
 		cr_expect_geq( report.quality.min_angle_free_deg, 20.0, "%s: %.2f", cases[k].name,
 					   report.quality.min_angle_free_deg );
 		sere_model_destroy( &model );
-		sere_leaf_free( &leaf );
+		sere_leaf_source_destroy( &leaf );
 	}
 }
 
@@ -54,7 +54,7 @@ Test( model, every_shipped_leaf_builds_with_quality )
 {
 	for ( size_t k = 0; k < sizeof( shipped ) / sizeof( shipped[0] ); ++k )
 	{
-		sere_leaf leaf;
+		sere_leaf_source leaf;
 		load( shipped[k], &leaf );
 		const sere_leaf_shape* shape = &leaf.file.shape;
 		sere_build_params params = sere_build_params_default();
@@ -74,13 +74,13 @@ Test( model, every_shipped_leaf_builds_with_quality )
 		/* Every vein segment became a T spring flagged as a vein. */
 		cr_expect_gt( model.vein_springs, 0, "%s", shipped[k] );
 		sere_model_destroy( &model );
-		sere_leaf_free( &leaf );
+		sere_leaf_source_destroy( &leaf );
 	}
 }
 
 Test( model, sampling_is_deterministic_and_spread )
 {
-	sere_leaf leaf;
+	sere_leaf_source leaf;
 	load( "hickory", &leaf );
 	sere_sample_params params = { .point_count = 1200, .boundary_count = 150, .seed = 3, .candidates = 0 };
 	sere_samples a, b;
@@ -115,17 +115,17 @@ Test( model, sampling_is_deterministic_and_spread )
 	sere_samples_destroy( &a );
 	sere_samples_destroy( &b );
 	sere_samples_destroy( &c );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 }
 
 Test( model, too_few_points_for_the_veins )
 {
-	sere_leaf leaf;
+	sere_leaf_source leaf;
 	load( "maple", &leaf );
 	sere_build_params params = sere_build_params_default();
 	params.point_count = 60;
 	params.boundary_count = 50;
 	sere_model model;
 	cr_expect_eq( sere_model_build( &leaf.file.shape, &params, &model, NULL ), SERE_ERR_COUNTS );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 }

@@ -733,12 +733,12 @@ typedef struct maple_system
 static void maple_systems( sere_model* model, maple_system systems[2] )
 {
 	char err[1024];
-	sere_leaf leaf;
-	cr_assert_eq( sere_leaf_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ), 0, "%s", err );
+	sere_leaf_source leaf;
+	cr_assert_eq( sere_leaf_source_load( "data/leaves/maple.leaf", &leaf, err, sizeof( err ) ), 0, "%s", err );
 	sere_build_params params = sere_build_params_default();
 	cr_assert_eq( sere_counts_solve( 13197, 51102, &params.point_count, &params.boundary_count ), SERE_OK );
 	cr_assert_eq( sere_model_build( &leaf.file.shape, &params, model, NULL ), SERE_OK );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 	double* w = malloc( sizeof( double ) * model->p.count );
 	double* mass = malloc( sizeof( double ) * model->p.count );
 	for ( int layer = 0; layer < 2; ++layer )

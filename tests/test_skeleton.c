@@ -75,7 +75,7 @@ static void grid_leaf( sere_tri_mesh* mesh, double length, double width, double 
 	{
 		used[v] = used[v] ? vertices++ : -1;
 	}
-	cr_assert_eq( sere_tri_mesh_alloc( mesh, vertices, count ), SERE_OK );
+	cr_assert_eq( sere_tri_mesh_create( mesh, vertices, count ), SERE_OK );
 	for ( int32_t v = 0; v < nv; ++v )
 	{
 		if ( used[v] >= 0 )
@@ -315,7 +315,7 @@ Test( skeleton, blade_meshes_convex_and_lobed_outlines )
 	parametric_leaf( l, r, m, &leaf );
 	sere_tri_mesh blade;
 	sere_skeleton_check check;
-	cr_assert_eq( sere_blade_create( &leaf, 0.4, &blade, &check ), SERE_OK, "%s",
+	cr_assert_eq( sere_leaf_skeleton_mesh( &leaf, 0.4, &blade, &check ), SERE_OK, "%s",
 				  sere_skeleton_problem_text( check.problem ) );
 	expect_blade( &blade, 0.4 );
 	/* The parametric blade's area is W L (4/15) / (2 / (3√3)) = 0.6928 W L for the exact
@@ -341,7 +341,7 @@ Test( skeleton, blade_meshes_convex_and_lobed_outlines )
 	}
 	double midvein[] = { 0.0, 0.0, 5.0, 0.0, 10.0, 0.0 };
 	sere_leaf_skeleton watermelon = { 15, 15, 3, lobed, mirrored, midvein };
-	cr_assert_eq( sere_blade_create( &watermelon, 0.3, &blade, &check ), SERE_OK, "%s",
+	cr_assert_eq( sere_leaf_skeleton_mesh( &watermelon, 0.3, &blade, &check ), SERE_OK, "%s",
 				  sere_skeleton_problem_text( check.problem ) );
 	expect_blade( &blade, 0.3 );
 	/* Nothing in the notch between the basal and the middle lobe, around (3.3, 3.8). */

@@ -206,8 +206,8 @@ Test( triangulate, shipped_leaves_are_constrained_delaunay )
 	{
 		char path[256], err[1024];
 		snprintf( path, sizeof( path ), "data/leaves/%s.leaf", names[k] );
-		sere_leaf leaf;
-		cr_assert_eq( sere_leaf_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
+		sere_leaf_source leaf;
+		cr_assert_eq( sere_leaf_source_load( path, &leaf, err, sizeof( err ) ), 0, "%s", err );
 		sere_sample_params params = { .point_count = 700, .boundary_count = 90, .seed = 2, .candidates = 0 };
 		sere_samples samples;
 		cr_assert_eq( sere_sample_leaf( &leaf.file.shape, &params, &samples ), SERE_OK, "%s", names[k] );
@@ -220,6 +220,6 @@ Test( triangulate, shipped_leaves_are_constrained_delaunay )
 		check_cdt( names[k], &in, &t, 1 );
 		sere_triangulation_destroy( &t );
 		sere_samples_destroy( &samples );
-		sere_leaf_free( &leaf );
+		sere_leaf_source_destroy( &leaf );
 	}
 }

@@ -978,7 +978,7 @@ static void write_leaf( leaf* l, const char* folder, int table_n, int table_b )
 	}
 	char path[1024], err[1024];
 	snprintf( path, sizeof( path ), "%s/%s.leaf", folder, l->name );
-	if ( sere_leaf_write( path, &shape, l->name, err, sizeof( err ) ) != SERE_OK )
+	if ( sere_leaf_file_write( path, &shape, l->name, err, sizeof( err ) ) != SERE_OK )
 	{
 		die( err, l->name );
 	}

@@ -819,7 +819,7 @@ int sere_cmd_litter( int argc, char** argv )
 		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 100000000, NULL },
 		{ "--preset", SERE_OPTION_CHOICE, &o.species, 0, 0, preset_names },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
 		{ "--progress", SERE_OPTION_COUNT, &progress_every, 0, 86400, NULL },
 	};
 	sere_options_result parsed;

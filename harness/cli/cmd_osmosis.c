@@ -123,7 +123,7 @@ int sere_cmd_osmosis( int argc, char** argv )
 		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
 		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
 		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
 	};
 	sere_options_result parsed;
 	if ( sere_options_parse( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",

@@ -270,7 +270,7 @@ static int parse_run_options( int argc, char** argv, run_options* o )
 		{ "--points", SERE_OPTION_COUNT, &o->points, 10, 10000000, NULL },
 		{ "--particles", SERE_OPTION_COUNT, &o->particles, 4, 100000000, NULL },
 		{ "--springs", SERE_OPTION_COUNT, &o->springs, 1, 400000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, 256, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
 	};
 	sere_options_result parsed;
 	if ( sere_options_parse( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
@@ -321,7 +321,7 @@ typedef struct run_state
 	const run_options* o;
 	int bound; /* threads */
 	char name[128];
-	sere_leaf leaf; /* the file, kept for its veins (the measures along and across them) */
+	sere_leaf_source leaf; /* the file, kept for its veins (the measures along and across them) */
 	int have_leaf;
 	sere_model model;
 	int have_model;
@@ -365,7 +365,7 @@ static int run_open_leaf( run_state* r )
 {
 	const run_options* o = r->o;
 	char err[1024];
-	if ( sere_leaf_load( o->path, &r->leaf, err, sizeof( err ) ) != 0 )
+	if ( sere_leaf_source_load( o->path, &r->leaf, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
 		return 1;
@@ -830,7 +830,7 @@ static void run_close( run_state* r )
 	}
 	if ( r->have_leaf )
 	{
-		sere_leaf_free( &r->leaf );
+		sere_leaf_source_destroy( &r->leaf );
 	}
 }
 

@@ -118,7 +118,7 @@ static int parse_options( int argc, char** argv, options* o )
 		{ "--humidity", SERE_OPTION_REAL, &o->humidity, 0.0, 1.0, NULL },
 		{ "--leaves", SERE_OPTION_COUNT, &o->leaves, 1, 1000000000, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &o->seed, 0, 2147483647, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, 256, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
 		{ "--iterations", SERE_OPTION_COUNT, &o->iterations, 0, 9, NULL },
 		{ "--samples", SERE_OPTION_COUNT, &o->samples, 8, 2000, NULL },
 		{ "--optimize", SERE_OPTION_COUNT, &o->optimize, 0, 10000, NULL },

@@ -32,7 +32,7 @@ int sere_cmd_table1( int argc, char** argv )
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
 		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
 		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
 	};

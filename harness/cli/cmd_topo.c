@@ -10,7 +10,7 @@
 int sere_cmd_topo( int argc, char** argv )
 {
 	long long threads = 0;
-	const sere_option options[] = { { "--threads", SERE_OPTION_COUNT, &threads, 0, 256, NULL } };
+	const sere_option options[] = { { "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL } };
 	sere_options_result parsed;
 	if ( sere_options_parse( "topo", argc, argv, options, 1, 0, NULL, &parsed ) != SERE_OK )
 	{

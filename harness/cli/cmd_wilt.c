@@ -211,7 +211,7 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		{ "--every", SERE_OPTION_COUNT, &o->every, 1, 1000000, NULL },
 		{ "--size", SERE_OPTION_TEXT, &size, 0, 0, NULL },
 		{ "--view", SERE_OPTION_TEXT, &view, 0, 0, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, 256, NULL },
+		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
 		{ "--json", SERE_OPTION_FLAG, &o->json, 0, 0, NULL },
 	};
 	sere_options_result parsed;
@@ -385,7 +385,7 @@ static int build_leaf( const wilt_options* o, wilt_run* r, double* leaf_length )
 	*leaf_length = hypot( mid[2 * leaf.mid_count - 2] - mid[0], mid[2 * leaf.mid_count - 1] - mid[1] );
 	double spacing = o->spacing > 0.0 ? o->spacing : *leaf_length / 25.0;
 	sere_skeleton_check check = { SERE_SKELETON_OK, -1, -1 };
-	sere_status status = sere_blade_create( &leaf, spacing, &r->blade, &check );
+	sere_status status = sere_leaf_skeleton_mesh( &leaf, spacing, &r->blade, &check );
 	if ( status != SERE_OK )
 	{
 		if ( check.problem != SERE_SKELETON_OK )

@@ -30,18 +30,18 @@ int sere_harness_build( const char* path, long long particles, long long springs
 						const sere_sim_params* params, sere_model* model, sere_build_report* report, char* name,
 						size_t name_size, char* err, size_t err_size )
 {
-	sere_leaf leaf;
-	if ( sere_leaf_load( path, &leaf, err, err_size ) != 0 )
+	sere_leaf_source leaf;
+	if ( sere_leaf_source_load( path, &leaf, err, err_size ) != 0 )
 	{
 		return -1;
 	}
 	int result = sere_harness_build_leaf( &leaf, path, particles, springs, points, params, model, report, name,
 										  name_size, err, err_size );
-	sere_leaf_free( &leaf );
+	sere_leaf_source_destroy( &leaf );
 	return result;
 }
 
-int sere_harness_build_leaf( const sere_leaf* leaf, const char* path, long long particles, long long springs,
+int sere_harness_build_leaf( const sere_leaf_source* leaf, const char* path, long long particles, long long springs,
 							 long long points, const sere_sim_params* params, sere_model* model,
 							 sere_build_report* report, char* name, size_t name_size, char* err, size_t err_size )
 {

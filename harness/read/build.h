@@ -20,7 +20,7 @@ int sere_harness_build( const char* path, long long particles, long long springs
 						size_t name_size, char* err, size_t err_size );
 
 /* The same from a leaf already read (path names it in messages). */
-int sere_harness_build_leaf( const sere_leaf* leaf, const char* path, long long particles, long long springs,
+int sere_harness_build_leaf( const sere_leaf_source* leaf, const char* path, long long particles, long long springs,
 							 long long points, const sere_sim_params* params, sere_model* model,
 							 sere_build_report* report, char* name, size_t name_size, char* err, size_t err_size );
 

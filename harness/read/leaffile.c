@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-void sere_leaf_file_free( sere_leaf_file* leaf )
+void sere_leaf_file_destroy( sere_leaf_file* leaf )
 {
 	free( leaf->outline_xy );
 	free( leaf->vein_xy );
@@ -496,7 +496,7 @@ static sere_status explain( reader* r, const blocks* b, const sere_leaf_file* le
 	}
 }
 
-sere_status sere_leaf_read( const char* path, sere_leaf_file* leaf, char* err, size_t err_size )
+sere_status sere_leaf_file_read( const char* path, sere_leaf_file* leaf, char* err, size_t err_size )
 {
 	memset( leaf, 0, sizeof( *leaf ) );
 	reader r = { .f = NULL, .path = path, .line = 0, .err = err, .err_size = err_size };
@@ -590,7 +590,7 @@ sere_status sere_leaf_read( const char* path, sere_leaf_file* leaf, char* err, s
 	fclose( r.f );
 	if ( status != SERE_OK )
 	{
-		sere_leaf_file_free( leaf );
+		sere_leaf_file_destroy( leaf );
 		return status;
 	}
 	if ( b.name_line == 0 )
@@ -631,8 +631,8 @@ static void write_xy( FILE* f, const double* xy )
 	fprintf( f, "%s %s\n", x, y );
 }
 
-sere_status sere_leaf_write( const char* path, const sere_leaf_shape* shape, const char* name, char* err,
-							 size_t err_size )
+sere_status sere_leaf_file_write( const char* path, const sere_leaf_shape* shape, const char* name, char* err,
+								  size_t err_size )
 {
 	if ( path == NULL || shape == NULL || err == NULL || err_size == 0 )
 	{

@@ -32,16 +32,16 @@ typedef struct sere_leaf_file
  * "PATH:LINE: problem" (or "PATH: problem" when no line is at fault, e.g. the file cannot be
  * opened) into err, and leaves nothing to free. The name defaults to the file name without
  * its extension. */
-sere_status sere_leaf_read( const char* path, sere_leaf_file* leaf, char* err, size_t err_size );
-void sere_leaf_file_free( sere_leaf_file* leaf );
+sere_status sere_leaf_file_read( const char* path, sere_leaf_file* leaf, char* err, size_t err_size );
+void sere_leaf_file_destroy( sere_leaf_file* leaf );
 
-/* Writes a shape as a .leaf file that sere_leaf_read returns bit for bit (every coordinate in
+/* Writes a shape as a .leaf file that sere_leaf_file_read returns bit for bit (every coordinate in
  * the fewest digits that read back to the same double), to a temporary name and then renamed.
  * Refuses, with one line in err, a shape sere_shape_validate rejects and a name the reader
  * would not return unchanged (more than 127 characters, '#', control characters, leading or
  * trailing blanks); name may be NULL or empty for no name line. */
-sere_status sere_leaf_write( const char* path, const sere_leaf_shape* shape, const char* name, char* err,
-							 size_t err_size );
+sere_status sere_leaf_file_write( const char* path, const sere_leaf_shape* shape, const char* name, char* err,
+								  size_t err_size );
 
 #ifdef __cplusplus
 }

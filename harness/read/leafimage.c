@@ -113,7 +113,7 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 done:
 	if ( status != SERE_OK )
 	{
-		sere_leaf_file_free( leaf );
+		sere_leaf_file_destroy( leaf );
 	}
 	leafimage_veins_work_free( &v );
 	free( o.xy );

@@ -43,7 +43,7 @@ typedef struct sere_leaf_image_map
 	double pixels_per_unit;
 } sere_leaf_image_map;
 
-/* Fills leaf (the same owning struct the .leaf reader fills; free with sere_leaf_file_free). On
+/* Fills leaf (the same owning struct the .leaf reader fills; free with sere_leaf_file_destroy). On
  * failure returns the error, writes one line "PATH: problem" into err and leaves nothing to free.
  * Problems: cannot open, not a PNG file, corrupt PNG, image too large (> 8192 on a side), no
  * leaf, no veins, no base, base dot off the margin, veins not reaching the base, a vein stroke not

@@ -5,16 +5,16 @@
 #include <stdio.h>
 #include <string.h>
 
-int sere_leaf_load( const char* path, sere_leaf* leaf, char* err, size_t err_size )
+int sere_leaf_source_load( const char* path, sere_leaf_source* leaf, char* err, size_t err_size )
 {
 	size_t length = strlen( path );
 	int png = length > 4 && ( strcmp( path + length - 4, ".png" ) == 0 || strcmp( path + length - 4, ".PNG" ) == 0 );
 	sere_status status = png ? sere_leaf_from_png( path, &leaf->file, err, err_size )
-							 : sere_leaf_read( path, &leaf->file, err, err_size );
+							 : sere_leaf_file_read( path, &leaf->file, err, err_size );
 	return status == SERE_OK ? 0 : -1;
 }
 
-void sere_leaf_free( sere_leaf* leaf )
+void sere_leaf_source_destroy( sere_leaf_source* leaf )
 {
-	sere_leaf_file_free( &leaf->file );
+	sere_leaf_file_destroy( &leaf->file );
 }

@@ -8,15 +8,15 @@ extern "C"
 {
 #endif
 
-typedef struct sere_leaf
+typedef struct sere_leaf_source
 {
 	sere_leaf_file file;
-} sere_leaf;
+} sere_leaf_source;
 
 /* Reads PATH by its extension (.png: an auxiliary image, see leafimage.h; anything else: a
  * .leaf file); 0 on success, else -1 with one line in err. */
-int sere_leaf_load( const char* path, sere_leaf* leaf, char* err, size_t err_size );
-void sere_leaf_free( sere_leaf* leaf );
+int sere_leaf_source_load( const char* path, sere_leaf_source* leaf, char* err, size_t err_size );
+void sere_leaf_source_destroy( sere_leaf_source* leaf );
 
 #ifdef __cplusplus
 }

@@ -14,6 +14,11 @@ extern "C"
 #define SERE_ALIGN 64
 #define SERE_PAD   16
 
+/* The most threads a kernel runs: a parallel region asked for more (OMP_NUM_THREADS,
+ * omp_set_num_threads, sere's --threads, which accepts at most this many) runs this many. The one
+ * limit every kernel and command shares; per-thread slots in a workspace are sized by it at most. */
+#define SERE_MAX_THREADS 256
+
 typedef enum sere_status
 {
 	SERE_OK = 0,

@@ -108,6 +108,7 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
  * triangle layer, Voronoi masses as the mean of their triangle's three, w = μ⁰ m, M = m − w. */
 sere_status sere_model_assign_masses( sere_model* model, const sere_layer_params* params );
 
+/* Frees every array of a model made by sere_model_from_triangles or sere_model_build (model.h). */
 void sere_model_destroy( sere_model* model );
 
 /* N and B from exact particle and spring counts; SERE_ERR_COUNTS when no disk triangulation

@@ -36,7 +36,10 @@ typedef struct sere_build_report
 int32_t sere_boundary_for_points( double area, double perimeter, int32_t point_count );
 
 /* Builds a model with exactly N triangle particles, B of them on the outline, so the double
- * layer has 3N − B − 2 particles and 12N − 6B − 12 springs. report may be NULL. */
+ * layer has 3N − B − 2 particles and 12N − 6B − 12 springs. report may be NULL. The model is
+ * made by sere_model_from_triangles and freed, as every model, by sere_model_destroy: the
+ * model's type, its maker and its destroy are in layers.h, this header adds the leaf-shaped
+ * builder on top. */
 sere_status sere_model_build( const sere_leaf_shape* shape, const sere_build_params* params, sere_model* model,
 							  sere_build_report* report );
 

@@ -434,8 +434,8 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 	return SERE_OK;
 }
 
-sere_status sere_count_crossings( const float* x, const float* y, const float* z, int32_t vertex_count,
-								  const int32_t* tri, int32_t triangle_count, int64_t* count )
+sere_status sere_crossings_count_once( const float* x, const float* y, const float* z, int32_t vertex_count,
+									   const int32_t* tri, int32_t triangle_count, int64_t* count )
 {
 	if ( count != NULL )
 	{

@@ -50,7 +50,7 @@ void sere_crossings_destroy( sere_crossings* crossings );
 /* Number of (edge, triangle) pairs, over every unique edge and every triangle sharing no vertex
  * index with it, for which sere_segment_crosses_triangle holds at the positions x, y, z
  * (vertex_count entries each). A surface passing through itself along a curve gives one pair
- * for every edge of either sheet the curve cuts. Exactly sere_ref_count_crossings, for any
+ * for every edge of either sheet the curve cuts. Exactly sere_crossings_ref_count, for any
  * thread count: each pair is tested in one grid cell only and the total is an integer sum. No
  * allocation; the grid is re-sized to the current positions on every call (coarser when the
  * sheet is spread out so thinly that the fixed buffers would not hold it).
@@ -59,8 +59,8 @@ sere_status sere_crossings_count( sere_crossings* crossings, const float* x, con
 								  int64_t* count );
 
 /* One call: create, count, destroy (allocates; use the workspace to count many frames). */
-sere_status sere_count_crossings( const float* x, const float* y, const float* z, int32_t vertex_count,
-								  const int32_t* tri, int32_t triangle_count, int64_t* count );
+sere_status sere_crossings_count_once( const float* x, const float* y, const float* z, int32_t vertex_count,
+									   const int32_t* tri, int32_t triangle_count, int64_t* count );
 
 /* What sere_shape_measure reads. Lengths are in the units of the positions; angles in radians.
  * For a sere_model m: x, y, z = m.p.x, y, z; u, v = m.u, m.v; vertex_count = m.triangle_particles;

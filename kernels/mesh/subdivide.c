@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-sere_status sere_tri_mesh_alloc( sere_tri_mesh* mesh, int32_t vertex_count, int32_t triangle_count )
+sere_status sere_tri_mesh_create( sere_tri_mesh* mesh, int32_t vertex_count, int32_t triangle_count )
 {
 	memset( mesh, 0, sizeof( *mesh ) );
 	if ( vertex_count < 0 || triangle_count < 0 || vertex_count > INT32_MAX - SERE_PAD ||
@@ -176,7 +176,7 @@ static sere_status subdivide_once( const sere_tri_mesh* in, double min_edge, ser
 		free( mid );
 		return SERE_ERR_CAPACITY;
 	}
-	sere_status status = sere_tri_mesh_alloc( out, (int32_t) next, (int32_t) triangles );
+	sere_status status = sere_tri_mesh_create( out, (int32_t) next, (int32_t) triangles );
 	if ( status != SERE_OK )
 	{
 		free( edges );
@@ -236,7 +236,7 @@ sere_status sere_subdivide( const sere_tri_mesh* in, int32_t iterations, float m
 		}
 	}
 	sere_tri_mesh current;
-	sere_status status = sere_tri_mesh_alloc( &current, in->vertex_count, in->triangle_count );
+	sere_status status = sere_tri_mesh_create( &current, in->vertex_count, in->triangle_count );
 	if ( status != SERE_OK )
 	{
 		return status;

@@ -23,7 +23,7 @@ typedef struct sere_tri_mesh
 } sere_tri_mesh;
 
 /* Allocates zeroed arrays for the given counts. On failure every pointer is NULL. */
-sere_status sere_tri_mesh_alloc( sere_tri_mesh* mesh, int32_t vertex_count, int32_t triangle_count );
+sere_status sere_tri_mesh_create( sere_tri_mesh* mesh, int32_t vertex_count, int32_t triangle_count );
 void sere_tri_mesh_destroy( sere_tri_mesh* mesh );
 
 /* Sec. 5.1: `iterations` passes of 1→4 subdivision. An edge is cut at its midpoint only when

@@ -129,7 +129,7 @@ static int ref_within_band( const sere_massspring_topology* topology, const sere
 	return within;
 }
 
-sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, sere_massspring_particles* p,
+sere_status sere_massspring_ref_step( const sere_massspring_topology* topology, sere_massspring_particles* p,
 									  const sere_massspring_params* params, float* fx, float* fy, float* fz,
 									  sere_massspring_report* report )
 {

@@ -14,7 +14,7 @@ extern "C"
 
 /* topology: the springs (e.g. sere_massspring_get_topology of the optimized kernel, so both sweep the
  * structural springs in the same order); fx, fy, fz: particles->count floats of scratch. */
-sere_status sere_massspring_step_ref( const sere_massspring_topology* topology, sere_massspring_particles* particles,
+sere_status sere_massspring_ref_step( const sere_massspring_topology* topology, sere_massspring_particles* particles,
 									  const sere_massspring_params* params, float* fx, float* fy, float* fz,
 									  sere_massspring_report* report );
 

@@ -22,7 +22,7 @@ static int edge_seen( const int32_t* tri, int32_t t, int k, int32_t i, int32_t j
 	return 0;
 }
 
-int64_t sere_ref_count_crossings( const float* x, const float* y, const float* z, int32_t vertex_count,
+int64_t sere_crossings_ref_count( const float* x, const float* y, const float* z, int32_t vertex_count,
 								  const int32_t* tri, int32_t tri_count )
 {
 	(void) vertex_count;
@@ -73,7 +73,7 @@ static void ref_normal( const float* x, const float* y, const float* z, const in
 	ref_cross( ab, ac, n );
 }
 
-void sere_ref_shape_dihedrals( const float* x, const float* y, const float* z, const int32_t* tri, int32_t tri_count,
+void sere_shape_ref_dihedrals( const float* x, const float* y, const float* z, const int32_t* tri, int32_t tri_count,
 							   const int32_t* edge_a, const int32_t* edge_b, int32_t edge_count, double* dihedral,
 							   double* area )
 {

@@ -476,7 +476,7 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 	free( sides );
 	if ( status == SERE_OK )
 	{
-		status = sere_color_springs( sa, sb, edges, vertex_count, &coloring );
+		status = sere_coloring_create( sa, sb, edges, vertex_count, &coloring );
 	}
 	if ( status == SERE_OK )
 	{

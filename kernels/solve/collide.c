@@ -327,7 +327,7 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	}
 	c->vertex_count = n;
 	c->triangle_count = triangles;
-	c->slots = omp_get_max_threads();
+	c->slots = omp_get_max_threads() < SERE_MAX_THREADS ? omp_get_max_threads() : SERE_MAX_THREADS;
 	size_t vn = (size_t) sere_pad( n );
 	c->entry_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
 	c->entry_cursor = sere_alloc( sizeof( int32_t ) * vn * (size_t) c->slots );

@@ -20,8 +20,8 @@ static sere_status fail( sere_coloring* coloring, uint64_t* used, sere_status st
 	return status;
 }
 
-sere_status sere_color_springs( const int32_t* a, const int32_t* b, int32_t spring_count, int32_t particle_count,
-								sere_coloring* coloring )
+sere_status sere_coloring_create( const int32_t* a, const int32_t* b, int32_t spring_count, int32_t particle_count,
+								  sere_coloring* coloring )
 {
 	if ( coloring == NULL )
 	{

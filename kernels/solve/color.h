@@ -30,8 +30,8 @@ typedef struct sere_coloring
  * of 2689–2690 springs, in about 3 ms). SERE_ERR_ARGUMENT for an index out of range or a spring
  * joining a particle to itself, SERE_ERR_CAPACITY past SERE_MAX_COLORS. The caller frees with
  * sere_coloring_destroy (also safe after a failed call). */
-sere_status sere_color_springs( const int32_t* a, const int32_t* b, int32_t spring_count, int32_t particle_count,
-								sere_coloring* coloring );
+sere_status sere_coloring_create( const int32_t* a, const int32_t* b, int32_t spring_count, int32_t particle_count,
+								  sere_coloring* coloring );
 void sere_coloring_destroy( sere_coloring* coloring );
 
 /* out[k] = in[order[k]] for every spring: moves per-spring arrays (a, b, rest, rest0, kind)

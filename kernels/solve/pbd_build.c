@@ -327,7 +327,7 @@ sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, 
 	{
 		return SERE_ERR_MEMORY;
 	}
-	sere_status status = sere_color_springs( a, b, count, particle_count, &pbd->coloring );
+	sere_status status = sere_coloring_create( a, b, count, particle_count, &pbd->coloring );
 	if ( status != SERE_OK )
 	{
 		sere_free( pbd );

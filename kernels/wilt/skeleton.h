@@ -68,7 +68,7 @@ sere_status sere_leaf_skeleton_generate( double length, double width, int32_t fe
 
 /* Checks a leaf skeleton and reports the first problem; SERE_ERR_GEOMETRY or
  * SERE_ERR_NONFINITE when it is not usable. spacing is the sampling interval of
- * sere_blade_create. */
+ * sere_leaf_skeleton_mesh. */
 sere_status sere_leaf_skeleton_validate( const sere_leaf_skeleton* leaf, double spacing, sere_skeleton_check* check );
 
 /* Sec. 5.1: the blade mesh. The boundary curves and the midvein are rebuilt as centripetal
@@ -78,8 +78,8 @@ sere_status sere_leaf_skeleton_validate( const sere_leaf_skeleton* leaf, double 
  * outline and the midvein are constrained edges, so concave and lobed outlines are meshed
  * correctly). z = 0; texture coordinates map the outline's bounding box to [0, 1]². check may
  * be NULL. On success the caller frees mesh with sere_tri_mesh_destroy. */
-sere_status sere_blade_create( const sere_leaf_skeleton* leaf, double spacing, sere_tri_mesh* mesh,
-							   sere_skeleton_check* check );
+sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spacing, sere_tri_mesh* mesh,
+									 sere_skeleton_check* check );
 
 /* Sec. 4.2: one vein of a venation skeleton as the user draws it: a polyline from its start
  * (on or near its parent vein) to its end, cut into `segments` pieces of equal length whose

@@ -332,8 +332,8 @@ sere_status sere_leaf_skeleton_validate( const sere_leaf_skeleton* leaf, double 
 	return status;
 }
 
-sere_status sere_blade_create( const sere_leaf_skeleton* leaf, double spacing, sere_tri_mesh* mesh,
-							   sere_skeleton_check* check )
+sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spacing, sere_tri_mesh* mesh,
+									 sere_skeleton_check* check )
 {
 	memset( mesh, 0, sizeof( *mesh ) );
 	sere_skel_leaf_curves c;
@@ -420,7 +420,7 @@ sere_status sere_blade_create( const sere_leaf_skeleton* leaf, double spacing, s
 	}
 	if ( status == SERE_OK )
 	{
-		status = sere_tri_mesh_alloc( mesh, count, triangulation.triangle_count );
+		status = sere_tri_mesh_create( mesh, count, triangulation.triangle_count );
 	}
 	if ( status == SERE_OK )
 	{

@@ -37,6 +37,8 @@
 #error "define _GNU_SOURCE before the first include (sched_getaffinity, CPU_ISSET)"
 #endif
 
+#include "core/base.h"
+
 #include <fcntl.h>
 #include <omp.h>
 #include <sched.h>
@@ -149,9 +151,11 @@ static inline void sere_team_sample( sere_team_state* s, double now )
 	s->have = 1, s->wall = now, s->own = own, s->busy = busy;
 }
 
-/* The thread count for a parallel region that the caller would run with `wanted` threads. */
+/* The thread count for a parallel region that the caller would run with `wanted` threads (at
+ * most SERE_MAX_THREADS, base.h). */
 static inline int sere_team( int wanted )
 {
+	wanted = wanted > SERE_MAX_THREADS ? SERE_MAX_THREADS : wanted;
 	sere_team_state* s = &sere_team_global;
 	if ( omp_in_parallel() )
 	{

@@ -16,8 +16,9 @@ enum
 	 * small share (on the maple, 8 bands: 6% of the constraints). */
 	BAND_PARTICLES = 1600,
 	MAX_BANDS = 8,
-	/* Threads past this many are not started (per-thread slots live in the workspace). */
-	MAX_THREADS = 64,
+	/* Threads past this many are not started (per-thread slots live in the workspace): the one
+	 * limit of every kernel (base.h). */
+	MAX_THREADS = SERE_MAX_THREADS,
 	/* A waiting thread naps this long at a time once it has spun SPIN_SECONDS. */
 	NAP_NANOSECONDS = 50000,
 };
