@@ -28,6 +28,17 @@ sere_status sere_collide_measure_h( const float* x, const float* y, const float*
 	return bad ? SERE_ERR_NONFINITE : SERE_OK;
 }
 
+/* Jeong Eq. 14: the Voronoi particle of triangle (a, b, c) with unit normal n at height h above
+ * the triangle's centroid. */
+static inline void voronoi_target( const float a[3], const float b[3], const float c[3], const float n[3], float h,
+								   float out[3] )
+{
+	for ( int k = 0; k < 3; ++k )
+	{
+		out[k] = ( a[k] + b[k] + c[k] ) / 3.0f + h * n[k];
+	}
+}
+
 sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,
 										  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
 										  const float* h )
@@ -73,10 +84,9 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 		float a[3], b[3], c[3], n[3];
 		triangle_frame( x, y, z, v, a, b, c, n );
 		int32_t i = voronoi_first + t;
-		/* Jeong Eq. 14 */
-		x[i] = ( a[0] + b[0] + c[0] ) / 3.0f + h[t] * n[0];
-		y[i] = ( a[1] + b[1] + c[1] ) / 3.0f + h[t] * n[1];
-		z[i] = ( a[2] + b[2] + c[2] ) / 3.0f + h[t] * n[2];
+		float target[3];
+		voronoi_target( a, b, c, n, h[t], target );
+		x[i] = target[0], y[i] = target[1], z[i] = target[2];
 		vx[i] = ( vx[v[0]] + vx[v[1]] + vx[v[2]] ) / 3.0f;
 		vy[i] = ( vy[v[0]] + vy[v[1]] + vy[v[2]] ) / 3.0f;
 		vz[i] = ( vz[v[0]] + vz[v[1]] + vz[v[2]] ) / 3.0f;
@@ -130,10 +140,9 @@ sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, fl
 		{
 			continue;
 		}
-		/* Jeong Eq. 14 */
-		float tx = ( a[0] + b[0] + c[0] ) / 3.0f + h[t] * n[0];
-		float ty = ( a[1] + b[1] + c[1] ) / 3.0f + h[t] * n[1];
-		float tz = ( a[2] + b[2] + c[2] ) / 3.0f + h[t] * n[2];
+		float target[3];
+		voronoi_target( a, b, c, n, h[t], target );
+		const float tx = target[0], ty = target[1], tz = target[2];
 		/* Sec. 5.2: a position change Δx changes the velocity by Δx/Δt, as every other
 		 * correction of the frame does. */
 		vx[i] += ( tx - x[i] ) * inv_dt;
