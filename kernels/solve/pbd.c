@@ -852,6 +852,10 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 static sere_status check_call( const sere_pbd* pbd, const float* px, const float* py, const float* pz,
 							   const float* inv_m, const sere_pbd_params* params, sere_pbd_report* report )
 {
+	if ( report != NULL )
+	{
+		memset( report, 0, sizeof( *report ) ); /* a refused call reports nothing done */
+	}
 	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || params == NULL || report == NULL ||
 		 !( params->stiffness >= 0.0f && params->stiffness <= 1.0f ) || !( params->tolerance > 0.0f ) ||
 		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) ||
@@ -890,10 +894,6 @@ static solve_setup setup_of( const sere_pbd_params* params, solver kind )
 sere_status sere_pbd_project( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 							  const sere_pbd_params* params, sere_pbd_report* report )
 {
-	if ( report != NULL )
-	{
-		memset( report, 0, sizeof( *report ) );
-	}
 	sere_status status = check_call( pbd, px, py, pz, inv_m, params, report );
 	if ( status != SERE_OK )
 	{
@@ -911,10 +911,6 @@ sere_status sere_pbd_project( sere_pbd* pbd, float* px, float* py, float* pz, co
 sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 									 const sere_pbd_params* params, sere_pbd_report* report )
 {
-	if ( report != NULL )
-	{
-		memset( report, 0, sizeof( *report ) );
-	}
 	sere_status status = check_call( pbd, px, py, pz, inv_m, params, report );
 	if ( status != SERE_OK )
 	{
