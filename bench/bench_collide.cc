@@ -435,7 +435,7 @@ void BM_collide_pass( benchmark::State& state, Shape shape )
 	collide_loop( state, shape, 1, false );
 }
 
-// The pass with the candidate list serving each detection (collide.c, SKIN): a frame whose motion
+// The pass with the candidate list serving each detection (collide_detect.c, SKIN): a frame whose motion
 // stays within the list's skin, as most Table 1 frames do.
 void BM_collide_pass_listed( benchmark::State& state, Shape shape )
 {
