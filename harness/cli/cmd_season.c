@@ -580,7 +580,9 @@ static int prepare_days( const options* o, season_run* r )
 		if ( r->plan.label[k][0] != '\0' )
 		{
 			r->label_day[r->label_count] = r->plan.day[k];
-			snprintf( r->label[r->label_count], NAME_SIZE, "%s", r->plan.label[k] );
+			/* both are NAME_SIZE buffers holding a terminated string: copied whole (gcc -O1 takes
+			 * snprintf between two members of one struct for an overlap) */
+			memcpy( r->label[r->label_count], r->plan.label[k], NAME_SIZE );
 			r->label_count += 1;
 		}
 	}
