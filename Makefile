@@ -342,7 +342,7 @@ $(FUZZ_BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
 
-$(FUZZ_BUILD)/obj/kernels/base.o: FUZZ_CFLAGS += -DSERE_VERSION='"$(VERSION)"'
+$(FUZZ_BUILD)/obj/kernels/core/base.o: FUZZ_CFLAGS += -DSERE_VERSION='"$(VERSION)"'
 
 $(FUZZ_LIB): $(FUZZ_LIB_OBJ)
 	@rm -f $@

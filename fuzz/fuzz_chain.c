@@ -1,17 +1,19 @@
 /* sere fuzz — the season readers: the Markov chain file and the weather schedule
- * (harness/cli/cmd_season.c, read_chain and read_schedule) and the key points file
- * (harness/read/seasonleaf.c, read_keys, through seasonleaf_shim.c).
+ * (harness/cli/cmd_season_files.c, season_read_chain and season_read_schedule, declared in
+ * cmd_season_shared.h) and the key points file (harness/read/seasonleaf.c, read_keys, through
+ * seasonleaf_shim.c).
  *
- * The readers are static, so this file compiles cmd_season.c itself (the library's copy is then
- * not linked). Every input is given to all three readers, so the seeds of each format (chains,
+ * Every input is given to all three readers, so the seeds of each format (chains,
  * schedules, key points) teach the fuzzer all of them. What a reader accepts is used the way
  * `sere season` uses it: a chain gives transition matrices (rows summing to 1) and sampling
  * tables over the whole weather range, a schedule gives the weather of every day. */
 #define _GNU_SOURCE
 #include "fuzz.h"
 
-#include "../harness/cli/cmd_season.c"
+#include "cli/cmd_season_shared.h"
 #include "seasonleaf_shim.h"
+
+#include <math.h>
 
 int LLVMFuzzerInitialize( int* argc, char*** argv )
 {
@@ -57,7 +59,7 @@ static void use_schedule( const schedule* s )
 	for ( int32_t day = 0; day <= last + 1; day += step )
 	{
 		double t, h;
-		weather( s, day, &t, &h );
+		season_weather( s, day, &t, &h );
 		FUZZ_CHECK( t >= -90.0 && t <= 70.0 && h >= 0.0 && h <= 1.0 );
 	}
 }
@@ -65,11 +67,11 @@ static void use_schedule( const schedule* s )
 int LLVMFuzzerTestOneInput( const uint8_t* data, size_t size )
 {
 	const char* path = fuzz_file( data, size );
-	if ( read_chain( path, &fuzz_chain ) == 0 )
+	if ( season_read_chain( path, &fuzz_chain ) == 0 )
 	{
 		use_chain( &fuzz_chain );
 	}
-	if ( read_schedule( path, &fuzz_plan ) == 0 )
+	if ( season_read_schedule( path, &fuzz_plan ) == 0 )
 	{
 		use_schedule( &fuzz_plan );
 	}
