@@ -91,7 +91,7 @@ void BM_SpMV( benchmark::State& state )
 	std::vector<double> x( a->rows, 1.0 ), y( a->rows );
 	for ( auto _ : state )
 	{
-		sere_csr_spmv( a, x.data(), y.data() );
+		sere_csr_spmv( a, x.data(), y.data(), static_cast<int32_t>( state.range( 1 ) ) );
 		benchmark::DoNotOptimize( y.data() );
 	}
 	state.counters["GFLOP/s"] = spmv_gflops( state, a );

@@ -219,7 +219,7 @@ struct Scene
 		{
 			h.data[k] = model->h[k];
 		}
-		sere_collide_restore_voronoi( x.data, y.data, z.data, vx.data, vy.data, vz.data, tri.data(), f, n, h.data );
+		sere_collide_restore_voronoi( x.data, y.data, z.data, vx.data, vy.data, vz.data, tri.data(), f, n, h.data, 0 );
 		x0.assign( x.data, x.data + n + f );
 		y0.assign( y.data, y.data + n + f );
 		z0.assign( z.data, z.data + n + f );
@@ -417,7 +417,7 @@ void collide_loop( benchmark::State& state, Shape shape, int32_t rounds, bool re
 		if ( restore )
 		{
 			sere_collide_restore_voronoi( s.x.data, s.y.data, s.z.data, s.vx.data, s.vy.data, s.vz.data, s.tri.data(),
-										  s.f, s.n, s.h.data );
+										  s.f, s.n, s.h.data, 0 );
 		}
 		benchmark::ClobberMemory();
 	}
@@ -451,11 +451,10 @@ void BM_collide_frame( benchmark::State& state, Shape shape )
 void BM_collide_restore_voronoi( benchmark::State& state )
 {
 	Scene& s = scene( kDried );
-	omp_set_num_threads( (int) state.range( 0 ) );
 	for ( auto _ : state )
 	{
 		sere_collide_restore_voronoi( s.x.data, s.y.data, s.z.data, s.vx.data, s.vy.data, s.vz.data, s.tri.data(), s.f,
-									  s.n, s.h.data );
+									  s.n, s.h.data, (int32_t) state.range( 0 ) );
 		benchmark::ClobberMemory();
 	}
 	rate( state, "triangles/s", s.f );

@@ -113,7 +113,7 @@ tree& population()
 	t.states.assign( leaves, GREEN0 );
 	for ( int64_t d = 0; d < settle_days; ++d )
 	{
-		if ( sere_markov_advance( &t.day, t.states.data(), leaves, 0, seed, d, nullptr ) != SERE_OK )
+		if ( sere_markov_advance( &t.day, t.states.data(), leaves, 0, seed, d, nullptr, 0 ) != SERE_OK )
 		{
 			std::abort();
 		}
@@ -146,7 +146,8 @@ void BM_MarkovAdvance( benchmark::State& state )
 		state.PauseTiming();
 		restore( t );
 		state.ResumeTiming();
-		sere_status status = sere_markov_advance( &t.day, t.states.data(), leaves, 0, seed, settle_days, counts );
+		sere_status status = sere_markov_advance( &t.day, t.states.data(), leaves, 0, seed, settle_days, counts,
+												  static_cast<int32_t>( state.range( 0 ) ) );
 		benchmark::ClobberMemory();
 		if ( status != SERE_OK )
 		{

@@ -16,7 +16,6 @@
 #include "fixture.h"
 
 #include <benchmark/benchmark.h>
-#include <omp.h>
 
 #include <cmath>
 #include <vector>
@@ -41,14 +40,14 @@ const sere_model& dried()
 
 void BM_Shrink( benchmark::State& state )
 {
-	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
+	const int32_t threads = static_cast<int32_t>( state.range( 0 ) );
 	const sere_model& m = dried();
 	std::vector<float> rest( m.s.rest, m.s.rest + m.s.count );
 	const sere_shrink_params params = maple_green();
 	for ( auto _ : state )
 	{
-		sere_status status =
-			sere_shrink( m.s.a, m.s.b, m.s.kind, m.s.rest0, rest.data(), 0, m.s.count, m.p.m, m.p.m0, &params );
+		sere_status status = sere_shrink( m.s.a, m.s.b, m.s.kind, m.s.rest0, rest.data(), 0, m.s.count, m.p.m, m.p.m0,
+										  &params, threads );
 		if ( status != SERE_OK )
 		{
 			state.SkipWithError( sere_status_text( status ) );

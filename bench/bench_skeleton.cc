@@ -132,8 +132,12 @@ template <typename Skin> int32_t skin_loop( benchmark::State& state, Skin skin )
 
 void BM_skeleton_skin( benchmark::State& state )
 {
-	omp_set_num_threads( (int) state.range( 0 ) );
-	int32_t vertices = skin_loop( state, sere_joint_frames_skin );
+	const int32_t threads = (int32_t) state.range( 0 );
+	int32_t vertices =
+		skin_loop( state, [threads]( const sere_joint_frames* f, const int32_t* joint, const float* ox, const float* oy,
+									 const float* oz, int32_t n, float* x, float* y, float* z ) {
+			sere_joint_frames_skin( f, joint, ox, oy, oz, n, x, y, z, threads );
+		} );
 	// joint index + offset in, position out: 28 bytes per vertex
 	rate( state, "bytes/s", 28.0 * vertices );
 }

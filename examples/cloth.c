@@ -24,6 +24,7 @@
 #define FRAMES	   120	 /* 1 s at 120 frames per second */
 #define TOLERANCE  1e-3f /* λ_C: stop when max |C/l| is below it */
 #define MAX_SWEEPS 20000 /* the cap a frame must not reach */
+#define THREADS	   2	 /* for every kernel call, said at the call (0: OpenMP's count) */
 
 /* Appends the constraint (p, q) with its rest length. */
 static void add( int32_t* a, int32_t* b, float* rest, int32_t* count, int32_t p, int32_t q, float length )
@@ -188,7 +189,7 @@ static int cloth_fall( cloth* c, sere_pbd* pbd )
 	for ( int32_t frame = 0; frame < FRAMES; ++frame )
 	{
 		sere_pbd_predict( c->n, c->x, c->y, c->z, c->vx, c->vy, c->vz, c->px, c->py, c->pz, c->inv_m, gravity,
-						  params.dt );
+						  params.dt, THREADS );
 		sere_pbd_report report = { 0 };
 		sere_status status = sere_pbd_project( pbd, c->px, c->py, c->pz, c->inv_m, &params, &report );
 		if ( status != SERE_OK || report.hit_cap || !( report.max_strain < TOLERANCE ) )
@@ -197,7 +198,7 @@ static int cloth_fall( cloth* c, sere_pbd* pbd )
 					 report.iterations, report.max_strain );
 			return 1;
 		}
-		sere_pbd_finish( c->n, c->x, c->y, c->z, c->vx, c->vy, c->vz, c->px, c->py, c->pz, params.dt );
+		sere_pbd_finish( c->n, c->x, c->y, c->z, c->vx, c->vy, c->vz, c->px, c->py, c->pz, params.dt, THREADS );
 		const float strain = cloth_strain( c );
 		if ( !( strain < TOLERANCE ) )
 		{
@@ -267,6 +268,10 @@ int main( void )
 	/* ... and the PBD workspace, which colors the constraints the same way for its sweeps. */
 	sere_pbd* pbd = NULL;
 	status = sere_pbd_create( c.a, c.b, c.count, c.n, &pbd );
+	if ( status == SERE_OK )
+	{
+		status = sere_pbd_set_threads( pbd, THREADS );
+	}
 	if ( status == SERE_OK )
 	{
 		status = sere_pbd_set_rest( pbd, c.rest );

@@ -17,6 +17,8 @@
 #include <stdlib.h>
 
 #define N 100 /* interior points per side: 10⁴ unknowns, 49600 nonzeros */
+/* Threads for every kernel call, said at the call (0 would take OpenMP's count). */
+#define THREADS 2
 
 int main( void )
 {
@@ -84,6 +86,10 @@ int main( void )
 	}
 	if ( status == SERE_OK )
 	{
+		status = sere_cg_set_threads( cg, THREADS );
+	}
+	if ( status == SERE_OK )
+	{
 		status = sere_cg_solve( cg, sell, b, x, tolerance, 10 * N, &result );
 	}
 	if ( status != SERE_OK )
@@ -93,7 +99,7 @@ int main( void )
 	}
 
 	/* The checks, computed here. */
-	sere_csr_spmv( &a, x, ax );
+	sere_csr_spmv( &a, x, ax, THREADS );
 	double rr = 0.0, bb = 0.0, error = 0.0, size = 0.0;
 	for ( int32_t row = 0; row < n; ++row )
 	{

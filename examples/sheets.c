@@ -25,6 +25,7 @@
 #define CELL	  0.04f				/* cell size */
 #define THICKNESS 0.01f				/* contact when a vertex is closer than this to a triangle */
 #define GAP		  ( THICKNESS / 3 ) /* the sheets start this far apart */
+#define THREADS	  2					/* for every kernel call, said at the call (0: OpenMP's count) */
 
 /* Brute force over every vertex of one sheet and every triangle of the other: the number of
  * pairs closer than `below` and the smallest distance. */
@@ -205,6 +206,10 @@ int main( void )
 	if ( status == SERE_OK )
 	{
 		status = sere_collide_create( bvh, 0, &collide );
+	}
+	if ( status == SERE_OK )
+	{
+		status = sere_collide_set_threads( collide, THREADS );
 	}
 	int32_t found = 0;
 	if ( status == SERE_OK )

@@ -356,6 +356,8 @@ static sere_status dry_model( const litter_options* o, const sere_sim_params* pa
 	sere_model_rest_on( model, params->leaf.ground );
 	*sim = NULL;
 	sere_status status = sere_leaf_create( model, sim );
+	/* One thread a leaf: the litter's parallelism is across leaves. */
+	status = status == SERE_OK ? sere_leaf_set_threads( *sim, 1 ) : status;
 	if ( status == SERE_OK && ( params->crease != 0.0f || params->curl != 0.0f ) )
 	{
 		/* Sec. 3.1, as sere run shapes a leaf before it dries */

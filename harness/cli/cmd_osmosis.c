@@ -174,6 +174,11 @@ int sere_cmd_osmosis( int argc, char** argv )
 		status = sere_osmosis_create( model.triangle_particles, model.triangle_count, model.s.a + model.t_springs,
 									  model.s.b + model.t_springs, model.v_springs, &v_layer );
 	}
+	if ( status == SERE_OK )
+	{
+		sere_osmosis_set_threads( t_layer, bound );
+		sere_osmosis_set_threads( v_layer, bound );
+	}
 	/* The leaf's osmosis settings at the leaf's time step, solved to the stand-alone solver's own
 	 * tolerance (the leaf loosens its CG stop, kernels/drying/leaf.c), at dt as written */
 	sere_osmosis_params op = params.leaf.osmosis;

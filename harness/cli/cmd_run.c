@@ -356,6 +356,7 @@ static sere_shape_input run_shape_input( const run_state* r )
 {
 	sere_shape_input in = sere_leaf_shape_input( &r->model, sere_params_decimal( r->o->params.leaf.ground ) );
 	in.veins = &r->leaf.file.shape;
+	in.threads = r->bound;
 	return in;
 }
 
@@ -400,6 +401,7 @@ static int run_open_leaf( run_state* r )
 	}
 	sere_model_rest_on( &r->model, o->params.leaf.ground );
 	sere_status status = sere_leaf_create( &r->model, &r->sim );
+	status = status == SERE_OK ? sere_leaf_set_threads( r->sim, r->bound ) : status;
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "sere run: %s\n", sere_status_text( status ) );
@@ -410,7 +412,7 @@ static int run_open_leaf( run_state* r )
 	status = sere_shape_measure( &shape_input, &r->shape_fresh );
 	if ( status == SERE_OK )
 	{
-		status = sere_watch_create( &r->model, sere_params_decimal( o->params.leaf.ground ), &r->watch );
+		status = sere_watch_create( &r->model, sere_params_decimal( o->params.leaf.ground ), r->bound, &r->watch );
 	}
 	if ( status != SERE_OK )
 	{

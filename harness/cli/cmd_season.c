@@ -534,6 +534,7 @@ static int grow_leaf_and_tree( const options* o, season_run* r )
 	lo.levels = levels;
 	lo.steps_per_level = (int32_t) o->steps;
 	lo.meshopt_iterations = (int32_t) o->optimize;
+	lo.threads = r->threads;
 	char err[1024];
 	double t0 = sere_now();
 	if ( sere_season_leaf_build( &lo, &r->leaf, err, sizeof( err ) ) != SERE_OK )
@@ -640,7 +641,8 @@ static int step_days( const options* o, season_run* r )
 		}
 		sere_markov_propagate( r->P, S, r->exact + (size_t) d * S, r->exact + (size_t) ( d + 1 ) * S );
 		double t1 = sere_now();
-		sere_status status = sere_markov_advance( r->day_table, r->states, N, 0, (uint64_t) o->seed, d, r->counts );
+		sere_status status =
+			sere_markov_advance( r->day_table, r->states, N, 0, (uint64_t) o->seed, d, r->counts, r->threads );
 		r->step_seconds += sere_now() - t1;
 		if ( status != SERE_OK )
 		{

@@ -94,6 +94,7 @@ int sere_cmd_table1( int argc, char** argv )
 		}
 		sere_leaf_sim* sim;
 		sere_status status = sere_leaf_create( &model, &sim );
+		status = status == SERE_OK ? sere_leaf_set_threads( sim, bound ) : status;
 		double osmosis = 0, dynamics = 0, collisions = 0, total = 0;
 		long long cap_hits = 0, stalls = 0;
 		sere_leaf_stats stats;

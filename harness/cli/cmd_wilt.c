@@ -259,6 +259,7 @@ typedef struct wilt_run
 	sere_tri_mesh blade, mesh;
 	sere_skeleton skeleton;
 	sere_plant* plant;
+	int threads; /* the kernels' (sere_topo_bind's count) */
 	sere_bvh* check_bvh;
 	wilt_picture picture;
 	char** names;
@@ -483,6 +484,7 @@ static int build_plant( const wilt_options* o, wilt_run* r, double leaf_length, 
 	sere_leaf_template template = { &r->mesh, &r->skeleton };
 	sere_status status = sere_plant_create( &template, 1, placement, leaves, &r->plant );
 	free( placement );
+	status = status == SERE_OK ? sere_plant_set_threads( r->plant, r->threads ) : status;
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "sere wilt: cannot build the plant of %d leaves: %s\n", leaves, sere_status_text( status ) );
@@ -566,7 +568,7 @@ static void final_check( wilt_run* r, wilt_summary* s )
 						  &r->check_bvh ) == SERE_OK )
 	{
 		s->intersections = sere_mesh_count_intersections( r->check_bvh, plant->tri, plant->triangle_count, plant->x,
-														  plant->y, plant->z );
+														  plant->y, plant->z, s->threads );
 	}
 	s->deepest = 0.0;
 	for ( int32_t j = 0; j < plant->joints.joint_count; ++j )
@@ -645,6 +647,7 @@ int sere_cmd_wilt( int argc, char** argv )
 	double start = sere_now();
 	wilt_run r;
 	memset( &r, 0, sizeof( r ) );
+	r.threads = s.threads;
 	double leaf_length = 0.0;
 	float stem[5];
 	if ( build_leaf( &o, &r, &leaf_length ) != 0 || build_plant( &o, &r, leaf_length, stem ) != 0 )

@@ -8,6 +8,7 @@
 
 struct sere_watch
 {
+	int32_t threads;
 	sere_crossings* crossings;
 	float *x, *y, *z; /* every particle at the previous frame */
 	int32_t count;
@@ -36,7 +37,7 @@ static void remember( sere_watch* watch, const sere_model* model )
 	memcpy( watch->z, model->p.z, bytes );
 }
 
-sere_status sere_watch_create( const sere_model* model, double ground, sere_watch** out )
+sere_status sere_watch_create( const sere_model* model, double ground, int32_t threads, sere_watch** out )
 {
 	sere_watch* watch = calloc( 1, sizeof( *watch ) );
 	if ( watch == NULL )
@@ -45,6 +46,7 @@ sere_status sere_watch_create( const sere_model* model, double ground, sere_watc
 	}
 	watch->count = model->p.count;
 	watch->ground = ground;
+	watch->threads = threads;
 	size_t bytes = sizeof( float ) * (size_t) watch->count;
 	watch->x = malloc( bytes ), watch->y = malloc( bytes ), watch->z = malloc( bytes );
 	sere_status status = watch->x && watch->y && watch->z ? SERE_OK : SERE_ERR_MEMORY;
@@ -53,10 +55,15 @@ sere_status sere_watch_create( const sere_model* model, double ground, sere_watc
 		status =
 			sere_crossings_create( model->tri, model->triangle_count, model->triangle_particles, &watch->crossings );
 	}
+	if ( status == SERE_OK )
+	{
+		status = sere_crossings_set_threads( watch->crossings, threads );
+	}
 	sere_shape shape;
 	if ( status == SERE_OK )
 	{
 		sere_shape_input in = sere_leaf_shape_input( model, ground );
+		in.threads = threads;
 		status = sere_shape_measure( &in, &shape );
 	}
 	if ( status != SERE_OK )
@@ -90,6 +97,7 @@ sere_status sere_watch_step( sere_watch* watch, const sere_model* model, sere_wa
 	}
 	sere_shape_input in = sere_leaf_shape_input( model, watch->ground );
 	in.skip_extent = true;
+	in.threads = watch->threads;
 	sere_shape shape;
 	status = sere_shape_measure( &in, &shape );
 	if ( status != SERE_OK )

@@ -27,8 +27,9 @@ typedef struct sere_watch_frame
 
 typedef struct sere_watch sere_watch;
 
-/* Takes the fresh state of model (its current positions) as the reference. */
-sere_status sere_watch_create( const sere_model* model, double ground, sere_watch** out );
+/* Takes the fresh state of model (its current positions) as the reference. Its measures run on
+ * `threads` threads (kernels/core/base.h). */
+sere_status sere_watch_create( const sere_model* model, double ground, int32_t threads, sere_watch** out );
 void sere_watch_destroy( sere_watch* watch );
 
 /* Measures the model's current state; call once after every frame. */

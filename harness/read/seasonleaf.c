@@ -312,7 +312,8 @@ void sere_season_leaf_free( sere_season_leaf* leaf )
 /* The deformation levels (Sec. 4, Fig. 4): level 0 the flat blade; from a slightly cupped rest
  * shape the mass-spring model runs steps_per_level steps per level with the springs contracted in
  * proportion to the level, held at the petiole and its ring of neighbours. */
-static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, char* err, size_t err_size )
+static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, int32_t threads, char* err,
+						   size_t err_size )
 {
 	const int32_t n = leaf->vertex_count;
 	float* buffer = calloc( 7 * (size_t) n, sizeof( float ) );
@@ -351,6 +352,7 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, char
 	}
 	sere_massspring* ms = NULL;
 	sere_status status = sere_massspring_create( x, y, z, n, leaf->tri, leaf->triangle_count, &ms );
+	status = status == SERE_OK ? sere_massspring_set_threads( ms, threads ) : status;
 	if ( status != SERE_OK )
 	{
 		free( buffer );
@@ -403,6 +405,11 @@ static sere_status check_options( const sere_season_leaf_options* options, char*
 	{
 		return failf( err, err_size, SERE_ERR_ARGUMENT, "steps per level: %d is outside [0, 1000000]",
 					  options->steps_per_level );
+	}
+	if ( !sere_threads_valid( options->threads ) )
+	{
+		return failf( err, err_size, SERE_ERR_ARGUMENT, "threads: %d is outside [0, %d]", options->threads,
+					  SERE_MAX_THREADS );
 	}
 	if ( ( options->keys_path == NULL ) == ( options->silhouette_path == NULL ) )
 	{
@@ -651,7 +658,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	{
 		goto done;
 	}
-	status = deform( leaf, options->steps_per_level, err, err_size );
+	status = deform( leaf, options->steps_per_level, options->threads, err, err_size );
 
 done:
 	if ( status != SERE_OK )

@@ -22,6 +22,7 @@ typedef struct sere_season_leaf_options
 	int32_t meshopt_iterations;	 /* the seed's 160 */
 	int32_t levels;				 /* deformation states D ≥ 1: level 0 fresh and flat, D − 1 the most withered */
 	int32_t steps_per_level;	 /* mass-spring steps between consecutive levels */
+	int32_t threads;			 /* the mass-spring's threads (kernels/core/base.h; 0: OpenMP's count) */
 } sere_season_leaf_options;
 
 /* Defaults: data/seasons/maple.keys, data/masks/maple.pgm, 120 samples, 160 iterations,

@@ -14,9 +14,18 @@ extern "C"
 #define SERE_ALIGN 64
 #define SERE_PAD   16
 
-/* The most threads a kernel runs: a parallel region asked for more (OMP_NUM_THREADS,
- * omp_set_num_threads, sere's --threads, which accepts at most this many) runs this many. The one
- * limit every kernel and command shares; per-thread slots in a workspace are sized by it at most. */
+/* How many threads a kernel runs is said where it is called, never through OpenMP's global state
+ * alone. A kernel called on an object (sere_pbd, sere_collide, sere_bvh, sere_cg_workspace,
+ * sere_sgs, sere_osmosis, sere_crossings, sere_massspring, sere_leaf_sim, ...) runs with the count
+ * set on that object by its sere_<object>_set_threads; a kernel called on plain arrays takes it
+ * as its `threads` argument. 0, every object's initial count, stands for the caller's OpenMP
+ * count at the call (omp_get_max_threads(): OMP_NUM_THREADS or omp_set_num_threads); 1 to
+ * SERE_MAX_THREADS, that many. A region may run fewer while other processes keep cores busy
+ * (core/internal/team.h), and every result is the same bits for every count. */
+
+/* The most threads a kernel runs: a count above it (OpenMP's, or one set on an object, which
+ * refuses more) runs this many. The one limit every kernel and command shares; per-thread slots
+ * in a workspace are sized by it at most. */
 #define SERE_MAX_THREADS 256
 
 typedef enum sere_status
@@ -53,6 +62,13 @@ void sere_free( void* memory );
 static inline int32_t sere_pad( int32_t n )
 {
 	return ( n + SERE_PAD - 1 ) & ~( SERE_PAD - 1 );
+}
+
+/* Whether a kernel accepts `threads` as a thread count (0 to SERE_MAX_THREADS): the check every
+ * sere_<object>_set_threads and every `threads` argument makes (SERE_ERR_ARGUMENT otherwise). */
+static inline int sere_threads_valid( int32_t threads )
+{
+	return threads >= 0 && threads <= SERE_MAX_THREADS;
 }
 
 /* splitmix64: small, fast and fully determined by its state, so that sampling and scene

@@ -1,4 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "drying/leaf.h"
+
+#include "core/internal/team.h"
 
 #include <math.h>
 #include <omp.h>
@@ -7,6 +12,7 @@
 
 struct sere_leaf_sim
 {
+	int32_t threads; /* sere_leaf_set_threads */
 	sere_model* model;
 	sere_osmosis *osmosis_t, *osmosis_v;
 	sere_pbd* pbd;
@@ -177,6 +183,26 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	return SERE_OK;
 }
 
+sere_status sere_leaf_set_threads( sere_leaf_sim* sim, int32_t threads )
+{
+	if ( sim == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	/* The collision workspace may need buffers for more threads: the one call that allocates. */
+	sere_status status = sere_collide_set_threads( sim->collide, threads );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	sim->threads = threads;
+	sere_osmosis_set_threads( sim->osmosis_t, threads );
+	sere_osmosis_set_threads( sim->osmosis_v, threads );
+	sere_pbd_set_threads( sim->pbd, threads );
+	sere_bvh_set_threads( sim->bvh, threads );
+	return SERE_OK;
+}
+
 void sere_leaf_relative_water( const sere_leaf_sim* sim, float* out )
 {
 	const sere_particles* p = &sim->model->p;
@@ -281,10 +307,10 @@ static float bits_value( uint32_t bits )
 
 /* Puts particles below the ground onto it and adds how far each was pushed to push[]; returns
  * the largest push of this call (the same for every thread count). */
-static float ground_contact( float* pz, float* push, int32_t count, float ground )
+static float ground_contact( float* pz, float* push, int32_t count, float ground, int32_t threads )
 {
 	uint32_t largest = 0;
-#pragma omp parallel for schedule( static ) reduction( max : largest )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( max : largest )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		float depth = ground - pz[i];
@@ -301,10 +327,11 @@ static float ground_contact( float* pz, float* push, int32_t count, float ground
  * ground's push d_n this frame bounds the tangential displacement it can hold. A particle whose
  * displacement along the ground Δx_t is within μ_s d_n sticks (Δx_t removed); a larger one slides
  * with Δx_t shortened by μ_k d_n. Returns the number of particles in contact. */
-static int32_t ground_friction( sere_particles* p, const float* push, int32_t count, float mu_static, float mu_kinetic )
+static int32_t ground_friction( sere_particles* p, const float* push, int32_t count, float mu_static, float mu_kinetic,
+								int32_t threads )
 {
 	int32_t touching = 0;
-#pragma omp parallel for schedule( static ) reduction( + : touching )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( + : touching )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		if ( !( push[i] > 0.0f ) )
@@ -324,12 +351,12 @@ static int32_t ground_friction( sere_particles* p, const float* push, int32_t co
 
 /* max |C/l| over every spring at the predicted positions (an integer maximum of the bits, as in
  * ground_contact; a NaN strain orders above every number). */
-static float largest_strain( const sere_model* model )
+static float largest_strain( const sere_model* model, int32_t threads )
 {
 	const sere_springs* s = &model->s;
 	const sere_particles* p = &model->p;
 	uint32_t largest = 0;
-#pragma omp parallel for schedule( static ) reduction( max : largest )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( max : largest )
 	for ( int32_t k = 0; k < s->count; ++k )
 	{
 		int32_t a = s->a[k], b = s->b[k];
@@ -393,7 +420,7 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 			sere_pbd_project_stalling( sim->pbd, p->px, p->py, p->pz, p->inv_m, pbd, &report, &stats->pbd_stalled );
 		if ( ground )
 		{
-			ground_contact( p->pz, sim->push, p->count, params->ground );
+			ground_contact( p->pz, sim->push, p->count, params->ground, sim->threads );
 		}
 		stats->pbd_iterations = report.iterations;
 		stats->residual = report.max_strain;
@@ -414,7 +441,7 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		}
 		left -= report.iterations;
 		stats->pbd_iterations += report.iterations;
-		float pushed = ground ? ground_contact( p->pz, sim->push, p->count, params->ground ) : 0.0f;
+		float pushed = ground ? ground_contact( p->pz, sim->push, p->count, params->ground, sim->threads ) : 0.0f;
 		if ( !report.hit_cap && pushed <= slack )
 		{
 			stats->pbd_converged = 1;
@@ -478,7 +505,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	if ( !sim->desiccated )
 	{
 		status = sere_shrink( model->s.a, model->s.b, model->s.kind, model->s.rest0, model->s.rest, 0, model->s.count,
-							  p->m, p->m0, &params->shrink );
+							  p->m, p->m0, &params->shrink, sim->threads );
 		if ( status == SERE_OK )
 		{
 			status = sere_pbd_set_rest( sim->pbd, model->s.rest );
@@ -495,7 +522,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		return status;
 	}
 	/* Lighter particles move more: PBD weights by the current inverse mass. */
-#pragma omp parallel for simd schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_for( sim->threads ) ) schedule( static )
 	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		p->inv_m[i] = (float) ( 1.0 / p->m[i] );
@@ -504,10 +531,10 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	/* Lines 10–13: gravity and prediction. The step's inertia anchor must not lie under the
 	 * ground: the ground holds the prediction up before the projection starts. */
 	sere_pbd_predict( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, p->inv_m, params->gravity,
-					  params->dt );
+					  params->dt, sim->threads );
 	if ( isfinite( params->ground ) )
 	{
-		ground_contact( p->pz, sim->push, p->count, params->ground );
+		ground_contact( p->pz, sim->push, p->count, params->ground, sim->threads );
 	}
 
 	/* Lines 17–22: projection of the T, V and L constraints, one colored Gauss–Seidel. */
@@ -525,9 +552,10 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 	if ( isfinite( params->ground ) )
 	{
-		stats->grounded = ground_friction( p, sim->push, p->count, params->friction_static, params->friction_kinetic );
+		stats->grounded =
+			ground_friction( p, sim->push, p->count, params->friction_static, params->friction_kinetic, sim->threads );
 	}
-	stats->max_strain = largest_strain( model );
+	stats->max_strain = largest_strain( model, sim->threads );
 	/* the start of the frame, before sere_pbd_finish moves it: where each contact's vertex was */
 	if ( params->collisions && params->collide.thickness > 0.0f )
 	{
@@ -535,9 +563,9 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		memcpy( sim->y0, p->y, sizeof( float ) * (size_t) n );
 		memcpy( sim->z0, p->z, sizeof( float ) * (size_t) n );
 	}
-	sere_pbd_finish( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, params->dt );
+	sere_pbd_finish( p->count, p->x, p->y, p->z, p->vx, p->vy, p->vz, p->px, p->py, p->pz, params->dt, sim->threads );
 	const float keep = 1.0f - params->damping;
-#pragma omp parallel for simd schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_for( sim->threads ) ) schedule( static )
 	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		p->vx[i] *= keep;
@@ -550,7 +578,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	 * triangles it moved back on their normals (Jeong Eq. 14), with ĥ stored just before (Sec. 5.3). */
 	if ( params->collisions && params->collide.thickness > 0.0f )
 	{
-		status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat );
+		status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat, sim->threads );
 		if ( status != SERE_OK )
 		{
 			return status;
@@ -586,14 +614,14 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		stats->edge_contacts = collide_stats.edge_contacts;
 		stats->unresolved = collide_stats.unresolved;
 		stats->collision_thickness = collide.thickness;
-#pragma omp parallel for simd schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_for( sim->threads ) ) schedule( static )
 		for ( int32_t i = 0; i < n; ++i )
 		{
 			sim->moved[i] = ( p->x[i] != sim->xc[i] ) | ( p->y[i] != sim->yc[i] ) | ( p->z[i] != sim->zc[i] );
 		}
 		status = sere_collide_restore_voronoi_moved( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n,
 													 params->restore_measured ? sim->h_hat : model->h, sim->moved,
-													 params->dt );
+													 params->dt, sim->threads );
 		if ( status != SERE_OK )
 		{
 			return status;

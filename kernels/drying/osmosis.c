@@ -1,4 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "drying/osmosis.h"
+
+#include "core/internal/team.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -6,6 +11,7 @@
 
 struct sere_osmosis
 {
+	int32_t threads; /* sere_osmosis_set_threads */
 	int32_t first, count;
 	sere_csr a;
 	sere_sell* sell;		  /* a's SELL layout for the CG, built once (the pattern never changes) and
@@ -184,11 +190,24 @@ const double* sere_osmosis_solution( const sere_osmosis* o )
 
 /* Spring lengths |l_ij| and E_i = Σ_j |l_ij| (Jeong Eq. 3) at the current positions;
  * SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
+sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
+{
+	if ( osmosis == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	osmosis->threads = threads;
+	sere_cg_set_threads( osmosis->cg, threads );
+	sere_sell_set_threads( osmosis->sell, threads );
+	sere_sgs_set_threads( osmosis->sgs, threads );
+	return SERE_OK;
+}
+
 static sere_status spring_lengths( sere_osmosis* o, const float* x, const float* y, const float* z )
 {
 	const int32_t n = o->count;
 	int nonfinite = 0;
-#pragma omp parallel for schedule( static ) reduction( | : nonfinite )
+#pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( | : nonfinite )
 	for ( int32_t s = 0; s < o->spring_count; ++s )
 	{
 		int32_t i = o->sa[s], j = o->sb[s];
@@ -200,7 +219,7 @@ static sere_status spring_lengths( sere_osmosis* o, const float* x, const float*
 	{
 		return SERE_ERR_GEOMETRY;
 	}
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		double e = 0.0;
@@ -226,7 +245,7 @@ static double assemble( sere_osmosis* o, const float* tau, const double* M, cons
 	 * atomics, the same result for any thread count). */
 	const double rate_dt = params->water_rate * dt;
 	double offdiag = 0.0;
-#pragma omp parallel for schedule( static ) reduction( max : offdiag )
+#pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( max : offdiag )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		const int32_t gi = first + i;

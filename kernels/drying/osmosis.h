@@ -65,6 +65,10 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 								 sere_osmosis** out );
 void sere_osmosis_destroy( sere_osmosis* osmosis );
 
+/* The threads sere_osmosis_step runs with, its assembly and its CG solve (core/base.h: 0, the
+ * initial count, is OpenMP's count at each step; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads );
+
 /* One implicit step: assemble, solve for c, w = max(0, M c), m = M + w (Jeong Eq. 10). Arrays are
  * global particle arrays; only the layer's entries are read or written. M must be positive.
  * CG starts from the concentration w/M extrapolated from the previous steps: the parabola

@@ -1,4 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "drying/shrink.h"
+
+#include "core/internal/team.h"
 
 #include "drying/layers.h"
 
@@ -106,13 +111,13 @@ static inline float select_float( int keep, float kept, float updated )
 
 sere_status sere_shrink( const int32_t* a, const int32_t* b, const uint8_t* kind, const float* rest0, float* rest,
 						 int32_t first, int32_t count, const double* m, const double* m0,
-						 const sere_shrink_params* params )
+						 const sere_shrink_params* params, int32_t threads )
 {
 	if ( params == NULL || !( params->alpha > 0.0 && params->alpha <= DBL_MAX ) ||
 		 !( params->sigma_vein >= -DBL_MAX && params->sigma_vein <= DBL_MAX ) ||
 		 !( params->sigma_surf >= -DBL_MAX && params->sigma_surf <= DBL_MAX ) ||
 		 !( params->min_length_ratio >= 0.0 && params->min_length_ratio <= 1.0 ) || params->m_min != params->m_min ||
-		 first < 0 || count < 0 )
+		 first < 0 || count < 0 || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -132,7 +137,7 @@ sere_status sere_shrink( const int32_t* a, const int32_t* b, const uint8_t* kind
 	 * contiguous; no lane depends on another, so any split over threads gives the same bits.
 	 * Every value is computed in every lane and then selected (&, | rather than &&, ||), so
 	 * the loop has no branch for the vectorizer to refuse under -ftrapping-math. */
-#pragma omp parallel for simd schedule( static ) reduction( | : bad )
+#pragma omp parallel for simd num_threads( sere_team_for( threads ) ) schedule( static ) reduction( | : bad )
 	for ( int32_t s = first; s < end; ++s )
 	{
 		double ma = m[a[s]], mb = m[b[s]];

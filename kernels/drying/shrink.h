@@ -33,10 +33,11 @@ typedef struct sere_shrink_params
  * α ≤ 3, 7e-14 for α = 10), far under the float rounding of l, so l equals the float rounding
  * of the libm formula or is one ulp off.
  * SERE_ERR_NONFINITE when v_rel or a length is not finite (NaN or infinite masses, a zero
- * m⁰ sum); those springs keep their rest length and the others are updated. */
+ * m⁰ sum); those springs keep their rest length and the others are updated. On `threads` threads
+ * (core/base.h; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
 sere_status sere_shrink( const int32_t* a, const int32_t* b, const uint8_t* kind, const float* rest0, float* rest,
 						 int32_t first, int32_t count, const double* m, const double* m0,
-						 const sere_shrink_params* params );
+						 const sere_shrink_params* params, int32_t threads );
 
 #ifdef __cplusplus
 }

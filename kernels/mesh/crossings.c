@@ -1,5 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "mesh/measure.h"
 
+#include "core/internal/team.h"
 #include "mesh/internal/measure_shared.h"
 
 #include <math.h>
@@ -73,6 +77,7 @@ typedef struct crossing_entry
 
 struct sere_crossings
 {
+	int32_t threads; /* sere_crossings_set_threads */
 	int32_t triangle_count;
 	int32_t vertex_count;
 	int32_t edge_count;
@@ -380,7 +385,7 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 	const crossing_grid* g = &grid;
 	const sere_crossings* w = c;
 	int64_t total = 0;
-#pragma omp parallel for schedule( dynamic, 256 ) reduction( + : total )
+#pragma omp parallel for num_threads( sere_team_for( w->threads ) ) schedule( dynamic, 256 ) reduction( + : total )
 	for ( int32_t e = 0; e < w->edge_count; ++e )
 	{
 		int32_t ea = w->edge_a[e], eb = w->edge_b[e];
@@ -434,8 +439,18 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 	return SERE_OK;
 }
 
+sere_status sere_crossings_set_threads( sere_crossings* crossings, int32_t threads )
+{
+	if ( crossings == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	crossings->threads = threads;
+	return SERE_OK;
+}
+
 sere_status sere_crossings_count_once( const float* x, const float* y, const float* z, int32_t vertex_count,
-									   const int32_t* tri, int32_t triangle_count, int64_t* count )
+									   const int32_t* tri, int32_t triangle_count, int64_t* count, int32_t threads )
 {
 	if ( count != NULL )
 	{
@@ -447,7 +462,8 @@ sere_status sere_crossings_count_once( const float* x, const float* y, const flo
 	{
 		return status;
 	}
-	status = sere_crossings_count( c, x, y, z, count );
+	status = sere_crossings_set_threads( c, threads );
+	status = status == SERE_OK ? sere_crossings_count( c, x, y, z, count ) : status;
 	sere_crossings_destroy( c );
 	return status;
 }

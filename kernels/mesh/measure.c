@@ -1,5 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "mesh/measure.h"
 
+#include "core/internal/team.h"
 #include "mesh/internal/measure_shared.h"
 
 #include <math.h>
@@ -23,7 +27,8 @@ sere_shape_input sere_shape_input_default( void )
 sere_status sere_measure_validate( const sere_shape_input* in )
 {
 	if ( in == NULL || in->x == NULL || in->y == NULL || in->z == NULL || in->u == NULL || in->v == NULL ||
-		 in->tri == NULL || in->edge_a == NULL || in->edge_b == NULL || in->boundary == NULL )
+		 in->tri == NULL || in->edge_a == NULL || in->edge_b == NULL || in->boundary == NULL ||
+		 !sere_threads_valid( in->threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -479,7 +484,7 @@ static double diameter2( const sere_shape_input* in )
 	int32_t n = in->vertex_count;
 	const float *x = in->x, *y = in->y, *z = in->z;
 	double best = 0.0;
-#pragma omp parallel for schedule( dynamic, 32 ) reduction( max : best )
+#pragma omp parallel for num_threads( sere_team_for( in->threads ) ) schedule( dynamic, 32 ) reduction( max : best )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		double xi = x[i], yi = y[i], zi = z[i];

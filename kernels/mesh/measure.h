@@ -58,9 +58,14 @@ void sere_crossings_destroy( sere_crossings* crossings );
 sere_status sere_crossings_count( sere_crossings* crossings, const float* x, const float* y, const float* z,
 								  int64_t* count );
 
-/* One call: create, count, destroy (allocates; use the workspace to count many frames). */
+/* The threads sere_crossings_count runs with (core/base.h: 0, the initial count, is OpenMP's
+ * count at each call; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_crossings_set_threads( sere_crossings* crossings, int32_t threads );
+
+/* One call on `threads` threads: create, count, destroy (allocates; use the workspace to count
+ * many frames). */
 sere_status sere_crossings_count_once( const float* x, const float* y, const float* z, int32_t vertex_count,
-									   const int32_t* tri, int32_t triangle_count, int64_t* count );
+									   const int32_t* tri, int32_t triangle_count, int64_t* count, int32_t threads );
 
 /* What sere_shape_measure reads. Lengths are in the units of the positions; angles in radians.
  * For a sere_model m: x, y, z = m.p.x, y, z; u, v = m.u, m.v; vertex_count = m.triangle_particles;
@@ -89,6 +94,7 @@ typedef struct sere_shape_input
 	const int32_t* midvein; /* optional polyline of vertex indices from base to tip, or NULL */
 	int32_t midvein_count;
 	bool skip_extent; /* true: leave extent NaN (the exact diameter is O(N²); per-frame measures skip it) */
+	int32_t threads;  /* the measure's threads (core/base.h; 0: OpenMP's count at the call) */
 } sere_shape_input;
 
 /* Everything zero or NULL except ground = -INFINITY, wrinkle_threshold = 0.05 rad (about 3°, so

@@ -1,4 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "season/markov.h"
+
+#include "core/internal/team.h"
 
 #include <math.h>
 #include <string.h>
@@ -239,10 +244,10 @@ static inline uint8_t step_leaf( const uint32_t* threshold, const int32_t* targe
 }
 
 sere_status sere_markov_advance( const sere_markov_day* day, uint8_t* states, int64_t leaf_count, uint64_t first_leaf,
-								 uint64_t seed, int64_t day_index, int64_t* counts )
+								 uint64_t seed, int64_t day_index, int64_t* counts, int32_t threads )
 {
 	if ( day == NULL || day->state_count < 1 || day->state_count > SERE_MARKOV_MAX_STATES || leaf_count < 0 ||
-		 ( leaf_count > 0 && states == NULL ) )
+		 ( leaf_count > 0 && states == NULL ) || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -251,7 +256,7 @@ sere_status sere_markov_advance( const sere_markov_day* day, uint8_t* states, in
 	const int32_t* target = &day->target[0][0];
 	const int64_t blocks = ( leaf_count + BLOCK - 1 ) / BLOCK;
 	int64_t histogram[256] = { 0 };
-#pragma omp parallel
+#pragma omp parallel num_threads( sere_team_for( threads ) )
 	{
 		int64_t local[4][256] = { { 0 } };
 #pragma omp for schedule( static )
@@ -300,15 +305,16 @@ sere_status sere_markov_advance( const sere_markov_day* day, uint8_t* states, in
 	return bad ? SERE_ERR_ARGUMENT : SERE_OK;
 }
 
-sere_status sere_markov_count( const uint8_t* states, int64_t leaf_count, int32_t state_count, int64_t* counts )
+sere_status sere_markov_count( const uint8_t* states, int64_t leaf_count, int32_t state_count, int64_t* counts,
+							   int32_t threads )
 {
 	if ( leaf_count < 0 || ( leaf_count > 0 && states == NULL ) || counts == NULL || state_count < 1 ||
-		 state_count > SERE_MARKOV_MAX_STATES )
+		 state_count > SERE_MARKOV_MAX_STATES || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
 	int64_t histogram[256] = { 0 };
-#pragma omp parallel
+#pragma omp parallel num_threads( sere_team_for( threads ) )
 	{
 		int64_t local[256] = { 0 };
 #pragma omp for schedule( static )

@@ -118,11 +118,12 @@ static inline uint64_t sere_random_u64( uint64_t key, uint64_t counter )
  * state is ≥ state_count (such leaves are left as they were, the others advanced) or for a
  * negative leaf_count. */
 sere_status sere_markov_advance( const sere_markov_day* day, uint8_t* states, int64_t leaf_count, uint64_t first_leaf,
-								 uint64_t seed, int64_t day_index, int64_t* counts );
+								 uint64_t seed, int64_t day_index, int64_t* counts, int32_t threads );
 
 /* How many leaves are in each of state_count states; SERE_ERR_ARGUMENT for a state out of
- * range. */
-sere_status sere_markov_count( const uint8_t* states, int64_t leaf_count, int32_t state_count, int64_t* counts );
+ * range. Both run on `threads` threads (core/base.h; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_markov_count( const uint8_t* states, int64_t leaf_count, int32_t state_count, int64_t* counts,
+							   int32_t threads );
 
 #ifdef __cplusplus
 }

@@ -1,3 +1,6 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "season/massspring.h"
 
 #include "core/array.h"
@@ -9,9 +12,11 @@
 #include <string.h>
 
 #include "core/internal/simd.h"
+#include "core/internal/team.h"
 
 struct sere_massspring
 {
+	int32_t threads; /* sere_massspring_set_threads */
 	int32_t vertex_count;
 	int32_t structural_count;
 	int32_t flexion_count;
@@ -82,6 +87,16 @@ sere_status sere_massspring_mass_from_gray( const float* gray, int32_t n, float 
 		double t = log1p( 255.0 * g ) * scale; /* Tang Eq. 3 */
 		mass[i] = (float) ( m_min + ( (double) m_max - m_min ) * t );
 	}
+	return SERE_OK;
+}
+
+sere_status sere_massspring_set_threads( sere_massspring* ms, int32_t threads )
+{
+	if ( ms == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	ms->threads = threads;
 	return SERE_OK;
 }
 
@@ -756,10 +771,10 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 }
 
 /* Every particle finite and no inverse mass negative. */
-static sere_status check_particles( const sere_massspring_particles* p )
+static sere_status check_particles( const sere_massspring_particles* p, int32_t threads )
 {
 	int bad = 0, negative = 0;
-#pragma omp parallel for schedule( static ) reduction( | : bad, negative )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( | : bad, negative )
 	for ( int32_t i = 0; i < p->count; ++i )
 	{
 		bad |= !isfinite( p->x[i] ) | !isfinite( p->y[i] ) | !isfinite( p->z[i] ) | !isfinite( p->vx[i] ) |
@@ -800,7 +815,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	sere_status status = check_particles( p );
+	sere_status status = check_particles( p, ms->threads );
 	if ( status != SERE_OK )
 	{
 		return status;
@@ -817,7 +832,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 	int32_t sweeps = 0, limited = 0, sweep_limited = 0;
 	int converged = 0;
 
-#pragma omp parallel
+#pragma omp parallel num_threads( sere_team_for( ms->threads ) )
 	{
 		pack( ms, p );
 		spring_forces( ms, 0, ms->structural_count, structural );

@@ -99,6 +99,10 @@ sere_status sere_massspring_create( const float* x, const float* y, const float*
 									const int32_t* tri, int32_t triangle_count, sere_massspring** out );
 void sere_massspring_destroy( sere_massspring* ms );
 
+/* The threads sere_massspring_step runs with (core/base.h: 0, the initial count, is OpenMP's
+ * count at each step; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_massspring_set_threads( sere_massspring* ms, int32_t threads );
+
 /* The springs as stored: structural springs in the order a sweep limits them, then the
  * flexion springs. a[k] < b[k]. The structural springs come in runs [run_offsets[k],
  * run_offsets[k + 1]) of one color within one band or one cut between neighbouring bands (the

@@ -53,10 +53,10 @@ static float range_area( const sere_bvh* bvh, int32_t begin, int32_t end )
 	return box3_area( &b );
 }
 
-static bool positions_finite( int32_t n, const float* x, const float* y, const float* z )
+static bool positions_finite( int32_t n, const float* x, const float* y, const float* z, int32_t threads )
 {
 	int bad = 0;
-#pragma omp parallel for num_threads( sere_team_default() ) reduction( | : bad ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) reduction( | : bad ) schedule( static )
 	for ( int32_t v = 0; v < n; ++v )
 	{
 		bad |= !( isfinite( x[v] ) && isfinite( y[v] ) && isfinite( z[v] ) );
@@ -354,7 +354,7 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 	int32_t cut = bvh->cut_level;
 	int32_t n = bvh->vertex_count;
 	int bad = 0;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( bvh->threads ) )
 	{
 #pragma omp for reduction( | : bad ) schedule( static )
 		for ( int32_t v = 0; v < n; ++v )
@@ -399,7 +399,7 @@ static bool refit_tree( sere_bvh* bvh, const float* x, const float* y, const flo
 static void triangle_boxes( sere_bvh* bvh, const float* x, const float* y, const float* z )
 {
 	int32_t n = bvh->triangle_count;
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( bvh->threads ) ) schedule( static )
 	for ( int32_t t = 0; t < n; ++t )
 	{
 		const int32_t* v = bvh->tri + 3 * (size_t) t;
@@ -539,7 +539,7 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( !positions_finite( bvh->vertex_count, x, y, z ) )
+	if ( !positions_finite( bvh->vertex_count, x, y, z, bvh->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}
@@ -651,6 +651,16 @@ void sere_bvh_destroy( sere_bvh* bvh )
 		sere_free( arrays[i] );
 	}
 	sere_free( bvh );
+}
+
+sere_status sere_bvh_set_threads( sere_bvh* bvh, int32_t threads )
+{
+	if ( bvh == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	bvh->threads = threads;
+	return SERE_OK;
 }
 
 sere_status sere_bvh_refit( sere_bvh* bvh, const float* x, const float* y, const float* z )

@@ -47,6 +47,10 @@ sere_status sere_bvh_create( const int32_t* tri, int32_t triangle_count, int32_t
 							 const float* y, const float* z, sere_bvh** out );
 void sere_bvh_destroy( sere_bvh* bvh );
 
+/* The threads build, refit and update run with (core/base.h: 0, the initial count, is OpenMP's
+ * count at each call; at most SERE_MAX_THREADS, else SERE_ERR_ARGUMENT). */
+sere_status sere_bvh_set_threads( sere_bvh* bvh, int32_t threads );
+
 /* A fresh tree for the current positions (sequential and deterministic); resets the quality
  * ratio to 1. No allocation. */
 sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const float* z );

@@ -13,9 +13,9 @@ static inline double row_dot( const sere_csr* a, int32_t i, const double* x )
 	return sum;
 }
 
-void sere_csr_spmv( const sere_csr* a, const double* x, double* y )
+void sere_csr_spmv( const sere_csr* a, const double* x, double* y, int32_t threads )
 {
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static )
 	for ( int32_t i = 0; i < a->rows; ++i )
 	{
 		y[i] = row_dot( a, i, x );
@@ -199,7 +199,7 @@ sere_status sere_sell_update( sere_sell* s, const sere_csr* a )
 		return SERE_ERR_ARGUMENT;
 	}
 	int mismatch = 0;
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static ) reduction( | : mismatch )
+#pragma omp parallel for num_threads( sere_team_for( s->threads ) ) schedule( static ) reduction( | : mismatch )
 	for ( int32_t k = 0; k < a->nnz; ++k )
 	{
 		s->val[s->slot[k]] = a->val[k];
@@ -237,7 +237,7 @@ static inline int32_t chunk_lanes( const sere_sell* a, int32_t c )
 
 void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
 {
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( a->threads ) ) schedule( static )
 	for ( int32_t c = 0; c < a->chunks; ++c )
 	{
 		lanes_t sum;
@@ -247,6 +247,26 @@ void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
 			y[a->row[c * LANES + l]] = lane( &sum, l );
 		}
 	}
+}
+
+sere_status sere_sell_set_threads( sere_sell* sell, int32_t threads )
+{
+	if ( sell == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sell->threads = threads;
+	return SERE_OK;
+}
+
+sere_status sere_cg_set_threads( sere_cg_workspace* workspace, int32_t threads )
+{
+	if ( workspace == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	workspace->threads = threads;
+	return SERE_OK;
 }
 
 sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
@@ -347,7 +367,7 @@ static void cg_start( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, c
 	double *x = ws->x, *b = ws->b, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *inv_diag = ws->inv_diag, *partial = ws->partial;
 	int bad_diagonal = 0, nonfinite = 0;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		/* Into positions; padding lanes get b = x = 0 and D⁻¹ = 0, so they stay 0 throughout
 		 * and add nothing to any sum. s = p = 0, so that the first step's p = u + 0·p is u. */
@@ -421,7 +441,7 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *inv_diag = ws->inv_diag, *partial = ws->partial;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		/* every thread steps its own copy; they stay equal */
 		cg_state my = *st;
@@ -532,7 +552,7 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 	const int32_t np = a->chunks * LANES;
 	const double* x = ws->x;
 	sere_status status = SERE_OK;
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( ws->threads ) ) schedule( static )
 	for ( int32_t at = 0; at < np; ++at )
 	{
 		if ( a->row[at] >= 0 )

@@ -21,8 +21,9 @@ typedef struct sere_csr
 	double* val;
 } sere_csr;
 
-/* y = A x, OpenMP over fixed row blocks (each y_i is one sequential sum: deterministic). */
-void sere_csr_spmv( const sere_csr* a, const double* x, double* y );
+/* y = A x over fixed row blocks on `threads` threads (core/base.h; each y_i is one sequential
+ * sum: the same bits for every count). */
+void sere_csr_spmv( const sere_csr* a, const double* x, double* y, int32_t threads );
 
 /* Dot products sum fixed blocks of SERE_CG_BLOCK entries, then the block sums in block order,
  * so the result is bitwise the same for any thread count. */
@@ -63,6 +64,7 @@ typedef struct sere_sell
 	int32_t* slot;		/* per CSR entry k: the slot holding it, val[slot[k]] */
 	int32_t* local_col; /* per slot, the column as a position in the layout's row order (below) */
 	int32_t* diagonal;	/* per position, the slot of the row's diagonal entry; −1 if it has none */
+	int32_t threads;	/* sere_sell_set_threads: update and product (0 at create, core/base.h) */
 } sere_sell;
 
 /* Builds the layout and values of a. σ is a multiple of SERE_SELL_C that divides SERE_CG_BLOCK
@@ -80,8 +82,12 @@ void sere_sell_destroy( sere_sell* sell );
  * checked, and every entry's column against its slot (SERE_ERR_ARGUMENT, values then undefined). */
 sere_status sere_sell_update( sere_sell* sell, const sere_csr* a );
 
-/* y = A x, OpenMP over chunks; bitwise equal to sere_csr_spmv on the CSR sell was built from. */
+/* y = A x over chunks; bitwise equal to sere_csr_spmv on the CSR sell was built from. */
 void sere_sell_spmv( const sere_sell* a, const double* x, double* y );
+
+/* The threads sere_sell_update and sere_sell_spmv run with (core/base.h; SERE_ERR_ARGUMENT above
+ * SERE_MAX_THREADS). A solve runs with its workspace's count instead. */
+sere_status sere_sell_set_threads( sere_sell* sell, int32_t threads );
 
 typedef struct sere_cg_workspace sere_cg_workspace;
 
@@ -89,6 +95,10 @@ typedef struct sere_cg_workspace sere_cg_workspace;
  * allocated per solve. */
 sere_status sere_cg_create( int32_t n, sere_cg_workspace** out );
 void sere_cg_destroy( sere_cg_workspace* workspace );
+
+/* The threads the solves on this workspace run with (core/base.h: 0, the initial count, is
+ * OpenMP's count at each solve; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_cg_set_threads( sere_cg_workspace* workspace, int32_t threads );
 
 typedef struct sere_cg_result
 {
@@ -141,6 +151,7 @@ typedef struct sere_sgs
 	int32_t* col;		  /* per slot, the column's position */
 	double* val;		  /* L slots, U slots, then the diagonal per position */
 	int32_t* slot;		  /* per CSR entry, its index into val */
+	int32_t threads;	  /* sere_sgs_set_threads: update and apply (0 at create, core/base.h) */
 } sere_sgs;
 
 /* Builds the coloring, layout and values of a. SERE_ERR_ARGUMENT for an empty matrix, a column
@@ -156,6 +167,10 @@ sere_status sere_sgs_update( sere_sgs* sgs, const sere_csr* a );
 /* z = M⁻¹ r in the row numbering (a forward then a backward sweep); for tests and callers with
  * their own Krylov method. SERE_ERR_NOT_SPD for a diagonal entry that is not positive. */
 sere_status sere_sgs_apply( const sere_sgs* sgs, const double* r, double* z );
+
+/* The threads sere_sgs_update and sere_sgs_apply run with (core/base.h; SERE_ERR_ARGUMENT above
+ * SERE_MAX_THREADS). sere_cg_solve_sgs runs with its workspace's count instead. */
+sere_status sere_sgs_set_threads( sere_sgs* sgs, int32_t threads );
 
 /* sere_cg_solve preconditioned with M (same arguments, tolerance and result: the relative
  * residual ||b − A x||₂ / ||b||₂, checked on the true residual before the solve returns).

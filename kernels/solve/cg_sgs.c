@@ -236,13 +236,23 @@ sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 	return SERE_OK;
 }
 
+sere_status sere_sgs_set_threads( sere_sgs* sgs, int32_t threads )
+{
+	if ( sgs == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sgs->threads = threads;
+	return SERE_OK;
+}
+
 sere_status sere_sgs_update( sere_sgs* g, const sere_csr* a )
 {
 	if ( g == NULL || a == NULL || a->rows != g->rows || a->nnz != g->nnz )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( g->threads ) ) schedule( static )
 	for ( int32_t k = 0; k < a->nnz; ++k )
 	{
 		g->val[g->slot[k]] = a->val[k];
@@ -345,7 +355,7 @@ sere_status sere_sgs_apply( const sere_sgs* g, const double* r, double* z )
 	if ( !bad )
 	{
 		/* M⁻¹ r = L̃⁻ᵀ D L̃⁻¹ r */
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( g->threads ) )
 		{
 			sgs_forward( g, inv, v );
 #pragma omp for schedule( static )
@@ -456,7 +466,7 @@ static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, c
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	double *x = ws->x, *b = ws->b, *inv_diag = ws->inv_diag, *partial = ws->partial;
 	int bad_diagonal = 0, nonfinite = 0;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 #pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite )
 		for ( int32_t at = 0; at < np; ++at )
@@ -490,7 +500,7 @@ static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it 
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		sgs_forward( g, inv_diag, r );
 		sgs_upper_product( g, x );
@@ -524,7 +534,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		/* every thread steps its own copy; they stay equal */
 		cg_state my = *st;
@@ -621,7 +631,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	for ( ;; )
 	{
 		/* The true residual of x: the answer, or where (re)starting from x begins. */
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 		{
 			sgs_residual( g, blocks, np, b, x, r, partial );
 		}
@@ -650,13 +660,13 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 			sgs_round( &st, ws, g, first, target, max_iterations, chunk );
 		}
 		/* Back from ŷ: x = L̃⁻ᵀ ŷ. */
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 		{
 			sgs_backward( g, inv_diag, x, x, NULL );
 		}
 		safety *= 0.5;
 	}
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( ws->threads ) ) schedule( static )
 	for ( int32_t at = 0; at < np; ++at )
 	{
 		if ( g->row[at] >= 0 )

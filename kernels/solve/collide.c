@@ -300,6 +300,47 @@ static bool build_edges( sere_collide* c, const int32_t* tri, const int32_t* nei
 	return ok;
 }
 
+/* (Re)allocates the per-thread arrays for `slots` threads (and the contact arrays, whose
+ * per-thread parts they size, once a capacity is set); the old ones are kept on failure. The
+ * candidate list is dropped: its runs are per thread. */
+static sere_status alloc_slots( sere_collide* c, int32_t slots )
+{
+	size_t vn = (size_t) sere_pad( c->vertex_count ), listed = (size_t) c->cache_capacity * (size_t) slots;
+	void** field[] = { (void**) &c->entry_cursor, (void**) &c->run_total,  (void**) &c->far_count,
+					   (void**) &c->lane_mark,	  (void**) &c->cache_item, (void**) &c->cache_target,
+					   (void**) &c->cache_near,	  (void**) &c->cache_used };
+	size_t bytes[] = { sizeof( int32_t ) * vn * (size_t) slots,
+					   sizeof( int32_t ) * 2 * FAR_STRIDE * (size_t) slots,
+					   sizeof( int32_t ) * FAR_STRIDE * (size_t) slots,
+					   sizeof( lane_bits ) * vn * (size_t) slots,
+					   sizeof( int32_t ) * listed,
+					   sizeof( int32_t ) * listed,
+					   listed,
+					   sizeof( int32_t ) * FAR_STRIDE * (size_t) slots };
+	enum
+	{
+		FIELDS = sizeof( field ) / sizeof( field[0] )
+	};
+	void* fresh[FIELDS];
+	bool ok = true;
+	for ( int i = 0; i < FIELDS; ++i )
+	{
+		fresh[i] = sere_alloc( bytes[i] );
+		ok = ok && fresh[i] != NULL;
+	}
+	int32_t old = c->slots;
+	c->slots = slots;
+	ok = ok && ( c->capacity == 0 || alloc_contacts( c, c->capacity ) == SERE_OK );
+	c->slots = ok ? slots : old;
+	for ( int i = 0; i < FIELDS; ++i )
+	{
+		sere_free( ok ? *field[i] : fresh[i] );
+		*field[i] = ok ? fresh[i] : *field[i];
+	}
+	c->cache_valid = false;
+	return ok ? SERE_OK : SERE_ERR_MEMORY;
+}
+
 /* Contacts of each kind stay below this: the gather lists index 4 entries per contact of both
  * kinds with int32_t. */
 #define CAPACITY_LIMIT ( 1 << 28 )
@@ -327,19 +368,17 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	}
 	c->vertex_count = n;
 	c->triangle_count = triangles;
-	c->slots = omp_get_max_threads() < SERE_MAX_THREADS ? omp_get_max_threads() : SERE_MAX_THREADS;
+	c->cache_capacity = CACHE_PAIRS * n + DETECT_BLOCK;
+	/* Slots for OpenMP's count now; sere_collide_set_threads makes more. */
+	int32_t slots = omp_get_max_threads() < SERE_MAX_THREADS ? omp_get_max_threads() : SERE_MAX_THREADS;
 	size_t vn = (size_t) sere_pad( n );
 	c->entry_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
-	c->entry_cursor = sere_alloc( sizeof( int32_t ) * vn * (size_t) c->slots );
-	c->run_total = sere_alloc( sizeof( int32_t ) * 2 * FAR_STRIDE * (size_t) c->slots );
 	c->touched = sere_alloc( sizeof( int32_t ) * vn );
 	c->position = sere_alloc( 4 * sizeof( float ) * vn );
 	c->acc = sere_alloc( 4 * sizeof( float ) * vn );
 	c->push_count = sere_alloc( sizeof( float ) * vn );
-	c->far_count = sere_alloc( sizeof( int32_t ) * FAR_STRIDE * (size_t) c->slots );
-	c->lane_mark = sere_alloc( sizeof( lane_bits ) * vn * (size_t) c->slots );
-	bool ok = c->entry_offset && c->entry_cursor && c->run_total && c->touched && c->position && c->acc &&
-			  c->push_count && c->far_count && c->lane_mark;
+	bool ok =
+		c->entry_offset && c->touched && c->position && c->acc && c->push_count && alloc_slots( c, slots ) == SERE_OK;
 	/* the mesh's edges as sorted neighbour lists, needed only to list the edges and build the
 	 * mark lists (thread 0's lane marks serve as scratch) */
 	int32_t* neighbor_offset = sere_alloc( sizeof( int32_t ) * ( vn + 1 ) );
@@ -361,23 +400,16 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->block_work = sere_alloc( sizeof( int64_t ) * blocks );
 	c->work_prefix = sere_alloc( sizeof( int64_t ) * blocks );
 	ok = ok && c->block_thread && c->block_start && c->block_found && c->block_work && c->work_prefix;
-	c->cache_valid = false;
 	c->skin = SKIN;
 	c->edge_across = sere_alloc( 3 * sizeof( float ) * (size_t) sere_pad( c->edge_count > 0 ? c->edge_count : 1 ) );
-	c->cache_capacity = CACHE_PAIRS * n + DETECT_BLOCK;
-	size_t listed = (size_t) c->cache_capacity * (size_t) c->slots;
 	c->cache_x = sere_alloc( sizeof( float ) * vn );
 	c->cache_y = sere_alloc( sizeof( float ) * vn );
 	c->cache_z = sere_alloc( sizeof( float ) * vn );
-	c->cache_item = sere_alloc( sizeof( int32_t ) * listed );
-	c->cache_target = sere_alloc( sizeof( int32_t ) * listed );
-	c->cache_near = sere_alloc( listed );
 	c->cache_block_thread = sere_alloc( sizeof( int32_t ) * blocks );
 	c->cache_block_start = sere_alloc( sizeof( int32_t ) * blocks );
 	c->cache_block_count = sere_alloc( sizeof( int32_t ) * blocks );
-	c->cache_used = sere_alloc( sizeof( int32_t ) * FAR_STRIDE * (size_t) c->slots );
-	ok = ok && c->cache_x && c->cache_y && c->cache_z && c->cache_item && c->cache_target && c->cache_near &&
-		 c->cache_block_thread && c->cache_block_start && c->cache_block_count && c->cache_used && c->edge_across;
+	ok = ok && c->cache_x && c->cache_y && c->cache_z && c->cache_block_thread && c->cache_block_start &&
+		 c->cache_block_count && c->edge_across;
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
 		collide_free( c );
@@ -396,6 +428,24 @@ void sere_collide_destroy( sere_collide* collide )
 	}
 	collide_free( collide );
 	sere_free( collide );
+}
+
+sere_status sere_collide_set_threads( sere_collide* collide, int32_t threads )
+{
+	if ( collide == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( threads > collide->slots )
+	{
+		sere_status status = alloc_slots( collide, threads );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
+	}
+	collide->threads = threads;
+	return SERE_OK;
 }
 
 sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacity )

@@ -98,10 +98,17 @@ typedef struct sere_collide sere_collide;
 
 /* A workspace for the BVH's mesh holding up to contact_capacity contacts of each kind, vertex–
  * triangle and edge–edge (0 picks 8 per vertex). The mesh's edges are listed here, once, from
- * its triangles. Per-thread buffers are made for omp_get_max_threads() threads at this call;
- * later calls use at most that many. On success the caller frees with sere_collide_destroy. */
+ * its triangles. Per-thread buffers are made for omp_get_max_threads() threads at this call, and
+ * for more by sere_collide_set_threads. On success the caller frees with sere_collide_destroy. */
 sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, sere_collide** out );
 void sere_collide_destroy( sere_collide* collide );
+
+/* The threads detection and response run with (core/base.h: 0, the initial count, is OpenMP's
+ * count at each call, then at most the threads this workspace has buffers for). A count above
+ * those makes buffers for it (allocates; the contact and candidate lists are dropped).
+ * SERE_ERR_ARGUMENT above SERE_MAX_THREADS, SERE_ERR_MEMORY (nothing changed) when the buffers
+ * cannot be made. */
+sere_status sere_collide_set_threads( sere_collide* collide, int32_t threads );
 
 /* Grows the contact capacity of each kind (allocates: call it between frames after
  * SERE_ERR_CAPACITY). */
@@ -172,9 +179,9 @@ sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const se
 
 /* ĥ_t = (x_t^V − x_a) · n_t for each triangle t = (a, b, c), n_t its unit normal and x_t^V the
  * Voronoi particle voronoi_first + t (Algorithm 1 line 14: stored before collisions). A
- * degenerate triangle gives 0. */
+ * degenerate triangle gives 0. On `threads` threads (core/base.h), as the two below. */
 sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
-									int32_t triangle_count, int32_t voronoi_first, float* h_hat );
+									int32_t triangle_count, int32_t voronoi_first, float* h_hat, int32_t threads );
 
 /* Jeong Eq. 14: x_t^V = (x_a + x_b + x_c) / 3 + h_t n_t and v_t^V = (v_a + v_b + v_c) / 3, with h the
  * ĥ of sere_collide_measure_h or the rest thickness (the two modes of Sec. 5.3), for Voronoi
@@ -184,7 +191,7 @@ sere_status sere_collide_measure_h( const float* x, const float* y, const float*
  * positions or velocities or in h. */
 sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,
 										  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
-										  const float* h );
+										  const float* h, int32_t threads );
 
 /* Jeong Eq. 14 where the collision response acted (Sec. 5.3: "when a particle on the triangle layer
  * passes through the Voronoi layer as a result of a displacement introduced to correct a
@@ -204,7 +211,7 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
  * SERE_ERR_ARGUMENT for a NULL moved or dt <= 0. */
 sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, float* vx, float* vy, float* vz,
 												const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
-												const float* h, const uint8_t* moved, float dt );
+												const float* h, const uint8_t* moved, float dt, int32_t threads );
 
 /* Closest point on triangle abc to p by Ericson's walk over the Voronoi regions of the
  * vertices, edges and face: returns the squared distance and writes the barycentric weights of

@@ -376,7 +376,7 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	collide->edge_found = 0;
 	collide->touched_count = 0;
 	int32_t n = collide->vertex_count;
-	int32_t threads = sere_team_default();
+	int32_t threads = sere_team_for( collide->threads );
 	threads = threads < collide->slots ? threads : collide->slots;
 	collide->work_prefix[0] = 0;
 	for ( int32_t block = 0; block < collide->block_count; ++block )

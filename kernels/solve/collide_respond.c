@@ -341,7 +341,7 @@ static int load_response( sere_collide* collide, const sere_collide_state* state
 	int32_t touched = collide->touched_count;
 	const float* inv_m = state->inv_m;
 	int bad = 0;
-#pragma omp parallel num_threads( sere_team_default() ) if ( parallel )
+#pragma omp parallel num_threads( sere_team_for( collide->threads ) ) if ( parallel )
 	{
 #pragma omp for reduction( | : bad ) schedule( static ) nowait
 		for ( int32_t j = 0; j < touched; ++j )
@@ -443,7 +443,7 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	int32_t blocks = vertex_blocks + ( contacts - vertex_contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
 	int32_t remaining = 0, applied = 0;
 	int32_t* far = collide->far_count;
-	int threads = sere_team_default();
+	int threads = sere_team_for( collide->threads );
 	threads = threads < collide->slots ? threads : collide->slots;
 	/* Per-thread counts of contacts still short of the tolerance, summed by every thread after
 	 * a barrier: two barriers per iteration (this one and the gather's), no reduction clause. */

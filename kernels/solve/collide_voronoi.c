@@ -5,15 +5,15 @@
 #include "solve/internal/collide_shared.h"
 
 sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
-									int32_t triangle_count, int32_t voronoi_first, float* h_hat )
+									int32_t triangle_count, int32_t voronoi_first, float* h_hat, int32_t threads )
 {
 	if ( x == NULL || y == NULL || z == NULL || tri == NULL || h_hat == NULL || triangle_count < 0 ||
-		 voronoi_first < 0 )
+		 voronoi_first < 0 || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
 	int bad = 0;
-#pragma omp parallel for num_threads( sere_team_default() ) reduction( | : bad ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) reduction( | : bad ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		float a[3], b[3], c[3], n[3], p[3];
@@ -41,10 +41,10 @@ static inline void voronoi_target( const float a[3], const float b[3], const flo
 
 sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* vx, float* vy, float* vz,
 										  const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
-										  const float* h )
+										  const float* h, int32_t threads )
 {
 	if ( x == NULL || y == NULL || z == NULL || vx == NULL || vy == NULL || vz == NULL || tri == NULL || h == NULL ||
-		 triangle_count < 0 || voronoi_first < 0 )
+		 triangle_count < 0 || voronoi_first < 0 || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -53,7 +53,7 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	/* Two reductions in one region need two variables: with a shared one, the first loop's
 	 * combine could race with the second's. */
 	int bad = 0, bad_h = 0, outside = 0;
-#pragma omp parallel num_threads( sere_team_default() )
+#pragma omp parallel num_threads( sere_team_for( threads ) )
 	{
 #pragma omp for reduction( | : bad ) schedule( static ) nowait
 		for ( int32_t i = 0; i < voronoi_first; ++i )
@@ -77,7 +77,7 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 	{
 		return SERE_ERR_NONFINITE;
 	}
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;
@@ -96,15 +96,15 @@ sere_status sere_collide_restore_voronoi( float* x, float* y, float* z, float* v
 
 sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, float* vx, float* vy, float* vz,
 												const int32_t* tri, int32_t triangle_count, int32_t voronoi_first,
-												const float* h, const uint8_t* moved, float dt )
+												const float* h, const uint8_t* moved, float dt, int32_t threads )
 {
 	if ( x == NULL || y == NULL || z == NULL || vx == NULL || vy == NULL || vz == NULL || tri == NULL || h == NULL ||
-		 moved == NULL || triangle_count < 0 || voronoi_first < 0 || !( dt > 0.0f ) )
+		 moved == NULL || triangle_count < 0 || voronoi_first < 0 || !( dt > 0.0f ) || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
 	int bad = 0, outside = 0;
-#pragma omp parallel for num_threads( sere_team_default() ) reduction( | : bad, outside ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) reduction( | : bad, outside ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;
@@ -121,7 +121,7 @@ sere_status sere_collide_restore_voronoi_moved( float* x, float* y, float* z, fl
 		return SERE_ERR_NONFINITE;
 	}
 	const float inv_dt = 1.0f / dt;
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
 		const int32_t* v = tri + 3 * (size_t) t;

@@ -790,7 +790,7 @@ static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup
 static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, const solve_setup* setup,
 						  sere_pbd_report* report )
 {
-	int requested = sere_team_default();
+	int requested = sere_team_for( pbd->thread_count );
 	requested = requested < 1 ? 1 : requested > MAX_THREADS ? MAX_THREADS : requested;
 	solve_result outcome = { 0, 0, 0.0f, 0 };
 	/* One parallel region per call; inside it every thread follows the same control flow,

@@ -92,10 +92,15 @@ sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest );
  * weight, which leaves the previous weights in place. */
 sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight );
 
+/* The threads projection, sere_pbd_touch* and sere_pbd_set_rest run with (core/base.h: 0, the
+ * initial count, is OpenMP's count at each call; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_pbd_set_threads( sere_pbd* pbd, int32_t threads );
+
 /* v += g dt and p = x + v dt for particles [0, count) with inv_m > 0; pinned ones (inv_m = 0)
- * get v = 0 and keep p = x. */
+ * get v = 0 and keep p = x. On `threads` threads (core/base.h; above SERE_MAX_THREADS, that many). */
 void sere_pbd_predict( int32_t count, const float* x, const float* y, const float* z, float* vx, float* vy, float* vz,
-					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt );
+					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt,
+					   int32_t threads );
 
 /* Projects the distance constraints C = |p_a − p_b| − l (Jeong Eq. 13) on the predicted positions,
  * Gauss–Seidel in sweeps, until max |C/l| < λ_C or the cap.
@@ -157,9 +162,10 @@ sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, cons
  * exchange, unpacking). SERE_ERR_ARGUMENT for sweeps < 1. */
 sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps );
 
-/* v = (p − x)/dt and x = p for particles [0, count) (Sec. 5.2: Δv = Δx/Δt). */
+/* v = (p − x)/dt and x = p for particles [0, count) (Sec. 5.2: Δv = Δx/Δt), on `threads`
+ * threads as sere_pbd_predict. */
 void sere_pbd_finish( int32_t count, float* x, float* y, float* z, float* vx, float* vy, float* vz, const float* px,
-					  const float* py, const float* pz, float dt );
+					  const float* py, const float* pz, float dt, int32_t threads );
 
 #ifdef __cplusplus
 }

@@ -390,7 +390,7 @@ sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest )
 	const int32_t lanes = pbd->lanes;
 	const int32_t* source = pbd->source;
 	float* lane_rest = pbd->rest;
-#pragma omp parallel for num_threads( sere_team_default() ) schedule( static ) reduction( | : bad )
+#pragma omp parallel for num_threads( sere_team_for( pbd->thread_count ) ) schedule( static ) reduction( | : bad )
 	for ( int32_t q = 0; q < lanes; ++q )
 	{
 		if ( source[q] >= 0 )
@@ -427,11 +427,22 @@ sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight 
 	return SERE_OK;
 }
 
+sere_status sere_pbd_set_threads( sere_pbd* pbd, int32_t threads )
+{
+	if ( pbd == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	pbd->thread_count = threads;
+	return SERE_OK;
+}
+
 void sere_pbd_predict( int32_t count, const float* x, const float* y, const float* z, float* vx, float* vy, float* vz,
-					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt )
+					   float* px, float* py, float* pz, const float* inv_m, const float gravity[3], float dt,
+					   int32_t threads )
 {
 	const float gx = gravity[0] * dt, gy = gravity[1] * dt, gz = gravity[2] * dt;
-#pragma omp parallel for simd num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_for( threads ) ) schedule( static )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		float free_particle = inv_m[i] > 0.0f ? 1.0f : 0.0f;
@@ -445,10 +456,10 @@ void sere_pbd_predict( int32_t count, const float* x, const float* y, const floa
 }
 
 void sere_pbd_finish( int32_t count, float* x, float* y, float* z, float* vx, float* vy, float* vz, const float* px,
-					  const float* py, const float* pz, float dt )
+					  const float* py, const float* pz, float dt, int32_t threads )
 {
 	const float inv_dt = 1.0f / dt;
-#pragma omp parallel for simd num_threads( sere_team_default() ) schedule( static )
+#pragma omp parallel for simd num_threads( sere_team_for( threads ) ) schedule( static )
 	for ( int32_t i = 0; i < count; ++i )
 	{
 		vx[i] = ( px[i] - x[i] ) * inv_dt;

@@ -145,6 +145,10 @@ sere_status sere_joint_grid_create( const float* x, const float* y, const float*
 void sere_joint_grid_destroy( sere_joint_grid* grid );
 int32_t sere_joint_grid_nearest( const sere_joint_grid* grid, float x, float y, float z );
 
+/* The threads sere_joint_grid_band runs with (core/base.h: 0, the count at create, is OpenMP's
+ * count at each call; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_joint_grid_set_threads( sere_joint_grid* grid, int32_t threads );
+
 /* Bands every vertex to its nearest joint (in parallel) and, when ox is not NULL, stores the
  * vertex's offset from that joint at rest: the rigid binding of Sec. 6, in which a vertex keeps
  * its offset in the joint's frame. jx, jy, jz are the joint positions the grid was made from. */
@@ -200,10 +204,11 @@ typedef struct sere_pose_stats
 sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
 								const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats );
 
-/* The mesh follows its joints (Sec. 6): x = p_j + R_j o for every vertex, in parallel. Fastest
- * when vertices of one joint are adjacent (runs share one transform); correct in any order. */
+/* The mesh follows its joints (Sec. 6): x = p_j + R_j o for every vertex, on `threads` threads
+ * (core/base.h). Fastest when vertices of one joint are adjacent (runs share one transform);
+ * correct in any order. */
 void sere_joint_frames_skin( const sere_joint_frames* frames, const int32_t* joint, const float* ox, const float* oy,
-							 const float* oz, int32_t vertex_count, float* x, float* y, float* z );
+							 const float* oz, int32_t vertex_count, float* x, float* y, float* z, int32_t threads );
 
 /* Sec. 6, piercing. A workspace over one triangle mesh: its BVH and per-vertex flags, made once.
  * rigid_group (copied; may be NULL) names, per vertex, a group the caller moves rigidly, such as
@@ -215,6 +220,10 @@ typedef struct sere_pierce sere_pierce;
 sere_status sere_pierce_create( const int32_t* tri, int32_t triangle_count, int32_t vertex_count, const float* x,
 								const float* y, const float* z, const int32_t* rigid_group, sere_pierce** pierce );
 void sere_pierce_destroy( sere_pierce* pierce );
+
+/* The threads sere_pierce_step and its BVH run with (core/base.h: 0, the initial count, is
+ * OpenMP's count at each step; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_pierce_set_threads( sere_pierce* pierce, int32_t threads );
 
 typedef struct sere_pierce_stats
 {
@@ -244,9 +253,9 @@ const sere_bvh* sere_pierce_bvh( const sere_pierce* pierce );
 
 /* Pairs of triangles that intersect: triangles sharing an edge are skipped, triangles sharing
  * one corner are tested with their opposite edges, others with all six edges (segment against
- * triangle, in double). bvh must be refit to x, y, z. */
+ * triangle, in double). bvh must be refit to x, y, z. On `threads` threads (core/base.h). */
 int64_t sere_mesh_count_intersections( const sere_bvh* bvh, const int32_t* tri, int32_t triangle_count, const float* x,
-									   const float* y, const float* z );
+									   const float* y, const float* z, int32_t threads );
 
 /* A leaf kind: its blade mesh and its venation skeleton in leaf coordinates. */
 typedef struct sere_leaf_template
@@ -292,6 +301,7 @@ typedef struct sere_plant
 	float *tx, *ty, *tz; /* targets of the piercing check */
 	sere_pose_stats* leaf_stats;
 	sere_pierce* pierce;
+	int32_t threads; /* sere_plant_set_threads (0 at create: OpenMP's count at each frame) */
 } sere_plant;
 
 sere_status sere_plant_create( const sere_leaf_template* templates, int32_t template_count,
@@ -300,6 +310,10 @@ void sere_plant_destroy( sere_plant* plant );
 
 /* Back to the rest pose. */
 void sere_plant_reset( sere_plant* plant );
+
+/* The threads sere_plant_frame runs with, posing, skinning and piercing (core/base.h;
+ * SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+sere_status sere_plant_set_threads( sere_plant* plant, int32_t threads );
 
 typedef struct sere_wilt_stats
 {

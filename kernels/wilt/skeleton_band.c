@@ -1,5 +1,10 @@
 /* sere — Banding (Sec. 5.2): every mesh vertex to its nearest joint. Seed 003: Lu, Zhao, Guo 2009. */
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "wilt/internal/skeleton_shared.h"
+
+#include "core/internal/team.h"
 
 #include <float.h>
 #include <math.h>
@@ -11,6 +16,7 @@
 
 struct sere_joint_grid
 {
+	int32_t threads; /* sere_joint_grid_set_threads */
 	int32_t count;
 	int32_t dim[3];
 	float lo[3];
@@ -312,7 +318,7 @@ static void grid_sort_joints( sere_joint_grid* g, const float* x, const float* y
 static sere_status grid_list_candidates( sere_joint_grid* g, const float* x, const float* y, const float* z,
 										 int64_t cells, int32_t* fill, int32_t* list )
 {
-#pragma omp parallel for schedule( dynamic, 16 )
+#pragma omp parallel for num_threads( sere_team_for( g->threads ) ) schedule( dynamic, 16 )
 	for ( int64_t c = 0; c < cells; ++c )
 	{
 		int32_t ix = (int32_t) ( c % g->dim[0] ), iy = (int32_t) ( ( c / g->dim[0] ) % g->dim[1] );
@@ -424,6 +430,16 @@ int32_t sere_joint_grid_nearest( const sere_joint_grid* g, float x, float y, flo
 	return ring_nearest( g, x, y, z );
 }
 
+sere_status sere_joint_grid_set_threads( sere_joint_grid* grid, int32_t threads )
+{
+	if ( grid == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	grid->threads = threads;
+	return SERE_OK;
+}
+
 sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, const float* jy, const float* jz,
 								  const float* x, const float* y, const float* z, int32_t vertex_count, int32_t* joint,
 								  float* ox, float* oy, float* oz )
@@ -434,7 +450,7 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 		return SERE_ERR_ARGUMENT;
 	}
 	int bad = 0;
-#pragma omp parallel for schedule( static ) reduction( | : bad )
+#pragma omp parallel for num_threads( sere_team_for( grid->threads ) ) schedule( static ) reduction( | : bad )
 	for ( int32_t i = 0; i < vertex_count; ++i )
 	{
 		bad |= !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] );
@@ -443,7 +459,7 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 	{
 		return SERE_ERR_NONFINITE;
 	}
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( grid->threads ) ) schedule( static )
 	for ( int32_t i = 0; i < vertex_count; ++i )
 	{
 		int32_t j = sere_joint_grid_nearest( grid, x[i], y[i], z[i] );

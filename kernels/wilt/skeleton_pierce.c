@@ -1,5 +1,10 @@
 /* sere — Piercing (Sec. 6) and the self-intersection count. Seed 003: Lu, Zhao, Guo 2009. */
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "wilt/internal/skeleton_shared.h"
+
+#include "core/internal/team.h"
 
 #include <float.h>
 #include <math.h>
@@ -86,11 +91,12 @@ static void pierce_visit( void* context, int32_t t, uint32_t lanes )
 }
 
 static int32_t pierce_limit( const sere_bvh* bvh, const int32_t* tri, const float* px, const float* py, const float* pz,
-							 float* x, float* y, float* z, int32_t vertex_count, float margin, uint8_t* modified )
+							 float* x, float* y, float* z, int32_t vertex_count, float margin, uint8_t* modified,
+							 int32_t threads )
 {
 	int32_t shortened = 0;
 	int32_t groups = ( vertex_count + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
-#pragma omp parallel for schedule( dynamic, 32 ) reduction( + : shortened )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( dynamic, 32 ) reduction( + : shortened )
 	for ( int32_t b = 0; b < groups; ++b )
 	{
 		pierce_group g;
@@ -236,6 +242,7 @@ static void triangle_box( const float* x, const float* y, const float* z, const 
 
 struct sere_pierce
 {
+	int32_t threads; /* sere_pierce_set_threads */
 	int32_t vertex_count;
 	int32_t triangle_count;
 	int32_t* tri;
@@ -350,11 +357,11 @@ static int64_t pair_search( const sere_bvh* bvh, const int32_t* tri, int32_t tri
 }
 
 int64_t sere_mesh_count_intersections( const sere_bvh* bvh, const int32_t* tri, int32_t triangle_count, const float* x,
-									   const float* y, const float* z )
+									   const float* y, const float* z, int32_t threads )
 {
 	int64_t total = 0;
 	int32_t groups = ( triangle_count + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
-#pragma omp parallel for schedule( dynamic, 32 ) reduction( + : total )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( dynamic, 32 ) reduction( + : total )
 	for ( int32_t b = 0; b < groups; ++b )
 	{
 		total += pair_search( bvh, tri, triangle_count, x, y, z, b * SERE_BVH_WIDTH, NULL, NULL, NULL );
@@ -434,6 +441,16 @@ void sere_skel_pierce_rest( sere_pierce* pierce )
 	memset( pierce->off_pose, 0, (size_t) pierce->vertex_count );
 }
 
+sere_status sere_pierce_set_threads( sere_pierce* pierce, int32_t threads )
+{
+	if ( pierce == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	pierce->threads = threads;
+	return sere_bvh_set_threads( pierce->bvh, threads );
+}
+
 const sere_bvh* sere_pierce_bvh( const sere_pierce* pierce )
 {
 	return pierce->bvh;
@@ -463,7 +480,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 	st.rebuilt = rebuilt;
 	int32_t n = p->vertex_count, f = p->triangle_count;
 	int bad = 0;
-#pragma omp parallel for schedule( static ) reduction( | : bad )
+#pragma omp parallel for num_threads( sere_team_for( p->threads ) ) schedule( static ) reduction( | : bad )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		bad |= !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] );
@@ -474,12 +491,12 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 	}
 	/* The seed's check: no vertex passes through the mesh as it was. */
 	memset( p->modified, 0, (size_t) n );
-	st.shortened = pierce_limit( p->bvh, p->tri, px, py, pz, x, y, z, n, margin, p->modified );
+	st.shortened = pierce_limit( p->bvh, p->tri, px, py, pz, x, y, z, n, margin, p->modified, p->threads );
 
 	/* Then no triangle may end up through another. Only triangles with a moving corner can
 	 * meet a new partner; later rounds search around the vertices just pulled back. */
 	memset( p->halvings, 0, (size_t) n );
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( p->threads ) ) schedule( static )
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		const int32_t* c = p->tri + 3 * t;
@@ -507,7 +524,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 		memset( p->flag, 0, (size_t) n );
 		int64_t found = 0;
 		int32_t groups = ( f + SERE_BVH_WIDTH - 1 ) / SERE_BVH_WIDTH;
-#pragma omp parallel for schedule( dynamic, 32 ) reduction( + : found )
+#pragma omp parallel for num_threads( sere_team_for( p->threads ) ) schedule( dynamic, 32 ) reduction( + : found )
 		for ( int32_t b = 0; b < groups; ++b )
 		{
 			found += pair_search( p->bvh, p->tri, f, x, y, z, b * SERE_BVH_WIDTH, p->candidate, p->flag,
@@ -519,7 +536,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 		}
 		++st.rounds;
 		int32_t pulled = 0;
-#pragma omp parallel for schedule( static ) reduction( + : pulled )
+#pragma omp parallel for num_threads( sere_team_for( p->threads ) ) schedule( static ) reduction( + : pulled )
 		for ( int32_t i = 0; i < n; ++i )
 		{
 			if ( !p->flag[i] || !moved( px, py, pz, x, y, z, i ) )
@@ -543,7 +560,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 			++pulled;
 		}
 		st.pulled_back += pulled;
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( p->threads ) ) schedule( static )
 		for ( int32_t t = 0; t < f; ++t )
 		{
 			const int32_t* c = p->tri + 3 * t;

@@ -1,5 +1,10 @@
 /* sere — A plant of wilting leaves (Sec. 7). Seed 003: Lu, Zhao, Guo 2009. */
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "wilt/internal/skeleton_shared.h"
+
+#include "core/internal/team.h"
 
 #include <float.h>
 #include <math.h>
@@ -364,6 +369,16 @@ void sere_plant_reset( sere_plant* plant )
 	}
 }
 
+sere_status sere_plant_set_threads( sere_plant* plant, int32_t threads )
+{
+	if ( plant == NULL || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	plant->threads = threads;
+	return sere_pierce_set_threads( plant->pierce, threads );
+}
+
 sere_status sere_plant_frame( sere_plant* plant, float time, const sere_wilt_params* params, sere_wilt_stats* stats )
 {
 	sere_status status = sere_skel_check_wilt_params( params );
@@ -380,7 +395,7 @@ sere_status sere_plant_frame( sere_plant* plant, float time, const sere_wilt_par
 		return SERE_ERR_NONFINITE;
 	}
 	/* The forward kinematics of a leaf is sequential from its root; leaves are independent. */
-#pragma omp parallel for schedule( dynamic, 1 )
+#pragma omp parallel for num_threads( sere_team_for( plant->threads ) ) schedule( dynamic, 1 )
 	for ( int32_t k = 0; k < plant->leaf_count; ++k )
 	{
 		float t = time - plant->onset[k];
@@ -402,7 +417,7 @@ sere_status sere_plant_frame( sere_plant* plant, float time, const sere_wilt_par
 	if ( params->pierce )
 	{
 		sere_joint_frames_skin( &plant->frames, plant->joint, plant->ox, plant->oy, plant->oz, plant->vertex_count,
-								plant->tx, plant->ty, plant->tz );
+								plant->tx, plant->ty, plant->tz, plant->threads );
 		status = sere_pierce_step( plant->pierce, plant->x, plant->y, plant->z, plant->tx, plant->ty, plant->tz,
 								   params->pierce_margin, &st.pierce );
 		if ( status != SERE_OK )
@@ -417,7 +432,7 @@ sere_status sere_plant_frame( sere_plant* plant, float time, const sere_wilt_par
 	else
 	{
 		sere_joint_frames_skin( &plant->frames, plant->joint, plant->ox, plant->oy, plant->oz, plant->vertex_count,
-								plant->x, plant->y, plant->z );
+								plant->x, plant->y, plant->z, plant->threads );
 	}
 	if ( stats != NULL )
 	{

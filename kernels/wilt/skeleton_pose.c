@@ -1,5 +1,10 @@
 /* sere — Wilting (Sec. 6, Lu Eq. 1): posing the skeleton and skinning the mesh. Seed 003: Lu, Zhao, Guo 2009. */
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "wilt/internal/skeleton_shared.h"
+
+#include "core/internal/team.h"
 
 #include <float.h>
 #include <math.h>
@@ -316,7 +321,7 @@ sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, in
 #define SKIN_BLOCK 2048
 
 void sere_joint_frames_skin( const sere_joint_frames* frames, const int32_t* joint, const float* ox, const float* oy,
-							 const float* oz, int32_t vertex_count, float* x, float* y, float* z )
+							 const float* oz, int32_t vertex_count, float* x, float* y, float* z, int32_t threads )
 {
 	const float *px = frames->x, *py = frames->y, *pz = frames->z;
 	float* const* m = frames->m;
@@ -325,7 +330,7 @@ void sere_joint_frames_skin( const sere_joint_frames* frames, const int32_t* joi
 	 * orders each leaf's vertices by joint) form a run: its transform is loaded once and
 	 * broadcast, and the run streams through unit-stride SIMD with no gathers. Any order is
 	 * correct; scattered joints just make runs of one. */
-#pragma omp parallel for schedule( static )
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static )
 	for ( int32_t b = 0; b < blocks; ++b )
 	{
 		int32_t i = b * SKIN_BLOCK;

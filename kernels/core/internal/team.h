@@ -9,10 +9,10 @@
  * waiting one left, which brings 2 threads back near the 1-thread time (0.8–1.2× in the
  * issue), but it is no speed-up: the process has one core, and pays wake-ups and migrations
  * besides; and passive waiting costs a futex call per barrier on a quiet machine. So before
- * each parallel region the kernels ask sere_team for a thread count: the caller's
- * (omp_get_max_threads()), capped at the cores other processes leave free, as last measured.
- * (An OMP_WAIT_POLICY default set by sere's own main would not reach users, who call the
- * kernels from their own programs; libgomp reads it once, at start-up.)
+ * each parallel region the kernels ask sere_team for a thread count: the caller's (the count
+ * set on the kernel's object or passed to it, base.h), capped at the cores other processes leave free, as last
+ * measured. (An OMP_WAIT_POLICY default set by sere's own main would not reach users, who call the kernels from their
+ * own programs; libgomp reads it once, at start-up.)
  *
  * The measure: every SERE_TEAM_INTERVAL seconds (at most; only when a kernel is called), the
  * busy time of the CPUs this process may run on (/proc/stat: user, system, irq, softirq and
@@ -188,8 +188,9 @@ static inline int sere_team( int wanted )
 	return wanted > 1 && cores > 0 && cores < wanted ? cores : wanted;
 }
 
-/* sere_team( omp_get_max_threads() ): the default team of a kernel's parallel region. */
-static inline int sere_team_default( void )
+/* The team of a parallel region in a kernel called with `threads` (its object's count or its
+ * `threads` argument, base.h): 0 asks for the caller's OpenMP count (omp_get_max_threads()). */
+static inline int sere_team_for( int32_t threads )
 {
-	return sere_team( omp_get_max_threads() );
+	return sere_team( threads > 0 ? threads : omp_get_max_threads() );
 }

@@ -32,6 +32,7 @@ typedef struct box3
 
 struct sere_bvh
 {
+	int32_t threads; /* sere_bvh_set_threads (0: OpenMP's count at the call) */
 	int32_t triangle_count;
 	int32_t vertex_count;
 	int32_t node_count;

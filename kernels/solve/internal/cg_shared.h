@@ -88,6 +88,7 @@ static inline void gather( half_t* out, const double* x, const int32_t* col )
 /* Vectors of the solve, indexed by position (see sere_sell): x and b as permuted in. */
 struct sere_cg_workspace
 {
+	int32_t threads; /* sere_cg_set_threads */
 	int32_t capacity;
 	int32_t positions; /* vector length: n rounded to chunks, plus a chunk of padding per SGS color */
 	int32_t block_capacity;

@@ -83,6 +83,7 @@ struct sere_collide
 	int32_t triangle_count;
 	int32_t edge_count;
 	int32_t capacity; /* of each kind of contact */
+	int32_t threads;  /* sere_collide_set_threads (0: OpenMP's count at the call, at most slots) */
 	int32_t slots;	  /* threads with their own detection buffer */
 	/* Detection blocks: vertex_blocks blocks of DETECT_BLOCK vertices querying for vertex–triangle
 	 * contacts, then as many for edge–edge contacts (lanes are the same vertices, each standing for

@@ -49,6 +49,7 @@ typedef struct spin_barrier
 
 struct sere_pbd
 {
+	int32_t thread_count; /* sere_pbd_set_threads */
 	int32_t particle_count, constraint_count;
 	sere_coloring coloring;
 	int32_t colors;
