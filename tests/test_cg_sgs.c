@@ -81,7 +81,7 @@ static void dense_solve( double* m, double* r, double* z, int32_t n )
 static double relative_residual( const sere_csr* a, const double* b, const double* x )
 {
 	double* ax = malloc( sizeof( double ) * a->rows );
-	sere_csr_spmv( a, x, ax );
+	sere_csr_spmv( a, x, ax, 0 );
 	double rr = 0.0, bb = 0.0;
 	for ( int32_t i = 0; i < a->rows; ++i )
 	{

@@ -734,7 +734,7 @@ Test( collide, edge_contact_pushes_crossing_edges_back_to_their_side )
 		memcpy( x, x0, sizeof( x ) ), memcpy( y, y0, sizeof( y ) ), memcpy( z, z0, sizeof( z ) );
 		z[0] = z[1] = below, z[2] = 1.0f + below;
 		int64_t crossings = 0;
-		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
+		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings, 0 ), SERE_OK );
 		cr_assert_eq( crossings, 2 );
 		sere_bvh* bvh;
 		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
@@ -766,7 +766,7 @@ Test( collide, edge_contact_pushes_crossing_edges_back_to_their_side )
 		float p0[3] = { x[0], y[0], z[0] }, p1[3] = { x[1], y[1], z[1] };
 		float q0[3] = { x[3], y[3], z[3] }, q1[3] = { x[4], y[4], z[4] }, w[2];
 		cr_assert_float_eq( sqrtf( sere_closest_points_segments( p0, p1, q0, q1, w ) ), h, 1e-7f );
-		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
+		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings, 0 ), SERE_OK );
 		cr_assert_eq( crossings, history ? 0 : 2, "history %d: %lld crossings", history, (long long) crossings );
 		sere_collide_destroy( c );
 		sere_bvh_destroy( bvh );
@@ -1013,7 +1013,7 @@ Test( collide, voronoi_restore_eq14 )
 	}
 	float* h_hat = malloc( sizeof( float ) * (size_t) f );
 	double* h_ref = malloc( sizeof( double ) * (size_t) f );
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h_hat ), SERE_OK );
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h_hat, 0 ), SERE_OK );
 	sere_collide_ref_measure_h( s.x, s.y, s.z, s.tri, f, n, h_ref );
 	for ( int32_t t = 0; t < f; ++t )
 	{
@@ -1047,7 +1047,8 @@ Test( collide, voronoi_restore_eq14 )
 		{
 			dh[t] = modes[m][t];
 		}
-		cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, modes[m] ), SERE_OK );
+		cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, modes[m], 0 ),
+					  SERE_OK );
 		sere_collide_ref_restore_voronoi( dx, dy, dz, dvx, dvy, dvz, s.tri, f, n, dh );
 		for ( int32_t t = 0; t < f; ++t )
 		{
@@ -1063,7 +1064,7 @@ Test( collide, voronoi_restore_eq14 )
 		}
 		/* measuring again gives back the thickness used (the particle sits on the normal line) */
 		float* again = malloc( sizeof( float ) * (size_t) f );
-		cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again ), SERE_OK );
+		cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again, 0 ), SERE_OK );
 		for ( int32_t t = 0; t < f; ++t )
 		{
 			cr_assert( fabsf( again[t] - modes[m][t] ) < 1e-6f, "mode %d: %d measures %g, restored %g", m, t, again[t],
@@ -1116,7 +1117,7 @@ static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), 
 	}
 	sere_collide_stats stats;
 	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
-	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_OK );
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, 0 ), SERE_OK );
 	*contacts_out = stats.contacts;
 	*edge_contacts_out = stats.edge_contacts;
 	if ( edges != NULL )
@@ -1280,17 +1281,19 @@ Test( collide, nonfinite_inputs_are_refused )
 	}
 	h[3] = NAN;
 	s.vz[0] = 0.0f;
-	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, 0 ),
+				  SERE_ERR_NONFINITE );
 	h[3] = 0.01f;
 	s.vy[5] = NAN;
-	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, 0 ),
+				  SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + n, s.x + n, sizeof( float ) * (size_t) f ) == 0, "Voronoi particles written on error" );
 	s.vy[5] = 0.0f;
 	/* a corner at or past voronoi_first would be overwritten while read */
-	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n - 1, h ),
+	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n - 1, h, 0 ),
 				  SERE_ERR_ARGUMENT );
 	s.z[2] = NAN;
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h, 0 ), SERE_ERR_NONFINITE );
 	for ( int32_t t = 0; t < f; ++t )
 	{
 		cr_assert( isfinite( h[t] ), "measure_h wrote a non-finite ĥ" );
@@ -1461,7 +1464,7 @@ Test( collide, restore_moved_applies_eq14_only_where_collisions_moved )
 		h[t] = t % 3 == 0 ? -0.06f : 0.01f;
 	}
 	/* nothing moved: nothing is touched, bit for bit (no velocity from nowhere) */
-	cr_assert_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, dt ),
+	cr_assert_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, dt, 0 ),
 				  SERE_OK );
 	cr_expect_eq( memcmp( s.z, before.z, sizeof( float ) * (size_t) ( n + f ) ), 0 );
 	cr_expect_eq( memcmp( s.vz, before.vz, sizeof( float ) * (size_t) ( n + f ) ), 0 );
@@ -1471,11 +1474,11 @@ Test( collide, restore_moved_applies_eq14_only_where_collisions_moved )
 	}
 	/* which side of its triangle each Voronoi particle is on before the restore */
 	float* side = malloc( sizeof( float ) * (size_t) f );
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, side ), SERE_OK );
-	cr_assert_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, dt ),
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, side, 0 ), SERE_OK );
+	cr_assert_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, dt, 0 ),
 				  SERE_OK );
 	float* again = malloc( sizeof( float ) * (size_t) f );
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again ), SERE_OK );
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again, 0 ), SERE_OK );
 	int32_t restored = 0;
 	for ( int32_t t = 0; t < f; ++t )
 	{
@@ -1501,9 +1504,9 @@ Test( collide, restore_moved_applies_eq14_only_where_collisions_moved )
 		}
 	}
 	cr_assert( restored > 0 && restored < f, "%d of %d triangles restored", restored, f );
-	cr_expect_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, NULL, dt ),
+	cr_expect_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, NULL, dt, 0 ),
 				  SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, 0.0f ),
+	cr_expect_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, 0.0f, 0 ),
 				  SERE_ERR_ARGUMENT );
 	free( again );
 	free( side );
@@ -1533,7 +1536,7 @@ Test( collide, restore_moved_is_deterministic )
 			moved[i] = 1;
 		}
 		cr_assert_eq(
-			sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, 0.002f ),
+			sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, 0.002f, 0 ),
 			SERE_OK );
 		collide_sheet fresh;
 		conserving_sheet( &fresh, 33 );

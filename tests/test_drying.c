@@ -77,7 +77,7 @@ static void dry( const char* preset, const char* leaf, int points, int max_frame
 	in.veins = &veins.file.shape;
 	cr_assert_eq( sere_shape_measure( &in, &run->fresh ), SERE_OK );
 	sere_watch* watch;
-	cr_assert_eq( sere_watch_create( &model, sere_params_decimal( params.leaf.ground ), &watch ), SERE_OK );
+	cr_assert_eq( sere_watch_create( &model, sere_params_decimal( params.leaf.ground ), 0, &watch ), SERE_OK );
 	run->length = sere_watch_length( watch );
 	run->normal_z_min = 1.0;
 	run->gap_max = -INFINITY;

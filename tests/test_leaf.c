@@ -1,3 +1,6 @@
+/* _POSIX_C_SOURCE: setenv. */
+#define _POSIX_C_SOURCE 200809L
+
 #include "drying/leaf.h"
 #include "drying/model.h"
 #include "read/leafload.h"
@@ -201,6 +204,63 @@ Test( leaf, deterministic_across_threads )
 		small_sim_free( sim, &model );
 	}
 	cr_expect_eq( memcmp( final[0], final[1], sizeof( float ) * 6 * count ), 0 );
+	free( final[0] ), free( final[1] );
+	omp_set_num_threads( 2 );
+}
+
+/* Threads in this process (libgomp keeps a team's threads alive between regions). */
+static int process_threads( void )
+{
+	char line[256];
+	int threads = 0;
+	FILE* status = fopen( "/proc/self/status", "r" );
+	cr_assert_not_null( status );
+	while ( fgets( line, sizeof( line ), status ) != NULL )
+	{
+		sscanf( line, "Threads: %d", &threads );
+	}
+	fclose( status );
+	return threads;
+}
+
+/* The count set on the simulation is the one its kernels run with, not OpenMP's: with OpenMP
+ * at 1 thread, a leaf set to 3 makes libgomp start a team of 3 (the collision workspace, made for
+ * OpenMP's 1, grows its buffers for them); and its frames are the bits of a leaf set to 1 while
+ * OpenMP says 3 (the determinism contract, with the count said at the call). */
+Test( leaf, explicit_threads_override_openmp )
+{
+	setenv( "SERE_ADAPTIVE_THREADS", "0", 1 ); /* no cap from a busy machine: the team is the count */
+	const int32_t explicit_threads[2] = { 3, 1 };
+	float* final[2];
+	int32_t count = 0;
+	for ( int t = 0; t < 2; ++t )
+	{
+		omp_set_num_threads( t == 0 ? 1 : 3 );
+		sere_model model;
+		small_leaf( &model, "maple", 1200 );
+		sere_leaf_sim* sim = small_sim( &model );
+		int before = process_threads();
+		cr_assert_eq( sere_leaf_set_threads( sim, explicit_threads[t] ), SERE_OK );
+		sere_leaf_params params = drying_params( -0.5, -1.0, 1.5 );
+		params.pbd.max_iterations = 40;
+		sere_leaf_stats stats;
+		for ( int frame = 0; frame < 40; ++frame )
+		{
+			cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK );
+		}
+		if ( t == 0 )
+		{
+			cr_expect_geq( process_threads(), before + 2, "3 threads asked, %d in the process (%d before)",
+						   process_threads(), before );
+		}
+		count = model.p.count;
+		final[t] = malloc( sizeof( float ) * 3 * count );
+		memcpy( final[t], model.p.x, sizeof( float ) * count );
+		memcpy( final[t] + count, model.p.y, sizeof( float ) * count );
+		memcpy( final[t] + 2 * count, model.p.z, sizeof( float ) * count );
+		small_sim_free( sim, &model );
+	}
+	cr_expect_eq( memcmp( final[0], final[1], sizeof( float ) * 3 * count ), 0 );
 	free( final[0] ), free( final[1] );
 	omp_set_num_threads( 2 );
 }

@@ -295,7 +295,7 @@ Test( markov, population_matches_the_exact_distribution, .timeout = 60 )
 			sere_markov_propagate( P, STATES, pi, next );
 			memcpy( previous, pi, sizeof( pi ) );
 			memcpy( pi, next, sizeof( pi ) );
-			cr_assert_eq( sere_markov_advance( &day, states, n, 0, seeds[trial], d, counts ), SERE_OK );
+			cr_assert_eq( sere_markov_advance( &day, states, n, 0, seeds[trial], d, counts, 0 ), SERE_OK );
 		}
 		int df;
 		double chi = chi_square( counts, pi, STATES, n, &df );
@@ -327,12 +327,12 @@ Test( markov, identical_for_any_thread_count_and_split )
 		sere_markov_day day;
 		cr_assert_eq( sere_markov_day_prepare( &c, 20.0 - d, 70.0 - 3.0 * d, &day ), SERE_OK );
 		omp_set_num_threads( 1 );
-		cr_assert_eq( sere_markov_advance( &day, one, n, 0, 99, d, counts_one ), SERE_OK );
+		cr_assert_eq( sere_markov_advance( &day, one, n, 0, 99, d, counts_one, 0 ), SERE_OK );
 		omp_set_num_threads( 2 );
-		cr_assert_eq( sere_markov_advance( &day, two, n, 0, 99, d, counts_two ), SERE_OK );
+		cr_assert_eq( sere_markov_advance( &day, two, n, 0, 99, d, counts_two, 0 ), SERE_OK );
 		/* The same population in two uneven pieces. */
-		cr_assert_eq( sere_markov_advance( &day, split, 70001, 0, 99, d, a ), SERE_OK );
-		cr_assert_eq( sere_markov_advance( &day, split + 70001, n - 70001, 70001, 99, d, b ), SERE_OK );
+		cr_assert_eq( sere_markov_advance( &day, split, 70001, 0, 99, d, a, 0 ), SERE_OK );
+		cr_assert_eq( sere_markov_advance( &day, split + 70001, n - 70001, 70001, 99, d, b, 0 ), SERE_OK );
 		for ( int s = 0; s < STATES; ++s )
 		{
 			cr_assert_eq( counts_one[s], counts_two[s] );
@@ -342,7 +342,7 @@ Test( markov, identical_for_any_thread_count_and_split )
 	cr_assert_eq( memcmp( one, two, (size_t) n ), 0 );
 	cr_assert_eq( memcmp( one, split, (size_t) n ), 0 );
 	int64_t counted[STATES];
-	cr_assert_eq( sere_markov_count( one, n, STATES, counted ), SERE_OK );
+	cr_assert_eq( sere_markov_count( one, n, STATES, counted, 0 ), SERE_OK );
 	cr_assert_eq( memcmp( counted, counts_one, sizeof( counted ) ), 0 );
 	/* Leaves really moved: the chain is not stuck in state 0. */
 	cr_assert( counts_one[0] < n / 2 );
@@ -361,10 +361,10 @@ Test( markov, bad_leaf_states_are_reported_and_kept )
 	states[17] = STATES;
 	states[500] = 200;
 	int64_t counts[STATES];
-	cr_expect_eq( sere_markov_advance( &day, states, 1000, 0, 3, 0, counts ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_markov_advance( &day, states, 1000, 0, 3, 0, counts, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( states[17], STATES );
 	cr_expect_eq( states[500], 200 );
-	cr_expect_eq( sere_markov_count( states, 1000, STATES, counts ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_markov_advance( &day, states, -1, 0, 3, 0, counts ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_markov_advance( NULL, states, 10, 0, 3, 0, counts ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_markov_count( states, 1000, STATES, counts, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_markov_advance( &day, states, -1, 0, 3, 0, counts, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_markov_advance( NULL, states, 10, 0, 3, 0, counts, 0 ), SERE_ERR_ARGUMENT );
 }

@@ -152,7 +152,7 @@ static void measure_crumple( measure_sheet* s, double amplitude, double noise, u
 static int64_t measure_fast_count( const measure_sheet* s )
 {
 	int64_t count = -1;
-	cr_assert_eq( sere_crossings_count_once( s->x, s->y, s->z, s->n, s->tri, s->triangles, &count ), SERE_OK );
+	cr_assert_eq( sere_crossings_count_once( s->x, s->y, s->z, s->n, s->tri, s->triangles, &count, 0 ), SERE_OK );
 	return count;
 }
 

@@ -60,8 +60,8 @@ Test( osmosis, matrix_is_symmetric )
 		x[i] = sin( 1.7 * i + 0.3 );
 		y[i] = cos( 0.9 * i );
 	}
-	sere_csr_spmv( a, x, ax );
-	sere_csr_spmv( a, y, ay );
+	sere_csr_spmv( a, x, ax, 0 );
+	sere_csr_spmv( a, y, ay, 0 );
 	double xay = 0.0, yax = 0.0, norm = 0.0;
 	for ( int32_t i = 0; i < n; ++i )
 	{
@@ -545,7 +545,7 @@ Test( cg, bitwise_identical_for_1_2_3_threads )
 	}
 	/* The solution satisfies A x = b to the tolerance, checked independently. */
 	double* ax = malloc( sizeof( double ) * n );
-	sere_csr_spmv( &a, x[0], ax );
+	sere_csr_spmv( &a, x[0], ax, 0 );
 	double rr = 0.0, bb = 0.0;
 	for ( int32_t i = 0; i < n; ++i )
 	{
@@ -650,7 +650,7 @@ static void expect_sell_equals_csr( const sere_csr* a, const sere_sell* sell, co
 	for ( int t = 1; t <= 3; ++t )
 	{
 		omp_set_num_threads( t );
-		sere_csr_spmv( a, x, y_csr );
+		sere_csr_spmv( a, x, y_csr, 0 );
 		memset( y_sell, 0xff, sizeof( double ) * a->rows ); /* NaN: a row SELL forgot would show */
 		sere_sell_spmv( sell, x, y_sell );
 		int32_t first = -1;
@@ -773,7 +773,7 @@ static int32_t textbook_pcg( const sere_csr* a, const double* b, double* x, doub
 	double *r = malloc( sizeof( double ) * n ), *z = malloc( sizeof( double ) * n );
 	double *p = malloc( sizeof( double ) * n ), *q = malloc( sizeof( double ) * n );
 	double *d = malloc( sizeof( double ) * n ), bb = 0.0, rz = 0.0, rr = 0.0;
-	sere_csr_spmv( a, x, q );
+	sere_csr_spmv( a, x, q, 0 );
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		d[i] = 0.0;
@@ -790,7 +790,7 @@ static int32_t textbook_pcg( const sere_csr* a, const double* b, double* x, doub
 	*residual = sqrt( rr / bb );
 	while ( *residual > tolerance && it < cap )
 	{
-		sere_csr_spmv( a, p, q );
+		sere_csr_spmv( a, p, q, 0 );
 		double pq = 0.0;
 		for ( int32_t i = 0; i < n; ++i )
 		{

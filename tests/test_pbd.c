@@ -696,7 +696,7 @@ Test( pbd, predict_and_finish )
 	float vx[2] = { 0.5f, 0.5f }, vy[2] = { 0.0f, 0.0f }, vz[2] = { 0.0f, 0.0f };
 	float px[2], py[2], pz[2], inv_m[2] = { 1.0f, 0.0f };
 	const float gravity[3] = { 0.0f, 0.0f, -9.8f }, dt = 0.01f;
-	sere_pbd_predict( 2, x, y, z, vx, vy, vz, px, py, pz, inv_m, gravity, dt );
+	sere_pbd_predict( 2, x, y, z, vx, vy, vz, px, py, pz, inv_m, gravity, dt, 0 );
 	/* Same float operations as the kernel (v += g dt, p = x + v dt), so exact equality. */
 	float vz0 = 0.0f + -9.8f * dt;
 	cr_expect_eq( vz[0], vz0 );
@@ -705,7 +705,7 @@ Test( pbd, predict_and_finish )
 	/* A pinned particle has no velocity and stays. */
 	cr_expect( vx[1] == 0.0f && vz[1] == 0.0f && px[1] == 2.0f && pz[1] == 0.0f );
 	px[0] = 1.5f;
-	sere_pbd_finish( 2, x, y, z, vx, vy, vz, px, py, pz, dt );
+	sere_pbd_finish( 2, x, y, z, vx, vy, vz, px, py, pz, dt, 0 );
 	cr_expect_eq( x[0], 1.5f );
 	cr_expect_eq( vx[0], ( 1.5f - 1.0f ) * ( 1.0f / dt ) );
 	cr_expect_eq( z[0], 0.0f + vz0 * dt );
@@ -904,10 +904,10 @@ static void buckle( shrink_profile profile, double* extent, double* curvature )
 			rest[s] = m.rest[s] * ( 1.0f - ramp * loss[s] );
 		}
 		cr_assert_eq( sere_pbd_set_rest( pbd, rest ), SERE_OK );
-		sere_pbd_predict( m.n, m.x, m.y, m.z, vx, vy, vz, px, py, pz, m.inv_m, gravity, params.dt );
+		sere_pbd_predict( m.n, m.x, m.y, m.z, vx, vy, vz, px, py, pz, m.inv_m, gravity, params.dt, 0 );
 		sere_pbd_report report;
 		cr_assert_eq( sere_pbd_project( pbd, px, py, pz, m.inv_m, &params, &report ), SERE_OK );
-		sere_pbd_finish( m.n, m.x, m.y, m.z, vx, vy, vz, px, py, pz, params.dt );
+		sere_pbd_finish( m.n, m.x, m.y, m.z, vx, vy, vz, px, py, pz, params.dt, 0 );
 		for ( int32_t i = 0; i < m.n; ++i )
 		{
 			vx[i] *= 0.98f, vy[i] *= 0.98f, vz[i] *= 0.98f; /* air damping, so the sheet settles */

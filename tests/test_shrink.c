@@ -45,7 +45,7 @@ Test( shrink, eq12_by_hand )
 	{
 		sere_shrink_params params = shrink_params( 0.5, 0.5, alphas[k] );
 		memcpy( rest, rest0, sizeof( rest ) );
-		cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &params ), SERE_OK );
+		cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &params, 0 ), SERE_OK );
 		for ( int s = 0; s < 3; ++s )
 		{
 			cr_expect_leq( ulps( rest[s], (float) expected[k] ), 1, "alpha %g spring %d: %.9g vs %.9g", alphas[k], s,
@@ -65,7 +65,7 @@ Test( shrink, vein_springs_use_sigma_vein )
 	 * double-precision power rounded to float. */
 	sere_shrink_params params = shrink_params( 1.0, 0.2, 1.0 );
 	params.min_length_ratio = 0.0;
-	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 4, m, m0, &params ), SERE_OK );
+	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 4, m, m0, &params, 0 ), SERE_OK );
 	const float expected[4] = { 0.5f, 0.9f, 0.5f, 0.9f };
 	for ( int s = 0; s < 4; ++s )
 	{
@@ -85,7 +85,7 @@ Test( shrink, stop_rules )
 	double m[8] = { 0.05, 0.95, 0.5, 0.5, 0.2, 0.2, 0.35, 0.35 };
 	sere_shrink_params params = shrink_params( 1.0, 1.0, 1.0 );
 	params.min_length_ratio = 0.3;
-	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 4, m, m0, &params ), SERE_OK );
+	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 4, m, m0, &params, 0 ), SERE_OK );
 	cr_expect_eq( rest[0], 0.9f, "below m_min: keeps its current length" );
 	cr_expect_leq( ulps( rest[1], 0.5f ), 1, "%.9g", rest[1] );
 	cr_expect_eq( rest[2], 0.9f, "below the length ratio: keeps its current length" );
@@ -101,12 +101,12 @@ Test( shrink, negative_sigma_expands_and_gained_water_restores )
 	double dry[4] = { 0.5, 0.5, 0.5, 0.5 };
 	/* σ < 0 (Fig. 15a): l = l⁰ (1 + 0.4 · 0.5) = 1.2. */
 	sere_shrink_params params = shrink_params( -0.4, 0.4, 1.0 );
-	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 2, dry, m0, &params ), SERE_OK );
+	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 2, dry, m0, &params, 0 ), SERE_OK );
 	cr_expect_leq( ulps( rest[0], 1.2f ), 1, "%.9g", rest[0] );
 	cr_expect_leq( ulps( rest[1], 0.8f ), 1, "%.9g", rest[1] );
 	/* More water than the fresh leaf (v_rel = 1.5): the base clamps to 0, both back to l⁰. */
 	double wet[4] = { 1.5, 1.5, 1.5, 1.5 };
-	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 2, wet, m0, &params ), SERE_OK );
+	cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, 2, wet, m0, &params, 0 ), SERE_OK );
 	cr_expect_eq( rest[0], 1.0f );
 	cr_expect_eq( rest[1], 1.0f );
 }
@@ -150,7 +150,7 @@ Test( shrink, simd_lanes_match_the_libm_formula )
 		params.min_length_ratio = 0.0;
 		params.m_min = 0.0;
 		memcpy( rest, rest0, sizeof( float ) * COUNT );
-		cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, COUNT, m, m0, &params ), SERE_OK );
+		cr_assert_eq( sere_shrink( a, b, kind, rest0, rest, 0, COUNT, m, m0, &params, 0 ), SERE_OK );
 		int64_t worst = 0;
 		for ( int s = 0; s < COUNT; ++s )
 		{
@@ -188,9 +188,9 @@ Test( shrink, only_the_given_range_and_same_bits_on_any_thread_count )
 	sere_shrink_params params = shrink_params( 0.5, 1.5, 1.3 );
 	params.min_length_ratio = 0.0;
 	omp_set_num_threads( 1 );
-	cr_assert_eq( sere_shrink( a, b, kind, rest0, one, 100, 800, m, m0, &params ), SERE_OK );
+	cr_assert_eq( sere_shrink( a, b, kind, rest0, one, 100, 800, m, m0, &params, 0 ), SERE_OK );
 	omp_set_num_threads( 2 );
-	cr_assert_eq( sere_shrink( a, b, kind, rest0, two, 100, 800, m, m0, &params ), SERE_OK );
+	cr_assert_eq( sere_shrink( a, b, kind, rest0, two, 100, 800, m, m0, &params, 0 ), SERE_OK );
 	cr_expect_eq( memcmp( one, two, sizeof( one ) ), 0 );
 	cr_expect( one[99] == 1.0f && one[900] == 1.0f && one[100] < 1.0f && one[899] < 1.0f );
 }
@@ -204,17 +204,17 @@ Test( shrink, bad_input )
 	double m[6] = { 0.5, NAN, 0.5, 0.5, 0.5, 0.5 };
 	sere_shrink_params params = shrink_params( 1.0, 1.0, 1.0 );
 	/* NaN mass and a zero m⁰ sum: those springs keep their length, the third one shrinks. */
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &params ), SERE_ERR_NONFINITE );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &params, 0 ), SERE_ERR_NONFINITE );
 	cr_expect( rest[0] == 0.9f && rest[1] == 0.9f && ulps( rest[2], 0.5f ) <= 1, "%g %g %g", rest[0], rest[1],
 			   rest[2] );
 	sere_shrink_params bad = params;
 	bad.alpha = 0.0;
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad, 0 ), SERE_ERR_ARGUMENT );
 	bad = params, bad.sigma_surf = NAN;
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad, 0 ), SERE_ERR_ARGUMENT );
 	bad = params, bad.min_length_ratio = 1.5;
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, -1, m, m0, &params ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, NULL ), SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 0, m, m0, &params ), SERE_OK );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, -1, m, m0, &params, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, NULL, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 0, m, m0, &params, 0 ), SERE_OK );
 }

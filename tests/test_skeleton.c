@@ -942,7 +942,7 @@ Test( skeleton, skinning_equals_reference_bitwise )
 		oy[i] = (float) ( unit_random( &seed ) - 0.5 );
 		oz[i] = (float) ( 0.1 * ( unit_random( &seed ) - 0.5 ) );
 	}
-	sere_joint_frames_skin( &f, joint, ox, oy, oz, N, x, y, z );
+	sere_joint_frames_skin( &f, joint, ox, oy, oz, N, x, y, z, 0 );
 	sere_skeleton_ref_skin( &f, joint, ox, oy, oz, N, rx, ry, rz );
 	/* The same operations in the same order without contraction: identical bits. */
 	cr_expect_eq( memcmp( x, rx, sizeof( x ) ), 0 );
@@ -959,7 +959,7 @@ static int64_t count_intersections( const int32_t* tri, int32_t triangles, int32
 {
 	sere_bvh* bvh;
 	cr_assert_eq( sere_bvh_create( tri, triangles, vertices, x, y, z, &bvh ), SERE_OK );
-	int64_t count = sere_mesh_count_intersections( bvh, tri, triangles, x, y, z );
+	int64_t count = sere_mesh_count_intersections( bvh, tri, triangles, x, y, z, 0 );
 	sere_bvh_destroy( bvh );
 	return count;
 }
@@ -1030,7 +1030,7 @@ Test( skeleton, piercing_shortens_moves_through_the_mesh )
 		cr_expect_eq( tx[a + k], x[a + k], "straight down: x unchanged" );
 	}
 	cr_expect_eq( count_intersections( tri, f, n, tx, ty, tz ), 0 );
-	cr_expect_eq( sere_mesh_count_intersections( sere_pierce_bvh( pierce ), tri, f, tx, ty, tz ), 0,
+	cr_expect_eq( sere_mesh_count_intersections( sere_pierce_bvh( pierce ), tri, f, tx, ty, tz, 0 ), 0,
 				  "the workspace BVH is refit to the result" );
 
 	/* An edge swept through a triangle while both its ends pass outside: no vertex pierces, the
@@ -1119,7 +1119,7 @@ Test( skeleton, wilting_never_self_intersects )
 				cr_assert_eq( sere_plant_frame( plant, frame / 20.0f, &p, NULL ), SERE_OK );
 				cr_assert_eq( sere_bvh_refit( bvh, plant->x, plant->y, plant->z ), SERE_OK );
 				unchecked += sere_mesh_count_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y,
-															plant->z );
+															plant->z, 0 );
 			}
 			cr_assert_gt( unchecked, 0 );
 			p.pierce = 1;
@@ -1130,9 +1130,9 @@ Test( skeleton, wilting_never_self_intersects )
 			sere_wilt_stats stats;
 			cr_assert_eq( sere_plant_frame( plant, frame / 20.0f, &p, &stats ), SERE_OK );
 			cr_assert_eq( sere_bvh_refit( bvh, plant->x, plant->y, plant->z ), SERE_OK );
-			cr_assert_eq(
-				sere_mesh_count_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y, plant->z ),
-				0, "lobed %d frame %d", lobed, frame );
+			cr_assert_eq( sere_mesh_count_intersections( bvh, plant->tri, plant->triangle_count, plant->x, plant->y,
+														 plant->z, 0 ),
+						  0, "lobed %d frame %d", lobed, frame );
 			cr_assert_eq( stats.pierce.reverted, 0 );
 		}
 		/* The plant did wilt: every leaf is at t = 1 and its tip far below its rest height. */
