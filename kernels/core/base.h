@@ -71,6 +71,18 @@ static inline int sere_threads_valid( int32_t threads )
 	return threads >= 0 && threads <= SERE_MAX_THREADS;
 }
 
+/* *count = threads when a kernel accepts it (SERE_OK), else SERE_ERR_ARGUMENT and *count kept:
+ * the body of every sere_<object>_set_threads. */
+static inline sere_status sere_threads_store( int32_t* count, int32_t threads )
+{
+	if ( !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	*count = threads;
+	return SERE_OK;
+}
+
 /* splitmix64: small, fast and fully determined by its state, so that sampling and scene
  * drawing give the same numbers on every machine and for every thread count. */
 static inline uint64_t sere_splitmix64( uint64_t* state )

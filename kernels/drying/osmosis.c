@@ -192,15 +192,14 @@ const double* sere_osmosis_solution( const sere_osmosis* o )
  * SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
 sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
 {
-	if ( osmosis == NULL || !sere_threads_valid( threads ) )
+	sere_status status = osmosis == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &osmosis->threads, threads );
+	if ( status == SERE_OK )
 	{
-		return SERE_ERR_ARGUMENT;
+		sere_cg_set_threads( osmosis->cg, threads );
+		sere_sell_set_threads( osmosis->sell, threads );
+		sere_sgs_set_threads( osmosis->sgs, threads );
 	}
-	osmosis->threads = threads;
-	sere_cg_set_threads( osmosis->cg, threads );
-	sere_sell_set_threads( osmosis->sell, threads );
-	sere_sgs_set_threads( osmosis->sgs, threads );
-	return SERE_OK;
+	return status;
 }
 
 static sere_status spring_lengths( sere_osmosis* o, const float* x, const float* y, const float* z )

@@ -441,12 +441,7 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 
 sere_status sere_crossings_set_threads( sere_crossings* crossings, int32_t threads )
 {
-	if ( crossings == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	crossings->threads = threads;
-	return SERE_OK;
+	return crossings == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &crossings->threads, threads );
 }
 
 sere_status sere_crossings_count_once( const float* x, const float* y, const float* z, int32_t vertex_count,

@@ -92,12 +92,7 @@ sere_status sere_massspring_mass_from_gray( const float* gray, int32_t n, float 
 
 sere_status sere_massspring_set_threads( sere_massspring* ms, int32_t threads )
 {
-	if ( ms == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	ms->threads = threads;
-	return SERE_OK;
+	return ms == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &ms->threads, threads );
 }
 
 void sere_massspring_destroy( sere_massspring* ms )

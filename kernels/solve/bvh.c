@@ -655,12 +655,7 @@ void sere_bvh_destroy( sere_bvh* bvh )
 
 sere_status sere_bvh_set_threads( sere_bvh* bvh, int32_t threads )
 {
-	if ( bvh == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	bvh->threads = threads;
-	return SERE_OK;
+	return bvh == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &bvh->threads, threads );
 }
 
 sere_status sere_bvh_refit( sere_bvh* bvh, const float* x, const float* y, const float* z )

@@ -251,22 +251,12 @@ void sere_sell_spmv( const sere_sell* a, const double* x, double* y )
 
 sere_status sere_sell_set_threads( sere_sell* sell, int32_t threads )
 {
-	if ( sell == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	sell->threads = threads;
-	return SERE_OK;
+	return sell == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &sell->threads, threads );
 }
 
 sere_status sere_cg_set_threads( sere_cg_workspace* workspace, int32_t threads )
 {
-	if ( workspace == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	workspace->threads = threads;
-	return SERE_OK;
+	return workspace == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &workspace->threads, threads );
 }
 
 sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )

@@ -238,12 +238,7 @@ sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 
 sere_status sere_sgs_set_threads( sere_sgs* sgs, int32_t threads )
 {
-	if ( sgs == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	sgs->threads = threads;
-	return SERE_OK;
+	return sgs == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &sgs->threads, threads );
 }
 
 sere_status sere_sgs_update( sere_sgs* g, const sere_csr* a )

@@ -429,12 +429,7 @@ sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight 
 
 sere_status sere_pbd_set_threads( sere_pbd* pbd, int32_t threads )
 {
-	if ( pbd == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	pbd->thread_count = threads;
-	return SERE_OK;
+	return pbd == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &pbd->thread_count, threads );
 }
 
 void sere_pbd_predict( int32_t count, const float* x, const float* y, const float* z, float* vx, float* vy, float* vz,

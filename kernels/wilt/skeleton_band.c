@@ -432,12 +432,7 @@ int32_t sere_joint_grid_nearest( const sere_joint_grid* g, float x, float y, flo
 
 sere_status sere_joint_grid_set_threads( sere_joint_grid* grid, int32_t threads )
 {
-	if ( grid == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	grid->threads = threads;
-	return SERE_OK;
+	return grid == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &grid->threads, threads );
 }
 
 sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, const float* jy, const float* jz,

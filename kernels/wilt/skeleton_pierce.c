@@ -443,12 +443,8 @@ void sere_skel_pierce_rest( sere_pierce* pierce )
 
 sere_status sere_pierce_set_threads( sere_pierce* pierce, int32_t threads )
 {
-	if ( pierce == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	pierce->threads = threads;
-	return sere_bvh_set_threads( pierce->bvh, threads );
+	sere_status status = pierce == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &pierce->threads, threads );
+	return status == SERE_OK ? sere_bvh_set_threads( pierce->bvh, threads ) : status;
 }
 
 const sere_bvh* sere_pierce_bvh( const sere_pierce* pierce )

@@ -371,12 +371,8 @@ void sere_plant_reset( sere_plant* plant )
 
 sere_status sere_plant_set_threads( sere_plant* plant, int32_t threads )
 {
-	if ( plant == NULL || !sere_threads_valid( threads ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	plant->threads = threads;
-	return sere_pierce_set_threads( plant->pierce, threads );
+	sere_status status = plant == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &plant->threads, threads );
+	return status == SERE_OK ? sere_pierce_set_threads( plant->pierce, threads ) : status;
 }
 
 sere_status sere_plant_frame( sere_plant* plant, float time, const sere_wilt_params* params, sere_wilt_stats* stats )
