@@ -539,17 +539,8 @@ sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const doub
 		cg_round( &st, ws, a, tolerance, max_iterations, chunk );
 	}
 	/* Out of positions: the last iterate, whatever stopped the solve. */
-	const int32_t np = a->chunks * LANES;
-	const double* x = ws->x;
+	positions_to_rows( a->row, a->chunks * LANES, ws->x, x_in, ws->threads );
 	sere_status status = SERE_OK;
-#pragma omp parallel for num_threads( sere_team_for( ws->threads ) ) schedule( static )
-	for ( int32_t at = 0; at < np; ++at )
-	{
-		if ( a->row[at] >= 0 )
-		{
-			x_in[a->row[at]] = x[at];
-		}
-	}
 	if ( st.bad_diagonal )
 	{
 		status = SERE_ERR_NOT_SPD;

@@ -661,14 +661,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 		}
 		safety *= 0.5;
 	}
-#pragma omp parallel for num_threads( sere_team_for( ws->threads ) ) schedule( static )
-	for ( int32_t at = 0; at < np; ++at )
-	{
-		if ( g->row[at] >= 0 )
-		{
-			x_in[g->row[at]] = x[at];
-		}
-	}
+	positions_to_rows( g->row, np, x, x_in, ws->threads );
 	result->iterations = st.it;
 	result->residual = rel;
 	if ( st.status != SERE_OK )

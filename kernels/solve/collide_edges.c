@@ -164,16 +164,7 @@ static void list_edge_pairs( detect_context* c )
 			item[l] = c->pair_item[k], target[l] = c->pair_target[k];
 		}
 		uint32_t keep = edge_bound_lanes( c, item, target, a0, a1, b0, b1 ) & ( ( 1u << count ) - 1u );
-		while ( keep != 0 )
-		{
-			int32_t k = start + __builtin_ctz( keep );
-			keep &= keep - 1;
-			c->pair_item[kept] = c->pair_item[k];
-			c->pair_target[kept] = c->pair_target[k];
-			c->pair_near[kept] = 0;
-			list_pair( c, kept );
-			kept += 1;
-		}
+		kept = keep_pairs( c, start, keep, kept, false );
 	}
 	c->pair_count = kept;
 }

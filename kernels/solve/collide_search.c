@@ -211,16 +211,7 @@ static void list_vertex_pairs( detect_context* c )
 		float p[3][CLOSEST_LANES], a[3][CLOSEST_LANES], b[3][CLOSEST_LANES], cc[3][CLOSEST_LANES];
 		gather_pairs( c, start, count, p, a, b, cc );
 		uint32_t keep = bound_lanes( c, p, a, b, cc ) & ( ( 1u << count ) - 1u );
-		while ( keep != 0 )
-		{
-			int32_t k = start + __builtin_ctz( keep );
-			keep &= keep - 1;
-			c->pair_item[kept] = c->pair_item[k];
-			c->pair_target[kept] = c->pair_target[k];
-			c->pair_near[kept] = c->pair_near[k];
-			list_pair( c, kept );
-			kept += 1;
-		}
+		kept = keep_pairs( c, start, keep, kept, true );
 	}
 	c->pair_count = kept;
 }

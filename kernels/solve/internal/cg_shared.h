@@ -97,6 +97,20 @@ struct sere_cg_workspace
 	double* chunk_delta; /* SGS: per chunk, its share of uᵀw */
 };
 
+/* The solution back from layout positions to rows: x_out[row[at]] = x[at] for every position
+ * holding a row (row[at] >= 0), at every position of the np. */
+static inline void positions_to_rows( const int32_t* row, int32_t np, const double* x, double* x_out, int32_t threads )
+{
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static )
+	for ( int32_t at = 0; at < np; ++at )
+	{
+		if ( row[at] >= 0 )
+		{
+			x_out[row[at]] = x[at];
+		}
+	}
+}
+
 /* Sum of partial[slot], partial[slot + 4], ... over blocks in block order. */
 static inline double block_sum( const double* partial, int32_t blocks, int slot )
 {

@@ -490,6 +490,24 @@ static inline void list_pair( detect_context* c, int32_t k )
 	}
 }
 
+/* Listing: moves the pairs start + l of the buffer for each set bit l of keep (in lane order)
+ * down to kept, kept + 1, ..., lists each and returns the next kept; edge pairs (vertex_pairs
+ * false) carry near = 0. */
+static inline int32_t keep_pairs( detect_context* c, int32_t start, uint32_t keep, int32_t kept, bool vertex_pairs )
+{
+	while ( keep != 0 )
+	{
+		int32_t k = start + __builtin_ctz( keep );
+		keep &= keep - 1;
+		c->pair_item[kept] = c->pair_item[k];
+		c->pair_target[kept] = c->pair_target[k];
+		c->pair_near[kept] = vertex_pairs ? c->pair_near[k] : 0;
+		list_pair( c, kept );
+		kept += 1;
+	}
+	return kept;
+}
+
 /* Separating directions (see SKIN): the projections of a convex set onto a unit direction d̂
  * span the interval of its corners' projections, and |p − q| ≥ (p − q) · d̂ for any points p, q,
  * so the gap between two sets' intervals on d̂ bounds their distance from below. Rounding moves
