@@ -667,6 +667,22 @@ static void sweep( sere_pbd* pbd, const block_context* ctx, block_mode mode, int
 	exchange( pbd, t, threads, parity, worst, flags );
 }
 
+/* p = h = ω (p − h) + h over [first, last): the extrapolated iterate, kept as the history
+ * (with ω = 1, p is copied). */
+static void extrapolate_range( float* restrict p, float* restrict h, int32_t first, int32_t last, float omega )
+{
+	if ( omega == 1.0f )
+	{
+		memcpy( h + first, p + first, sizeof( float ) * (size_t) ( last - first ) );
+		return;
+	}
+	for ( int32_t s = first; s < last; ++s )
+	{
+		float n = omega * ( p[s] - h[s] ) + h[s];
+		p[s] = n, h[s] = n;
+	}
+}
+
 /* Chebyshev semi-iteration (Wang 2015): x_{k+1} = ω_{k+1} (x̂_{k+1} − x_{k−1}) + x_{k−1},
  * x̂_{k+1} the sweep's result in the records, x_{k−1} in history[*older]; with XPBD the same
  * combination of the multipliers, so each position stays the inertia anchor plus the
@@ -677,38 +693,12 @@ static void sweep( sere_pbd* pbd, const block_context* ctx, block_mode mode, int
 static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t, int threads )
 {
 	int32_t first, last;
-	float* restrict p = pbd->packed[0];
-	float* restrict h = pbd->history[*older];
 	share( 4 * pbd->slot_count, t, threads, &first, &last );
-	if ( omega == 1.0f )
-	{
-		memcpy( h + first, p + first, sizeof( float ) * (size_t) ( last - first ) );
-	}
-	else
-	{
-		for ( int32_t s = first; s < last; ++s )
-		{
-			float n = omega * ( p[s] - h[s] ) + h[s];
-			p[s] = n, h[s] = n;
-		}
-	}
+	extrapolate_range( pbd->packed[0], pbd->history[*older], first, last, omega );
 	if ( xpbd )
 	{
-		float* restrict l = pbd->lambda;
-		float* restrict g = pbd->lambda_history[*older];
 		share( pbd->lanes, t, threads, &first, &last );
-		if ( omega == 1.0f )
-		{
-			memcpy( g + first, l + first, sizeof( float ) * (size_t) ( last - first ) );
-		}
-		else
-		{
-			for ( int32_t q = first; q < last; ++q )
-			{
-				float n = omega * ( l[q] - g[q] ) + g[q];
-				l[q] = n, g[q] = n;
-			}
-		}
+		extrapolate_range( pbd->lambda, pbd->lambda_history[*older], first, last, omega );
 	}
 	*older ^= 1;
 	barrier_wait( pbd->barrier, threads );
