@@ -271,6 +271,23 @@ static inline void chunk_sum( const int32_t* col, const double* val, int32_t beg
 	out->hi = hi;
 }
 
+/* Chunk ch of a sweep: out = (in − Σ a_ij out_j) / d over the chunk's slots [ptr[ch],
+ * ptr[ch + 1]) (L's for the forward sweep, U's for the backward one), and the sums to sum_out
+ * when it is not NULL. */
+static inline void sweep_chunk( const sere_sgs* g, const int32_t* ptr, int32_t ch, const double* inv_diag,
+								const double* in, double* out, double* sum_out )
+{
+	lanes_t sum, v = load_lanes( in + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+	chunk_sum( g->col, g->val, ptr[ch], ptr[ch + 1], out, &sum );
+	v.lo = ( v.lo - sum.lo ) * inv.lo;
+	v.hi = ( v.hi - sum.hi ) * inv.hi;
+	store_lanes( out + ch * LANES, &v );
+	if ( sum_out != NULL )
+	{
+		store_lanes( sum_out + ch * LANES, &sum );
+	}
+}
+
 /* Forward sweep z = L̃⁻¹ v in place (v in z on entry): color by color, each row
  * z_i = (v_i − Σ_L a_ij z_j) / d_i, the z_j of earlier colors already final. To be called by
  * every thread of a parallel region (the loop over a color's chunks is shared; its implicit
@@ -282,11 +299,7 @@ static void sgs_forward( const sere_sgs* g, const double* inv_diag, double* z )
 #pragma omp for schedule( static )
 		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
 		{
-			lanes_t sum, v = load_lanes( z + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
-			chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], z, &sum );
-			v.lo = ( v.lo - sum.lo ) * inv.lo;
-			v.hi = ( v.hi - sum.hi ) * inv.hi;
-			store_lanes( z + ch * LANES, &v );
+			sweep_chunk( g, g->lower_ptr, ch, inv_diag, z, z, NULL );
 		}
 	}
 }
@@ -300,15 +313,7 @@ static void sgs_backward( const sere_sgs* g, const double* inv_diag, const doubl
 #pragma omp for schedule( static )
 		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
 		{
-			lanes_t sum, v = load_lanes( u + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
-			chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], t, &sum );
-			v.lo = ( v.lo - sum.lo ) * inv.lo;
-			v.hi = ( v.hi - sum.hi ) * inv.hi;
-			store_lanes( t + ch * LANES, &v );
-			if ( upper_sum != NULL )
-			{
-				store_lanes( upper_sum + ch * LANES, &sum );
-			}
+			sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, upper_sum );
 		}
 	}
 }
