@@ -448,7 +448,7 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	char leaves_dir[4200];
 	snprintf( leaves_dir, sizeof( leaves_dir ), "%s/leaves", o->out );
 	const char* const names[] = { name };
-	if ( sere_check_outputs( leaves_dir, names, 1, err, sizeof( err ) ) != 0 )
+	if ( sere_outputs_check( leaves_dir, names, 1, err, sizeof( err ) ) != 0 )
 	{
 		return leaf_fail( r, err );
 	}
@@ -463,7 +463,7 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	params.seed = d.sample_seed;
 	char relative[64];
 	snprintf( relative, sizeof( relative ), "leaves/%s.leaf", species_names[d.species] );
-	if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )
+	if ( sere_data_find( relative, path, sizeof( path ) ) != 0 )
 	{
 		snprintf( err, sizeof( err ), "cannot find %s (in SERE_DATA, ./data or the install prefix)", relative );
 		return leaf_fail( r, err );
@@ -778,7 +778,7 @@ static int write_scene_files( const litter_options* o, const litter_result* resu
 		/* glTF has no empty mesh; and no scene of an earlier run is left beside this one */
 		remove( path );
 	}
-	else if ( sere_write_glb( path, &glb, err, sizeof( err ) ) != 0 )
+	else if ( sere_glb_write( path, &glb, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere litter: %s\n", err );
 		status = 1;
@@ -843,13 +843,13 @@ int sere_cmd_litter( int argc, char** argv )
 	}
 	char path[4200], err[1024];
 	snprintf( path, sizeof( path ), "%s/leaves", o.out );
-	if ( sere_mkdirs( path ) != 0 )
+	if ( sere_dir_create( path ) != 0 )
 	{
 		fprintf( stderr, "sere litter: cannot create %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
 	static const char* const outputs[] = { "litter.ply", "litter.glb", "litter.png", "summary.json" };
-	if ( sere_check_outputs( o.out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
+	if ( sere_outputs_check( o.out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere litter: %s\n", err );
 		return 1;

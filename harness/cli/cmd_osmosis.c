@@ -42,7 +42,7 @@ static int write_mtx_vector( const char* path, const double* v, int32_t n )
 
 static int dump( const char* dir, const sere_osmosis* o, const sere_model* model )
 {
-	if ( sere_mkdirs( dir ) != 0 )
+	if ( sere_dir_create( dir ) != 0 )
 	{
 		return -1;
 	}

@@ -108,11 +108,12 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 	};
 	char path[4096];
 	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
-	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
+	sere_status failed =
+		sere_ply_write( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
 	if ( !failed )
 	{
 		snprintf( path, sizeof( path ), "%s/frames/frame_%05d.vtp", out, frame );
-		failed = sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 4 );
+		failed = sere_vtp_write( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 4 );
 		if ( failed )
 		{
 			/* no half frame: the PLY goes too, which on a full disk leaves room for the summary */
@@ -153,8 +154,8 @@ typedef struct sheet_context
 	sere_render_view view;
 } sheet_context;
 
-static int draw_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
-					   size_t caption_size, char* err, size_t err_size )
+static sere_status draw_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
+							   char* caption, size_t caption_size, char* err, size_t err_size )
 {
 	sheet_context* c = user;
 	const snapshot* s = c->shots + index;
@@ -381,14 +382,14 @@ static int run_open_leaf( run_state* r )
 	r->have_model = 1;
 	char frames_dir[4096];
 	snprintf( frames_dir, sizeof( frames_dir ), "%s/frames", o->out );
-	if ( sere_mkdirs( frames_dir ) != 0 )
+	if ( sere_dir_create( frames_dir ) != 0 )
 	{
 		fprintf( stderr, "sere run: cannot create %s: %s\n", frames_dir, strerror( errno ) );
 		return 1;
 	}
 	static const char* const outputs[] = { "stats.csv",	 "summary.json", "leaf.pvd",  "drying.png",
 										   "curves.png", "drying3d.png", "leaf3d.png" };
-	if ( sere_check_outputs( o->out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
+	if ( sere_outputs_check( o->out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
 		return 1;

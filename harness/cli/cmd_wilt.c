@@ -305,7 +305,7 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 	if ( o->ply )
 	{
 		snprintf( path, sizeof( path ), "%s/frame_%04lld.ply", o->out, (long long) frame );
-		if ( sere_write_ply( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, NULL, props, 4 ) != 0 )
+		if ( sere_ply_write( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, NULL, props, 4 ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -316,7 +316,7 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 		char name[64];
 		snprintf( name, sizeof( name ), "frame_%04lld.vtp", (long long) frame );
 		snprintf( path, sizeof( path ), "%s/%s", o->out, name );
-		if ( sere_write_vtp( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, props, 4 ) != 0 )
+		if ( sere_vtp_write( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, props, 4 ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -329,7 +329,7 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 		}
 		r->times[r->written++] = time;
 		snprintf( path, sizeof( path ), "%s/wilt.pvd", o->out );
-		if ( sere_write_pvd( path, (const char* const*) r->names, r->times, r->written ) != 0 )
+		if ( sere_pvd_write( path, (const char* const*) r->names, r->times, r->written ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -633,7 +633,7 @@ int sere_cmd_wilt( int argc, char** argv )
 	{
 		return code;
 	}
-	if ( o.out != NULL && sere_mkdirs( o.out ) != 0 )
+	if ( o.out != NULL && sere_dir_create( o.out ) != 0 )
 	{
 		fprintf( stderr, "sere wilt: cannot create output directory '%s': %s\n", o.out, strerror( errno ) );
 		return 1;

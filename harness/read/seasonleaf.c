@@ -72,7 +72,7 @@ static const char* resolve( const char* path, char* buffer, size_t size )
 		fclose( f );
 		return path;
 	}
-	return path[0] != '/' && sere_data_path( path, buffer, size ) == 0 ? buffer : path;
+	return path[0] != '/' && sere_data_find( path, buffer, size ) == 0 ? buffer : path;
 }
 
 /* The key points file: '#' comments, "image W H" first, then "x y" pixel positions. */
