@@ -815,23 +815,18 @@ int sere_cmd_litter( int argc, char** argv )
 	const sere_option options[] = {
 		{ "--leaves", SERE_OPTION_COUNT, &leaves, 1, 99999, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &seed, 0, (double) LONG_MAX, NULL },
-		{ "--out", SERE_OPTION_DIR, &o.out, 0, 0, NULL },
-		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
+		sere_option_out( &o.out ),
+		sere_option_points( &points ),
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 100000000, NULL },
 		{ "--preset", SERE_OPTION_CHOICE, &o.species, 0, 0, preset_names },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_threads( &threads ),
 		{ "--progress", SERE_OPTION_COUNT, &progress_every, 0, 86400, NULL },
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "litter", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "litter", argc, argv, options, sizeof( options ) / sizeof( options[0] ), NULL, NULL,
+								  litter_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
-	}
-	if ( parsed.help )
-	{
-		litter_help();
-		return 0;
+		return code;
 	}
 	o.leaves = (long) leaves, o.seed = (long) seed, o.points = (long) points, o.progress = (long) progress_every;
 	o.frames_given = frames > 0;

@@ -36,26 +36,21 @@ int sere_cmd_model( int argc, char** argv )
 	const char* preset = NULL;
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
-		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
-		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
+		sere_option_particles( &particles ),
+		sere_option_springs( &springs ),
 		{ "--points", SERE_OPTION_COUNT, &points, 3, 30000000, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &seed, 0, 4294967295.0, NULL },
-		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
-		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+		sere_option_preset( &preset ),
+		sere_option_sets( &sets ),
+		sere_option_json( &json ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "model", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
-							 &parsed ) != SERE_OK )
+	const char* path;
+	int code = sere_options_read( "model", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF", &path,
+								  model_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		model_help();
-		return 0;
-	}
-	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	sere_sim_params params = sere_sim_params_default();
 	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
 	{

@@ -115,28 +115,23 @@ int sere_cmd_osmosis( int argc, char** argv )
 	sere_option_list sets = { .count = 0 };
 	static const char* const modes[] = { "paper", "conservative", NULL };
 	const sere_option options[] = {
-		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
+		sere_option_preset( &preset ),
 		{ "--dump", SERE_OPTION_DIR, &dump_dir, 0, 0, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		sere_option_sets( &sets ),
 		{ "--mode", SERE_OPTION_CHOICE, &conservative, 0, 0, modes },
 		{ "--steps", SERE_OPTION_COUNT, &steps, 1, 100000000, NULL },
-		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
-		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
-		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_points( &points ),
+		sere_option_particles( &particles ),
+		sere_option_springs( &springs ),
+		sere_option_threads( &threads ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
-							 &parsed ) != SERE_OK )
+	const char* path;
+	int code = sere_options_read( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF",
+								  &path, osmosis_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		osmosis_help();
-		return 0;
-	}
-	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	if ( path == NULL )
 	{
 		fprintf( stderr, "sere osmosis: missing LEAF (see sere osmosis --help)\n" );

@@ -255,36 +255,30 @@ typedef struct run_options
 	sere_sim_params params;
 } run_options;
 
-/* 0 to run, 1 after --help, 2 for bad input (the message is out). */
+/* SERE_OPTIONS_GO to run, else the exit code: 0 after --help, 2 for bad input (the message is out). */
 static int parse_run_options( int argc, char** argv, run_options* o )
 {
 	*o = ( run_options ){ .out = "out/run", .frames = 400, .points = 1500, .particles = -1, .springs = -1 };
 	o->params = sere_sim_params_default();
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
-		{ "--preset", SERE_OPTION_TEXT, &o->preset, 0, 0, NULL },
-		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
+		sere_option_preset( &o->preset ),
+		sere_option_out( &o->out ),
+		sere_option_sets( &sets ),
 		{ "--until-dry", SERE_OPTION_FLAG, &o->until_dry, 0, 0, NULL },
 		{ "--frames", SERE_OPTION_COUNT, &o->frames, 1, 100000000, NULL },
 		{ "--every", SERE_OPTION_COUNT, &o->every, 1, 100000000, NULL },
-		{ "--points", SERE_OPTION_COUNT, &o->points, 10, 10000000, NULL },
-		{ "--particles", SERE_OPTION_COUNT, &o->particles, 4, 100000000, NULL },
-		{ "--springs", SERE_OPTION_COUNT, &o->springs, 1, 400000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_points( &o->points ),
+		sere_option_particles( &o->particles ),
+		sere_option_springs( &o->springs ),
+		sere_option_threads( &o->threads ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF",
+								  &o->path, run_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		run_help();
-		return 1;
-	}
-	o->path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	if ( o->path == NULL )
 	{
 		fprintf( stderr, "sere run: missing LEAF (a .leaf file; see sere run --help)\n" );
@@ -305,7 +299,7 @@ static int parse_run_options( int argc, char** argv, run_options* o )
 	{
 		o->every = o->frames / 24 > 0 ? o->frames / 24 : 1;
 	}
-	return 0;
+	return SERE_OPTIONS_GO;
 }
 
 enum
@@ -839,9 +833,9 @@ int sere_cmd_run( int argc, char** argv )
 {
 	run_options o;
 	int parsed = parse_run_options( argc, argv, &o );
-	if ( parsed != 0 )
+	if ( parsed != SERE_OPTIONS_GO )
 	{
-		return parsed == 1 ? 0 : 2;
+		return parsed;
 	}
 	run_state r = { .o = &o, .onset_tip = -1, .onset_base = -1, .gap_max = -INFINITY, .shot_every = 1 };
 	r.watched = ( sere_watch_frame ){ 0, 0.0, 0.0, NAN, 1.0, 0.0, NAN, NAN };

@@ -86,7 +86,7 @@ static void season_help( void )
 		"summary.json.\n" );
 }
 
-/* 0 to run, 1 for --help, 2 for bad input. */
+/* SERE_OPTIONS_GO to run, else the exit code: 0 after --help, 2 for bad input. */
 static int parse_options( int argc, char** argv, options* o )
 {
 	*o = ( options ){ .chain = "seasons/maple.chain",
@@ -112,13 +112,13 @@ static int parse_options( int argc, char** argv, options* o )
 		{ "--keys", SERE_OPTION_TEXT, &o->keys, 0, 0, NULL },
 		{ "--silhouette", SERE_OPTION_TEXT, &o->silhouette, 0, 0, NULL },
 		{ "--mask", SERE_OPTION_TEXT, &o->mask, 0, 0, NULL },
-		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
+		sere_option_out( &o->out ),
 		{ "--days", SERE_OPTION_COUNT, &o->days, 1, MAX_DAYS, NULL },
 		{ "--temperature", SERE_OPTION_REAL, &o->temperature, -90.0, 70.0, NULL },
 		{ "--humidity", SERE_OPTION_REAL, &o->humidity, 0.0, 1.0, NULL },
 		{ "--leaves", SERE_OPTION_COUNT, &o->leaves, 1, 1000000000, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &o->seed, 0, 2147483647, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_threads( &o->threads ),
 		{ "--iterations", SERE_OPTION_COUNT, &o->iterations, 0, 9, NULL },
 		{ "--samples", SERE_OPTION_COUNT, &o->samples, 8, 2000, NULL },
 		{ "--optimize", SERE_OPTION_COUNT, &o->optimize, 0, 10000, NULL },
@@ -126,16 +126,11 @@ static int parse_options( int argc, char** argv, options* o )
 		{ "--size", SERE_OPTION_COUNT, &o->size, 200, 4000, NULL },
 		{ "--no-pictures", SERE_OPTION_FLAG, &no_pictures, 0, 0, NULL },
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "season", argc, argv, table, sizeof( table ) / sizeof( table[0] ), 0, NULL, &parsed ) !=
-		 SERE_OK )
+	int code =
+		sere_options_read( "season", argc, argv, table, sizeof( table ) / sizeof( table[0] ), NULL, NULL, season_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
-	}
-	if ( parsed.help )
-	{
-		season_help();
-		return 1;
+		return code;
 	}
 	o->pictures = !no_pictures;
 	int constant = o->days > 0 || isfinite( o->temperature ) || isfinite( o->humidity );
@@ -163,18 +158,7 @@ static int parse_options( int argc, char** argv, options* o )
 	{
 		o->keys = "seasons/maple.keys";
 	}
-	return 0;
-}
-
-static const char* data_file( const char* path, char* buffer, size_t size )
-{
-	FILE* f = fopen( path, "r" );
-	if ( f != NULL )
-	{
-		fclose( f );
-		return path;
-	}
-	return path[0] != '/' && sere_data_find( path, buffer, size ) == 0 ? buffer : path;
+	return SERE_OPTIONS_GO;
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -495,7 +479,7 @@ typedef struct season_run
 static int read_inputs( const options* o, season_run* r )
 {
 	char path_buffer[4096];
-	if ( season_read_chain( data_file( o->chain, path_buffer, sizeof( path_buffer ) ), &r->chain ) != 0 )
+	if ( season_read_chain( sere_data_resolve( o->chain, path_buffer, sizeof( path_buffer ) ), &r->chain ) != 0 )
 	{
 		return 2;
 	}
@@ -509,7 +493,8 @@ static int read_inputs( const options* o, season_run* r )
 		snprintf( r->plan.label[0], NAME_SIZE, "start" );
 		snprintf( r->plan.label[1], NAME_SIZE, "end" );
 	}
-	else if ( season_read_schedule( data_file( o->schedule, path_buffer, sizeof( path_buffer ) ), &r->plan ) != 0 )
+	else if ( season_read_schedule( sere_data_resolve( o->schedule, path_buffer, sizeof( path_buffer ) ), &r->plan ) !=
+			  0 )
 	{
 		return 2;
 	}
@@ -657,18 +642,39 @@ static int step_days( const options* o, season_run* r )
 	return 0;
 }
 
+/* Opens o->out/name to be written atomically; NULL after printing why. */
+static FILE* open_output( const options* o, const char* name, sere_atomic_file* file )
+{
+	char path[4096];
+	snprintf( path, sizeof( path ), "%s/%s", o->out, name );
+	FILE* f = sere_atomic_open( file, path );
+	if ( f == NULL )
+	{
+		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
+	}
+	return f;
+}
+
+/* Renames a file of open_output into place; 0, or 1 after printing why. */
+static int commit_output( sere_atomic_file* file )
+{
+	if ( sere_atomic_commit( file ) != SERE_OK )
+	{
+		fprintf( stderr, "sere season: cannot write %s\n", file->path );
+		return 1;
+	}
+	return 0;
+}
+
 /* distribution.csv: the weather and both shares of every state, day by day; also the largest
  * gap between them. 0, or 1 after printing why. */
 static int write_distribution_csv( const options* o, season_run* r )
 {
 	const int32_t S = r->chain.state_count;
-	char path[4096];
-	snprintf( path, sizeof( path ), "%s/distribution.csv", o->out );
 	sere_atomic_file csv;
-	FILE* f = sere_atomic_open( &csv, path );
+	FILE* f = open_output( o, "distribution.csv", &csv );
 	if ( f == NULL )
 	{
-		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
 	fprintf( f, "day,temperature,humidity" );
@@ -699,12 +705,7 @@ static int write_distribution_csv( const options* o, season_run* r )
 			r->worst = fmax( r->worst, fabs( r->exact[(size_t) d * S + s] - r->sampled[(size_t) d * S + s] ) );
 		}
 	}
-	if ( sere_atomic_commit( &csv ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot write %s\n", path );
-		return 1;
-	}
-	return 0;
+	return commit_output( &csv );
 }
 
 /* The tree on every labeled day as PLY; 0, or 1 after printing why. */
@@ -801,13 +802,10 @@ static int write_pictures( const options* o, season_run* r )
 static int write_summary( const options* o, const season_run* r )
 {
 	const int32_t S = r->chain.state_count;
-	char path[4096];
-	snprintf( path, sizeof( path ), "%s/summary.json", o->out );
 	sere_atomic_file json;
-	FILE* f = sere_atomic_open( &json, path );
+	FILE* f = open_output( o, "summary.json", &json );
 	if ( f == NULL )
 	{
-		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
 	fprintf( f, "{\n  \"leaves\": %lld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %lld,\n", o->leaves, r->days,
@@ -828,12 +826,7 @@ static int write_summary( const options* o, const season_run* r )
 				 r->exact[(size_t) r->days * S + s], r->sampled[(size_t) r->days * S + s] );
 	}
 	fprintf( f, "\n  }\n}\n" );
-	if ( sere_atomic_commit( &json ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot write %s\n", path );
-		return 1;
-	}
-	return 0;
+	return commit_output( &json );
 }
 
 static void print_report( const options* o, const season_run* r )
@@ -859,9 +852,9 @@ int sere_cmd_season( int argc, char** argv )
 {
 	options o;
 	int parsed = parse_options( argc, argv, &o );
-	if ( parsed != 0 )
+	if ( parsed != SERE_OPTIONS_GO )
 	{
-		return parsed == 1 ? 0 : 2;
+		return parsed;
 	}
 	/* Static: the chain and the schedule hold fixed tables too large for the stack. */
 	static season_run run;

@@ -148,6 +148,18 @@ static void table1_print_tail( int json, const sere_option_list* sets )
 	printf( "\n" );
 }
 
+static void table1_help( void )
+{
+	printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
+			"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
+			"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
+			"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
+			"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
+			"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
+			"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
+			"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
+}
+
 int sere_cmd_table1( int argc, char** argv )
 {
 	long long frames = 20, threads = 0;
@@ -155,27 +167,15 @@ int sere_cmd_table1( int argc, char** argv )
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
-		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+		sere_option_threads( &threads ),
+		sere_option_sets( &sets ),
+		sere_option_json( &json ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "table1", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "table1", argc, argv, options, sizeof( options ) / sizeof( options[0] ), NULL, NULL,
+								  table1_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
-	}
-	if ( parsed.help )
-	{
-		printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
-				"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
-				"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
-				"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
-				"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
-				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
-				"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
-				"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
-		return 0;
+		return code;
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
 	table1_print_head( json, bound, frames );

@@ -435,3 +435,15 @@ sere_status sere_fail( sere_status status, char* err, size_t err_size, const cha
 	}
 	return status;
 }
+
+sere_status sere_fail_at( sere_status status, char* err, size_t err_size, const char* path, int line,
+						  const char* format, va_list args )
+{
+	char message[512];
+	vsnprintf( message, sizeof( message ), format, args );
+	if ( line > 0 )
+	{
+		return sere_fail( status, err, err_size, "%s:%d: %s", path, line, message );
+	}
+	return sere_fail( status, err, err_size, "%s: %s", path, message );
+}

@@ -3,6 +3,7 @@
 
 #include "core/base.h"
 
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -42,6 +43,11 @@ const char* sere_json_escape( char* out, size_t size, const char* text );
  * return of every harness function that reports through (err, err_size). */
 sere_status sere_fail( sere_status status, char* err, size_t err_size, const char* format, ... )
 	__attribute__( ( format( printf, 4, 5 ) ) );
+
+/* sere_fail for a reader: "path:line: message" (line > 0) or "path: message", the message cut at
+ * 511 bytes. */
+sere_status sere_fail_at( sere_status status, char* err, size_t err_size, const char* path, int line,
+						  const char* format, va_list args ) __attribute__( ( format( printf, 6, 0 ) ) );
 
 /* The offset of the first byte of text that does not start a valid UTF-8 character, or -1 when
  * all of it is UTF-8 (cairo draws only UTF-8; names go into titles). */

@@ -304,6 +304,17 @@ sere_status sere_data_find( const char* relative, char* path, size_t path_size )
 	return SERE_ERR_IO;
 }
 
+const char* sere_data_resolve( const char* path, char* buffer, size_t size )
+{
+	FILE* f = fopen( path, "rb" );
+	if ( f != NULL )
+	{
+		fclose( f );
+		return path;
+	}
+	return path[0] != '/' && sere_data_find( path, buffer, size ) == SERE_OK ? buffer : path;
+}
+
 sere_status sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size )
 {
 	char path[4096];

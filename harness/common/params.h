@@ -84,6 +84,10 @@ void sere_params_describe( FILE* f );
  * full path and returns SERE_OK, or SERE_ERR_IO when it does not exist. */
 sere_status sere_data_find( const char* relative, char* path, size_t path_size );
 
+/* A path that opens as given is used as given; else a relative one is looked up like a data file
+ * (sere_data_find) into buffer. Returns the path to open (path itself when neither finds it). */
+const char* sere_data_resolve( const char* path, char* buffer, size_t size );
+
 #ifdef __cplusplus
 }
 #endif

@@ -2,7 +2,7 @@
 #include "render/leafpics.h"
 
 #include "common/io.h"
-
+#include "render/internal/draw.h"
 #include "render/render.h"
 
 #include <math.h>
@@ -113,13 +113,7 @@ static void blend_bar( cairo_t* cr, double x, double y, double w, double h, int 
 	cairo_pattern_t* gradient = cairo_pattern_create_linear( x, 0.0, x + w, 0.0 );
 	cairo_pattern_add_color_stop_rgb( gradient, 0.0, dry[0], dry[1], dry[2] );
 	cairo_pattern_add_color_stop_rgb( gradient, 1.0, fresh[0], fresh[1], fresh[2] );
-	cairo_rectangle( cr, x, y, w, h );
-	cairo_set_source( cr, gradient );
-	cairo_fill_preserve( cr );
-	cairo_pattern_destroy( gradient );
-	cairo_set_source_rgb( cr, 0.35, 0.35, 0.35 );
-	cairo_set_line_width( cr, 1.0 );
-	cairo_stroke( cr );
+	sere_render_gradient_box( cr, gradient, x, y, w, h, 0.35 );
 }
 
 /* The legend line: both faces' color ramps and the shadow, from x at baseline y. */

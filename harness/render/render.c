@@ -254,6 +254,18 @@ static void vertex_color( const sere_render_mesh* mesh, int32_t i, double rgb[3]
 	}
 }
 
+void sere_render_gradient_box( cairo_t* cr, cairo_pattern_t* gradient, double x, double y, double w, double h,
+							   double grey )
+{
+	cairo_rectangle( cr, x, y, w, h );
+	cairo_set_source( cr, gradient );
+	cairo_fill_preserve( cr );
+	cairo_pattern_destroy( gradient );
+	cairo_set_source_rgb( cr, grey, grey, grey );
+	cairo_set_line_width( cr, 1.0 );
+	cairo_stroke( cr );
+}
+
 sere_status sere_render_cairo_failed( cairo_t* cr, char* err, size_t err_size )
 {
 	cairo_status_t status = cairo_status( cr );

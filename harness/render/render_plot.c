@@ -102,13 +102,7 @@ void sere_render_colorbar( cairo_t* cr, double x, double y, double w, double h, 
 		sere_render_colormap( k / 9.0, rgb );
 		cairo_pattern_add_color_stop_rgb( gradient, k / 9.0, rgb[0], rgb[1], rgb[2] );
 	}
-	cairo_rectangle( cr, x, y, w, h );
-	cairo_set_source( cr, gradient );
-	cairo_fill_preserve( cr );
-	cairo_pattern_destroy( gradient );
-	cairo_set_source_rgb( cr, 0.3, 0.3, 0.3 );
-	cairo_set_line_width( cr, 1.0 );
-	cairo_stroke( cr );
+	sere_render_gradient_box( cr, gradient, x, y, w, h, 0.3 );
 	set_font( cr, 12, 0 );
 	if ( hi > lo && isfinite( lo ) && isfinite( hi ) )
 	{
