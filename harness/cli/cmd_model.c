@@ -62,9 +62,8 @@ int sere_cmd_model( int argc, char** argv )
 		fprintf( stderr, "sere model: missing LEAF (a .leaf file or an auxiliary PNG; see sere model --help)\n" );
 		return 2;
 	}
-	if ( ( particles < 0 ) != ( springs < 0 ) )
+	if ( !sere_options_counts_paired( "model", particles, springs ) )
 	{
-		fprintf( stderr, "sere model: --particles and --springs go together\n" );
 		return 2;
 	}
 

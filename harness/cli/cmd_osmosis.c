@@ -137,9 +137,8 @@ int sere_cmd_osmosis( int argc, char** argv )
 		fprintf( stderr, "sere osmosis: missing LEAF (see sere osmosis --help)\n" );
 		return 2;
 	}
-	if ( ( particles < 0 ) != ( springs < 0 ) )
+	if ( !sere_options_counts_paired( "osmosis", particles, springs ) )
 	{
-		fprintf( stderr, "sere osmosis: --particles and --springs go together\n" );
 		return 2;
 	}
 	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )

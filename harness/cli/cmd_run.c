@@ -284,9 +284,8 @@ static int parse_run_options( int argc, char** argv, run_options* o )
 		fprintf( stderr, "sere run: missing LEAF (a .leaf file; see sere run --help)\n" );
 		return 2;
 	}
-	if ( ( o->particles < 0 ) != ( o->springs < 0 ) )
+	if ( !sere_options_counts_paired( "run", o->particles, o->springs ) )
 	{
-		fprintf( stderr, "sere run: --particles and --springs go together\n" );
 		return 2;
 	}
 	char err[1024];

@@ -211,3 +211,13 @@ sere_option sere_option_springs( long long* springs )
 {
 	return ( sere_option ){ "--springs", SERE_OPTION_COUNT, springs, 1, 400000000, NULL };
 }
+
+int sere_options_counts_paired( const char* command, long long particles, long long springs )
+{
+	if ( ( particles < 0 ) != ( springs < 0 ) )
+	{
+		fprintf( stderr, "sere %s: --particles and --springs go together\n", command );
+		return 0;
+	}
+	return 1;
+}

@@ -66,6 +66,10 @@ sere_option sere_option_points( long long* points );	   /* --points N, 10 to 10^
 sere_option sere_option_particles( long long* particles ); /* --particles N, 4 to 10^8 */
 sere_option sere_option_springs( long long* springs );	   /* --springs N, 1 to 4 10^8 */
 
+/* Whether --particles and --springs were given together or not at all (both -1 when not given);
+ * when not, prints "sere COMMAND: --particles and --springs go together" first. */
+int sere_options_counts_paired( const char* command, long long particles, long long springs );
+
 /* What sere_options_read returns when the command goes on; an exit code is 0 or more. */
 #define SERE_OPTIONS_GO ( -1 )
 

@@ -358,25 +358,23 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, char
 
 static sere_status check_options( const sere_season_leaf_options* options, char* err, size_t err_size )
 {
-	if ( options->outline_samples < 8 || options->outline_samples > 20000 )
+	const struct
 	{
-		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "outline samples: %d is outside [8, 20000]",
-						  options->outline_samples );
-	}
-	if ( options->meshopt_iterations < 0 || options->meshopt_iterations > 10000 )
+		const char* what;
+		int value, lo, hi;
+	} ranges[] = {
+		{ "outline samples", options->outline_samples, 8, 20000 },
+		{ "mesh optimization iterations", options->meshopt_iterations, 0, 10000 },
+		{ "deformation levels", options->levels, 1, 64 },
+		{ "steps per level", options->steps_per_level, 0, 1000000 },
+	};
+	for ( size_t k = 0; k < sizeof( ranges ) / sizeof( ranges[0] ); ++k )
 	{
-		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "mesh optimization iterations: %d is outside [0, 10000]",
-						  options->meshopt_iterations );
-	}
-	if ( options->levels < 1 || options->levels > 64 )
-	{
-		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "deformation levels: %d is outside [1, 64]",
-						  options->levels );
-	}
-	if ( options->steps_per_level < 0 || options->steps_per_level > 1000000 )
-	{
-		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "steps per level: %d is outside [0, 1000000]",
-						  options->steps_per_level );
+		if ( ranges[k].value < ranges[k].lo || ranges[k].value > ranges[k].hi )
+		{
+			return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: %d is outside [%d, %d]", ranges[k].what,
+							  ranges[k].value, ranges[k].lo, ranges[k].hi );
+		}
 	}
 	if ( ( options->keys_path == NULL ) == ( options->silhouette_path == NULL ) )
 	{
