@@ -261,17 +261,18 @@ static int parse_run_options( int argc, char** argv, run_options* o )
 	*o = ( run_options ){ .out = "out/run", .frames = 400, .points = 1500, .particles = -1, .springs = -1 };
 	o->params = sere_sim_params_default();
 	sere_option_list sets = { .count = 0 };
+	/* in the order of the usage text */
 	const sere_option options[] = {
 		sere_option_preset( &o->preset ),
-		sere_option_out( &o->out ),
-		sere_option_sets( &sets ),
-		{ "--until-dry", SERE_OPTION_FLAG, &o->until_dry, 0, 0, NULL },
 		{ "--frames", SERE_OPTION_COUNT, &o->frames, 1, 100000000, NULL },
+		{ "--until-dry", SERE_OPTION_FLAG, &o->until_dry, 0, 0, NULL },
+		sere_option_out( &o->out ),
 		{ "--every", SERE_OPTION_COUNT, &o->every, 1, 100000000, NULL },
 		sere_option_points( &o->points ),
 		sere_option_particles( &o->particles ),
 		sere_option_springs( &o->springs ),
 		sere_option_threads( &o->threads ),
+		sere_option_sets( &sets ),
 	};
 	int code = sere_options_read( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF",
 								  &o->path, run_help );
