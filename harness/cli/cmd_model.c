@@ -1,3 +1,4 @@
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -32,7 +33,6 @@ int sere_cmd_model( int argc, char** argv )
 {
 	long long particles = -1, springs = -1, points = 3000, seed = 1;
 	int json = 0;
-	char err[1024];
 	const char* preset = NULL;
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
@@ -52,9 +52,8 @@ int sere_cmd_model( int argc, char** argv )
 		return code;
 	}
 	sere_sim_params params = sere_sim_params_default();
-	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	if ( !command_params_apply( "model", &params, preset, &sets ) )
 	{
-		fprintf( stderr, "sere model: %s\n", err );
 		return 2;
 	}
 	if ( path == NULL )
@@ -71,10 +70,9 @@ int sere_cmd_model( int argc, char** argv )
 	sere_model model;
 	sere_build_report report;
 	char name[128];
-	if ( sere_harness_build( path, particles, springs, points, &params, &model, &report, name, sizeof( name ), err,
-							 sizeof( err ) ) != 0 )
+	if ( !command_model_build( "model", path, particles, springs, points, &params, &model, &report, name,
+							   sizeof( name ) ) )
 	{
-		fprintf( stderr, "sere model: %s\n", err );
 		return 1;
 	}
 	/* The constraint coloring the projection uses (Sec. 5.2): colors and batch sizes. */

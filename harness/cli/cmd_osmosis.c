@@ -1,3 +1,4 @@
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -110,7 +111,6 @@ int sere_cmd_osmosis( int argc, char** argv )
 	const char *preset = NULL, *dump_dir = NULL;
 	long long steps = 10, points = 1500, particles = -1, springs = -1, threads = 0;
 	int conservative = -1;
-	char err[1024];
 	sere_sim_params params = sere_sim_params_default();
 	sere_option_list sets = { .count = 0 };
 	static const char* const modes[] = { "paper", "conservative", NULL };
@@ -141,9 +141,8 @@ int sere_cmd_osmosis( int argc, char** argv )
 	{
 		return 2;
 	}
-	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	if ( !command_params_apply( "osmosis", &params, preset, &sets ) )
 	{
-		fprintf( stderr, "sere osmosis: %s\n", err );
 		return 2;
 	}
 	if ( conservative >= 0 )
@@ -154,10 +153,9 @@ int sere_cmd_osmosis( int argc, char** argv )
 	sere_model model;
 	sere_build_report report;
 	char name[128];
-	if ( sere_harness_build( path, particles, springs, points, &params, &model, &report, name, sizeof( name ), err,
-							 sizeof( err ) ) != 0 )
+	if ( !command_model_build( "osmosis", path, particles, springs, points, &params, &model, &report, name,
+							   sizeof( name ) ) )
 	{
-		fprintf( stderr, "sere osmosis: %s\n", err );
 		return 1;
 	}
 	sere_osmosis *t_layer = NULL, *v_layer = NULL;

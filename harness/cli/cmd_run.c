@@ -1,4 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -289,10 +290,8 @@ static int parse_run_options( int argc, char** argv, run_options* o )
 	{
 		return 2;
 	}
-	char err[1024];
-	if ( sere_params_apply( &o->params, o->preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	if ( !command_params_apply( "run", &o->params, o->preset, &sets ) )
 	{
-		fprintf( stderr, "sere run: %s\n", err );
 		return 2;
 	}
 	if ( o->every == 0 )

@@ -1,3 +1,4 @@
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/machine.h"
@@ -86,19 +87,17 @@ static void table1_print_row( int json, int k, const table1_row* row, const sere
 static int table1_leaf( int k, const sere_option_list* sets, long long frames, int json, int bound )
 {
 	const table1_row* row = rows + k;
-	char err[1024], name[128];
+	char name[128];
 	sere_sim_params params = sere_sim_params_default();
-	if ( sere_params_apply( &params, row->preset, sets->items, sets->count, err, sizeof( err ) ) != SERE_OK )
+	if ( !command_params_apply( "table1", &params, row->preset, sets ) )
 	{
-		fprintf( stderr, "sere table1: %s\n", err );
 		return 1;
 	}
 	sere_model model;
 	sere_build_report report;
-	if ( sere_harness_build( row->path, row->particles, row->springs, 0, &params, &model, &report, name, sizeof( name ),
-							 err, sizeof( err ) ) != SERE_OK )
+	if ( !command_model_build( "table1", row->path, row->particles, row->springs, 0, &params, &model, &report, name,
+							   sizeof( name ) ) )
 	{
-		fprintf( stderr, "sere table1: %s\n", err );
 		return 1;
 	}
 	sere_leaf_sim* sim;
