@@ -14,7 +14,8 @@ int command_params_apply( const char* command, sere_sim_params* params, const ch
 						  const sere_option_list* sets );
 
 /* The model of the leaf at path with the counts of sere_harness_build (particles and springs -1:
- * points); name gets the leaf's name. 1, or 0 after the message. */
+ * points); report (may be NULL) gets the build's report and name the leaf's name. 1, or 0 after
+ * the message. */
 int command_model_build( const char* command, const char* path, long long particles, long long springs,
 						 long long points, const sere_sim_params* params, sere_model* model, sere_build_report* report,
 						 char* name, size_t name_size );

@@ -114,16 +114,17 @@ int sere_cmd_osmosis( int argc, char** argv )
 	sere_sim_params params = sere_sim_params_default();
 	sere_option_list sets = { .count = 0 };
 	static const char* const modes[] = { "paper", "conservative", NULL };
+	/* in the order of the usage text */
 	const sere_option options[] = {
 		sere_option_preset( &preset ),
+		{ "--steps", SERE_OPTION_COUNT, &steps, 1, 100000000, NULL },
+		{ "--mode", SERE_OPTION_CHOICE, &conservative, 0, 0, modes },
+		sere_option_threads( &threads ),
 		{ "--dump", SERE_OPTION_DIR, &dump_dir, 0, 0, NULL },
 		sere_option_sets( &sets ),
-		{ "--mode", SERE_OPTION_CHOICE, &conservative, 0, 0, modes },
-		{ "--steps", SERE_OPTION_COUNT, &steps, 1, 100000000, NULL },
 		sere_option_points( &points ),
 		sere_option_particles( &particles ),
 		sere_option_springs( &springs ),
-		sere_option_threads( &threads ),
 	};
 	const char* path;
 	int code = sere_options_read( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF",
@@ -151,9 +152,8 @@ int sere_cmd_osmosis( int argc, char** argv )
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
 	sere_model model;
-	sere_build_report report;
 	char name[128];
-	if ( !command_model_build( "osmosis", path, particles, springs, points, &params, &model, &report, name,
+	if ( !command_model_build( "osmosis", path, particles, springs, points, &params, &model, NULL, name,
 							   sizeof( name ) ) )
 	{
 		return 1;

@@ -15,7 +15,7 @@ extern "C"
 
 /* particles/springs (both >= 0) ask for exact counts; otherwise points triangle-layer points
  * with B matched to the outline. Returns SERE_OK, or the reader's or the builder's status
- * (SERE_ERR_COUNTS, SERE_ERR_GEOMETRY, ...) with one line in err. */
+ * (SERE_ERR_COUNTS, SERE_ERR_GEOMETRY, ...) with one line in err. report may be NULL. */
 sere_status sere_harness_build( const char* path, long long particles, long long springs, long long points,
 								const sere_sim_params* params, sere_model* model, sere_build_report* report, char* name,
 								size_t name_size, char* err, size_t err_size );

@@ -45,8 +45,6 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 	{
 		goto done;
 	}
-	/* the coverage (ink_max) is no longer needed: it becomes the base dot's mask */
-	double dot_x = 0.0, dot_y = 0.0, dot_radius = 0.0;
 	int veins_found = 0;
 	for ( int32_t i = 0; i < r.n && !veins_found; ++i )
 	{
@@ -58,6 +56,8 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 								 "no veins: draw them as red strokes (R > 200, G < 80, B < 80) over the blade" );
 		goto done;
 	}
+	/* the coverage (ink_max) is no longer needed: it becomes the base dot's mask */
+	double dot_x = 0.0, dot_y = 0.0, dot_radius = 0.0;
 	if ( leafimage_base_dot( &r, &dot_x, &dot_y, &dot_radius ) == 0 )
 	{
 		int elsewhere = 0;
