@@ -144,6 +144,22 @@ static void legend( cairo_t* cr, double x, double y )
 	sere_render_text( cr, x + 32.0, y, 12, 0, 0, "ground, shadow from above" );
 }
 
+/* The rows' names, turned to read upwards, left of the rows that start at y0. */
+static void row_names( cairo_t* cr, double left, double y0, double ph, double pad )
+{
+	const char* names[2] = { "oblique view", "top view" };
+	for ( int r = 0; r < 2; ++r )
+	{
+		double y = y0 + r * ( ph + pad );
+		cairo_save( cr );
+		cairo_translate( cr, left - 12.0, y + 0.5 * ph );
+		cairo_rotate( cr, -0.5 * 3.14159265358979323846 );
+		cairo_set_source_rgb( cr, 0.25, 0.25, 0.25 );
+		sere_render_text( cr, 0.0, 0.0, 13, 1, 1, names[r] );
+		cairo_restore( cr );
+	}
+}
+
 sere_status sere_leafpics_sheet( const char* path, const char* title, int frame_count,
 								 const sere_leafpics_frame* frames, const int32_t* tri, int32_t tri_count,
 								 float ground_z, char* err, size_t err_size )
@@ -230,17 +246,7 @@ sere_status sere_leafpics_sheet( const char* path, const char* title, int frame_
 	cairo_t* cr = canvas.cr;
 	cairo_set_source_rgb( cr, 0.1, 0.1, 0.1 );
 	sere_render_text( cr, 0.5 * canvas_w, 29, 18, 1, 1, title );
-	const char* row_names[2] = { "oblique view", "top view" };
-	for ( int r = 0; r < 2; ++r )
-	{
-		double y = top + header + r * ( ph + pad );
-		cairo_save( cr );
-		cairo_translate( cr, left - 12.0, y + 0.5 * ph );
-		cairo_rotate( cr, -0.5 * 3.14159265358979323846 );
-		cairo_set_source_rgb( cr, 0.25, 0.25, 0.25 );
-		sere_render_text( cr, 0.0, 0.0, 13, 1, 1, row_names[r] );
-		cairo_restore( cr );
-	}
+	row_names( cr, left, top + header, ph, pad );
 	for ( int k = 0; k < frame_count; ++k )
 	{
 		double x = left + k * ( pw + pad );
