@@ -204,6 +204,16 @@ $(SERE): $(MAIN_OBJ) $(HARNESS_OBJ) $(LIB_A)
 $(TESTS): $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A)
 	$(CC) -fopenmp $(LDSAN) -o $@ $(TEST_OBJ) $(HARNESS_OBJ) $(LIB_A) -lcriterion -lassimp $(LIBS_HARNESS)
 
+# leafgen writes the shipped leaves (data/tools/leafgen.c): `build/leafgen data/leaves`.
+LEAFGEN_SRC := $(filter data/tools/leafgen%.c,$(TOOL_SRC))
+LEAFGEN_OBJ := $(LEAFGEN_SRC:%.c=$(BUILD)/obj/%.o)
+$(BUILD)/obj/data/tools/%.o: data/tools/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -c $< -o $@
+
+$(BUILD)/leafgen: $(LEAFGEN_OBJ) $(BUILD)/obj/harness/read/leaffile.o $(BUILD)/obj/harness/common/io.o $(LIB_A)
+	$(CC) -fopenmp $(LDSAN) -o $@ $^ -lm
+
 $(BENCHX): $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A)
 	$(CXX) -fopenmp $(LDSAN) -o $@ $(BENCH_OBJ) $(HARNESS_OBJ) $(LIB_A) -lbenchmark -lpthread -lembree3 $(HYPRE_LIBS) $(LIBS_HARNESS)
 
@@ -308,7 +318,7 @@ format-check:
 clean:
 	rm -rf build
 
--include $(KERNEL_OBJ:.o=.d) $(HARNESS_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(BENCH_OBJ:.o=.d) $(MAIN_OBJ:.o=.d)
+-include $(KERNEL_OBJ:.o=.d) $(HARNESS_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(BENCH_OBJ:.o=.d) $(MAIN_OBJ:.o=.d) $(LEAFGEN_OBJ:.o=.d)
 
 # ---- fuzz: libFuzzer targets for the readers (fuzz/README.md) ------------------------------------
 # `make fuzz FUZZ_SECONDS=N` builds, with clang, one libFuzzer target per reader in build/fuzz

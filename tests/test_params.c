@@ -211,26 +211,29 @@ Test( params, ranges_refuse_with_the_key_and_range )
 		char assignment[128], err[256] = "";
 		double outside = row->hi + ( fabs( row->hi ) + 1.0 );
 		snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, outside );
-		cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), -1, "%s accepted", assignment );
+		cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
+					  assignment );
 		cr_expect( strstr( err, row->name ) != NULL && strstr( err, "out of range" ) != NULL, "%s: '%s'", assignment,
 				   err );
 		if ( isfinite( row->lo ) )
 		{
 			snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, row->lo - ( fabs( row->lo ) + 1.0 ) );
-			cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), -1, "%s accepted", assignment );
+			cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
+						  assignment );
 		}
 		if ( row->type != SERE_PARAM_DOUBLE && row->type != SERE_PARAM_FLOAT )
 		{
 			snprintf( assignment, sizeof( assignment ), "%s=%g", row->name, row->lo + 0.5 );
-			cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), -1, "%s accepted", assignment );
+			cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
+						  assignment );
 			cr_expect( strstr( err, "whole number" ) != NULL, "%s: '%s'", assignment, err );
 		}
 	}
 	char err[256];
 	sere_sim_params p = sere_sim_params_default();
-	cr_expect_eq( sere_params_set( &p, "no_such_key=1", err, sizeof( err ) ), -1 );
+	cr_expect_eq( sere_params_set( &p, "no_such_key=1", err, sizeof( err ) ), SERE_ERR_ARGUMENT );
 	cr_expect( strstr( err, "no_such_key" ) != NULL, "%s", err );
-	cr_expect_eq( sere_params_set( &p, "dt=fast", err, sizeof( err ) ), -1 );
+	cr_expect_eq( sere_params_set( &p, "dt=fast", err, sizeof( err ) ), SERE_ERR_PARSE );
 	cr_expect( strstr( err, "not a number" ) != NULL, "%s", err );
 }
 

@@ -378,7 +378,7 @@ Test( render, plot_has_requested_size_and_ink )
 
 	sere_render_series empty = { .name = "nothing", .x = x, .y = a, .count = 0 };
 	scratch_path( &s, "empty.png", path, sizeof( path ) );
-	cr_assert_eq( sere_render_plot( path, 320, 200, &axes, &empty, 1, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_plot( path, 320, 200, &axes, &empty, 1, err, sizeof( err ) ), SERE_ERR_ARGUMENT );
 	cr_assert_neq( err[0], '\0' );
 	cr_assert_eq( access( path, F_OK ), -1, "a failed plot must not leave a file" );
 	scratch_remove( &s );
@@ -390,7 +390,7 @@ Test( render, unwritable_path_fails_with_a_message )
 	double x[2] = { 0, 1 }, y[2] = { 0, 1 };
 	sere_render_series series = { .name = "line", .x = x, .y = y, .count = 2 };
 	const char* path = "/nonexistent-sere-dir/plot.png";
-	cr_assert_eq( sere_render_plot( path, 200, 150, NULL, &series, 1, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_plot( path, 200, 150, NULL, &series, 1, err, sizeof( err ) ), SERE_ERR_IO );
 	cr_assert_not_null( strstr( err, path ), "message '%s' does not name the file", err );
 	cr_assert_eq( access( "/nonexistent-sere-dir/plot.png.tmp", F_OK ), -1 );
 }
@@ -405,24 +405,28 @@ Test( render, bad_meshes_are_refused )
 	mesh.triangles = wrong;
 	mesh.triangle_count = 1;
 	sere_render_view view = { .elevation = 90.0 };
-	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &view, NULL, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &view, NULL, err, sizeof( err ) ),
+				  SERE_ERR_ARGUMENT );
 	cr_assert_not_null( strstr( err, "vertex 4" ), "%s", err );
 	const float z[4] = { 0, NAN, 0, 0 };
 	mesh = square_mesh( z, 1, 1, 1 );
 	err[0] = '\0';
-	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &view, NULL, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &view, NULL, err, sizeof( err ) ),
+				  SERE_ERR_NONFINITE );
 	cr_assert_not_null( strstr( err, "non-finite" ), "%s", err );
 	const int32_t far[2] = { 0, 9 };
 	sere_render_lines lines = { .pairs = far, .count = 1, .width = 1.0 };
 	sere_render_style style = { .lines = &lines, .line_set_count = 1 };
 	mesh = square_mesh( NULL, 1, 1, 1 );
-	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &view, &style, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &view, &style, err, sizeof( err ) ),
+				  SERE_ERR_ARGUMENT );
 	sere_render_view lost = { .azimuth = NAN, .elevation = 90.0 };
-	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &lost, NULL, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_mesh_draw( canvas.cr, 0, 0, 20, 20, &mesh, &lost, NULL, err, sizeof( err ) ),
+				  SERE_ERR_NONFINITE );
 	cr_assert_eq( cairo_status( canvas.cr ), CAIRO_STATUS_SUCCESS, "a refused draw must leave the context usable" );
 	sere_render_canvas_destroy( &canvas );
 	sere_render_canvas empty;
-	cr_assert_eq( sere_render_canvas_create( &empty, 0, 10, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_canvas_create( &empty, 0, 10, err, sizeof( err ) ), SERE_ERR_ARGUMENT );
 	cr_assert_null( empty.cr );
 }
 
@@ -433,8 +437,8 @@ typedef struct sheet_log
 	int fail_at;
 } sheet_log;
 
-static int sheet_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
-						size_t caption_size, char* err, size_t err_size )
+static sere_status sheet_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
+								char* caption, size_t caption_size, char* err, size_t err_size )
 {
 	sheet_log* log = user;
 	log->order_ok &= index == log->calls;
@@ -442,7 +446,7 @@ static int sheet_panel( void* user, int index, cairo_t* cr, double x, double y, 
 	if ( index == log->fail_at )
 	{
 		snprintf( err, err_size, "panel %d failed", index );
-		return -1;
+		return SERE_ERR_ARGUMENT;
 	}
 	sere_render_mesh mesh = square_mesh( NULL, 0.30f, 0.55f, 0.18f );
 	sere_render_view view = { .azimuth = 0.0, .elevation = 90.0, .margin = 6.0 };
@@ -476,7 +480,7 @@ Test( render, contact_sheet_draws_every_panel_in_order )
 
 	scratch_path( &s, "broken.png", path, sizeof( path ) );
 	log = ( sheet_log ){ 0, 1, 1 };
-	cr_assert_eq( sere_render_contact_sheet( path, &sheet, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_contact_sheet( path, &sheet, err, sizeof( err ) ), SERE_ERR_ARGUMENT );
 	cr_assert_str_eq( err, "panel 1 failed" );
 	cr_assert_eq( access( path, F_OK ), -1 );
 	cr_assert_eq( scratch_tmp_count( &s ), 0 );
@@ -520,7 +524,7 @@ Test( render, plane_picture_shows_veins_in_red )
 	cairo_surface_destroy( p.surface );
 	const float bad[4] = { 0.0f, INFINITY, 0.0f, 0.0f };
 	plane.scalar = bad;
-	cr_assert_eq( sere_render_plane_png( path, 300, 240, &plane, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_render_plane_png( path, 300, 240, &plane, err, sizeof( err ) ), SERE_ERR_NONFINITE );
 	scratch_remove( &s );
 }
 
@@ -820,12 +824,13 @@ Test( render, leafpics_errors_name_the_file )
 	const char* bad = "/nonexistent-sere-dir/leaf.png";
 	cr_assert_eq(
 		sere_leafpics_sheet( bad, NULL, 3, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
-		-1 );
+		SERE_ERR_IO );
 	cr_assert_not_null( strstr( err, bad ), "%s", err );
 	cr_assert_null( strchr( err, '\n' ) );
 	err[0] = '\0';
 	cr_assert_eq(
-		sere_leafpics_view( bad, NULL, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, 0, err, sizeof( err ) ), -1 );
+		sere_leafpics_view( bad, NULL, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, 0, err, sizeof( err ) ),
+		SERE_ERR_IO );
 	cr_assert_not_null( strstr( err, bad ), "%s", err );
 
 	scratch s;
@@ -834,17 +839,18 @@ Test( render, leafpics_errors_name_the_file )
 	scratch_path( &s, "broken.png", path, sizeof( path ) );
 	int32_t wrong[3] = { 0, 1, DISK_VERTICES };
 	err[0] = '\0';
-	cr_assert_eq( sere_leafpics_sheet( path, NULL, 3, frames, wrong, 1, -INFINITY, err, sizeof( err ) ), -1 );
+	cr_assert_eq( sere_leafpics_sheet( path, NULL, 3, frames, wrong, 1, -INFINITY, err, sizeof( err ) ),
+				  SERE_ERR_ARGUMENT );
 	cr_assert_eq( strncmp( err, path, strlen( path ) ), 0, "%s", err );
 	cr_assert_eq( access( path, F_OK ), -1 );
 	d[1].z[5] = NAN;
 	cr_assert_eq(
 		sere_leafpics_sheet( path, NULL, 3, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
-		-1 );
+		SERE_ERR_NONFINITE );
 	cr_assert_not_null( strstr( err, "frame 400" ), "%s", err );
 	cr_assert_eq(
 		sere_leafpics_sheet( path, NULL, 0, frames, disk_triangles, DISK_TRIANGLES, -INFINITY, err, sizeof( err ) ),
-		-1 );
+		SERE_ERR_ARGUMENT );
 	cr_assert_eq( scratch_tmp_count( &s ), 0 );
 	scratch_remove( &s );
 }

@@ -450,7 +450,7 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	char leaves_dir[4200];
 	snprintf( leaves_dir, sizeof( leaves_dir ), "%s/leaves", o->out );
 	const char* const names[] = { name };
-	if ( sere_check_outputs( leaves_dir, names, 1, err, sizeof( err ) ) != 0 )
+	if ( sere_outputs_check( leaves_dir, names, 1, err, sizeof( err ) ) != 0 )
 	{
 		return leaf_fail( r, err );
 	}
@@ -465,7 +465,7 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	params.seed = d.sample_seed;
 	char relative[64];
 	snprintf( relative, sizeof( relative ), "leaves/%s.leaf", species_names[d.species] );
-	if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )
+	if ( sere_data_find( relative, path, sizeof( path ) ) != 0 )
 	{
 		snprintf( err, sizeof( err ), "cannot find %s (in SERE_DATA, ./data or the install prefix)", relative );
 		return leaf_fail( r, err );
@@ -780,7 +780,7 @@ static int write_scene_files( const litter_options* o, const litter_result* resu
 		/* glTF has no empty mesh; and no scene of an earlier run is left beside this one */
 		remove( path );
 	}
-	else if ( sere_write_glb( path, &glb, err, sizeof( err ) ) != 0 )
+	else if ( sere_glb_write( path, &glb, err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere litter: %s\n", err );
 		status = 1;
@@ -817,23 +817,18 @@ int sere_cmd_litter( int argc, char** argv )
 	const sere_option options[] = {
 		{ "--leaves", SERE_OPTION_COUNT, &leaves, 1, 99999, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &seed, 0, (double) LONG_MAX, NULL },
-		{ "--out", SERE_OPTION_DIR, &o.out, 0, 0, NULL },
-		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
+		sere_option_out( &o.out ),
+		sere_option_points( &points ),
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 100000000, NULL },
 		{ "--preset", SERE_OPTION_CHOICE, &o.species, 0, 0, preset_names },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_threads( &threads ),
 		{ "--progress", SERE_OPTION_COUNT, &progress_every, 0, 86400, NULL },
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "litter", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "litter", argc, argv, options, sizeof( options ) / sizeof( options[0] ), NULL, NULL,
+								  litter_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
-	}
-	if ( parsed.help )
-	{
-		litter_help();
-		return 0;
+		return code;
 	}
 	o.leaves = (long) leaves, o.seed = (long) seed, o.points = (long) points, o.progress = (long) progress_every;
 	o.frames_given = frames > 0;
@@ -845,13 +840,13 @@ int sere_cmd_litter( int argc, char** argv )
 	}
 	char path[4200], err[1024];
 	snprintf( path, sizeof( path ), "%s/leaves", o.out );
-	if ( sere_mkdirs( path ) != 0 )
+	if ( sere_dir_create( path ) != 0 )
 	{
 		fprintf( stderr, "sere litter: cannot create %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
 	static const char* const outputs[] = { "litter.ply", "litter.glb", "litter.png", "summary.json" };
-	if ( sere_check_outputs( o.out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
+	if ( sere_outputs_check( o.out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere litter: %s\n", err );
 		return 1;

@@ -1,3 +1,4 @@
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -32,34 +33,27 @@ int sere_cmd_model( int argc, char** argv )
 {
 	long long particles = -1, springs = -1, points = 3000, seed = 1;
 	int json = 0;
-	char err[1024];
 	const char* preset = NULL;
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
-		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
-		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
+		sere_option_particles( &particles ),
+		sere_option_springs( &springs ),
 		{ "--points", SERE_OPTION_COUNT, &points, 3, 30000000, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &seed, 0, 4294967295.0, NULL },
-		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
-		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+		sere_option_preset( &preset ),
+		sere_option_sets( &sets ),
+		sere_option_json( &json ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "model", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
-							 &parsed ) != SERE_OK )
+	const char* path;
+	int code = sere_options_read( "model", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF", &path,
+								  model_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		model_help();
-		return 0;
-	}
-	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	sere_sim_params params = sere_sim_params_default();
-	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	if ( !command_params_apply( "model", &params, preset, &sets ) )
 	{
-		fprintf( stderr, "sere model: %s\n", err );
 		return 2;
 	}
 	if ( path == NULL )
@@ -67,9 +61,8 @@ int sere_cmd_model( int argc, char** argv )
 		fprintf( stderr, "sere model: missing LEAF (a .leaf file or an auxiliary PNG; see sere model --help)\n" );
 		return 2;
 	}
-	if ( ( particles < 0 ) != ( springs < 0 ) )
+	if ( !sere_options_counts_paired( "model", particles, springs ) )
 	{
-		fprintf( stderr, "sere model: --particles and --springs go together\n" );
 		return 2;
 	}
 
@@ -77,10 +70,9 @@ int sere_cmd_model( int argc, char** argv )
 	sere_model model;
 	sere_build_report report;
 	char name[128];
-	if ( sere_harness_build( path, particles, springs, points, &params, &model, &report, name, sizeof( name ), err,
-							 sizeof( err ) ) != 0 )
+	if ( !command_model_build( "model", path, particles, springs, points, &params, &model, &report, name,
+							   sizeof( name ) ) )
 	{
-		fprintf( stderr, "sere model: %s\n", err );
 		return 1;
 	}
 	/* The constraint coloring the projection uses (Sec. 5.2): colors and batch sizes. */

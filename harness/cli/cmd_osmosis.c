@@ -1,3 +1,4 @@
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -42,7 +43,7 @@ static int write_mtx_vector( const char* path, const double* v, int32_t n )
 
 static int dump( const char* dir, const sere_osmosis* o, const sere_model* model )
 {
-	if ( sere_mkdirs( dir ) != 0 )
+	if ( sere_dir_create( dir ) != 0 )
 	{
 		return -1;
 	}
@@ -110,46 +111,39 @@ int sere_cmd_osmosis( int argc, char** argv )
 	const char *preset = NULL, *dump_dir = NULL;
 	long long steps = 10, points = 1500, particles = -1, springs = -1, threads = 0;
 	int conservative = -1;
-	char err[1024];
 	sere_sim_params params = sere_sim_params_default();
 	sere_option_list sets = { .count = 0 };
 	static const char* const modes[] = { "paper", "conservative", NULL };
+	/* in the order of the usage text */
 	const sere_option options[] = {
-		{ "--preset", SERE_OPTION_TEXT, &preset, 0, 0, NULL },
-		{ "--dump", SERE_OPTION_DIR, &dump_dir, 0, 0, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
-		{ "--mode", SERE_OPTION_CHOICE, &conservative, 0, 0, modes },
+		sere_option_preset( &preset ),
 		{ "--steps", SERE_OPTION_COUNT, &steps, 1, 100000000, NULL },
-		{ "--points", SERE_OPTION_COUNT, &points, 10, 10000000, NULL },
-		{ "--particles", SERE_OPTION_COUNT, &particles, 4, 100000000, NULL },
-		{ "--springs", SERE_OPTION_COUNT, &springs, 1, 400000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
+		{ "--mode", SERE_OPTION_CHOICE, &conservative, 0, 0, modes },
+		sere_option_threads( &threads ),
+		{ "--dump", SERE_OPTION_DIR, &dump_dir, 0, 0, NULL },
+		sere_option_sets( &sets ),
+		sere_option_points( &points ),
+		sere_option_particles( &particles ),
+		sere_option_springs( &springs ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
-							 &parsed ) != SERE_OK )
+	const char* path;
+	int code = sere_options_read( "osmosis", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF",
+								  &path, osmosis_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		osmosis_help();
-		return 0;
-	}
-	const char* path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	if ( path == NULL )
 	{
 		fprintf( stderr, "sere osmosis: missing LEAF (see sere osmosis --help)\n" );
 		return 2;
 	}
-	if ( ( particles < 0 ) != ( springs < 0 ) )
+	if ( !sere_options_counts_paired( "osmosis", particles, springs ) )
 	{
-		fprintf( stderr, "sere osmosis: --particles and --springs go together\n" );
 		return 2;
 	}
-	if ( sere_params_apply( &params, preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	if ( !command_params_apply( "osmosis", &params, preset, &sets ) )
 	{
-		fprintf( stderr, "sere osmosis: %s\n", err );
 		return 2;
 	}
 	if ( conservative >= 0 )
@@ -158,12 +152,10 @@ int sere_cmd_osmosis( int argc, char** argv )
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
 	sere_model model;
-	sere_build_report report;
 	char name[128];
-	if ( sere_harness_build( path, particles, springs, points, &params, &model, &report, name, sizeof( name ), err,
-							 sizeof( err ) ) != 0 )
+	if ( !command_model_build( "osmosis", path, particles, springs, points, &params, &model, NULL, name,
+							   sizeof( name ) ) )
 	{
-		fprintf( stderr, "sere osmosis: %s\n", err );
 		return 1;
 	}
 	sere_osmosis *t_layer = NULL, *v_layer = NULL;
@@ -174,11 +166,8 @@ int sere_cmd_osmosis( int argc, char** argv )
 		status = sere_osmosis_create( model.triangle_particles, model.triangle_count, model.s.a + model.t_springs,
 									  model.s.b + model.t_springs, model.v_springs, &v_layer );
 	}
-	if ( status == SERE_OK )
-	{
-		sere_osmosis_set_threads( t_layer, bound );
-		sere_osmosis_set_threads( v_layer, bound );
-	}
+	status = status == SERE_OK ? sere_osmosis_set_threads( t_layer, bound ) : status;
+	status = status == SERE_OK ? sere_osmosis_set_threads( v_layer, bound ) : status;
 	/* The leaf's osmosis settings at the leaf's time step, solved to the stand-alone solver's own
 	 * tolerance (the leaf loosens its CG stop, kernels/drying/leaf.c), at dt as written */
 	sere_osmosis_params op = params.leaf.osmosis;

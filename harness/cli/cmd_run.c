@@ -1,4 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/io.h"
@@ -108,11 +109,12 @@ static int write_frame( const char* out, int frame, double time, const sere_mode
 	};
 	char path[4096];
 	snprintf( path, sizeof( path ), "%s/frames/frame_%05d.ply", out, frame );
-	int failed = sere_write_ply( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
+	sere_status failed =
+		sere_ply_write( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, NULL, properties, 4 );
 	if ( !failed )
 	{
 		snprintf( path, sizeof( path ), "%s/frames/frame_%05d.vtp", out, frame );
-		failed = sere_write_vtp( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 4 );
+		failed = sere_vtp_write( path, p->x, p->y, p->z, n, model->tri, model->triangle_count, properties, 4 );
 		if ( failed )
 		{
 			/* no half frame: the PLY goes too, which on a full disk leaves room for the summary */
@@ -153,8 +155,8 @@ typedef struct sheet_context
 	sere_render_view view;
 } sheet_context;
 
-static int draw_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
-					   size_t caption_size, char* err, size_t err_size )
+static sere_status draw_panel( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
+							   char* caption, size_t caption_size, char* err, size_t err_size )
 {
 	sheet_context* c = user;
 	const snapshot* s = c->shots + index;
@@ -254,57 +256,49 @@ typedef struct run_options
 	sere_sim_params params;
 } run_options;
 
-/* 0 to run, 1 after --help, 2 for bad input (the message is out). */
+/* SERE_OPTIONS_GO to run, else the exit code: 0 after --help, 2 for bad input (the message is out). */
 static int parse_run_options( int argc, char** argv, run_options* o )
 {
 	*o = ( run_options ){ .out = "out/run", .frames = 400, .points = 1500, .particles = -1, .springs = -1 };
 	o->params = sere_sim_params_default();
 	sere_option_list sets = { .count = 0 };
+	/* in the order of the usage text */
 	const sere_option options[] = {
-		{ "--preset", SERE_OPTION_TEXT, &o->preset, 0, 0, NULL },
-		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
-		{ "--until-dry", SERE_OPTION_FLAG, &o->until_dry, 0, 0, NULL },
+		sere_option_preset( &o->preset ),
 		{ "--frames", SERE_OPTION_COUNT, &o->frames, 1, 100000000, NULL },
+		{ "--until-dry", SERE_OPTION_FLAG, &o->until_dry, 0, 0, NULL },
+		sere_option_out( &o->out ),
 		{ "--every", SERE_OPTION_COUNT, &o->every, 1, 100000000, NULL },
-		{ "--points", SERE_OPTION_COUNT, &o->points, 10, 10000000, NULL },
-		{ "--particles", SERE_OPTION_COUNT, &o->particles, 4, 100000000, NULL },
-		{ "--springs", SERE_OPTION_COUNT, &o->springs, 1, 400000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_points( &o->points ),
+		sere_option_particles( &o->particles ),
+		sere_option_springs( &o->springs ),
+		sere_option_threads( &o->threads ),
+		sere_option_sets( &sets ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "LEAF",
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "run", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "LEAF",
+								  &o->path, run_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		run_help();
-		return 1;
-	}
-	o->path = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	if ( o->path == NULL )
 	{
 		fprintf( stderr, "sere run: missing LEAF (a .leaf file; see sere run --help)\n" );
 		return 2;
 	}
-	if ( ( o->particles < 0 ) != ( o->springs < 0 ) )
+	if ( !sere_options_counts_paired( "run", o->particles, o->springs ) )
 	{
-		fprintf( stderr, "sere run: --particles and --springs go together\n" );
 		return 2;
 	}
-	char err[1024];
-	if ( sere_params_apply( &o->params, o->preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+	if ( !command_params_apply( "run", &o->params, o->preset, &sets ) )
 	{
-		fprintf( stderr, "sere run: %s\n", err );
 		return 2;
 	}
 	if ( o->every == 0 )
 	{
 		o->every = o->frames / 24 > 0 ? o->frames / 24 : 1;
 	}
-	return 0;
+	return SERE_OPTIONS_GO;
 }
 
 enum
@@ -382,14 +376,14 @@ static int run_open_leaf( run_state* r )
 	r->have_model = 1;
 	char frames_dir[4096];
 	snprintf( frames_dir, sizeof( frames_dir ), "%s/frames", o->out );
-	if ( sere_mkdirs( frames_dir ) != 0 )
+	if ( sere_dir_create( frames_dir ) != 0 )
 	{
 		fprintf( stderr, "sere run: cannot create %s: %s\n", frames_dir, strerror( errno ) );
 		return 1;
 	}
 	static const char* const outputs[] = { "stats.csv",	 "summary.json", "leaf.pvd",  "drying.png",
 										   "curves.png", "drying3d.png", "leaf3d.png" };
-	if ( sere_check_outputs( o->out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
+	if ( sere_outputs_check( o->out, outputs, sizeof( outputs ) / sizeof( outputs[0] ), err, sizeof( err ) ) != 0 )
 	{
 		fprintf( stderr, "sere run: %s\n", err );
 		return 1;
@@ -840,9 +834,9 @@ int sere_cmd_run( int argc, char** argv )
 {
 	run_options o;
 	int parsed = parse_run_options( argc, argv, &o );
-	if ( parsed != 0 )
+	if ( parsed != SERE_OPTIONS_GO )
 	{
-		return parsed == 1 ? 0 : 2;
+		return parsed;
 	}
 	run_state r = { .o = &o, .onset_tip = -1, .onset_base = -1, .gap_max = -INFINITY, .shot_every = 1 };
 	r.watched = ( sere_watch_frame ){ 0, 0.0, 0.0, NAN, 1.0, 0.0, NAN, NAN };

@@ -86,7 +86,7 @@ static void season_help( void )
 		"summary.json.\n" );
 }
 
-/* 0 to run, 1 for --help, 2 for bad input. */
+/* SERE_OPTIONS_GO to run, else the exit code: 0 after --help, 2 for bad input. */
 static int parse_options( int argc, char** argv, options* o )
 {
 	*o = ( options ){ .chain = "seasons/maple.chain",
@@ -112,13 +112,13 @@ static int parse_options( int argc, char** argv, options* o )
 		{ "--keys", SERE_OPTION_TEXT, &o->keys, 0, 0, NULL },
 		{ "--silhouette", SERE_OPTION_TEXT, &o->silhouette, 0, 0, NULL },
 		{ "--mask", SERE_OPTION_TEXT, &o->mask, 0, 0, NULL },
-		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
+		sere_option_out( &o->out ),
 		{ "--days", SERE_OPTION_COUNT, &o->days, 1, MAX_DAYS, NULL },
 		{ "--temperature", SERE_OPTION_REAL, &o->temperature, -90.0, 70.0, NULL },
 		{ "--humidity", SERE_OPTION_REAL, &o->humidity, 0.0, 1.0, NULL },
 		{ "--leaves", SERE_OPTION_COUNT, &o->leaves, 1, 1000000000, NULL },
 		{ "--seed", SERE_OPTION_COUNT, &o->seed, 0, 2147483647, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
+		sere_option_threads( &o->threads ),
 		{ "--iterations", SERE_OPTION_COUNT, &o->iterations, 0, 9, NULL },
 		{ "--samples", SERE_OPTION_COUNT, &o->samples, 8, 2000, NULL },
 		{ "--optimize", SERE_OPTION_COUNT, &o->optimize, 0, 10000, NULL },
@@ -126,16 +126,11 @@ static int parse_options( int argc, char** argv, options* o )
 		{ "--size", SERE_OPTION_COUNT, &o->size, 200, 4000, NULL },
 		{ "--no-pictures", SERE_OPTION_FLAG, &no_pictures, 0, 0, NULL },
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "season", argc, argv, table, sizeof( table ) / sizeof( table[0] ), 0, NULL, &parsed ) !=
-		 SERE_OK )
+	int code =
+		sere_options_read( "season", argc, argv, table, sizeof( table ) / sizeof( table[0] ), NULL, NULL, season_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
-	}
-	if ( parsed.help )
-	{
-		season_help();
-		return 1;
+		return code;
 	}
 	o->pictures = !no_pictures;
 	int constant = o->days > 0 || isfinite( o->temperature ) || isfinite( o->humidity );
@@ -163,18 +158,7 @@ static int parse_options( int argc, char** argv, options* o )
 	{
 		o->keys = "seasons/maple.keys";
 	}
-	return 0;
-}
-
-static const char* data_file( const char* path, char* buffer, size_t size )
-{
-	FILE* f = fopen( path, "r" );
-	if ( f != NULL )
-	{
-		fclose( f );
-		return path;
-	}
-	return path[0] != '/' && sere_data_path( path, buffer, size ) == 0 ? buffer : path;
+	return SERE_OPTIONS_GO;
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -208,8 +192,8 @@ static double unit_random( uint64_t seed, uint64_t i )
 	return (double) ( hash64( seed ^ hash64( i ) ) >> 11 ) / 9007199254740992.0;
 }
 
-static int build_scene( const sere_tree* tree, const sere_season_leaf* leaf, const chain_file* c, const uint8_t* states,
-						double crown, uint64_t seed, scene* s )
+static sere_status build_scene( const sere_tree* tree, const sere_season_leaf* leaf, const chain_file* c,
+								const uint8_t* states, double crown, uint64_t seed, scene* s )
 {
 	const int32_t nv = leaf->vertex_count, nt = leaf->triangle_count;
 	const int64_t vertices = (int64_t) tree->segment_count * 2 * BRANCH_SIDES + (int64_t) tree->leaf_count * nv;
@@ -217,7 +201,7 @@ static int build_scene( const sere_tree* tree, const sere_season_leaf* leaf, con
 	if ( vertices > INT32_MAX / 4 || triangles > INT32_MAX / 4 )
 	{
 		fprintf( stderr, "sere season: the tree is too large to draw (%lld vertices)\n", (long long) vertices );
-		return -1;
+		return SERE_ERR_CAPACITY;
 	}
 	s->x = malloc( sizeof( float ) * (size_t) vertices );
 	s->y = malloc( sizeof( float ) * (size_t) vertices );
@@ -229,7 +213,7 @@ static int build_scene( const sere_tree* tree, const sere_season_leaf* leaf, con
 	{
 		scene_free( s );
 		fprintf( stderr, "sere season: out of memory for the tree's mesh\n" );
-		return -1;
+		return SERE_ERR_MEMORY;
 	}
 	int32_t v = 0, t = 0;
 	for ( int32_t k = 0; k < tree->segment_count; ++k )
@@ -327,16 +311,17 @@ typedef struct season_pictures
 	sere_render_view view; /* fitted once on the first season, shared by all */
 } season_pictures;
 
-static int draw_season( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
-						size_t caption_size, char* err, size_t err_size )
+static sere_status draw_season( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
+								char* caption, size_t caption_size, char* err, size_t err_size )
 {
 	season_pictures* p = user;
 	scene s = { 0 };
-	if ( build_scene( p->tree, p->leaf, p->chain, p->snapshots + (size_t) index * (size_t) p->tree->leaf_count,
-					  p->crown, p->seed, &s ) != 0 )
+	sere_status status =
+		build_scene( p->tree, p->leaf, p->chain, p->snapshots + (size_t) index * (size_t) p->tree->leaf_count, p->crown,
+					 p->seed, &s );
+	if ( status != SERE_OK )
 	{
-		snprintf( err, err_size, "cannot build the tree's mesh" );
-		return -1;
+		return sere_fail( status, err, err_size, "cannot build the tree's mesh" );
 	}
 	cairo_save( cr );
 	cairo_rectangle( cr, x, y, w, h );
@@ -346,22 +331,24 @@ static int draw_season( void* user, int index, cairo_t* cr, double x, double y, 
 	sere_render_mesh mesh = {
 		s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, NULL, s.rgb, { 0.5f, 0.5f, 0.5f }
 	};
-	int rc = sere_render_mesh_draw( cr, x, y, w, h, &mesh, &p->view, NULL, err, err_size );
+	status = sere_render_mesh_draw( cr, x, y, w, h, &mesh, &p->view, NULL, err, err_size );
 	scene_free( &s );
 	snprintf( caption, caption_size, "day %d: %s", p->label_day[index], p->label[index] );
-	return rc;
+	return status;
 }
 
-static int write_season_png( season_pictures* p, int index, const char* path, int size, char* err, size_t err_size )
+static sere_status write_season_png( season_pictures* p, int index, const char* path, int size, char* err,
+									 size_t err_size )
 {
 	sere_render_canvas canvas;
-	if ( sere_render_canvas_create( &canvas, size, size, err, err_size ) != 0 )
+	sere_status rc = sere_render_canvas_create( &canvas, size, size, err, err_size );
+	if ( rc != SERE_OK )
 	{
-		return -1;
+		return rc;
 	}
 	char caption[128];
-	int rc = draw_season( p, index, canvas.cr, 0, 0, size, size, caption, sizeof( caption ), err, err_size );
-	if ( rc == 0 )
+	rc = draw_season( p, index, canvas.cr, 0, 0, size, size, caption, sizeof( caption ), err, err_size );
+	if ( rc == SERE_OK )
 	{
 		sere_render_text( canvas.cr, 16, 32, 20, 1, 0, caption );
 		rc = sere_render_canvas_write_png( &canvas, path, err, err_size );
@@ -376,16 +363,15 @@ typedef struct level_pictures
 	sere_render_view view;
 } level_pictures;
 
-static int draw_level( void* user, int index, cairo_t* cr, double x, double y, double w, double h, char* caption,
-					   size_t caption_size, char* err, size_t err_size )
+static sere_status draw_level( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
+							   char* caption, size_t caption_size, char* err, size_t err_size )
 {
 	level_pictures* p = user;
 	const int32_t n = p->leaf->vertex_count;
 	float* xyz = malloc( sizeof( float ) * 3 * (size_t) n );
 	if ( xyz == NULL )
 	{
-		snprintf( err, err_size, "out of memory" );
-		return -1;
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "out of memory" );
 	}
 	const float* src = p->leaf->xyz + 3 * (size_t) n * (size_t) index;
 	for ( int32_t i = 0; i < n; ++i )
@@ -397,8 +383,7 @@ static int draw_level( void* user, int index, cairo_t* cr, double x, double y, d
 	if ( mass_rgb == NULL )
 	{
 		free( xyz );
-		snprintf( err, err_size, "out of memory" );
-		return -1;
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "out of memory" );
 	}
 	float lo = p->leaf->mass[0], hi = p->leaf->mass[0];
 	for ( int32_t i = 1; i < n; ++i )
@@ -409,15 +394,15 @@ static int draw_level( void* user, int index, cairo_t* cr, double x, double y, d
 	sere_render_mesh mesh = { xyz,	xyz + n, xyz + 2 * (size_t) n, n, p->leaf->tri, p->leaf->triangle_count, mass_rgb,
 							  NULL, { 0 } };
 	sere_render_style style = { 1, 0, 0.0, NULL, 0 };
-	int rc = sere_render_mesh_draw( cr, x, y, w, h, &mesh, &p->view, &style, err, err_size );
+	sere_status rc = sere_render_mesh_draw( cr, x, y, w, h, &mesh, &p->view, &style, err, err_size );
 	snprintf( caption, caption_size, "deformation level %d", index );
 	free( xyz );
 	free( mass_rgb );
 	return rc;
 }
 
-static int write_distribution_png( const char* path, const chain_file* c, const double* exact, const double* sampled,
-								   int32_t days, char* err, size_t err_size )
+static sere_status write_distribution_png( const char* path, const chain_file* c, const double* exact,
+										   const double* sampled, int32_t days, char* err, size_t err_size )
 {
 	const int32_t S = c->state_count, n = days + 1;
 	double* x = malloc( sizeof( double ) * (size_t) n );
@@ -427,8 +412,7 @@ static int write_distribution_png( const char* path, const chain_file* c, const 
 	if ( x == NULL || series == NULL || names == NULL || columns == NULL )
 	{
 		free( x ), free( series ), free( names ), free( columns );
-		snprintf( err, err_size, "out of memory" );
-		return -1;
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "out of memory" );
 	}
 	for ( int32_t d = 0; d < n; ++d )
 	{
@@ -459,7 +443,7 @@ static int write_distribution_png( const char* path, const chain_file* c, const 
 	sere_render_axes axes = {
 		"Leaf states: exact distribution (dashed) and the sampled population", "day", "share of leaves", 1, 0.0, 1.0
 	};
-	int rc = sere_render_plot( path, 1100, 620, &axes, series, 2 * S, err, err_size );
+	sere_status rc = sere_render_plot( path, 1100, 620, &axes, series, 2 * S, err, err_size );
 	free( x ), free( series ), free( names ), free( columns );
 	return rc;
 }
@@ -495,7 +479,7 @@ typedef struct season_run
 static int read_inputs( const options* o, season_run* r )
 {
 	char path_buffer[4096];
-	if ( season_read_chain( data_file( o->chain, path_buffer, sizeof( path_buffer ) ), &r->chain ) != 0 )
+	if ( season_read_chain( sere_data_resolve( o->chain, path_buffer, sizeof( path_buffer ) ), &r->chain ) != 0 )
 	{
 		return 2;
 	}
@@ -509,7 +493,8 @@ static int read_inputs( const options* o, season_run* r )
 		snprintf( r->plan.label[0], NAME_SIZE, "start" );
 		snprintf( r->plan.label[1], NAME_SIZE, "end" );
 	}
-	else if ( season_read_schedule( data_file( o->schedule, path_buffer, sizeof( path_buffer ) ), &r->plan ) != 0 )
+	else if ( season_read_schedule( sere_data_resolve( o->schedule, path_buffer, sizeof( path_buffer ) ), &r->plan ) !=
+			  0 )
 	{
 		return 2;
 	}
@@ -559,7 +544,7 @@ static int grow_leaf_and_tree( const options* o, season_run* r )
 		fprintf( stderr, "sere season: --leaves %lld is fewer than the tree's %d leaves\n", o->leaves,
 				 r->tree.leaf_count );
 	}
-	else if ( sere_mkdirs( o->out ) != 0 )
+	else if ( sere_dir_create( o->out ) != 0 )
 	{
 		fprintf( stderr, "sere season: cannot create %s: %s\n", o->out, strerror( errno ) );
 	}
@@ -659,18 +644,39 @@ static int step_days( const options* o, season_run* r )
 	return 0;
 }
 
+/* Opens o->out/name to be written atomically; NULL after printing why. */
+static FILE* open_output( const options* o, const char* name, sere_atomic_file* file )
+{
+	char path[4096];
+	snprintf( path, sizeof( path ), "%s/%s", o->out, name );
+	FILE* f = sere_atomic_open( file, path );
+	if ( f == NULL )
+	{
+		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
+	}
+	return f;
+}
+
+/* Renames a file of open_output into place; 0, or 1 after printing why. */
+static int commit_output( sere_atomic_file* file )
+{
+	if ( sere_atomic_commit( file ) != SERE_OK )
+	{
+		fprintf( stderr, "sere season: cannot write %s\n", file->path );
+		return 1;
+	}
+	return 0;
+}
+
 /* distribution.csv: the weather and both shares of every state, day by day; also the largest
  * gap between them. 0, or 1 after printing why. */
 static int write_distribution_csv( const options* o, season_run* r )
 {
 	const int32_t S = r->chain.state_count;
-	char path[4096];
-	snprintf( path, sizeof( path ), "%s/distribution.csv", o->out );
 	sere_atomic_file csv;
-	FILE* f = sere_atomic_open( &csv, path );
+	FILE* f = open_output( o, "distribution.csv", &csv );
 	if ( f == NULL )
 	{
-		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
 	fprintf( f, "day,temperature,humidity" );
@@ -701,12 +707,7 @@ static int write_distribution_csv( const options* o, season_run* r )
 			r->worst = fmax( r->worst, fabs( r->exact[(size_t) d * S + s] - r->sampled[(size_t) d * S + s] ) );
 		}
 	}
-	if ( sere_atomic_commit( &csv ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot write %s\n", path );
-		return 1;
-	}
-	return 0;
+	return commit_output( &csv );
 }
 
 /* The tree on every labeled day as PLY; 0, or 1 after printing why. */
@@ -727,11 +728,11 @@ static int write_trees( const options* o, season_run* r )
 		char path[4096];
 		sere_vertex_property property = { "state", s.state };
 		snprintf( path, sizeof( path ), "%s/tree_%.31s.ply", o->out, r->label[k] );
-		int written =
-			sere_write_ply( path, s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, s.rgb, &property, 1 );
+		sere_status written =
+			sere_ply_write( path, s.x, s.y, s.z, s.vertex_count, s.tri, s.triangle_count, s.rgb, &property, 1 );
 		r->tree_vertices = s.vertex_count, r->tree_triangles = s.triangle_count;
 		scene_free( &s );
-		if ( written != 0 )
+		if ( written != SERE_OK )
 		{
 			fprintf( stderr, "sere season: cannot write %s\n", path );
 			return 1;
@@ -803,13 +804,10 @@ static int write_pictures( const options* o, season_run* r )
 static int write_summary( const options* o, const season_run* r )
 {
 	const int32_t S = r->chain.state_count;
-	char path[4096];
-	snprintf( path, sizeof( path ), "%s/summary.json", o->out );
 	sere_atomic_file json;
-	FILE* f = sere_atomic_open( &json, path );
+	FILE* f = open_output( o, "summary.json", &json );
 	if ( f == NULL )
 	{
-		fprintf( stderr, "sere season: cannot write %s: %s\n", path, strerror( errno ) );
 		return 1;
 	}
 	fprintf( f, "{\n  \"leaves\": %lld,\n  \"days\": %d,\n  \"threads\": %d,\n  \"seed\": %lld,\n", o->leaves, r->days,
@@ -830,12 +828,7 @@ static int write_summary( const options* o, const season_run* r )
 				 r->exact[(size_t) r->days * S + s], r->sampled[(size_t) r->days * S + s] );
 	}
 	fprintf( f, "\n  }\n}\n" );
-	if ( sere_atomic_commit( &json ) != 0 )
-	{
-		fprintf( stderr, "sere season: cannot write %s\n", path );
-		return 1;
-	}
-	return 0;
+	return commit_output( &json );
 }
 
 static void print_report( const options* o, const season_run* r )
@@ -861,9 +854,9 @@ int sere_cmd_season( int argc, char** argv )
 {
 	options o;
 	int parsed = parse_options( argc, argv, &o );
-	if ( parsed != 0 )
+	if ( parsed != SERE_OPTIONS_GO )
 	{
-		return parsed == 1 ? 0 : 2;
+		return parsed;
 	}
 	/* Static: the chain and the schedule hold fixed tables too large for the stack. */
 	static season_run run;

@@ -4,6 +4,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli/cmd_season_shared.h"
 
+#include "common/io.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -15,19 +17,12 @@ static int fail_line( const char* path, int line, const char* format, ... ) __at
 
 static int fail_line( const char* path, int line, const char* format, ... )
 {
-	char what[512];
+	char what[4096 + 600];
 	va_list args;
 	va_start( args, format );
-	vsnprintf( what, sizeof( what ), format, args );
+	sere_fail_at( SERE_ERR_PARSE, what, sizeof( what ), path, line, format, args );
 	va_end( args );
-	if ( line > 0 )
-	{
-		fprintf( stderr, "sere season: %s:%d: %s\n", path, line, what );
-	}
-	else
-	{
-		fprintf( stderr, "sere season: %s: %s\n", path, what );
-	}
+	fprintf( stderr, "sere season: %s\n", what );
 	return -1;
 }
 

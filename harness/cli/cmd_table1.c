@@ -1,3 +1,4 @@
+#include "cli/cmd_leaf.h"
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "common/machine.h"
@@ -25,6 +26,140 @@ static const table1_row rows[3] = {
 	{ "wisteria", "data/leaves/wisteria.leaf", "wisteria", 12750, 50436, 16.26, 1499.41, 23.16, 1538.83 },
 };
 
+/* The heading: the machine facts (JSON) or the column titles with the run's machine line. */
+static void table1_print_head( int json, int bound, long long frames )
+{
+	if ( json )
+	{
+		printf( "{\n" );
+		sere_machine_json( stdout, "  ", bound );
+		printf( ",\n  \"leaves\": [" );
+		return;
+	}
+	printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames)\n", bound,
+			frames );
+	sere_machine machine;
+	char binding[1024];
+	sere_machine_read( &machine, bound );
+	sere_machine_binding_text( &machine, binding, sizeof( binding ) );
+	printf( "ours: %s, %s, threads %s%s, sere %s (commit %s), %s\n\n", machine.cpu, machine.simd,
+			machine.bound ? "on cores " : "", binding, machine.version, machine.commit, machine.compiler );
+	printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %s\n", "leaf", "particles", "springs", "osmotic flow",
+			"dynamics", "collisions", "total", "ratio", "PBD cap hits" );
+}
+
+/* One leaf's mean ms per frame over the run, and how often PBD hit its cap or stalled. */
+typedef struct table1_times
+{
+	double osmosis, dynamics, collisions, total;
+	long long cap_hits, stalls;
+} table1_times;
+
+static void table1_print_row( int json, int k, const table1_row* row, const sere_model* model,
+							  const sere_sim_params* params, const table1_times* t, long long frames, int bound )
+{
+	if ( json )
+	{
+		printf( "%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
+				"\"collisions_ms\": %.4f, \"total_ms\": %.4f, \"paper_osmosis_ms\": %.2f, \"paper_dynamics_ms\": %.2f, "
+				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
+				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, \"frames\": "
+				"%lld, "
+				"\"threads\": %d}",
+				k ? ", " : "", row->leaf, model->p.count, model->s.count, t->osmosis, t->dynamics, t->collisions,
+				t->total, row->osmosis, row->dynamics, row->collisions, row->total, params->leaf.pbd.tolerance,
+				params->leaf.pbd.max_iterations, t->cap_hits, params->leaf.pbd.stall, t->stalls,
+				params->leaf.pbd.compliance, frames, bound );
+		return;
+	}
+	printf( "%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld",
+			row->leaf, model->p.count, model->s.count, t->osmosis, row->osmosis, t->dynamics, row->dynamics,
+			t->collisions, row->collisions, t->total, row->total, row->total / t->total, t->cap_hits, frames );
+	if ( params->leaf.pbd.stall > 0.0f )
+	{
+		printf( ", stalled %lld/%lld", t->stalls, frames );
+	}
+	printf( "\n" );
+}
+
+/* Builds row k's leaf at its Table 1 counts, dries it for `frames` and prints its row; 1 on an
+ * error (already reported). */
+static int table1_leaf( int k, const sere_option_list* sets, long long frames, int json, int bound )
+{
+	const table1_row* row = rows + k;
+	char name[128];
+	sere_sim_params params = sere_sim_params_default();
+	if ( !command_params_apply( "table1", &params, row->preset, sets ) )
+	{
+		return 1;
+	}
+	sere_model model;
+	sere_build_report report;
+	if ( !command_model_build( "table1", row->path, row->particles, row->springs, 0, &params, &model, &report, name,
+							   sizeof( name ) ) )
+	{
+		return 1;
+	}
+	sere_leaf_sim* sim;
+	sere_status status = sere_leaf_create( &model, &sim );
+	status = status == SERE_OK ? sere_leaf_set_threads( sim, bound ) : status;
+	table1_times t = { 0 };
+	sere_leaf_stats stats;
+	for ( long long f = 0; f < frames && status == SERE_OK; ++f )
+	{
+		status = sere_leaf_step( sim, &params.leaf, &stats );
+		t.osmosis += stats.osmosis_ms, t.dynamics += stats.dynamics_ms;
+		t.collisions += stats.collisions_ms, t.total += stats.total_ms;
+		t.cap_hits += stats.pbd_hit_cap;
+		t.stalls += stats.pbd_stalled;
+	}
+	if ( status != SERE_OK )
+	{
+		fprintf( stderr, "sere table1: %s: %s\n", row->leaf, sere_status_text( status ) );
+		return 1;
+	}
+	t.osmosis /= frames, t.dynamics /= frames, t.collisions /= frames, t.total /= frames;
+	table1_print_row( json, k, row, &model, &params, &t, frames, bound );
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
+	return 0;
+}
+
+/* The closing bracket (JSON) or the note on how a frame's projection stops. */
+static void table1_print_tail( int json, const sere_option_list* sets )
+{
+	if ( json )
+	{
+		printf( "]\n}\n" );
+		return;
+	}
+	printf( "\neach cell: ours / paper. A frame's projection stops when its residual is below the preset's\n"
+			"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
+			"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
+			"paper's Table 1)." );
+	if ( sets->count > 0 )
+	{
+		printf( " Overrides:" );
+		for ( int k = 0; k < sets->count; ++k )
+		{
+			printf( " %s", sets->items[k] );
+		}
+	}
+	printf( "\n" );
+}
+
+static void table1_help( void )
+{
+	printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
+			"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
+			"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
+			"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
+			"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
+			"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
+			"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
+			"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
+}
+
 int sere_cmd_table1( int argc, char** argv )
 {
 	long long frames = 20, threads = 0;
@@ -32,134 +167,25 @@ int sere_cmd_table1( int argc, char** argv )
 	sere_option_list sets = { .count = 0 };
 	const sere_option options[] = {
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &threads, 0, SERE_MAX_THREADS, NULL },
-		{ "--set", SERE_OPTION_LIST, &sets, 0, 0, NULL },
-		{ "--json", SERE_OPTION_FLAG, &json, 0, 0, NULL },
+		sere_option_threads( &threads ),
+		sere_option_sets( &sets ),
+		sere_option_json( &json ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "table1", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 0, NULL,
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "table1", argc, argv, options, sizeof( options ) / sizeof( options[0] ), NULL, NULL,
+								  table1_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
-	}
-	if ( parsed.help )
-	{
-		printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
-				"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
-				"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
-				"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
-				"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
-				"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
-				"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
-				"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
-		return 0;
+		return code;
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
-	if ( json )
-	{
-		printf( "{\n" );
-		sere_machine_json( stdout, "  ", bound );
-		printf( ",\n  \"leaves\": [" );
-	}
-	else
-	{
-		printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames)\n",
-				bound, frames );
-		sere_machine machine;
-		char binding[1024];
-		sere_machine_read( &machine, bound );
-		sere_machine_binding_text( &machine, binding, sizeof( binding ) );
-		printf( "ours: %s, %s, threads %s%s, sere %s (commit %s), %s\n\n", machine.cpu, machine.simd,
-				machine.bound ? "on cores " : "", binding, machine.version, machine.commit, machine.compiler );
-		printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %s\n", "leaf", "particles", "springs",
-				"osmotic flow", "dynamics", "collisions", "total", "ratio", "PBD cap hits" );
-	}
+	table1_print_head( json, bound, frames );
 	for ( int k = 0; k < 3; ++k )
 	{
-		const table1_row* row = rows + k;
-		char err[1024], name[128];
-		sere_sim_params params = sere_sim_params_default();
-		if ( sere_params_apply( &params, row->preset, sets.items, sets.count, err, sizeof( err ) ) != 0 )
+		if ( table1_leaf( k, &sets, frames, json, bound ) != 0 )
 		{
-			fprintf( stderr, "sere table1: %s\n", err );
 			return 1;
 		}
-		sere_model model;
-		sere_build_report report;
-		if ( sere_harness_build( row->path, row->particles, row->springs, 0, &params, &model, &report, name,
-								 sizeof( name ), err, sizeof( err ) ) != 0 )
-		{
-			fprintf( stderr, "sere table1: %s\n", err );
-			return 1;
-		}
-		sere_leaf_sim* sim;
-		sere_status status = sere_leaf_create( &model, &sim );
-		status = status == SERE_OK ? sere_leaf_set_threads( sim, bound ) : status;
-		double osmosis = 0, dynamics = 0, collisions = 0, total = 0;
-		long long cap_hits = 0, stalls = 0;
-		sere_leaf_stats stats;
-		for ( long long f = 0; f < frames && status == SERE_OK; ++f )
-		{
-			status = sere_leaf_step( sim, &params.leaf, &stats );
-			osmosis += stats.osmosis_ms, dynamics += stats.dynamics_ms;
-			collisions += stats.collisions_ms, total += stats.total_ms;
-			cap_hits += stats.pbd_hit_cap;
-			stalls += stats.pbd_stalled;
-		}
-		if ( status != SERE_OK )
-		{
-			fprintf( stderr, "sere table1: %s: %s\n", row->leaf, sere_status_text( status ) );
-			return 1;
-		}
-		osmosis /= frames, dynamics /= frames, collisions /= frames, total /= frames;
-		if ( json )
-		{
-			printf(
-				"%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
-				"\"collisions_ms\": %.4f, \"total_ms\": %.4f, \"paper_osmosis_ms\": %.2f, \"paper_dynamics_ms\": %.2f, "
-				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
-				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, \"frames\": "
-				"%lld, "
-				"\"threads\": %d}",
-				k ? ", " : "", row->leaf, model.p.count, model.s.count, osmosis, dynamics, collisions, total,
-				row->osmosis, row->dynamics, row->collisions, row->total, params.leaf.pbd.tolerance,
-				params.leaf.pbd.max_iterations, cap_hits, params.leaf.pbd.stall, stalls, params.leaf.pbd.compliance,
-				frames, bound );
-		}
-		else
-		{
-			printf(
-				"%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld",
-				row->leaf, model.p.count, model.s.count, osmosis, row->osmosis, dynamics, row->dynamics, collisions,
-				row->collisions, total, row->total, row->total / total, cap_hits, frames );
-			if ( params.leaf.pbd.stall > 0.0f )
-			{
-				printf( ", stalled %lld/%lld", stalls, frames );
-			}
-			printf( "\n" );
-		}
-		sere_leaf_destroy( sim );
-		sere_model_destroy( &model );
 	}
-	if ( json )
-	{
-		printf( "]\n}\n" );
-	}
-	else
-	{
-		printf( "\neach cell: ours / paper. A frame's projection stops when its residual is below the preset's\n"
-				"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
-				"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
-				"paper's Table 1)." );
-		if ( sets.count > 0 )
-		{
-			printf( " Overrides:" );
-			for ( int k = 0; k < sets.count; ++k )
-			{
-				printf( " %s", sets.items[k] );
-			}
-		}
-		printf( "\n" );
-	}
+	table1_print_tail( json, &sets );
 	return 0;
 }

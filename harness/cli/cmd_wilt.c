@@ -173,10 +173,9 @@ static void wilt_defaults( wilt_options* o )
 	o->view[1] = 25.0;
 }
 
-/* 0 parsed (or help printed: *done = 1), 2 on a bad option. */
-static int parse_options( int argc, char** argv, wilt_options* o, int* done )
+/* SERE_OPTIONS_GO to run, else the exit code: 0 after --help, 2 on a bad option. */
+static int parse_options( int argc, char** argv, wilt_options* o )
 {
-	*done = 0;
 	wilt_defaults( o );
 	/* options stored as given, then turned into the kernels' units below (NAN, -1: not given) */
 	long long mid_segments = -1, veins = -1, vein_segments = -1;
@@ -206,27 +205,20 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		{ "--elevation", SERE_OPTION_REAL, &o->elevation, -80.0, 80.0, NULL },
 		{ "--frames", SERE_OPTION_COUNT, &o->frames, 1, 1000000, NULL },
 		{ "--speed", SERE_OPTION_REAL, &o->speed, 0.0, 100.0, NULL },
-		{ "--out", SERE_OPTION_DIR, &o->out, 0, 0, NULL },
+		sere_option_out( &o->out ),
 		{ "--format", SERE_OPTION_TEXT, &format, 0, 0, NULL },
 		{ "--every", SERE_OPTION_COUNT, &o->every, 1, 1000000, NULL },
 		{ "--size", SERE_OPTION_TEXT, &size, 0, 0, NULL },
 		{ "--view", SERE_OPTION_TEXT, &view, 0, 0, NULL },
-		{ "--threads", SERE_OPTION_COUNT, &o->threads, 0, SERE_MAX_THREADS, NULL },
-		{ "--json", SERE_OPTION_FLAG, &o->json, 0, 0, NULL },
+		sere_option_threads( &o->threads ),
+		sere_option_json( &o->json ),
 	};
-	sere_options_result parsed;
-	if ( sere_options_parse( "wilt", argc, argv, options, sizeof( options ) / sizeof( options[0] ), 1, "SKELETON",
-							 &parsed ) != SERE_OK )
+	int code = sere_options_read( "wilt", argc, argv, options, sizeof( options ) / sizeof( options[0] ), "SKELETON",
+								  &o->skeleton, wilt_help );
+	if ( code != SERE_OPTIONS_GO )
 	{
-		return 2;
+		return code;
 	}
-	if ( parsed.help )
-	{
-		wilt_help();
-		*done = 1;
-		return 0;
-	}
-	o->skeleton = parsed.positional_count > 0 ? parsed.positional[0] : NULL;
 	o->wilt.pierce = no_pierce ? 0 : o->wilt.pierce;
 	o->venation.mid_segments = mid_segments > 0 ? (int32_t) mid_segments : o->venation.mid_segments;
 	o->venation.secondary_count = veins >= 0 ? (int32_t) veins : o->venation.secondary_count;
@@ -248,7 +240,7 @@ static int parse_options( int argc, char** argv, wilt_options* o, int* done )
 		fprintf( stderr, "sere wilt: --view elevation must lie within +-89 degrees, not '%s'\n", view );
 		return 2;
 	}
-	return 0;
+	return SERE_OPTIONS_GO;
 }
 
 typedef struct wilt_run
@@ -306,7 +298,7 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 	if ( o->ply )
 	{
 		snprintf( path, sizeof( path ), "%s/frame_%04lld.ply", o->out, (long long) frame );
-		if ( sere_write_ply( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, NULL, props, 4 ) != 0 )
+		if ( sere_ply_write( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, NULL, props, 4 ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -317,7 +309,7 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 		char name[64];
 		snprintf( name, sizeof( name ), "frame_%04lld.vtp", (long long) frame );
 		snprintf( path, sizeof( path ), "%s/%s", o->out, name );
-		if ( sere_write_vtp( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, props, 4 ) != 0 )
+		if ( sere_vtp_write( path, p->x, p->y, p->z, p->vertex_count, p->tri, p->triangle_count, props, 4 ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -330,7 +322,7 @@ static int write_frame( const wilt_options* o, wilt_run* r, int64_t frame, doubl
 		}
 		r->times[r->written++] = time;
 		snprintf( path, sizeof( path ), "%s/wilt.pvd", o->out );
-		if ( sere_write_pvd( path, (const char* const*) r->names, r->times, r->written ) != 0 )
+		if ( sere_pvd_write( path, (const char* const*) r->names, r->times, r->written ) != 0 )
 		{
 			fprintf( stderr, "sere wilt: cannot write %s: %s\n", path, strerror( errno ) );
 			return -1;
@@ -629,13 +621,12 @@ static void print_summary( const wilt_options* o, const wilt_run* r, const wilt_
 int sere_cmd_wilt( int argc, char** argv )
 {
 	wilt_options o;
-	int done;
-	int code = parse_options( argc, argv, &o, &done );
-	if ( code != 0 || done )
+	int code = parse_options( argc, argv, &o );
+	if ( code != SERE_OPTIONS_GO )
 	{
 		return code;
 	}
-	if ( o.out != NULL && sere_mkdirs( o.out ) != 0 )
+	if ( o.out != NULL && sere_dir_create( o.out ) != 0 )
 	{
 		fprintf( stderr, "sere wilt: cannot create output directory '%s': %s\n", o.out, strerror( errno ) );
 		return 1;

@@ -19,8 +19,8 @@ static void leaf_color( double t, float rgb[3] )
 	rgb[2] = (float) ( 0.16 + 0.02 * w );
 }
 
-int wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int width, int height,
-					  const sere_plant* plant, char* err, size_t err_size )
+sere_status wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int width, int height,
+							  const sere_plant* plant, char* err, size_t err_size )
 {
 	int32_t n = plant->vertex_count;
 	pic->width = width;
@@ -30,7 +30,7 @@ int wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int w
 	if ( pic->rgb == NULL || room == NULL )
 	{
 		free( room );
-		return sere_fail( err, err_size, "sere wilt: out of memory for the pictures" );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "sere wilt: out of memory for the pictures" );
 	}
 	/* Each leaf vertex at rest and mirrored below its leaf's base, a little deeper than the
 	 * mirror image: the lowest a drooping leaf can reach. */
@@ -51,7 +51,7 @@ int wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int w
 	/* render's azimuth 0 looks along +y from the -y side; wilt's 0 looks from +x. */
 	pic->view = ( sere_render_view ){ .azimuth = azimuth + 90.0, .elevation = elevation, .margin = 0.05 * width };
 	sere_render_mesh points = { .x = x, .y = y, .z = z, .vertex_count = 2 * plant->vertex_first[plant->leaf_count] };
-	int result = sere_render_fit_view( &points, width, height - BAR_ROOM, &pic->view, err, err_size );
+	sere_status result = sere_render_fit_view( &points, width, height - BAR_ROOM, &pic->view, err, err_size );
 	free( room );
 	return result;
 }
@@ -114,8 +114,8 @@ static void draw_progress( cairo_t* cr, const sere_plant* plant, double progress
 	}
 }
 
-int wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* plant, const float* stem_top,
-					  double progress, char* err, size_t err_size )
+sere_status wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* plant, const float* stem_top,
+							  double progress, char* err, size_t err_size )
 {
 	for ( int32_t k = 0; k < plant->leaf_count; ++k )
 	{
@@ -127,9 +127,10 @@ int wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* pla
 		}
 	}
 	sere_render_canvas canvas;
-	if ( sere_render_canvas_create( &canvas, pic->width, pic->height, err, err_size ) != 0 )
+	sere_status result = sere_render_canvas_create( &canvas, pic->width, pic->height, err, err_size );
+	if ( result != SERE_OK )
 	{
-		return -1;
+		return result;
 	}
 	cairo_t* cr = canvas.cr;
 	cairo_pattern_t* sky = cairo_pattern_create_linear( 0, 0, 0, pic->height );
@@ -147,17 +148,16 @@ int wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* pla
 								.rgb = pic->rgb };
 	/* A leaf is a thin sheet: both faces lit alike, a third of the light ambient. */
 	sere_render_style style = { .ambient = 0.3 };
-	int result = draw_stem( cr, pic, plant, stem_top );
-	if ( result != 0 )
+	if ( draw_stem( cr, pic, plant, stem_top ) != 0 )
 	{
-		sere_fail( err, err_size, "sere wilt: out of memory for the picture" );
+		result = sere_fail( SERE_ERR_MEMORY, err, err_size, "sere wilt: out of memory for the picture" );
 	}
 	else
 	{
 		result = sere_render_mesh_draw( cr, 0.0, BAR_ROOM, pic->width, pic->height - BAR_ROOM, &leaves, &pic->view,
 										&style, err, err_size );
 	}
-	if ( result == 0 )
+	if ( result == SERE_OK )
 	{
 		draw_progress( cr, plant, progress );
 		result = sere_render_canvas_write_png( &canvas, path, err, err_size );

@@ -53,12 +53,13 @@ void wilt_skeleton_where( const skeleton_file* s, const sere_skeleton_check* che
 
 /* Fits the view (azimuth and elevation in degrees: the eye's direction from +x toward +y, and
  * above the ground) to the rest plant and to its mirror image below each leaf's base, the room
- * that drooping leaves reach. 0, or -1 with one line in err. */
-int wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int width, int height,
-					  const sere_plant* plant, char* err, size_t err_size );
+ * that drooping leaves reach. SERE_OK, or a status with one line in err. */
+sere_status wilt_picture_fit( wilt_picture* pic, double azimuth, double elevation, int width, int height,
+							  const sere_plant* plant, char* err, size_t err_size );
 void wilt_picture_free( wilt_picture* pic );
 
 /* The plant as a PNG at path, written atomically through harness/render: sky, stem and
- * petioles, the leaves (far to near) and a progress bar. 0, or -1 with one line in err. */
-int wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* plant, const float* stem_top,
-					  double progress, char* err, size_t err_size );
+ * petioles, the leaves (far to near) and a progress bar. SERE_OK, or a status with one line in
+ * err. */
+sere_status wilt_picture_png( const char* path, wilt_picture* pic, const sere_plant* plant, const float* stem_top,
+							  double progress, char* err, size_t err_size );

@@ -62,7 +62,7 @@ static int skeleton_locate( const char* name, char* path, size_t size )
 	}
 	char relative[512];
 	snprintf( relative, sizeof( relative ), "skeletons/%s.skel", name );
-	return sere_data_path( relative, path, size );
+	return sere_data_find( relative, path, size );
 }
 
 /* A 'vein PARENT SEGMENTS BEND_DEGREES' line: opens the vein's block. */

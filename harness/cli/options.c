@@ -150,3 +150,74 @@ sere_status sere_options_parse( const char* command, int argc, char** argv, cons
 	}
 	return SERE_OK;
 }
+
+int sere_options_read( const char* command, int argc, char** argv, const sere_option* options, int option_count,
+					   const char* positional_name, const char** positional, void ( *help )( void ) )
+{
+	sere_options_result result;
+	if ( sere_options_parse( command, argc, argv, options, option_count, positional_name != NULL ? 1 : 0,
+							 positional_name, &result ) != SERE_OK )
+	{
+		return 2;
+	}
+	if ( result.help )
+	{
+		help();
+		return 0;
+	}
+	if ( positional != NULL )
+	{
+		*positional = result.positional_count > 0 ? result.positional[0] : NULL;
+	}
+	return SERE_OPTIONS_GO;
+}
+
+sere_option sere_option_threads( long long* threads )
+{
+	return ( sere_option ){ "--threads", SERE_OPTION_COUNT, threads, 0, SERE_MAX_THREADS, NULL };
+}
+
+sere_option sere_option_out( const char** dir )
+{
+	return ( sere_option ){ "--out", SERE_OPTION_DIR, dir, 0, 0, NULL };
+}
+
+sere_option sere_option_preset( const char** name )
+{
+	return ( sere_option ){ "--preset", SERE_OPTION_TEXT, name, 0, 0, NULL };
+}
+
+sere_option sere_option_sets( sere_option_list* sets )
+{
+	return ( sere_option ){ "--set", SERE_OPTION_LIST, sets, 0, 0, NULL };
+}
+
+sere_option sere_option_json( int* json )
+{
+	return ( sere_option ){ "--json", SERE_OPTION_FLAG, json, 0, 0, NULL };
+}
+
+sere_option sere_option_points( long long* points )
+{
+	return ( sere_option ){ "--points", SERE_OPTION_COUNT, points, 10, 10000000, NULL };
+}
+
+sere_option sere_option_particles( long long* particles )
+{
+	return ( sere_option ){ "--particles", SERE_OPTION_COUNT, particles, 4, 100000000, NULL };
+}
+
+sere_option sere_option_springs( long long* springs )
+{
+	return ( sere_option ){ "--springs", SERE_OPTION_COUNT, springs, 1, 400000000, NULL };
+}
+
+int sere_options_counts_paired( const char* command, long long particles, long long springs )
+{
+	if ( ( particles < 0 ) != ( springs < 0 ) )
+	{
+		fprintf( stderr, "sere %s: --particles and --springs go together\n", command );
+		return 0;
+	}
+	return 1;
+}

@@ -56,6 +56,30 @@ sere_status sere_options_parse( const char* command, int argc, char** argv, cons
 								int option_count, int positional_max, const char* positional_name,
 								sere_options_result* result );
 
+/* The rows several commands share, so each option has one range everywhere. */
+sere_option sere_option_threads( long long* threads );	   /* --threads T, 0 (one per core) to SERE_MAX_THREADS */
+sere_option sere_option_out( const char** dir );		   /* --out DIR */
+sere_option sere_option_preset( const char** name );	   /* --preset NAME or a path */
+sere_option sere_option_sets( sere_option_list* sets );	   /* --set key=value, repeated */
+sere_option sere_option_json( int* json );				   /* --json */
+sere_option sere_option_points( long long* points );	   /* --points N, 10 to 10^7 */
+sere_option sere_option_particles( long long* particles ); /* --particles N, 4 to 10^8 */
+sere_option sere_option_springs( long long* springs );	   /* --springs N, 1 to 4 10^8 */
+
+/* Whether --particles and --springs were given together or not at all (both -1 when not given);
+ * when not, prints "sere COMMAND: --particles and --springs go together" first. */
+int sere_options_counts_paired( const char* command, long long particles, long long springs );
+
+/* What sere_options_read returns when the command goes on; an exit code is 0 or more. */
+#define SERE_OPTIONS_GO ( -1 )
+
+/* The start of every command: sere_options_parse with at most one positional argument (named
+ * positional_name, NULL for none; *positional is NULL when it is not given), then help() on
+ * --help. SERE_OPTIONS_GO, or the command's exit code: 0 after the usage, 2 after the message
+ * of a bad argument. */
+int sere_options_read( const char* command, int argc, char** argv, const sere_option* options, int option_count,
+					   const char* positional_name, const char** positional, void ( *help )( void ) );
+
 #ifdef __cplusplus
 }
 #endif

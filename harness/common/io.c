@@ -28,12 +28,12 @@ FILE* sere_atomic_open( sere_atomic_file* file, const char* path )
 	return file->f;
 }
 
-int sere_atomic_commit( sere_atomic_file* file )
+sere_status sere_atomic_commit( sere_atomic_file* file )
 {
 	if ( file->f == NULL )
 	{
 		errno = EBADF;
-		return -1;
+		return SERE_ERR_IO;
 	}
 	/* The first failure's errno is the reason; a stream error set by an earlier write left its
 	 * errno in place unless something else failed since. */
@@ -63,9 +63,9 @@ int sere_atomic_commit( sere_atomic_file* file )
 	{
 		remove( file->tmp_path );
 		errno = error;
-		return -1;
+		return SERE_ERR_IO;
 	}
-	return 0;
+	return SERE_OK;
 }
 
 void sere_atomic_abort( sere_atomic_file* file )
@@ -78,19 +78,19 @@ void sere_atomic_abort( sere_atomic_file* file )
 	remove( file->tmp_path );
 }
 
-int sere_mkdirs( const char* dir )
+sere_status sere_dir_create( const char* dir )
 {
 	char path[4096];
 	size_t length = strlen( dir );
 	if ( length == 0 )
 	{
 		errno = ENOENT;
-		return -1;
+		return SERE_ERR_IO;
 	}
 	if ( length >= sizeof( path ) )
 	{
 		errno = ENAMETOOLONG;
-		return -1;
+		return SERE_ERR_IO;
 	}
 	memcpy( path, dir, length + 1 );
 	for ( size_t i = 1; i <= length; ++i )
@@ -101,7 +101,7 @@ int sere_mkdirs( const char* dir )
 			path[i] = '\0';
 			if ( mkdir( path, 0755 ) != 0 && errno != EEXIST )
 			{
-				return -1;
+				return SERE_ERR_IO;
 			}
 			path[i] = saved;
 		}
@@ -109,17 +109,17 @@ int sere_mkdirs( const char* dir )
 	struct stat info;
 	if ( stat( dir, &info ) != 0 )
 	{
-		return -1;
+		return SERE_ERR_IO;
 	}
 	if ( !S_ISDIR( info.st_mode ) )
 	{
 		errno = ENOTDIR;
-		return -1;
+		return SERE_ERR_IO;
 	}
-	return 0;
+	return SERE_OK;
 }
 
-int sere_check_outputs( const char* dir, const char* const* names, int count, char* err, size_t err_size )
+sere_status sere_outputs_check( const char* dir, const char* const* names, int count, char* err, size_t err_size )
 {
 	for ( int k = 0; k < count; ++k )
 	{
@@ -129,10 +129,10 @@ int sere_check_outputs( const char* dir, const char* const* names, int count, ch
 		if ( stat( path, &info ) == 0 && S_ISDIR( info.st_mode ) )
 		{
 			snprintf( err, err_size, "%s is a directory, not a file", path );
-			return -1;
+			return SERE_ERR_IO;
 		}
 	}
-	return 0;
+	return SERE_OK;
 }
 
 /* Length of the UTF-8 character at s (1 to 4), or 0 when s does not start a valid one. */
@@ -227,15 +227,15 @@ const char* sere_json_escape( char* out, size_t size, const char* text )
 	return out;
 }
 
-int sere_write_ply( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
-					const int32_t* tri, int32_t triangle_count, const uint8_t* rgb,
-					const sere_vertex_property* properties, int32_t property_count )
+sere_status sere_ply_write( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
+							const int32_t* tri, int32_t triangle_count, const uint8_t* rgb,
+							const sere_vertex_property* properties, int32_t property_count )
 {
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
 	if ( f == NULL )
 	{
-		return -1;
+		return SERE_ERR_IO;
 	}
 	fprintf( f, "ply\nformat binary_little_endian 1.0\ncomment sere\nelement vertex %d\n", vertex_count );
 	fprintf( f, "property float x\nproperty float y\nproperty float z\n" );
@@ -271,15 +271,15 @@ int sere_write_ply( const char* path, const float* x, const float* y, const floa
 	return sere_atomic_commit( &file );
 }
 
-int sere_write_vtp( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
-					const int32_t* tri, int32_t triangle_count, const sere_vertex_property* properties,
-					int32_t property_count )
+sere_status sere_vtp_write( const char* path, const float* x, const float* y, const float* z, int32_t vertex_count,
+							const int32_t* tri, int32_t triangle_count, const sere_vertex_property* properties,
+							int32_t property_count )
 {
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
 	if ( f == NULL )
 	{
-		return -1;
+		return SERE_ERR_IO;
 	}
 	fprintf( f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n" );
 	fprintf( f, "<PolyData>\n<Piece NumberOfPoints=\"%d\" NumberOfPolys=\"%d\">\n", vertex_count, triangle_count );
@@ -313,13 +313,13 @@ int sere_write_vtp( const char* path, const float* x, const float* y, const floa
 	return sere_atomic_commit( &file );
 }
 
-int sere_write_pvd( const char* path, const char* const* files, const double* times, int32_t count )
+sere_status sere_pvd_write( const char* path, const char* const* files, const double* times, int32_t count )
 {
 	sere_atomic_file file;
 	FILE* f = sere_atomic_open( &file, path );
 	if ( f == NULL )
 	{
-		return -1;
+		return SERE_ERR_IO;
 	}
 	fprintf( f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n" );
 	for ( int32_t i = 0; i < count; ++i )
@@ -330,7 +330,7 @@ int sere_write_pvd( const char* path, const char* const* files, const double* ti
 	return sere_atomic_commit( &file );
 }
 
-int sere_pvd_append( sere_pvd_series* series, const char* path, const char* file, double time )
+sere_status sere_pvd_append( sere_pvd_series* series, const char* path, const char* file, double time )
 {
 	if ( series->count == series->capacity )
 	{
@@ -341,7 +341,7 @@ int sere_pvd_append( sere_pvd_series* series, const char* path, const char* file
 		if ( times == NULL )
 		{
 			errno = ENOMEM;
-			return -1;
+			return SERE_ERR_MEMORY;
 		}
 		series->times = times;
 		series->capacity = capacity;
@@ -350,12 +350,12 @@ int sere_pvd_append( sere_pvd_series* series, const char* path, const char* file
 	if ( copy == NULL )
 	{
 		errno = ENOMEM;
-		return -1;
+		return SERE_ERR_MEMORY;
 	}
 	series->files[series->count] = copy;
 	series->times[series->count] = time;
 	series->count += 1;
-	return sere_write_pvd( path, (const char* const*) series->files, series->times, series->count );
+	return sere_pvd_write( path, (const char* const*) series->files, series->times, series->count );
 }
 
 void sere_pvd_free( sere_pvd_series* series )
@@ -424,7 +424,7 @@ void sere_progress_end( sere_progress* progress )
 	}
 }
 
-int sere_fail( char* err, size_t err_size, const char* format, ... )
+sere_status sere_fail( sere_status status, char* err, size_t err_size, const char* format, ... )
 {
 	if ( err != NULL && err_size > 0 )
 	{
@@ -433,5 +433,17 @@ int sere_fail( char* err, size_t err_size, const char* format, ... )
 		vsnprintf( err, err_size, format, args );
 		va_end( args );
 	}
-	return -1;
+	return status;
+}
+
+sere_status sere_fail_at( sere_status status, char* err, size_t err_size, const char* path, int line,
+						  const char* format, va_list args )
+{
+	char message[512];
+	vsnprintf( message, sizeof( message ), format, args );
+	if ( line > 0 )
+	{
+		return sere_fail( status, err, err_size, "%s:%d: %s", path, line, message );
+	}
+	return sere_fail( status, err, err_size, "%s: %s", path, message );
 }

@@ -193,7 +193,7 @@ static const sere_param* find_key( const char* name, size_t length )
 	return NULL;
 }
 
-static int parse_value( const sere_param* key, const char* text, double* value, char* err, size_t err_size )
+static sere_status parse_value( const sere_param* key, const char* text, double* value, char* err, size_t err_size )
 {
 	char* end = NULL;
 	errno = 0;
@@ -205,29 +205,29 @@ static int parse_value( const sere_param* key, const char* text, double* value, 
 	if ( end == text || end == NULL || *end != '\0' || errno == ERANGE || isnan( v ) )
 	{
 		snprintf( err, err_size, "%s: '%s' is not a number", key->name, text );
-		return -1;
+		return SERE_ERR_PARSE;
 	}
 	if ( v < key->lo || v > key->hi )
 	{
 		snprintf( err, err_size, "%s = %g is out of range [%g, %g]", key->name, v, key->lo, key->hi );
-		return -1;
+		return SERE_ERR_ARGUMENT;
 	}
 	if ( key->type != SERE_PARAM_DOUBLE && key->type != SERE_PARAM_FLOAT && v != floor( v ) )
 	{
 		snprintf( err, err_size, "%s must be a whole number, not %g", key->name, v );
-		return -1;
+		return SERE_ERR_ARGUMENT;
 	}
 	*value = v;
-	return 0;
+	return SERE_OK;
 }
 
-int sere_params_set( sere_sim_params* params, const char* assignment, char* err, size_t err_size )
+sere_status sere_params_set( sere_sim_params* params, const char* assignment, char* err, size_t err_size )
 {
 	const char* eq = strchr( assignment, '=' );
 	if ( eq == NULL )
 	{
 		snprintf( err, err_size, "expected key=value, got '%s'", assignment );
-		return -1;
+		return SERE_ERR_PARSE;
 	}
 	const char* name = assignment;
 	size_t length = (size_t) ( eq - assignment );
@@ -239,7 +239,7 @@ int sere_params_set( sere_sim_params* params, const char* assignment, char* err,
 	if ( key == NULL )
 	{
 		snprintf( err, err_size, "unknown parameter '%.*s' (sere run --help lists them)", (int) length, name );
-		return -1;
+		return SERE_ERR_ARGUMENT;
 	}
 	const char* text = eq + 1;
 	while ( *text == ' ' || *text == '\t' )
@@ -247,9 +247,10 @@ int sere_params_set( sere_sim_params* params, const char* assignment, char* err,
 		++text;
 	}
 	double value;
-	if ( parse_value( key, text, &value, err, err_size ) != 0 )
+	sere_status status = parse_value( key, text, &value, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	write_at( params, key->offset, key->type, value );
 	if ( key->also != 0 )
@@ -259,9 +260,9 @@ int sere_params_set( sere_sim_params* params, const char* assignment, char* err,
 	if ( params->layer.m_max < params->layer.m_min )
 	{
 		snprintf( err, err_size, "m_max (%g) must not be below m_min (%g)", params->layer.m_max, params->layer.m_min );
-		return -1;
+		return SERE_ERR_ARGUMENT;
 	}
-	return 0;
+	return SERE_OK;
 }
 
 static int file_exists( const char* path )
@@ -270,7 +271,7 @@ static int file_exists( const char* path )
 	return stat( path, &info ) == 0 && S_ISREG( info.st_mode );
 }
 
-int sere_data_path( const char* relative, char* path, size_t path_size )
+sere_status sere_data_find( const char* relative, char* path, size_t path_size )
 {
 	/* SERE_DATA first; then PREFIX/share/sere beside the running binary PREFIX/bin/sere, found
 	 * from /proc/self/exe at run time so that an installed tree still works after it is moved;
@@ -297,13 +298,24 @@ int sere_data_path( const char* relative, char* path, size_t path_size )
 		snprintf( path, path_size, "%s/%s", roots[i], relative );
 		if ( file_exists( path ) )
 		{
-			return 0;
+			return SERE_OK;
 		}
 	}
-	return -1;
+	return SERE_ERR_IO;
 }
 
-int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size )
+const char* sere_data_resolve( const char* path, char* buffer, size_t size )
+{
+	FILE* f = fopen( path, "rb" );
+	if ( f != NULL )
+	{
+		fclose( f );
+		return path;
+	}
+	return path[0] != '/' && sere_data_find( path, buffer, size ) == SERE_OK ? buffer : path;
+}
+
+sere_status sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size )
 {
 	char path[4096];
 	if ( file_exists( name_or_path ) )
@@ -314,20 +326,20 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 	{
 		char relative[512];
 		snprintf( relative, sizeof( relative ), "presets/%s.preset", name_or_path );
-		if ( sere_data_path( relative, path, sizeof( path ) ) != 0 )
+		if ( sere_data_find( relative, path, sizeof( path ) ) != 0 )
 		{
 			snprintf(
 				err, err_size,
 				"unknown preset '%s' (known: maple-green, maple-red, plane-tree, wisteria, grass, or a file path)",
 				name_or_path );
-			return -1;
+			return SERE_ERR_IO;
 		}
 	}
 	FILE* f = fopen( path, "r" );
 	if ( f == NULL )
 	{
 		snprintf( err, err_size, "%s: %s", path, strerror( errno ) );
-		return -1;
+		return SERE_ERR_IO;
 	}
 	/* Lines of any length: a long comment stays a comment, and a line number is a line's. */
 	char* line = NULL;
@@ -342,7 +354,7 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 			snprintf( err, err_size, "%s:%d: a NUL byte (this is not a text file)", path, number );
 			free( line );
 			fclose( f );
-			return -1;
+			return SERE_ERR_PARSE;
 		}
 		char* hash = strchr( line, '#' );
 		if ( hash != NULL )
@@ -365,12 +377,13 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 			continue;
 		}
 		char message[512];
-		if ( sere_params_set( params, start, message, sizeof( message ) ) != 0 )
+		sere_status status = sere_params_set( params, start, message, sizeof( message ) );
+		if ( status != SERE_OK )
 		{
 			snprintf( err, err_size, "%s:%d: %s", path, number, message );
 			free( line );
 			fclose( f );
-			return -1;
+			return status;
 		}
 	}
 	int failed = ferror( f );
@@ -380,26 +393,20 @@ int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, 
 	if ( failed )
 	{
 		snprintf( err, err_size, "%s: cannot read: %s", path, strerror( error ) );
-		return -1;
+		return SERE_ERR_IO;
 	}
-	return 0;
+	return SERE_OK;
 }
 
-int sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count, char* err,
-					   size_t err_size )
+sere_status sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count,
+							   char* err, size_t err_size )
 {
-	if ( preset != NULL && sere_params_load_preset( params, preset, err, err_size ) != 0 )
+	sere_status status = preset != NULL ? sere_params_load_preset( params, preset, err, err_size ) : SERE_OK;
+	for ( int k = 0; k < set_count && status == SERE_OK; ++k )
 	{
-		return -1;
+		status = sere_params_set( params, sets[k], err, err_size );
 	}
-	for ( int k = 0; k < set_count; ++k )
-	{
-		if ( sere_params_set( params, sets[k], err, err_size ) != 0 )
-		{
-			return -1;
-		}
-	}
-	return 0;
+	return status;
 }
 
 /* The shortest text that reads back as the same value of row's type: a float row writes

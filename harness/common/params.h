@@ -55,17 +55,20 @@ double sere_params_get( const sere_sim_params* params, const sere_param* row );
 
 sere_sim_params sere_sim_params_default( void );
 
-/* Sets one "key=value"; 0 on success, else -1 with a one-line message in err naming the key. */
-int sere_params_set( sere_sim_params* params, const char* assignment, char* err, size_t err_size );
+/* Sets one "key=value"; SERE_OK, else SERE_ERR_PARSE (not key=value, not a number) or
+ * SERE_ERR_ARGUMENT (an unknown key, a value out of range) with a one-line message in err naming
+ * the key. */
+sere_status sere_params_set( sere_sim_params* params, const char* assignment, char* err, size_t err_size );
 
 /* Loads a preset by name (data/presets/NAME.preset, searched in SERE_DATA, ./data and the
- * install prefix) or by path; 0 on success, else -1 with a one-line message. */
-int sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size );
+ * install prefix) or by path; SERE_OK, else SERE_ERR_IO (not found, unreadable) or the status
+ * of its first bad line, with a one-line message. */
+sere_status sere_params_load_preset( sere_sim_params* params, const char* name_or_path, char* err, size_t err_size );
 
 /* A preset (may be NULL) then each "key=value" in order, the way every command applies its
- * --preset and --set options; 0 on success, else -1 with a one-line message. */
-int sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count, char* err,
-					   size_t err_size );
+ * --preset and --set options; SERE_OK, else the first failure's status with a one-line message. */
+sere_status sere_params_apply( sere_sim_params* params, const char* preset, const char* const* sets, int set_count,
+							   char* err, size_t err_size );
 
 /* The shortest decimal that reads back as value, as a double: the number a user wrote for a
  * float parameter (0.002 for 0.002f), for the harness's time axis and measures, which were
@@ -78,8 +81,12 @@ void sere_params_print_json( const sere_sim_params* params, FILE* f, const char*
 void sere_params_describe( FILE* f );
 
 /* Finds a data file (relative to SERE_DATA, ./data, or SERE_DATA_DIR compiled in); writes the
- * full path and returns 0, or -1 when it does not exist. */
-int sere_data_path( const char* relative, char* path, size_t path_size );
+ * full path and returns SERE_OK, or SERE_ERR_IO when it does not exist. */
+sere_status sere_data_find( const char* relative, char* path, size_t path_size );
+
+/* A path that opens as given is used as given; else a relative one is looked up like a data file
+ * (sere_data_find) into buffer. Returns the path to open (path itself when neither finds it). */
+const char* sere_data_resolve( const char* path, char* buffer, size_t size );
 
 #ifdef __cplusplus
 }

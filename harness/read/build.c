@@ -26,24 +26,26 @@ static sere_status build_points( const sere_leaf_shape* shape, sere_build_params
 	return status;
 }
 
-int sere_harness_build( const char* path, long long particles, long long springs, long long points,
-						const sere_sim_params* params, sere_model* model, sere_build_report* report, char* name,
-						size_t name_size, char* err, size_t err_size )
+sere_status sere_harness_build( const char* path, long long particles, long long springs, long long points,
+								const sere_sim_params* params, sere_model* model, sere_build_report* report, char* name,
+								size_t name_size, char* err, size_t err_size )
 {
 	sere_leaf_source leaf;
-	if ( sere_leaf_source_load( path, &leaf, err, err_size ) != 0 )
+	sere_status status = sere_leaf_source_load( path, &leaf, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
-	int result = sere_harness_build_leaf( &leaf, path, particles, springs, points, params, model, report, name,
-										  name_size, err, err_size );
+	status = sere_harness_build_leaf( &leaf, path, particles, springs, points, params, model, report, name, name_size,
+									  err, err_size );
 	sere_leaf_source_destroy( &leaf );
-	return result;
+	return status;
 }
 
-int sere_harness_build_leaf( const sere_leaf_source* leaf, const char* path, long long particles, long long springs,
-							 long long points, const sere_sim_params* params, sere_model* model,
-							 sere_build_report* report, char* name, size_t name_size, char* err, size_t err_size )
+sere_status sere_harness_build_leaf( const sere_leaf_source* leaf, const char* path, long long particles,
+									 long long springs, long long points, const sere_sim_params* params,
+									 sere_model* model, sere_build_report* report, char* name, size_t name_size,
+									 char* err, size_t err_size )
 {
 	const sere_leaf_shape* shape = &leaf->file.shape;
 	snprintf( name, name_size, "%s", leaf->file.name );
@@ -52,13 +54,14 @@ int sere_harness_build_leaf( const sere_leaf_source* leaf, const char* path, lon
 	build.seed = params->seed;
 	if ( particles >= 0 && springs >= 0 )
 	{
-		if ( sere_counts_solve( particles, springs, &build.point_count, &build.boundary_count ) != SERE_OK )
+		sere_status status = sere_counts_solve( particles, springs, &build.point_count, &build.boundary_count );
+		if ( status != SERE_OK )
 		{
 			snprintf( err, err_size,
 					  "no triangulation has %lld particles and %lld springs (need particles = 3N - B - 2, springs = "
 					  "12N - 6B - 12 with 3 <= B <= N)",
 					  particles, springs );
-			return -1;
+			return status;
 		}
 	}
 	else
@@ -84,23 +87,23 @@ int sere_harness_build_leaf( const sere_leaf_source* leaf, const char* path, lon
 					"%s: --points %lld is too few for this leaf (its outline and %d veins need more); --points %d "
 					"builds",
 					path, points, (int) shape->vein_count, (int) n );
-				return -1;
+				return status;
 			}
 		}
 		if ( status != SERE_OK )
 		{
 			snprintf( err, err_size, "%s: cannot build %lld triangle-layer points: %s", path, points,
 					  sere_status_text( status ) );
-			return -1;
+			return status;
 		}
-		return 0;
+		return SERE_OK;
 	}
 	sere_status status = sere_model_build( shape, &build, model, report );
 	if ( status != SERE_OK )
 	{
 		snprintf( err, err_size, "%s: cannot build N=%d B=%d: %s", path, build.point_count, build.boundary_count,
 				  sere_status_text( status ) );
-		return -1;
+		return status;
 	}
-	return 0;
+	return SERE_OK;
 }

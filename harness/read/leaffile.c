@@ -38,19 +38,10 @@ typedef struct reader
 
 static sere_status fail( reader* r, int32_t line, sere_status status, const char* format, ... )
 {
-	char message[512];
 	va_list args;
 	va_start( args, format );
-	vsnprintf( message, sizeof( message ), format, args );
+	sere_fail_at( status, r->err, r->err_size, r->path, (int) line, format, args );
 	va_end( args );
-	if ( line > 0 )
-	{
-		snprintf( r->err, r->err_size, "%s:%d: %s", r->path, (int) line, message );
-	}
-	else
-	{
-		snprintf( r->err, r->err_size, "%s: %s", r->path, message );
-	}
 	return status;
 }
 

@@ -5,6 +5,24 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The outline of the traced pixels with the base at (base_x, base_y). Full processing first; a
+ * sub-pixel neck can make the simplified loop touch itself, then less processing is used (the
+ * raw marching-squares loop is always simple). SERE_OK, or the status after its message. */
+static sere_status outline_of( reader* r, const points* traced, double base_x, double base_y, outline* o )
+{
+	sere_status status = SERE_ERR_GEOMETRY;
+	for ( int level = 0; level < 3 && status == SERE_ERR_GEOMETRY; ++level )
+	{
+		status = leafimage_make_outline( traced, level < 1, level < 2, base_x, base_y, o );
+	}
+	if ( status == SERE_OK )
+	{
+		return SERE_OK;
+	}
+	return status == SERE_ERR_MEMORY ? leafimage_fail( r, status, "out of memory for the outline" )
+									 : leafimage_fail( r, status, "the traced outline is not a simple polygon" );
+}
+
 sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, sere_leaf_image_map* map, char* err,
 									   size_t err_size )
 {
@@ -27,8 +45,6 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 	{
 		goto done;
 	}
-	/* the coverage (ink_max) is no longer needed: it becomes the base dot's mask */
-	double dot_x = 0.0, dot_y = 0.0, dot_radius = 0.0;
 	int veins_found = 0;
 	for ( int32_t i = 0; i < r.n && !veins_found; ++i )
 	{
@@ -40,6 +56,8 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 								 "no veins: draw them as red strokes (R > 200, G < 80, B < 80) over the blade" );
 		goto done;
 	}
+	/* the coverage (ink_max) is no longer needed: it becomes the base dot's mask */
+	double dot_x = 0.0, dot_y = 0.0, dot_radius = 0.0;
 	if ( leafimage_base_dot( &r, &dot_x, &dot_y, &dot_radius ) == 0 )
 	{
 		int elsewhere = 0;
@@ -53,17 +71,9 @@ sere_status sere_leaf_from_png_mapped( const char* path, sere_leaf_file* leaf, s
 									 : "draw a blue dot (B > 200, R < 80, G < 80) touching the margin at the petiole" );
 		goto done;
 	}
-	/* Full processing first; a sub-pixel neck can make the simplified loop touch itself, then
-	 * less processing is used (the raw marching-squares loop is always simple). */
-	status = SERE_ERR_GEOMETRY;
-	for ( int level = 0; level < 3 && status == SERE_ERR_GEOMETRY; ++level )
-	{
-		status = leafimage_make_outline( &traced, level < 1, level < 2, dot_x, dot_y, &o );
-	}
+	status = outline_of( &r, &traced, dot_x, dot_y, &o );
 	if ( status != SERE_OK )
 	{
-		status = status == SERE_ERR_MEMORY ? leafimage_fail( &r, status, "out of memory for the outline" )
-										   : leafimage_fail( &r, status, "the traced outline is not a simple polygon" );
 		goto done;
 	}
 	if ( o.dot_distance > dot_radius + 3.0 )
@@ -165,15 +175,9 @@ sere_status sere_silhouette_from_png( const char* path, double** xy, int32_t* co
 	{
 		bottom_middle( &traced, &base_x, &base_y );
 	}
-	status = SERE_ERR_GEOMETRY;
-	for ( int level = 0; level < 3 && status == SERE_ERR_GEOMETRY; ++level )
-	{
-		status = leafimage_make_outline( &traced, level < 1, level < 2, base_x, base_y, &o );
-	}
+	status = outline_of( &r, &traced, base_x, base_y, &o );
 	if ( status != SERE_OK )
 	{
-		status = status == SERE_ERR_MEMORY ? leafimage_fail( &r, status, "out of memory for the outline" )
-										   : leafimage_fail( &r, status, "the traced outline is not a simple polygon" );
 		goto done;
 	}
 	/* back from leaf units to pixels (make_outline's mapping inverted) */

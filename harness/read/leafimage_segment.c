@@ -31,39 +31,32 @@ void leafimage_classify( reader* r )
 	}
 }
 
-/* 5 x 5 running maximum, separably; scratch is n bytes. */
+/* The running maximum of 5 samples along each of `lines` lines of `length` samples, sample k of
+ * line j at j * line_step + k * step: one pass of max_filter. */
+static void max_pass( const uint8_t* in, uint8_t* out, int lines, int length, int line_step, int step )
+{
+	for ( int j = 0; j < lines; ++j )
+	{
+		for ( int i = 0; i < length; ++i )
+		{
+			uint8_t m = 0;
+			for ( int k = i - 2; k <= i + 2; ++k )
+			{
+				if ( k >= 0 && k < length && in[j * line_step + k * step] > m )
+				{
+					m = in[j * line_step + k * step];
+				}
+			}
+			out[j * line_step + i * step] = m;
+		}
+	}
+}
+
+/* 5 x 5 running maximum, separably (rows, then columns); scratch is n bytes. */
 static void max_filter( const uint8_t* in, uint8_t* scratch, uint8_t* out, int w, int h )
 {
-	for ( int y = 0; y < h; ++y )
-	{
-		for ( int x = 0; x < w; ++x )
-		{
-			uint8_t m = 0;
-			for ( int k = x - 2; k <= x + 2; ++k )
-			{
-				if ( k >= 0 && k < w && in[y * w + k] > m )
-				{
-					m = in[y * w + k];
-				}
-			}
-			scratch[y * w + x] = m;
-		}
-	}
-	for ( int y = 0; y < h; ++y )
-	{
-		for ( int x = 0; x < w; ++x )
-		{
-			uint8_t m = 0;
-			for ( int k = y - 2; k <= y + 2; ++k )
-			{
-				if ( k >= 0 && k < h && scratch[k * w + x] > m )
-				{
-					m = scratch[k * w + x];
-				}
-			}
-			out[y * w + x] = m;
-		}
-	}
+	max_pass( in, scratch, h, w, w, 1 );
+	max_pass( scratch, out, w, h, 1, w );
 }
 
 /* Floods the 4-connected pixels equal to from, starting at seed, setting them to to. */

@@ -2,6 +2,7 @@
  * masses from the mask (Tang Eq. 3) → deformation levels by the mass-spring model (Sec. 4). */
 #include "read/seasonleaf.h"
 
+#include "common/io.h"
 #include "common/params.h"
 #include "core/array.h"
 #include "mesh/bspline.h"
@@ -12,7 +13,6 @@
 
 #include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -47,34 +47,6 @@ sere_season_leaf_options sere_season_leaf_options_default( void )
 	};
 }
 
-static sere_status failf( char* err, size_t err_size, sere_status status, const char* format, ... )
-	__attribute__( ( format( printf, 4, 5 ) ) );
-
-static sere_status failf( char* err, size_t err_size, sere_status status, const char* format, ... )
-{
-	if ( err != NULL && err_size > 0 )
-	{
-		va_list args;
-		va_start( args, format );
-		vsnprintf( err, err_size, format, args );
-		va_end( args );
-	}
-	return status;
-}
-
-/* A relative data path is looked up like every other data file (params.h); a path that exists
- * as given is used as given. */
-static const char* resolve( const char* path, char* buffer, size_t size )
-{
-	FILE* f = fopen( path, "rb" );
-	if ( f != NULL )
-	{
-		fclose( f );
-		return path;
-	}
-	return path[0] != '/' && sere_data_path( path, buffer, size ) == 0 ? buffer : path;
-}
-
 /* The key points file: '#' comments, "image W H" first, then "x y" pixel positions. */
 static sere_status read_keys( const char* path, double** xy, int32_t* count, int32_t* width, int32_t* height, char* err,
 							  size_t err_size )
@@ -82,7 +54,7 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 	FILE* f = fopen( path, "r" );
 	if ( f == NULL )
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: cannot open: %s", path, strerror( errno ) );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: cannot open: %s", path, strerror( errno ) );
 	}
 	char line[512];
 	int line_number = 0, have_image = 0;
@@ -109,8 +81,9 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 			if ( have_image || sscanf( line, " image %d %d %1s", &w, &h, extra ) != 2 || w < 2 || h < 2 ||
 				 w > MAX_SIDE || h > MAX_SIDE )
 			{
-				status = failf( err, err_size, SERE_ERR_ARGUMENT,
-								"%s:%d: expected one 'image W H' with 2 <= W, H <= %d", path, line_number, MAX_SIDE );
+				status =
+					sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s:%d: expected one 'image W H' with 2 <= W, H <= %d",
+							   path, line_number, MAX_SIDE );
 				break;
 			}
 			have_image = 1, *width = w, *height = h;
@@ -119,23 +92,23 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 		double x, y;
 		if ( sscanf( line, "%lf %lf %1s", &x, &y, extra ) != 2 )
 		{
-			status = failf( err, err_size, SERE_ERR_ARGUMENT, "%s:%d: expected 'x y' (two numbers) or 'image W H'",
-							path, line_number );
+			status = sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s:%d: expected 'x y' (two numbers) or 'image W H'",
+								path, line_number );
 		}
 		else if ( !have_image )
 		{
-			status = failf( err, err_size, SERE_ERR_ARGUMENT, "%s:%d: 'image W H' must come before the points", path,
-							line_number );
+			status = sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s:%d: 'image W H' must come before the points",
+								path, line_number );
 		}
 		else if ( !isfinite( x ) || !isfinite( y ) || x < 0.0 || y < 0.0 || x > *width || y > *height )
 		{
-			status = failf( err, err_size, SERE_ERR_ARGUMENT, "%s:%d: point (%g, %g) outside the %d x %d image", path,
-							line_number, x, y, *width, *height );
+			status = sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s:%d: point (%g, %g) outside the %d x %d image",
+								path, line_number, x, y, *width, *height );
 		}
 		else if ( n == MAX_KEYS )
 		{
-			status = failf( err, err_size, SERE_ERR_ARGUMENT, "%s:%d: more than %d key points", path, line_number,
-							MAX_KEYS );
+			status = sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s:%d: more than %d key points", path, line_number,
+								MAX_KEYS );
 		}
 		else
 		{
@@ -145,7 +118,7 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 				double* grown = capacity > 0 ? sere_array_resize( points, capacity, 2 * sizeof( double ) ) : NULL;
 				if ( grown == NULL )
 				{
-					status = failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", path );
+					status = sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory", path );
 					break;
 				}
 				points = grown;
@@ -157,7 +130,7 @@ static sere_status read_keys( const char* path, double** xy, int32_t* count, int
 	fclose( f );
 	if ( status == SERE_OK && n < 3 )
 	{
-		status = failf( err, err_size, SERE_ERR_ARGUMENT, "%s: %d key points; a leaf needs at least 3", path, n );
+		status = sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: %d key points; a leaf needs at least 3", path, n );
 	}
 	if ( status != SERE_OK )
 	{
@@ -211,7 +184,7 @@ static sere_status read_pgm( const char* path, float** gray, int32_t* width, int
 	FILE* f = fopen( path, "rb" );
 	if ( f == NULL )
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: cannot open: %s", path, strerror( errno ) );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: cannot open: %s", path, strerror( errno ) );
 	}
 	long header[3];
 	char magic[3] = { 0 };
@@ -238,15 +211,15 @@ static sere_status read_pgm( const char* path, float** gray, int32_t* width, int
 	if ( !ok || ( separator != ' ' && separator != '\t' && separator != '\n' && separator != '\r' ) )
 	{
 		fclose( f );
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: not a binary PGM (P5) image", path );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: not a binary PGM (P5) image", path );
 	}
 	if ( header[0] < 1 || header[1] < 1 || header[0] > MAX_SIDE || header[1] > MAX_SIDE || header[2] < 1 ||
 		 header[2] > 65535 )
 	{
 		fclose( f );
-		return failf( err, err_size, SERE_ERR_ARGUMENT,
-					  "%s: bad PGM header %ld x %ld, maxval %ld (at most %d x %d, 65535)", path, header[0], header[1],
-					  header[2], MAX_SIDE, MAX_SIDE );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size,
+						  "%s: bad PGM header %ld x %ld, maxval %ld (at most %d x %d, 65535)", path, header[0],
+						  header[1], header[2], MAX_SIDE, MAX_SIDE );
 	}
 	const int32_t w = (int32_t) header[0], h = (int32_t) header[1];
 	const size_t n = (size_t) w * (size_t) h, bytes = header[2] > 255 ? 2 : 1;
@@ -256,14 +229,14 @@ static sere_status read_pgm( const char* path, float** gray, int32_t* width, int
 	{
 		fclose( f );
 		free( raw ), free( g );
-		return failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory for %d x %d pixels", path, w, h );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory for %d x %d pixels", path, w, h );
 	}
 	size_t got = fread( raw, bytes, n, f );
 	fclose( f );
 	if ( got != n )
 	{
 		free( raw ), free( g );
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: truncated: %zu of %zu pixels", path, got, n );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: truncated: %zu of %zu pixels", path, got, n );
 	}
 	for ( size_t i = 0; i < n; ++i )
 	{
@@ -271,8 +244,8 @@ static sere_status read_pgm( const char* path, float** gray, int32_t* width, int
 		if ( value > (unsigned long) header[2] )
 		{
 			free( raw ), free( g );
-			return failf( err, err_size, SERE_ERR_ARGUMENT, "%s: pixel (%zu, %zu) is %u, above the maxval %ld", path,
-						  i % (size_t) w, i / (size_t) w, value, header[2] );
+			return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: pixel (%zu, %zu) is %u, above the maxval %ld",
+							  path, i % (size_t) w, i / (size_t) w, value, header[2] );
 		}
 		g[i] = (float) ( (double) value / (double) header[2] );
 	}
@@ -319,7 +292,7 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, int3
 	float* buffer = calloc( 7 * (size_t) n, sizeof( float ) );
 	if ( buffer == NULL )
 	{
-		return failf( err, err_size, SERE_ERR_MEMORY, "leaf: out of memory for %d particles", n );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "leaf: out of memory for %d particles", n );
 	}
 	float *x = buffer, *y = x + n, *z = y + n, *vx = z + n, *vy = vx + n, *vz = vy + n, *inv_m = vz + n;
 	double cx = 0.0, cy = 0.0;
@@ -356,8 +329,8 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, int3
 	if ( status != SERE_OK )
 	{
 		free( buffer );
-		return failf( err, err_size, status, "leaf: the optimized mesh cannot carry springs (%s)",
-					  sere_status_text( status ) );
+		return sere_fail( status, err, err_size, "leaf: the optimized mesh cannot carry springs (%s)",
+						  sere_status_text( status ) );
 	}
 	sere_massspring_particles particles = { n, x, y, z, vx, vy, vz, inv_m };
 	sere_massspring_params params = sere_massspring_params_default();
@@ -380,44 +353,39 @@ static sere_status deform( sere_season_leaf* leaf, int32_t steps_per_level, int3
 	}
 	sere_massspring_destroy( ms );
 	free( buffer );
-	return status == SERE_OK
-			   ? SERE_OK
-			   : failf( err, err_size, status, "leaf: the mass-spring model failed (%s)", sere_status_text( status ) );
+	return status == SERE_OK ? SERE_OK
+							 : sere_fail( status, err, err_size, "leaf: the mass-spring model failed (%s)",
+										  sere_status_text( status ) );
 }
 
 static sere_status check_options( const sere_season_leaf_options* options, char* err, size_t err_size )
 {
-	if ( options->outline_samples < 8 || options->outline_samples > 20000 )
+	const struct
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "outline samples: %d is outside [8, 20000]",
-					  options->outline_samples );
-	}
-	if ( options->meshopt_iterations < 0 || options->meshopt_iterations > 10000 )
+		const char* what;
+		int value, lo, hi;
+	} ranges[] = {
+		{ "outline samples", options->outline_samples, 8, 20000 },
+		{ "mesh optimization iterations", options->meshopt_iterations, 0, 10000 },
+		{ "deformation levels", options->levels, 1, 64 },
+		{ "steps per level", options->steps_per_level, 0, 1000000 },
+		{ "threads", options->threads, 0, SERE_MAX_THREADS },
+	};
+	for ( size_t k = 0; k < sizeof( ranges ) / sizeof( ranges[0] ); ++k )
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "mesh optimization iterations: %d is outside [0, 10000]",
-					  options->meshopt_iterations );
-	}
-	if ( options->levels < 1 || options->levels > 64 )
-	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "deformation levels: %d is outside [1, 64]", options->levels );
-	}
-	if ( options->steps_per_level < 0 || options->steps_per_level > 1000000 )
-	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "steps per level: %d is outside [0, 1000000]",
-					  options->steps_per_level );
-	}
-	if ( !sere_threads_valid( options->threads ) )
-	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "threads: %d is outside [0, %d]", options->threads,
-					  SERE_MAX_THREADS );
+		if ( ranges[k].value < ranges[k].lo || ranges[k].value > ranges[k].hi )
+		{
+			return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: %d is outside [%d, %d]", ranges[k].what,
+							  ranges[k].value, ranges[k].lo, ranges[k].hi );
+		}
 	}
 	if ( ( options->keys_path == NULL ) == ( options->silhouette_path == NULL ) )
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "leaf: give key points or a silhouette, exactly one" );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "leaf: give key points or a silhouette, exactly one" );
 	}
 	if ( options->mask_path == NULL )
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "leaf: no mask map" );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "leaf: no mask map" );
 	}
 	return SERE_OK;
 }
@@ -487,7 +455,7 @@ static sere_status fill_leaf( sere_season_leaf* leaf, const sere_meshopt_mesh* m
 		 vertex_gray == NULL )
 	{
 		free( vertex_gray );
-		return failf( err, err_size, SERE_ERR_MEMORY, "leaf: out of memory for %d vertices", n );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "leaf: out of memory for %d vertices", n );
 	}
 	memcpy( leaf->tri, m->tri, sizeof( int32_t ) * 3 * (size_t) m->triangle_count );
 	for ( int32_t i = 0; i < n; ++i )
@@ -503,7 +471,8 @@ static sere_status fill_leaf( sere_season_leaf* leaf, const sere_meshopt_mesh* m
 	free( vertex_gray );
 	if ( status != SERE_OK )
 	{
-		return failf( err, err_size, status, "%s: the mask gives no masses (%s)", mask, sere_status_text( status ) );
+		return sere_fail( status, err, err_size, "%s: the mask gives no masses (%s)", mask,
+						  sere_status_text( status ) );
 	}
 	return SERE_OK;
 }
@@ -517,8 +486,8 @@ static sere_status outline_mesh( const double* kx, const double* ky, int32_t key
 	sere_status status = sere_bspline_fit( kx, ky, key_count, spline );
 	if ( status != SERE_OK )
 	{
-		failf( err, err_size, status, "%s: the key points give no B-spline (%s: two consecutive points equal?)", source,
-			   sere_status_text( status ) );
+		sere_fail( status, err, err_size, "%s: the key points give no B-spline (%s: two consecutive points equal?)",
+				   source, sere_status_text( status ) );
 		return status;
 	}
 	status = sere_bspline_sample( spline, samples, sx, sy, NULL );
@@ -533,10 +502,10 @@ static sere_status outline_mesh( const double* kx, const double* ky, int32_t key
 	if ( status != SERE_OK || triangulation->merged_count > 0 )
 	{
 		status = status != SERE_OK ? status : SERE_ERR_GEOMETRY;
-		failf( err, err_size, status,
-			   "%s: the B-spline through the key points crosses itself at %d samples; move the key points apart or "
-			   "sample more",
-			   source, samples );
+		sere_fail( status, err, err_size,
+				   "%s: the B-spline through the key points crosses itself at %d samples; move the key points apart or "
+				   "sample more",
+				   source, samples );
 		return status;
 	}
 	/* edge length of the even outline sampling: the triangles aim at the boundary's spacing */
@@ -545,8 +514,8 @@ static sere_status outline_mesh( const double* kx, const double* ky, int32_t key
 	if ( capacity > SERE_MESHOPT_MAX_VERTICES )
 	{
 		status = SERE_ERR_CAPACITY;
-		failf( err, err_size, status, "outline samples: %d samples would make more than %d vertices", samples,
-			   SERE_MESHOPT_MAX_VERTICES );
+		sere_fail( status, err, err_size, "outline samples: %d samples would make more than %d vertices", samples,
+				   SERE_MESHOPT_MAX_VERTICES );
 		return status;
 	}
 	status = sere_meshopt_create( (int32_t) capacity, mo );
@@ -559,7 +528,7 @@ static sere_status outline_mesh( const double* kx, const double* ky, int32_t key
 	}
 	if ( status != SERE_OK )
 	{
-		failf( err, err_size, status, "%s: mesh optimization failed (%s)", source, sere_status_text( status ) );
+		sere_fail( status, err, err_size, "%s: mesh optimization failed (%s)", source, sere_status_text( status ) );
 		return status;
 	}
 	return status;
@@ -574,7 +543,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	}
 	if ( options == NULL || leaf == NULL )
 	{
-		return failf( err, err_size, SERE_ERR_ARGUMENT, "leaf: no options or no leaf to fill" );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "leaf: no options or no leaf to fill" );
 	}
 	memset( leaf, 0, sizeof( *leaf ) );
 	sere_status status = check_options( options, err, err_size );
@@ -588,19 +557,19 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	const char* source;
 	if ( options->keys_path != NULL )
 	{
-		source = resolve( options->keys_path, keys_buffer, sizeof( keys_buffer ) );
+		source = sere_data_resolve( options->keys_path, keys_buffer, sizeof( keys_buffer ) );
 		status = read_keys( source, &keys, &key_count, &width, &height, err, err_size );
 	}
 	else
 	{
-		source = resolve( options->silhouette_path, keys_buffer, sizeof( keys_buffer ) );
+		source = sere_data_resolve( options->silhouette_path, keys_buffer, sizeof( keys_buffer ) );
 		double* traced = NULL;
 		int32_t traced_count = 0;
 		status = sere_silhouette_from_png( source, &traced, &traced_count, &width, &height, err, err_size );
 		if ( status == SERE_OK )
 		{
 			keys = pick_keys( traced, traced_count, &key_count );
-			status = keys != NULL ? SERE_OK : failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", source );
+			status = keys != NULL ? SERE_OK : sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory", source );
 			free( traced );
 		}
 	}
@@ -614,7 +583,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	double* ky = NULL;
 	if ( to_leaf_units( keys, key_count, &kx, &ky, &base_px, &base_py, &scale, &twice_area ) != 0 )
 	{
-		return failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", source );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory", source );
 	}
 
 	sere_bspline spline = { 0 };
@@ -627,7 +596,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	status = sx != NULL && sy != NULL
 				 ? outline_mesh( kx, ky, key_count, samples, 0.5 * fabs( twice_area ), options->meshopt_iterations,
 								 source, &spline, sx, sy, &triangulation, &mo, err, err_size )
-				 : failf( err, err_size, SERE_ERR_MEMORY, "%s: out of memory", source );
+				 : sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory", source );
 	if ( status != SERE_OK )
 	{
 		goto done;
@@ -635,7 +604,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	sere_meshopt_mesh mesh = sere_meshopt_result( mo );
 
 	int32_t mask_w = 0, mask_h = 0;
-	const char* mask = resolve( options->mask_path, mask_buffer, sizeof( mask_buffer ) );
+	const char* mask = sere_data_resolve( options->mask_path, mask_buffer, sizeof( mask_buffer ) );
 	status = has_suffix( mask, ".png" ) || has_suffix( mask, ".PNG" )
 				 ? sere_png_read_gray( mask, &gray, &mask_w, &mask_h, err, err_size )
 				 : read_pgm( mask, &gray, &mask_w, &mask_h, err, err_size );
@@ -646,9 +615,9 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 	if ( mask_w != width || mask_h != height )
 	{
 		status =
-			failf( err, err_size, SERE_ERR_ARGUMENT,
-				   "%s: the mask is %d x %d pixels but the key points' image is %d x %d (one pixel frame for both)",
-				   mask, mask_w, mask_h, width, height );
+			sere_fail( SERE_ERR_ARGUMENT, err, err_size,
+					   "%s: the mask is %d x %d pixels but the key points' image is %d x %d (one pixel frame for both)",
+					   mask, mask_w, mask_h, width, height );
 		goto done;
 	}
 

@@ -56,18 +56,20 @@ static void vertex_normals( const sere_glb_mesh* m, float* normal )
 	}
 }
 
-int sere_write_glb( const char* path, const sere_glb_mesh* m, char* err, size_t err_size )
+sere_status sere_glb_write( const char* path, const sere_glb_mesh* m, char* err, size_t err_size )
 {
 	int32_t n = m->vertex_count, t = m->triangle_count;
 	if ( n < 1 || t < 1 )
 	{
-		return sere_fail( err, err_size, "%s: a glTF mesh needs a vertex and a triangle, not %d and %d", path, n, t );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size,
+						  "%s: a glTF mesh needs a vertex and a triangle, not %d and %d", path, n, t );
 	}
 	for ( size_t k = 0; k < 3 * (size_t) t; ++k )
 	{
 		if ( m->tri[k] < 0 || m->tri[k] >= n )
 		{
-			return sere_fail( err, err_size, "%s: triangle %zu has vertex %d of %d", path, k / 3, m->tri[k], n );
+			return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: triangle %zu has vertex %d of %d", path, k / 3,
+							  m->tri[k], n );
 		}
 	}
 	/* One buffer: positions, normals, colors (3 floats each per vertex), then the indices; every
@@ -76,14 +78,15 @@ int sere_write_glb( const char* path, const sere_glb_mesh* m, char* err, size_t 
 	size_t buffer_bytes = 3 * vec3_bytes + index_bytes;
 	if ( buffer_bytes > UINT32_MAX - 4096 )
 	{
-		return sere_fail( err, err_size, "%s: %zu bytes is more than a .glb holds", path, buffer_bytes );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: %zu bytes is more than a .glb holds", path,
+						  buffer_bytes );
 	}
 	float* normal = calloc( 3 * (size_t) n, sizeof( float ) );
 	float* color = malloc( sizeof( float ) * 3 * (size_t) n );
 	if ( normal == NULL || color == NULL )
 	{
 		free( normal ), free( color );
-		return sere_fail( err, err_size, "%s: out of memory for %d vertices", path, n );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory for %d vertices", path, n );
 	}
 	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
 	for ( int32_t i = 0; i < n; ++i )
@@ -127,7 +130,7 @@ int sere_write_glb( const char* path, const sere_glb_mesh* m, char* err, size_t 
 	{
 		int error = errno;
 		free( normal ), free( color );
-		return sere_fail( err, err_size, "cannot write %s: %s", path, strerror( error ) );
+		return sere_fail( SERE_ERR_IO, err, err_size, "cannot write %s: %s", path, strerror( error ) );
 	}
 	put_u32( f, 0x46546C67u ); /* "glTF" */
 	put_u32( f, 2 );
@@ -148,7 +151,7 @@ int sere_write_glb( const char* path, const sere_glb_mesh* m, char* err, size_t 
 	free( normal ), free( color );
 	if ( sere_atomic_commit( &file ) != 0 )
 	{
-		return sere_fail( err, err_size, "cannot write %s: %s", path, strerror( errno ) );
+		return sere_fail( SERE_ERR_IO, err, err_size, "cannot write %s: %s", path, strerror( errno ) );
 	}
-	return 0;
+	return SERE_OK;
 }

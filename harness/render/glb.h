@@ -3,6 +3,8 @@
  * Blender, three.js and any glTF viewer show a scene without a converter. */
 #pragma once
 
+#include "core/base.h"
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -24,9 +26,9 @@ typedef struct sere_glb_mesh
 /* Writes the mesh to path atomically ("<path>.tmp", renamed). Normals are the area-weighted
  * means of the triangle normals around each vertex (+z where they cancel); colors become
  * linear floats, as glTF's COLOR_0 is linear. Deterministic: the same mesh gives the same bytes.
- * 0, or -1 with one line in err naming path (an empty mesh, an index out of range, a write
- * error). */
-int sere_write_glb( const char* path, const sere_glb_mesh* mesh, char* err, size_t err_size );
+ * SERE_OK, or SERE_ERR_ARGUMENT (an empty mesh, an index out of range), SERE_ERR_MEMORY or
+ * SERE_ERR_IO (a write error) with one line in err naming path. */
+sere_status sere_glb_write( const char* path, const sere_glb_mesh* mesh, char* err, size_t err_size );
 
 #ifdef __cplusplus
 }

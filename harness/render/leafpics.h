@@ -7,9 +7,12 @@
  * counter-clockwise seen from +z); the lower face in sere_render_lower_tint of it (paler,
  * greyer). The ground is a light gray tile under the leaf with the leaf's vertical shadow.
  *
- * Every function returns 0, or -1 with one line in err that starts with the output path.
+ * Every function returns SERE_OK, or a sere_status with one line in err that starts with the
+ * output path.
  * PNGs are written to "<path>.tmp" and renamed (sere_render_canvas_write_png). */
 #pragma once
+
+#include "core/base.h"
 
 #include <stddef.h>
 #include <stdint.h>
@@ -48,13 +51,15 @@ typedef struct sere_leafpics_frame
  * title may be NULL. frame_count is 1..16; tri holds 3 tri_count vertex indices valid for
  * every frame. Panels are SERE_LEAFPICS_PANEL_WIDTH x SERE_LEAFPICS_PANEL_HEIGHT; the sheet is
  * max(760, 34 + 352 frame_count) pixels wide and 694 high (662 without a title). */
-int sere_leafpics_sheet( const char* path, const char* title, int frame_count, const sere_leafpics_frame* frames,
-						 const int32_t* tri, int32_t tri_count, float ground_z, char* err, size_t err_size );
+sere_status sere_leafpics_sheet( const char* path, const char* title, int frame_count,
+								 const sere_leafpics_frame* frames, const int32_t* tri, int32_t tri_count,
+								 float ground_z, char* err, size_t err_size );
 
 /* The oblique view of one frame alone as a size x size PNG (size <= 0: 900), with ground,
  * shadow, title (may be NULL) and the caption "frame N, RWC r": a gallery picture. */
-int sere_leafpics_view( const char* path, const char* title, const sere_leafpics_frame* frame, const int32_t* tri,
-						int32_t tri_count, float ground_z, int size, char* err, size_t err_size );
+sere_status sere_leafpics_view( const char* path, const char* title, const sere_leafpics_frame* frame,
+								const int32_t* tri, int32_t tri_count, float ground_z, int size, char* err,
+								size_t err_size );
 
 #ifdef __cplusplus
 }

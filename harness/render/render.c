@@ -53,40 +53,41 @@ static void point_at( const sere_render_mesh* mesh, const double* extra, int32_t
 	p[0] = e[0], p[1] = e[1], p[2] = e[2];
 }
 
-static int check_mesh( const sere_render_mesh* mesh, char* err, size_t err_size )
+static sere_status check_mesh( const sere_render_mesh* mesh, char* err, size_t err_size )
 {
 	if ( mesh == NULL || mesh->vertex_count < 0 || mesh->triangle_count < 0 ||
 		 ( mesh->vertex_count > 0 && ( mesh->x == NULL || mesh->y == NULL ) ) ||
 		 ( mesh->triangle_count > 0 && mesh->triangles == NULL ) )
 	{
-		return sere_fail( err, err_size, "render: mesh arrays missing or negative counts" );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: mesh arrays missing or negative counts" );
 	}
 	for ( int32_t i = 0; i < mesh->vertex_count; ++i )
 	{
 		if ( !isfinite( mesh->x[i] ) || !isfinite( mesh->y[i] ) || !isfinite( vertex_z( mesh, i ) ) )
 		{
-			return sere_fail( err, err_size, "render: vertex %d has a non-finite coordinate", (int) i );
+			return sere_fail( SERE_ERR_NONFINITE, err, err_size, "render: vertex %d has a non-finite coordinate",
+							  (int) i );
 		}
 	}
 	for ( int32_t k = 0; k < 3 * mesh->triangle_count; ++k )
 	{
 		if ( mesh->triangles[k] < 0 || mesh->triangles[k] >= mesh->vertex_count )
 		{
-			return sere_fail( err, err_size, "render: triangle %d uses vertex %d of %d", (int) ( k / 3 ),
-							  (int) mesh->triangles[k], (int) mesh->vertex_count );
+			return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: triangle %d uses vertex %d of %d",
+							  (int) ( k / 3 ), (int) mesh->triangles[k], (int) mesh->vertex_count );
 		}
 	}
-	return 0;
+	return SERE_OK;
 }
 
-static int check_view( const sere_render_view* view, char* err, size_t err_size )
+static sere_status check_view( const sere_render_view* view, char* err, size_t err_size )
 {
 	if ( !isfinite( view->azimuth ) || !isfinite( view->elevation ) || !isfinite( view->center[0] ) ||
 		 !isfinite( view->center[1] ) || !isfinite( view->center[2] ) || !isfinite( view->margin ) )
 	{
-		return sere_fail( err, err_size, "render: view angles, center and margin must be finite" );
+		return sere_fail( SERE_ERR_NONFINITE, err, err_size, "render: view angles, center and margin must be finite" );
 	}
-	return 0;
+	return SERE_OK;
 }
 
 /* The ground plane of a scene resolved against the mesh: its height and its quad. */
@@ -127,12 +128,14 @@ static ground_plane resolve_ground( const sere_render_mesh* mesh, const sere_ren
 
 /* Fits the mesh's vertices and `extra` more points (3 doubles each); with on_screen the
  * center is the middle of their projection rather than of their box. */
-static int fit_points( const sere_render_mesh* mesh, const double* extra, int extra_count, int on_screen, double w,
-					   double h, sere_render_view* view, char* err, size_t err_size )
+static sere_status fit_points( const sere_render_mesh* mesh, const double* extra, int extra_count, int on_screen,
+							   double w, double h, sere_render_view* view, char* err, size_t err_size )
 {
-	if ( check_view( view, err, err_size ) != 0 || check_mesh( mesh, err, err_size ) != 0 )
+	sere_status status = check_view( view, err, err_size );
+	status = status == SERE_OK ? check_mesh( mesh, err, err_size ) : status;
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	int32_t total = mesh->vertex_count + extra_count;
 	double lo[3] = { 0.0, 0.0, 0.0 }, hi[3] = { 0.0, 0.0, 0.0 };
@@ -185,11 +188,11 @@ static int fit_points( const sere_render_mesh* mesh, const double* extra, int ex
 	scale = half_x > 0.0 ? fmin( scale, room_x / half_x ) : scale;
 	scale = half_y > 0.0 ? fmin( scale, room_y / half_y ) : scale;
 	view->scale = isfinite( scale ) ? scale : 1.0;
-	return 0;
+	return SERE_OK;
 }
 
-int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere_render_view* view, char* err,
-						  size_t err_size )
+sere_status sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere_render_view* view, char* err,
+								  size_t err_size )
 {
 	return fit_points( mesh, NULL, 0, 0, w, h, view, err, err_size );
 }
@@ -205,16 +208,17 @@ static void ground_corners( const ground_plane* g, double corners[12] )
 	}
 }
 
-int sere_render_fit_scene( const sere_render_mesh* mesh, const sere_render_scene* scene, double w, double h,
-						   sere_render_view* view, char* err, size_t err_size )
+sere_status sere_render_fit_scene( const sere_render_mesh* mesh, const sere_render_scene* scene, double w, double h,
+								   sere_render_view* view, char* err, size_t err_size )
 {
 	if ( scene == NULL || !scene->ground )
 	{
 		return fit_points( mesh, NULL, 0, 0, w, h, view, err, err_size );
 	}
-	if ( check_mesh( mesh, err, err_size ) != 0 )
+	sere_status status = check_mesh( mesh, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	ground_plane g = resolve_ground( mesh, scene );
 	double corners[12];
@@ -250,14 +254,27 @@ static void vertex_color( const sere_render_mesh* mesh, int32_t i, double rgb[3]
 	}
 }
 
-int sere_render_cairo_failed( cairo_t* cr, char* err, size_t err_size )
+void sere_render_gradient_box( cairo_t* cr, cairo_pattern_t* gradient, double x, double y, double w, double h,
+							   double grey )
+{
+	cairo_rectangle( cr, x, y, w, h );
+	cairo_set_source( cr, gradient );
+	cairo_fill_preserve( cr );
+	cairo_pattern_destroy( gradient );
+	cairo_set_source_rgb( cr, grey, grey, grey );
+	cairo_set_line_width( cr, 1.0 );
+	cairo_stroke( cr );
+}
+
+sere_status sere_render_cairo_failed( cairo_t* cr, char* err, size_t err_size )
 {
 	cairo_status_t status = cairo_status( cr );
 	if ( status != CAIRO_STATUS_SUCCESS )
 	{
-		return sere_fail( err, err_size, "render: cairo: %s", cairo_status_to_string( status ) );
+		return sere_fail( status == CAIRO_STATUS_NO_MEMORY ? SERE_ERR_MEMORY : SERE_ERR_ARGUMENT, err, err_size,
+						  "render: cairo: %s", cairo_status_to_string( status ) );
 	}
-	return 0;
+	return SERE_OK;
 }
 
 void sere_render_lower_tint( const float rgb[3], float out[3] )
@@ -334,14 +351,15 @@ static void draw_ground( cairo_t* cr, const sere_render_mesh* mesh, const sere_r
 	cairo_restore( cr );
 }
 
-int sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
-						   sere_render_view* view, const sere_render_style* style, char* err, size_t err_size )
+sere_status sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
+								   sere_render_view* view, const sere_render_style* style, char* err, size_t err_size )
 {
 	return sere_render_mesh_draw_scene( cr, x0, y0, w, h, mesh, view, style, NULL, err, err_size );
 }
 
 /* Every line's end points must be mesh vertices. */
-static int check_lines( const sere_render_mesh* mesh, const sere_render_style* style, char* err, size_t err_size )
+static sere_status check_lines( const sere_render_mesh* mesh, const sere_render_style* style, char* err,
+								size_t err_size )
 {
 	for ( int32_t s = 0; s < style->line_set_count; ++s )
 	{
@@ -350,12 +368,12 @@ static int check_lines( const sere_render_mesh* mesh, const sere_render_style* s
 		{
 			if ( lines->pairs[k] < 0 || lines->pairs[k] >= mesh->vertex_count )
 			{
-				return sere_fail( err, err_size, "render: line %d of set %d uses vertex %d of %d", (int) ( k / 2 ),
-								  (int) s, (int) lines->pairs[k], (int) mesh->vertex_count );
+				return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: line %d of set %d uses vertex %d of %d",
+								  (int) ( k / 2 ), (int) s, (int) lines->pairs[k], (int) mesh->vertex_count );
 			}
 		}
 	}
-	return 0;
+	return SERE_OK;
 }
 
 /* Screen x, y and depth of every vertex (3 doubles each, depth growing away from the eye), and
@@ -473,32 +491,40 @@ static void draw_lines( cairo_t* cr, const sere_render_style* style, const doubl
 	}
 }
 
-int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
-								 sere_render_view* view, const sere_render_style* style, const sere_render_scene* scene,
-								 char* err, size_t err_size )
+sere_status sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, double h,
+										 const sere_render_mesh* mesh, sere_render_view* view,
+										 const sere_render_style* style, const sere_render_scene* scene, char* err,
+										 size_t err_size )
 {
 	const sere_render_style plain = { 0 };
 	const sere_render_scene bare = { 0 };
 	style = style != NULL ? style : &plain;
 	scene = scene != NULL ? scene : &bare;
-	if ( check_view( view, err, err_size ) != 0 )
+	sere_status status = check_view( view, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	if ( view->scale <= 0.0 || !isfinite( view->scale ) )
 	{
-		if ( sere_render_fit_scene( mesh, scene, w, h, view, err, err_size ) != 0 )
+		status = sere_render_fit_scene( mesh, scene, w, h, view, err, err_size );
+		if ( status != SERE_OK )
 		{
-			return -1;
+			return status;
 		}
 	}
-	else if ( check_mesh( mesh, err, err_size ) != 0 )
+	else
 	{
-		return -1;
+		status = check_mesh( mesh, err, err_size );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
 	}
-	if ( check_lines( mesh, style, err, err_size ) != 0 )
+	status = check_lines( mesh, style, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	size_t n = (size_t) mesh->vertex_count, t_count = (size_t) mesh->triangle_count;
 	double* screen = malloc( sizeof( double ) * 3 * ( n > 0 ? n : 1 ) );
@@ -507,7 +533,8 @@ int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, do
 	{
 		free( screen );
 		free( order );
-		return sere_fail( err, err_size, "render: out of memory for %d triangles", (int) mesh->triangle_count );
+		return sere_fail( SERE_ERR_MEMORY, err, err_size, "render: out of memory for %d triangles",
+						  (int) mesh->triangle_count );
 	}
 	frame f = view_frame( view );
 	double cx = x0 + 0.5 * w, cy = y0 + 0.5 * h;
@@ -620,7 +647,7 @@ void sere_render_palette( int index, float rgb[3] )
 	}
 }
 
-int sere_render_canvas_create( sere_render_canvas* canvas, int width, int height, char* err, size_t err_size )
+sere_status sere_render_canvas_create( sere_render_canvas* canvas, int width, int height, char* err, size_t err_size )
 {
 	canvas->surface = NULL;
 	canvas->cr = NULL;
@@ -628,18 +655,20 @@ int sere_render_canvas_create( sere_render_canvas* canvas, int width, int height
 	canvas->height = height;
 	if ( width <= 0 || height <= 0 || width > 32767 || height > 32767 )
 	{
-		return sere_fail( err, err_size, "render: canvas size %dx%d outside 1..32767", width, height );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: canvas size %dx%d outside 1..32767", width,
+						  height );
 	}
 	canvas->surface = cairo_image_surface_create( CAIRO_FORMAT_RGB24, width, height );
 	canvas->cr = cairo_create( canvas->surface );
-	if ( sere_render_cairo_failed( canvas->cr, err, err_size ) != 0 )
+	sere_status status = sere_render_cairo_failed( canvas->cr, err, err_size );
+	if ( status != SERE_OK )
 	{
 		sere_render_canvas_destroy( canvas );
-		return -1;
+		return status;
 	}
 	cairo_set_source_rgb( canvas->cr, 1.0, 1.0, 1.0 );
 	cairo_paint( canvas->cr );
-	return 0;
+	return SERE_OK;
 }
 
 static cairo_status_t write_to_file( void* closure, const unsigned char* data, unsigned int length )
@@ -647,31 +676,37 @@ static cairo_status_t write_to_file( void* closure, const unsigned char* data, u
 	return fwrite( data, 1, length, closure ) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
 }
 
-int sere_render_canvas_write_png( const sere_render_canvas* canvas, const char* path, char* err, size_t err_size )
+sere_status sere_render_canvas_write_png( const sere_render_canvas* canvas, const char* path, char* err,
+										  size_t err_size )
 {
-	if ( canvas->cr == NULL || sere_render_cairo_failed( canvas->cr, err, err_size ) != 0 )
+	if ( canvas->cr == NULL )
 	{
-		return canvas->cr == NULL ? sere_fail( err, err_size, "%s: no canvas to write", path ) : -1;
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: no canvas to write", path );
+	}
+	sere_status failed = sere_render_cairo_failed( canvas->cr, err, err_size );
+	if ( failed != SERE_OK )
+	{
+		return failed;
 	}
 	cairo_surface_flush( canvas->surface );
 	sere_atomic_file file;
 	if ( sere_atomic_open( &file, path ) == NULL )
 	{
-		return sere_fail( err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
+		return sere_fail( SERE_ERR_IO, err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
 	}
 	cairo_status_t status = cairo_surface_write_to_png_stream( canvas->surface, write_to_file, file.f );
 	if ( status != CAIRO_STATUS_SUCCESS )
 	{
 		int saved = errno;
 		sere_atomic_abort( &file );
-		return sere_fail( err, err_size, "%s: cannot write PNG: %s (%s)", path, cairo_status_to_string( status ),
-						  strerror( saved ) );
+		return sere_fail( SERE_ERR_IO, err, err_size, "%s: cannot write PNG: %s (%s)", path,
+						  cairo_status_to_string( status ), strerror( saved ) );
 	}
 	if ( sere_atomic_commit( &file ) != 0 )
 	{
-		return sere_fail( err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
+		return sere_fail( SERE_ERR_IO, err, err_size, "%s: cannot write PNG: %s", path, strerror( errno ) );
 	}
-	return 0;
+	return SERE_OK;
 }
 
 void sere_render_canvas_destroy( sere_render_canvas* canvas )
@@ -688,11 +723,12 @@ void sere_render_canvas_destroy( sere_render_canvas* canvas )
 	canvas->surface = NULL;
 }
 
-int sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet, char* err, size_t err_size )
+sere_status sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet, char* err, size_t err_size )
 {
 	if ( sheet->count <= 0 || sheet->columns <= 0 || sheet->draw == NULL )
 	{
-		return sere_fail( err, err_size, "%s: a contact sheet needs panels, columns and a draw function", path );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size,
+						  "%s: a contact sheet needs panels, columns and a draw function", path );
 	}
 	const int pad = 12, caption_height = 26;
 	int pw = sheet->panel_width > 0 ? sheet->panel_width : 320;
@@ -705,12 +741,13 @@ int sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet,
 	sere_render_canvas canvas;
 	if ( width > 32767 || height > 32767 )
 	{
-		return sere_fail( err, err_size, "%s: a sheet of %d panels of %dx%d exceeds 32767 pixels", path, sheet->count,
-						  pw, ph );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "%s: a sheet of %d panels of %dx%d exceeds 32767 pixels",
+						  path, sheet->count, pw, ph );
 	}
-	if ( sere_render_canvas_create( &canvas, (int) width, (int) height, err, err_size ) != 0 )
+	sere_status status = sere_render_canvas_create( &canvas, (int) width, (int) height, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	cairo_t* cr = canvas.cr;
 	cairo_set_source_rgb( cr, 0.1, 0.1, 0.1 );
@@ -721,17 +758,17 @@ int sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet,
 		double y = title_height + ( k / columns ) * ( ph + caption_height + pad );
 		char caption[256] = { 0 };
 		cairo_save( cr );
-		int status = sheet->draw( sheet->user, k, cr, x, y, pw, ph, caption, sizeof( caption ), err, err_size );
+		status = sheet->draw( sheet->user, k, cr, x, y, pw, ph, caption, sizeof( caption ), err, err_size );
 		cairo_restore( cr );
-		if ( status != 0 )
+		if ( status != SERE_OK )
 		{
 			sere_render_canvas_destroy( &canvas );
-			return -1;
+			return status;
 		}
 		cairo_set_source_rgb( cr, 0.15, 0.15, 0.15 );
 		sere_render_text( cr, x + 0.5 * pw, y + ph + 18, 13, 0, 1, caption );
 	}
-	int result = sere_render_canvas_write_png( &canvas, path, err, err_size );
+	status = sere_render_canvas_write_png( &canvas, path, err, err_size );
 	sere_render_canvas_destroy( &canvas );
-	return result;
+	return status;
 }

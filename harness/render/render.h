@@ -2,10 +2,13 @@
  * the paper's fresh-to-dry leaf color (Sec. 6, Fig. 1, 16, 17), a perceptual colormap for
  * scalar fields, contact sheets of panels, line plots and the plane triangulation picture.
  *
- * Every function that can fail returns 0 on success and -1 with one line in err (never NULL
- * err unless err_size is 0). PNG files are written to "<path>.tmp" and renamed, so an
+ * Every function that can fail returns SERE_OK, or a sere_status (SERE_ERR_ARGUMENT,
+ * SERE_ERR_NONFINITE, SERE_ERR_MEMORY, SERE_ERR_IO) with one line in err (never NULL err unless
+ * err_size is 0). PNG files are written to "<path>.tmp" and renamed, so an
  * interrupted run never leaves a half-written picture. Nothing here keeps global state. */
 #pragma once
+
+#include "core/base.h"
 
 #include <cairo.h>
 #include <stddef.h>
@@ -70,15 +73,15 @@ typedef struct sere_render_style
 
 /* Fills view->center and view->scale so the mesh fits a w x h region with view->margin
  * pixels free on every side. Non-finite coordinates give -1. */
-int sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere_render_view* view, char* err,
-						  size_t err_size );
+sere_status sere_render_fit_view( const sere_render_mesh* mesh, double w, double h, sere_render_view* view, char* err,
+								  size_t err_size );
 
 /* Draws the mesh into the region (x0, y0, w, h) of cr, clipped to it: painter's algorithm
  * (triangles sorted far to near by centroid depth, ties by index, so the picture is
  * deterministic), flat Lambert shading, two-sided, a light from the upper left of the screen.
  * style may be NULL (shaded, no edges, no lines). */
-int sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
-						   sere_render_view* view, const sere_render_style* style, char* err, size_t err_size );
+sere_status sere_render_mesh_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
+								   sere_render_view* view, const sere_render_style* style, char* err, size_t err_size );
 
 /* A leaf seen in 3D: the ground it rests on with its shadow, and its two faces told apart.
  * Kept apart from sere_render_style so the callers that list that struct's fields in order
@@ -113,15 +116,16 @@ void sere_render_lower_tint( const float rgb[3], float out[3] );
  * quad, so the whole scene fits the region; with a ground the center is then moved to the
  * middle of the scene's projection (an oblique scene fills its region evenly). scene may be
  * NULL (exactly sere_render_fit_view). */
-int sere_render_fit_scene( const sere_render_mesh* mesh, const sere_render_scene* scene, double w, double h,
-						   sere_render_view* view, char* err, size_t err_size );
+sere_status sere_render_fit_scene( const sere_render_mesh* mesh, const sere_render_scene* scene, double w, double h,
+								   sere_render_view* view, char* err, size_t err_size );
 
 /* sere_render_mesh_draw with a scene (may be NULL: the same picture as sere_render_mesh_draw);
  * an unfitted view is fitted with sere_render_fit_scene. Deterministic: the same input gives
  * the same pixels. */
-int sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_mesh* mesh,
-								 sere_render_view* view, const sere_render_style* style, const sere_render_scene* scene,
-								 char* err, size_t err_size );
+sere_status sere_render_mesh_draw_scene( cairo_t* cr, double x0, double y0, double w, double h,
+										 const sere_render_mesh* mesh, sere_render_view* view,
+										 const sere_render_style* style, const sere_render_scene* scene, char* err,
+										 size_t err_size );
 
 /* Screen position of a model point under view in the region (x0, y0, w, h) (view fitted). */
 void sere_render_project( const sere_render_view* view, double x0, double y0, double w, double h, double x, double y,
@@ -173,15 +177,16 @@ typedef struct sere_render_canvas
 	int height;
 } sere_render_canvas;
 
-int sere_render_canvas_create( sere_render_canvas* canvas, int width, int height, char* err, size_t err_size );
+sere_status sere_render_canvas_create( sere_render_canvas* canvas, int width, int height, char* err, size_t err_size );
 /* Checks the drawing status, then writes the PNG atomically. */
-int sere_render_canvas_write_png( const sere_render_canvas* canvas, const char* path, char* err, size_t err_size );
+sere_status sere_render_canvas_write_png( const sere_render_canvas* canvas, const char* path, char* err,
+										  size_t err_size );
 void sere_render_canvas_destroy( sere_render_canvas* canvas );
 
 /* Draws panel `index` into the region (x, y, w, h) of cr and may write its caption
- * (e.g. "frame 120, RWC 0.63") into caption; returns 0, or -1 with a message in err. */
-typedef int sere_render_panel_fn( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
-								  char* caption, size_t caption_size, char* err, size_t err_size );
+ * (e.g. "frame 120, RWC 0.63") into caption; returns SERE_OK, or a status with a message in err. */
+typedef sere_status sere_render_panel_fn( void* user, int index, cairo_t* cr, double x, double y, double w, double h,
+										  char* caption, size_t caption_size, char* err, size_t err_size );
 
 typedef struct sere_render_sheet
 {
@@ -195,7 +200,7 @@ typedef struct sere_render_sheet
 } sere_render_sheet;
 
 /* A grid of panels with a caption under each and a title on top, written as a PNG. */
-int sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet, char* err, size_t err_size );
+sere_status sere_render_contact_sheet( const char* path, const sere_render_sheet* sheet, char* err, size_t err_size );
 
 /* One curve. Points with a non-finite coordinate break the line. */
 typedef struct sere_render_series
@@ -220,12 +225,12 @@ typedef struct sere_render_axes
 
 /* A line plot in the region (x0, y0, w, h): title, axes with nice ticks, grid lines, labels
  * and a legend in the corner the data leaves emptiest. -1 when there is no finite point. */
-int sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_axes* axes,
-						   const sere_render_series* series, int series_count, char* err, size_t err_size );
+sere_status sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_axes* axes,
+								   const sere_render_series* series, int series_count, char* err, size_t err_size );
 
 /* The plot alone as a width x height PNG. */
-int sere_render_plot( const char* path, int width, int height, const sere_render_axes* axes,
-					  const sere_render_series* series, int series_count, char* err, size_t err_size );
+sere_status sere_render_plot( const char* path, int width, int height, const sere_render_axes* axes,
+							  const sere_render_series* series, int series_count, char* err, size_t err_size );
 
 /* The flat triangulation of a leaf seen from above (sere model --png): triangles outlined,
  * optionally filled by a per-vertex scalar through the colormap with a colorbar, vein edges
@@ -246,8 +251,8 @@ typedef struct sere_render_plane
 	int32_t outline_count;
 } sere_render_plane;
 
-int sere_render_plane_png( const char* path, int width, int height, const sere_render_plane* plane, char* err,
-						   size_t err_size );
+sere_status sere_render_plane_png( const char* path, int width, int height, const sere_render_plane* plane, char* err,
+								   size_t err_size );
 
 #ifdef __cplusplus
 }

@@ -102,13 +102,7 @@ void sere_render_colorbar( cairo_t* cr, double x, double y, double w, double h, 
 		sere_render_colormap( k / 9.0, rgb );
 		cairo_pattern_add_color_stop_rgb( gradient, k / 9.0, rgb[0], rgb[1], rgb[2] );
 	}
-	cairo_rectangle( cr, x, y, w, h );
-	cairo_set_source( cr, gradient );
-	cairo_fill_preserve( cr );
-	cairo_pattern_destroy( gradient );
-	cairo_set_source_rgb( cr, 0.3, 0.3, 0.3 );
-	cairo_set_line_width( cr, 1.0 );
-	cairo_stroke( cr );
+	sere_render_gradient_box( cr, gradient, x, y, w, h, 0.3 );
 	set_font( cr, 12, 0 );
 	if ( hi > lo && isfinite( lo ) && isfinite( hi ) )
 	{
@@ -268,8 +262,8 @@ static void draw_legend( cairo_t* cr, const plot_area* a, const sere_render_seri
 
 /* The data's box, or the axes' fixed y range; a constant curve widened so it still gets an
  * axis. -1 with a message when no point is finite or the fixed range is empty. */
-static int plot_range( const sere_render_axes* axes, const sere_render_series* series, int series_count, double lo[2],
-					   double hi[2], char* err, size_t err_size )
+static sere_status plot_range( const sere_render_axes* axes, const sere_render_series* series, int series_count,
+							   double lo[2], double hi[2], char* err, size_t err_size )
 {
 	lo[0] = lo[1] = INFINITY;
 	hi[0] = hi[1] = -INFINITY;
@@ -286,13 +280,15 @@ static int plot_range( const sere_render_axes* axes, const sere_render_series* s
 	}
 	if ( !( lo[0] <= hi[0] ) )
 	{
-		return sere_fail( err, err_size, "render: plot '%s' has no finite point", axes->title ? axes->title : "" );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: plot '%s' has no finite point",
+						  axes->title ? axes->title : "" );
 	}
 	if ( axes->fixed_y )
 	{
 		if ( !( axes->y_min < axes->y_max ) || !isfinite( axes->y_min ) || !isfinite( axes->y_max ) )
 		{
-			return sere_fail( err, err_size, "render: plot y range [%g, %g] is empty", axes->y_min, axes->y_max );
+			return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: plot y range [%g, %g] is empty", axes->y_min,
+							  axes->y_max );
 		}
 		lo[1] = axes->y_min, hi[1] = axes->y_max;
 	}
@@ -305,7 +301,7 @@ static int plot_range( const sere_render_axes* axes, const sere_render_series* s
 			lo[c] -= pad, hi[c] += pad;
 		}
 	}
-	return 0;
+	return SERE_OK;
 }
 
 /* The grid, the tick marks and their labels. */
@@ -390,15 +386,16 @@ static void draw_series( cairo_t* cr, const plot_area* a, const sere_render_seri
 	cairo_restore( cr );
 }
 
-int sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_axes* axes,
-						   const sere_render_series* series, int series_count, char* err, size_t err_size )
+sere_status sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h, const sere_render_axes* axes,
+								   const sere_render_series* series, int series_count, char* err, size_t err_size )
 {
 	const sere_render_axes none = { 0 };
 	axes = axes != NULL ? axes : &none;
 	double lo[2], hi[2];
-	if ( plot_range( axes, series, series_count, lo, hi, err, err_size ) != 0 )
+	sere_status status = plot_range( axes, series, series_count, lo, hi, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 
 	plot_area a;
@@ -430,7 +427,7 @@ int sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h
 	if ( a.width < 20.0 || a.height < 20.0 )
 	{
 		cairo_restore( cr );
-		return sere_fail( err, err_size, "render: plot region %gx%g too small", w, h );
+		return sere_fail( SERE_ERR_ARGUMENT, err, err_size, "render: plot region %gx%g too small", w, h );
 	}
 
 	draw_grid( cr, &a );
@@ -463,15 +460,17 @@ int sere_render_plot_draw( cairo_t* cr, double x0, double y0, double w, double h
 	return sere_render_cairo_failed( cr, err, err_size );
 }
 
-int sere_render_plot( const char* path, int width, int height, const sere_render_axes* axes,
-					  const sere_render_series* series, int series_count, char* err, size_t err_size )
+sere_status sere_render_plot( const char* path, int width, int height, const sere_render_axes* axes,
+							  const sere_render_series* series, int series_count, char* err, size_t err_size )
 {
 	sere_render_canvas canvas;
-	if ( sere_render_canvas_create( &canvas, width, height, err, err_size ) != 0 )
+	sere_status status = sere_render_canvas_create( &canvas, width, height, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
-	int result = sere_render_plot_draw( canvas.cr, 0.0, 0.0, width, height, axes, series, series_count, err, err_size );
+	sere_status result =
+		sere_render_plot_draw( canvas.cr, 0.0, 0.0, width, height, axes, series, series_count, err, err_size );
 	if ( result == 0 )
 	{
 		result = sere_render_canvas_write_png( &canvas, path, err, err_size );
@@ -480,8 +479,8 @@ int sere_render_plot( const char* path, int width, int height, const sere_render
 	return result;
 }
 
-int sere_render_plane_png( const char* path, int width, int height, const sere_render_plane* plane, char* err,
-						   size_t err_size )
+sere_status sere_render_plane_png( const char* path, int width, int height, const sere_render_plane* plane, char* err,
+								   size_t err_size )
 {
 	double lo = INFINITY, hi = -INFINITY;
 	if ( plane->scalar != NULL )
@@ -490,15 +489,17 @@ int sere_render_plane_png( const char* path, int width, int height, const sere_r
 		{
 			if ( !isfinite( plane->scalar[i] ) )
 			{
-				return sere_fail( err, err_size, "%s: scalar at vertex %d is not finite", path, (int) i );
+				return sere_fail( SERE_ERR_NONFINITE, err, err_size, "%s: scalar at vertex %d is not finite", path,
+								  (int) i );
 			}
 			lo = fmin( lo, plane->scalar[i] ), hi = fmax( hi, plane->scalar[i] );
 		}
 	}
 	sere_render_canvas canvas;
-	if ( sere_render_canvas_create( &canvas, width, height, err, err_size ) != 0 )
+	sere_status status = sere_render_canvas_create( &canvas, width, height, err, err_size );
+	if ( status != SERE_OK )
 	{
-		return -1;
+		return status;
 	}
 	float* rgb = NULL;
 	sere_render_mesh mesh = {
@@ -515,7 +516,7 @@ int sere_render_plane_png( const char* path, int width, int height, const sere_r
 		if ( rgb == NULL )
 		{
 			sere_render_canvas_destroy( &canvas );
-			return sere_fail( err, err_size, "%s: out of memory", path );
+			return sere_fail( SERE_ERR_MEMORY, err, err_size, "%s: out of memory", path );
 		}
 		sere_render_colormap_values( plane->scalar, plane->vertex_count, lo, hi, rgb );
 		mesh.rgb = rgb;
@@ -529,8 +530,8 @@ int sere_render_plane_png( const char* path, int width, int height, const sere_r
 	double top = has_title ? 40.0 : 8.0, bar = rgb != NULL ? 96.0 : 0.0;
 	sere_render_view view = { .azimuth = 0.0, .elevation = 90.0, .margin = 14.0 };
 	cairo_t* cr = canvas.cr;
-	int result = sere_render_mesh_draw( cr, 8.0, top, width - 16.0 - bar, height - top - 8.0, &mesh, &view, &style, err,
-										err_size );
+	sere_status result = sere_render_mesh_draw( cr, 8.0, top, width - 16.0 - bar, height - top - 8.0, &mesh, &view,
+												&style, err, err_size );
 	if ( result == 0 )
 	{
 		cairo_set_source_rgb( cr, 0.1, 0.1, 0.1 );

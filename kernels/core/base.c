@@ -48,6 +48,10 @@ const char* sere_status_text( sere_status status )
 			return "iteration cap reached before the tolerance";
 		case SERE_ERR_CAPACITY:
 			return "workspace too small for the input";
+		case SERE_ERR_IO:
+			return "file could not be read or written";
+		case SERE_ERR_PARSE:
+			return "text not in the expected format";
 		case SERE_STATUS_COUNT:
 			break;
 	}

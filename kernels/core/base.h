@@ -39,6 +39,8 @@ typedef enum sere_status
 	SERE_ERR_NOT_SPD,	  /* the matrix is not symmetric positive definite (CG met pᵀAp ≤ 0) */
 	SERE_ERR_NO_CONVERGE, /* an iteration cap was reached before the tolerance */
 	SERE_ERR_CAPACITY,	  /* a workspace is too small for the input */
+	SERE_ERR_IO,		  /* a file could not be opened, read, written or renamed (the harness's files) */
+	SERE_ERR_PARSE,		  /* a file or option's text is not in its format (the harness's readers) */
 	SERE_STATUS_COUNT
 } sere_status;
 
