@@ -24,8 +24,7 @@ int LLVMFuzzerTestOneInput( const uint8_t* data, size_t size )
 	snprintf( path, sizeof( path ), "%s", fuzz_file( data, size ) );
 	char* argv[] = { command, path, NULL };
 	wilt_options o;
-	int done = 0;
-	FUZZ_CHECK( parse_options( 2, argv, &o, &done ) == 0 && !done );
+	FUZZ_CHECK( parse_options( 2, argv, &o ) == SERE_OPTIONS_GO );
 	wilt_run r;
 	memset( &r, 0, sizeof( r ) );
 	double leaf_length = 0.0;
