@@ -14,6 +14,29 @@
 
 #define DEG ( 3.14159265358979323846 / 180.0 )
 
+/* The generated skeleton (skeleton_generated) with its joint frames. */
+static void skeleton_framed( sere_skeleton* s, const sere_venation_params* params, sere_joint_frames* f )
+{
+	skeleton_generated( s, params );
+	cr_assert_eq( sere_joint_frames_create( f, s->joint_count ), SERE_OK );
+}
+
+/* skeleton_framed on the default venation with the midrib and the secondary veins bent by the
+ * given total angles (degrees). */
+static void skeleton_bent( sere_skeleton* s, sere_joint_frames* f, double mid_bend, double secondary_bend )
+{
+	sere_venation_params vp = sere_venation_params_default();
+	vp.mid_bend = (float) ( mid_bend * DEG );
+	vp.secondary_bend = (float) ( secondary_bend * DEG );
+	skeleton_framed( s, &vp, f );
+}
+
+static void skeleton_free( sere_skeleton* s, sere_joint_frames* f )
+{
+	sere_joint_frames_destroy( f );
+	sere_skeleton_destroy( s );
+}
+
 static sere_wilt_params no_limits( void )
 {
 	sere_wilt_params p = sere_wilt_params_default();
@@ -35,13 +58,9 @@ static void segment_lengths( const sere_skeleton* s, const sere_joint_frames* f,
 
 Test( skeleton, rotations_keep_segment_lengths_and_match_the_reference )
 {
-	sere_venation_params vp = sere_venation_params_default();
-	vp.mid_bend = (float) ( 150.0 * DEG );
-	vp.secondary_bend = (float) ( 120.0 * DEG );
 	sere_skeleton s;
-	skeleton_generated( &s, &vp );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
+	skeleton_bent( &s, &f, 150.0, 120.0 );
 	double* rx = malloc( (size_t) s.joint_count * 3 * sizeof( double ) );
 	double *ry = rx + s.joint_count, *rz = ry + s.joint_count;
 	sere_wilt_params limited = sere_wilt_params_default();
@@ -101,8 +120,7 @@ Test( skeleton, rotations_keep_segment_lengths_and_match_the_reference )
 		}
 	}
 	free( rx );
-	sere_joint_frames_destroy( &f );
-	sere_skeleton_destroy( &s );
+	skeleton_free( &s, &f );
 }
 
 Test( skeleton, wilting_turns_down_tips_first_and_not_past_straight_down )
@@ -144,8 +162,7 @@ Test( skeleton, wilting_turns_down_tips_first_and_not_past_straight_down )
 	}
 	double dz = (double) f.z[tip] - f.z[tip - 1], dx = (double) f.x[tip] - f.x[tip - 1];
 	cr_expect_float_eq( atan2( -dz, dx ), 90.0 * DEG, 1e-5, "the tip segment hangs straight down" );
-	sere_joint_frames_destroy( &f );
-	sere_skeleton_destroy( &s );
+	skeleton_free( &s, &f );
 }
 
 /* The lowest a joint sinks below its rest height over the whole skeleton. */
@@ -183,13 +200,9 @@ static double smallest_included_angle( const sere_skeleton* s, const sere_joint_
 
 Test( skeleton, droop_limit_holds )
 {
-	sere_venation_params vp = sere_venation_params_default();
-	vp.mid_bend = (float) ( 170.0 * DEG );
-	vp.secondary_bend = (float) ( 150.0 * DEG );
 	sere_skeleton s;
-	skeleton_generated( &s, &vp );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
+	skeleton_bent( &s, &f, 170.0, 150.0 );
 	sere_wilt_params p = no_limits();
 	cr_assert_eq( sere_skeleton_pose( &s, 0, s.joint_count, 1.0f, &p, &f, NULL ), SERE_OK );
 	double unlimited = deepest_droop( &s, &f );
@@ -213,8 +226,7 @@ Test( skeleton, droop_limit_holds )
 			}
 		}
 	}
-	sere_joint_frames_destroy( &f );
-	sere_skeleton_destroy( &s );
+	skeleton_free( &s, &f );
 }
 
 Test( skeleton, minimal_angle_limit_holds )
@@ -244,29 +256,38 @@ Test( skeleton, minimal_angle_limit_holds )
 			cr_expect_gt( stats.angle_limited, 0 );
 		}
 	}
-	sere_joint_frames_destroy( &f );
-	sere_skeleton_destroy( &s );
+	skeleton_free( &s, &f );
 }
 
 Test( skeleton, pose_rejects_bad_input )
 {
 	sere_skeleton s;
-	skeleton_generated( &s, NULL );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
-	sere_wilt_params p = sere_wilt_params_default();
-	cr_expect_eq( sere_skeleton_pose( &s, 0, s.joint_count, NAN, &p, &f, NULL ), SERE_ERR_NONFINITE );
-	cr_expect_eq( sere_skeleton_pose( &s, 1, s.joint_count - 1, 0.5f, &p, &f, NULL ), SERE_ERR_ARGUMENT,
-				  "a range must be a whole tree" );
-	p.spread = 1.0f;
-	cr_expect_eq( sere_skeleton_pose( &s, 0, s.joint_count, 0.5f, &p, &f, NULL ), SERE_ERR_ARGUMENT );
-	p = sere_wilt_params_default();
-	p.droop_max = -1.0f;
-	cr_expect_eq( sere_skeleton_pose( &s, 0, s.joint_count, 0.5f, &p, &f, NULL ), SERE_ERR_ARGUMENT );
-	p.droop_max = NAN;
-	cr_expect_eq( sere_skeleton_pose( &s, 0, s.joint_count, 0.5f, &p, &f, NULL ), SERE_ERR_NONFINITE );
-	sere_joint_frames_destroy( &f );
-	sere_skeleton_destroy( &s );
+	skeleton_framed( &s, NULL, &f );
+	/* each case from the default parameters; spread and droop_max replace theirs when nonzero */
+	const struct
+	{
+		int32_t first;
+		float water, spread, droop_max;
+		sere_status status;
+		const char* what;
+	} cases[] = {
+		{ 0, NAN, 0.0f, 0.0f, SERE_ERR_NONFINITE, "NaN water" },
+		{ 1, 0.5f, 0.0f, 0.0f, SERE_ERR_ARGUMENT, "a range must be a whole tree" },
+		{ 0, 0.5f, 1.0f, 0.0f, SERE_ERR_ARGUMENT, "spread 1" },
+		{ 0, 0.5f, 0.0f, -1.0f, SERE_ERR_ARGUMENT, "a negative droop limit" },
+		{ 0, 0.5f, 0.0f, NAN, SERE_ERR_NONFINITE, "a NaN droop limit" },
+	};
+	for ( size_t k = 0; k < sizeof( cases ) / sizeof( cases[0] ); ++k )
+	{
+		sere_wilt_params p = sere_wilt_params_default();
+		p.spread = cases[k].spread != 0.0f ? cases[k].spread : p.spread;
+		p.droop_max = cases[k].droop_max != 0.0f ? cases[k].droop_max : p.droop_max;
+		cr_expect_eq(
+			sere_skeleton_pose( &s, cases[k].first, s.joint_count - cases[k].first, cases[k].water, &p, &f, NULL ),
+			cases[k].status, "%s", cases[k].what );
+	}
+	skeleton_free( &s, &f );
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -274,9 +295,8 @@ Test( skeleton, pose_rejects_bad_input )
 Test( skeleton, skinning_equals_reference_bitwise )
 {
 	sere_skeleton s;
-	skeleton_generated( &s, NULL );
 	sere_joint_frames f;
-	cr_assert_eq( sere_joint_frames_create( &f, s.joint_count ), SERE_OK );
+	skeleton_framed( &s, NULL, &f );
 	sere_wilt_params p = sere_wilt_params_default();
 	cr_assert_eq( sere_skeleton_pose( &s, 0, s.joint_count, 0.8f, &p, &f, NULL ), SERE_OK );
 	enum
@@ -299,8 +319,7 @@ Test( skeleton, skinning_equals_reference_bitwise )
 	cr_expect_eq( memcmp( x, rx, sizeof( x ) ), 0 );
 	cr_expect_eq( memcmp( y, ry, sizeof( y ) ), 0 );
 	cr_expect_eq( memcmp( z, rz, sizeof( z ) ), 0 );
-	sere_joint_frames_destroy( &f );
-	sere_skeleton_destroy( &s );
+	skeleton_free( &s, &f );
 }
 
 /* ------------------------------------------------------------------------------------------- */
