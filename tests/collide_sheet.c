@@ -16,6 +16,8 @@ void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed
 	s->n = plane.mesh.point_count;
 	s->triangles = plane.mesh.triangle_count;
 	s->cell = 1.0f / (float) nx;
+	s->bvh = NULL;
+	s->c = NULL;
 	size_t bytes = sizeof( float ) * (size_t) sere_pad( s->n + s->triangles );
 	float** arrays[] = { &s->x, &s->y, &s->z, &s->vx, &s->vy, &s->vz, &s->inv_m };
 	for ( int k = 0; k < 7; ++k )
@@ -46,16 +48,23 @@ void collide_sheet_free( collide_sheet* s )
 	free( s->tri );
 }
 
-void collide_sheet_tree( const collide_sheet* s, int32_t capacity, sere_bvh** bvh, sere_collide** c )
+void collide_sheet_tree( collide_sheet* s, int32_t capacity )
 {
-	cr_assert_eq( sere_bvh_create( s->tri, s->triangles, s->n, s->x, s->y, s->z, bvh ), SERE_OK );
-	cr_assert_eq( sere_collide_create( *bvh, capacity, c ), SERE_OK );
+	cr_assert_eq( sere_bvh_create( s->tri, s->triangles, s->n, s->x, s->y, s->z, &s->bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s->bvh, capacity, &s->c ), SERE_OK );
 }
 
-void collide_sheet_release( collide_sheet* s, sere_bvh* bvh, sere_collide* c )
+float collide_sheet_open( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed, int32_t capacity )
 {
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
+	collide_sheet_make( s, nx, ny, seed );
+	collide_sheet_tree( s, capacity );
+	return 0.3f * s->cell;
+}
+
+void collide_sheet_release( collide_sheet* s )
+{
+	sere_collide_destroy( s->c );
+	sere_bvh_destroy( s->bvh );
 	collide_sheet_free( s );
 }
 

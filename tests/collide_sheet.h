@@ -19,14 +19,20 @@ typedef struct collide_sheet
 	double *u, *v;
 	int32_t* tri;
 	float cell;
+	sere_bvh* bvh; /* the tree and collide workspace on the sheet, NULL until collide_sheet_tree */
+	sere_collide* c;
 } collide_sheet;
 
 void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed );
 void collide_sheet_free( collide_sheet* s );
 
 /* The tree over the sheet's triangles and a collide workspace of the given capacity on it. */
-void collide_sheet_tree( const collide_sheet* s, int32_t capacity, sere_bvh** bvh, sere_collide** c );
-void collide_sheet_release( collide_sheet* s, sere_bvh* bvh, sere_collide* c );
+void collide_sheet_tree( collide_sheet* s, int32_t capacity );
+/* collide_sheet_make and collide_sheet_tree on the flat sheet; returns the thickness the tests
+ * use, 0.3 cell. */
+float collide_sheet_open( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed, int32_t capacity );
+/* Destroys the sheet's tree and workspace (if any) and frees the sheet. */
+void collide_sheet_release( collide_sheet* s );
 
 void collide_sheet_flat( collide_sheet* s );
 

@@ -56,12 +56,8 @@ Test( collide, closest_point_matches_double_reference )
 Test( collide, pairs_match_brute_force_on_random_deformations )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 5 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
-	cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "flat", NULL ), 0 );
+	float h = collide_sheet_open( &s, 36, 24, 5, 1 << 16 );
+	cr_assert_eq( collide_check_pairs( &s, s.bvh, s.c, h, "flat", NULL ), 0 );
 	/* noise of 3 cells in every axis: neighbourhoods interpenetrate, many contacts beyond the
 	 * vertices joined by an edge (which do not count) */
 	for ( uint64_t seed = 1; seed <= 3; ++seed )
@@ -74,88 +70,80 @@ Test( collide, pairs_match_brute_force_on_random_deformations )
 			s.z[i] = (float) ( 3.0 * s.cell * ( sere_test_unit( &state ) - 0.5 ) );
 		}
 		/* refit only: the tree was built on the flat sheet */
-		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 		int32_t edges = 0;
-		int32_t refit = collide_check_pairs( &s, bvh, c, h, "noise, refit", &edges );
+		int32_t refit = collide_check_pairs( &s, s.bvh, s.c, h, "noise, refit", &edges );
 		cr_assert_gt( refit, 100, "refit found %d", refit );
 		cr_assert_gt( edges, 100, "refit found %d edge pairs", edges );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
-		cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "noise, rebuilt", NULL ), refit );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( collide_check_pairs( &s, s.bvh, s.c, h, "noise, rebuilt", NULL ), refit );
 		collide_sheet_flat( &s );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	}
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, pairs_match_brute_force_on_u_fold )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 6 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	float h = collide_sheet_open( &s, 36, 24, 6, 1 << 16 );
 	/* below the thickness the halves touch everywhere: about every vertex is in contact */
 	collide_sheet_fold( &s, 0.8 * h );
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	int32_t near_edges = 0;
-	int32_t near = collide_check_pairs( &s, bvh, c, h, "fold 0.8h, refit", &near_edges );
+	int32_t near = collide_check_pairs( &s, s.bvh, s.c, h, "fold 0.8h, refit", &near_edges );
 	cr_assert_gt( near, s.n );
 	/* the halves' edges cross over each other in projection, about two per edge */
 	cr_assert_gt( near_edges, s.n / 2 );
-	cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
-	collide_check_pairs( &s, bvh, c, h, "fold 0.8h, rebuilt", NULL );
+	cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
+	collide_check_pairs( &s, s.bvh, s.c, h, "fold 0.8h, rebuilt", NULL );
 	/* above it only the tight bend itself (radius 0.6h) is closer than h */
 	collide_sheet_fold( &s, 1.2 * h );
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	int32_t far_edges = 0;
-	int32_t far = collide_check_pairs( &s, bvh, c, h, "fold 1.2h", &far_edges );
+	int32_t far = collide_check_pairs( &s, s.bvh, s.c, h, "fold 1.2h", &far_edges );
 	cr_assert_lt( far, near / 20 );
 	cr_assert_lt( far_edges, near_edges / 20 );
 	int32_t count;
-	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	const sere_contact* contacts = sere_collide_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		const int32_t* v = s.tri + 3 * contacts[k].triangle;
 		cr_assert( fabs( s.u[contacts[k].vertex] - 0.5 ) < 2.0 * s.cell && fabs( s.u[v[0]] - 0.5 ) < 2.0 * s.cell,
 				   "contact away from the bend" );
 	}
-	const sere_edge_contact* edge_contacts = sere_collide_edge_contacts( c, &count );
+	const sere_edge_contact* edge_contacts = sere_collide_edge_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		cr_assert( fabs( s.u[edge_contacts[k].a0] - 0.5 ) < 2.0 * s.cell &&
 					   fabs( s.u[edge_contacts[k].b0] - 0.5 ) < 2.0 * s.cell,
 				   "edge contact away from the bend" );
 	}
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, pairs_match_brute_force_on_crumpled_sheet )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 7 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	float h = collide_sheet_open( &s, 36, 24, 7, 1 << 16 );
 	const double amplitudes[] = { 0.05, 0.2, 0.4 };
 	int32_t most = 0, most_edges = 0;
 	for ( int k = 0; k < 3; ++k )
 	{
 		collide_sheet_crumple( &s, amplitudes[k], 0.3 * h, 11 + (uint64_t) k );
-		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 		int32_t edges = 0;
-		int32_t refit = collide_check_pairs( &s, bvh, c, h, "crumpled, refit", &edges );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
-		cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "crumpled, rebuilt", NULL ), refit );
+		int32_t refit = collide_check_pairs( &s, s.bvh, s.c, h, "crumpled, refit", &edges );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( collide_check_pairs( &s, s.bvh, s.c, h, "crumpled, rebuilt", NULL ), refit );
 		most = refit > most ? refit : most;
 		most_edges = edges > most_edges ? edges : most_edges;
 		collide_sheet_flat( &s );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	}
 	cr_assert_gt( most, 50, "the strongest crumple must fold the sheet onto itself" );
 	cr_assert_gt( most_edges, 50, "the strongest crumple must bring edges across each other" );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 /* A detection served by the candidate list (collide.c, SKIN) must find what a search finds: the
@@ -239,37 +227,35 @@ Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 	collide_sheet_make( &s, 36, 24, 7 );
 	float h = 0.3f * s.cell, gap = 1.47f * h, d = 0.24f * h;
 	collide_sheet_fold( &s, gap );
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	collide_sheet_tree( &s, 1 << 16 );
 	int32_t before = -1;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
-	cr_assert_eq( sere_collide_list_uses( c ), 0 );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
+	cr_assert_eq( sere_collide_list_uses( s.c ), 0 );
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		s.z[i] = d + s.z[i] * ( gap - 2.0f * d ) / gap;
 	}
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	int32_t edges = 0;
-	int32_t count = collide_check_pairs( &s, bvh, c, h, "closed fold", &edges );
-	cr_assert_eq( sere_collide_list_uses( c ), 1, "the list must serve a move within its skin" );
+	int32_t count = collide_check_pairs( &s, s.bvh, s.c, h, "closed fold", &edges );
+	cr_assert_eq( sere_collide_list_uses( s.c ), 1, "the list must serve a move within its skin" );
 	cr_assert_gt( count, 10 * ( before + 10 ), "closing the fold must bring the halves within the thickness" );
 	cr_assert_gt( edges, 100 );
 	sere_collide* fresh;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s.bvh, 1 << 16, &fresh ), SERE_OK );
 	int32_t fresh_count = -1;
-	cr_assert_eq( sere_collide_detect( fresh, bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( fresh, s.bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
 	int32_t n_a, n_b, e_a, e_b;
-	const sere_contact* a = sere_collide_contacts( c, &n_a );
+	const sere_contact* a = sere_collide_contacts( s.c, &n_a );
 	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
-	const sere_edge_contact* ea = sere_collide_edge_contacts( c, &e_a );
+	const sere_edge_contact* ea = sere_collide_edge_contacts( s.c, &e_a );
 	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
 	cr_assert( n_a == n_b && e_a == e_b );
 	/* tolerance 0: the same pairs through the same exact test, in the same order */
 	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0 );
 	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0 );
 	sere_collide_destroy( fresh );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 /* One vertex over the middle of a triangle, everything else far away: a single contact whose
@@ -279,11 +265,7 @@ Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 9 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	float h = collide_sheet_open( &s, 36, 24, 9, 1 << 16 );
 	collide_sheet_fold( &s, 0.8 * h );
 	/* on the upper half, put a corner of every fifth triangle on the midpoint of the other two
 	 * (zero area), or a millionth of a cell beside it (a sliver) */
@@ -302,12 +284,12 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 		collapsed += 1;
 	}
 	cr_assert_gt( collapsed, 50 );
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
-	int32_t near = collide_check_pairs( &s, bvh, c, h, "fold with collapsed triangles", NULL );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t near = collide_check_pairs( &s, s.bvh, s.c, h, "fold with collapsed triangles", NULL );
 	cr_assert_gt( near, s.n / 2 );
 	/* some contact must lie on a collapsed triangle for the fallback to have been exercised */
 	int32_t count, on_degenerate = 0;
-	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	const sere_contact* contacts = sere_collide_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		const int32_t* v = s.tri + 3 * contacts[k].triangle;
@@ -319,7 +301,7 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 		on_degenerate += area2 <= 1e-6f * ab2 * ab2;
 	}
 	cr_assert_gt( on_degenerate, 0, "no contact on a collapsed triangle: the fallback was not exercised" );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, single_contact_shared_by_inverse_mass )
@@ -627,21 +609,19 @@ Test( collide, nonfinite_inputs_are_refused )
 	collide_sheet_make( &s, 12, 10, 1 );
 	collide_shape_fold( &s );
 	int32_t n = s.n, f = s.triangles;
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &bvh ), SERE_OK );
-	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &s.bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s.bvh, 0, &s.c ), SERE_OK );
 	size_t bytes = sizeof( float ) * (size_t) ( n + f );
 	float* saved = malloc( 3 * bytes );
 	memcpy( saved, s.x, bytes ), memcpy( saved + n + f, s.y, bytes ), memcpy( saved + 2 * ( n + f ), s.z, bytes );
 
 	s.x[7] = NAN;
 	int32_t count = 0;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_NONFINITE );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
 	s.x[7] = saved[7];
 	cr_assert( memcmp( saved, s.x, bytes ) == 0 && memcmp( saved + n + f, s.y, bytes ) == 0 &&
 				   memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0,
@@ -650,15 +630,15 @@ Test( collide, nonfinite_inputs_are_refused )
 	/* a NaN velocity on a vertex in contact */
 	s.vz[0] = INFINITY;
 	bool touched = false;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, params.thickness, &count ), SERE_OK );
-	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, params.thickness, &count ), SERE_OK );
+	const sere_contact* contacts = sere_collide_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		touched = touched || contacts[k].vertex == 0 || s.tri[3 * contacts[k].triangle] == 0 ||
 				  s.tri[3 * contacts[k].triangle + 1] == 0 || s.tri[3 * contacts[k].triangle + 2] == 0;
 	}
 	cr_assert( touched, "vertex 0 should be in contact in the fold" );
-	cr_assert_eq( sere_collide_respond( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_respond( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
 	s.vz[0] = 0.0f;
 
@@ -668,7 +648,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	start[0] = NAN;
 	sere_collide_state history = state;
 	history.x0 = s.x, history.y0 = s.y, history.z0 = start;
-	const sere_contact* listed = sere_collide_contacts( c, &count );
+	const sere_contact* listed = sere_collide_contacts( s.c, &count );
 	float* sides = malloc( sizeof( float ) * (size_t) count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
@@ -679,7 +659,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	{
 		start[i] = -s.z[i];
 	}
-	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_respond( s.c, s.bvh, &history, &params, NULL ), SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
 	for ( int32_t k = 0; k < count; ++k )
 	{
@@ -687,8 +667,8 @@ Test( collide, nonfinite_inputs_are_refused )
 	}
 	free( sides );
 	history.y0 = NULL;
-	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
-	cr_assert_eq( sere_collide_resolve( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_respond( s.c, s.bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
 	free( start );
 	s.vz[0] = INFINITY;
 
@@ -717,7 +697,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	}
 	free( h );
 	free( saved );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
@@ -725,63 +705,59 @@ Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
 	collide_sheet s;
 	collide_sheet_make( &s, 20, 16, 2 );
 	collide_shape_fold( &s );
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 16, &bvh, &c );
+	collide_sheet_tree( &s, 16 );
 	float* saved = malloc( sizeof( float ) * (size_t) s.n );
 	memcpy( saved, s.z, sizeof( float ) * (size_t) s.n );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	sere_collide_stats stats;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_ERR_CAPACITY );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_ERR_CAPACITY );
 	/* the capacity holds each kind: the larger count is what it must grow to */
 	int32_t needed = stats.contacts > stats.edge_contacts ? stats.contacts : stats.edge_contacts;
 	cr_assert_gt( stats.contacts, 16 );
 	cr_assert_gt( stats.edge_contacts, 16 );
 	cr_assert_eq( memcmp( saved, s.z, sizeof( float ) * (size_t) s.n ), 0, "positions changed on overflow" );
 	int32_t listed;
-	sere_collide_contacts( c, &listed );
+	sere_collide_contacts( s.c, &listed );
 	cr_assert_eq( listed, 0 );
-	sere_collide_edge_contacts( c, &listed );
+	sere_collide_edge_contacts( s.c, &listed );
 	cr_assert_eq( listed, 0 );
-	cr_assert_eq( sere_collide_reserve( c, needed ), SERE_OK );
+	cr_assert_eq( sere_collide_reserve( s.c, needed ), SERE_OK );
 	int32_t found;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, params.thickness, &found ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, params.thickness, &found ), SERE_OK );
 	cr_assert_eq( found, stats.contacts );
-	sere_collide_edge_contacts( c, &listed );
+	sere_collide_edge_contacts( s.c, &listed );
 	cr_assert_eq( listed, stats.edge_contacts );
 	free( saved );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, bad_arguments_are_refused )
 {
 	collide_sheet s;
 	collide_sheet_make( &s, 6, 6, 1 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
-	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, -1, &c ), SERE_ERR_ARGUMENT );
-	cr_assert_null( c );
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &s.bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s.bvh, -1, &s.c ), SERE_ERR_ARGUMENT );
+	cr_assert_null( s.c );
+	cr_assert_eq( sere_collide_create( s.bvh, 0, &s.c ), SERE_OK );
 	int32_t count;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.0f, &count ), SERE_ERR_ARGUMENT );
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, NAN, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, 0.0f, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, NAN, &count ), SERE_ERR_ARGUMENT );
 	sere_collide_params params = sere_collide_params_default();
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	params.dt = 0.0f;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
 	params = sere_collide_params_default();
 	params.rounds = 0;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
 	/* a workspace made for another mesh */
 	sere_bvh* other;
 	int32_t one[3] = { 0, 1, 2 };
 	cr_assert_eq( sere_bvh_create( one, 1, 3, s.x, s.y, s.z, &other ), SERE_OK );
-	cr_assert_eq( sere_collide_detect( c, other, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( s.c, other, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_ARGUMENT );
 	sere_bvh_destroy( other );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, neighbours_in_the_sheet_are_not_contacts )
@@ -825,13 +801,11 @@ Test( collide, neighbours_in_the_sheet_are_not_contacts )
 		}
 	}
 	cr_assert_gt( close_edges, s.n / 2 );
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	collide_sheet_tree( &s, 1 << 16 );
 	int32_t count = -1;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &count ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, h, &count ), SERE_OK );
 	cr_expect_eq( count, 0, "%d contacts between neighbours in a flat sheet", count );
-	sere_collide_edge_contacts( c, &count );
+	sere_collide_edge_contacts( s.c, &count );
 	cr_expect_eq( count, 0, "%d edge contacts between neighbours in a flat sheet", count );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }

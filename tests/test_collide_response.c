@@ -11,6 +11,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The default response at thickness h with the given iterations a round and rounds. */
+static sere_collide_params response_params( float h, int32_t iterations, int32_t rounds )
+{
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.iterations = iterations;
+	params.rounds = rounds;
+	return params;
+}
+
 /* The U-fold closer than the thickness: after the response no vertex is closer than the
  * thickness to a non-incident triangle and no two edges are, up to SERE_COLLIDE_TOLERANCE (0.1%:
  * Jacobi averaging approaches the target from below). At gap 0.5h the bend (radius 0.25h) is
@@ -20,15 +30,8 @@
 Test( collide, response_separates_u_fold )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 8 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 0, &bvh, &c );
-	sere_collide_params params = sere_collide_params_default();
-	params.thickness = h;
-	params.iterations = 32;
-	params.rounds = 4;
+	float h = collide_sheet_open( &s, 36, 24, 8, 0 );
+	sere_collide_params params = response_params( h, 32, 4 );
 	const double gaps[] = { 0.8, 0.5 };
 	for ( int g = 0; g < 2; ++g )
 	{
@@ -41,7 +44,7 @@ Test( collide, response_separates_u_fold )
 		cr_assert_gt( collide_violations( &s, h, SERE_COLLIDE_TOLERANCE ), s.n );
 		sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 		sere_collide_stats stats;
-		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_OK );
 		cr_assert_gt( stats.contacts, s.n );
 		cr_assert_eq( stats.unresolved, 0 );
 		int64_t left = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
@@ -54,7 +57,7 @@ Test( collide, response_separates_u_fold )
 		}
 		free( before );
 	}
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 /* A sheet crumpled through itself cannot be separated by proximity pushes where it truly
@@ -81,18 +84,13 @@ Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 		moment[0] += s.x[i] / s.inv_m[i], moment[1] += s.y[i] / s.inv_m[i], moment[2] += s.z[i] / s.inv_m[i];
 		mass += 1.0 / s.inv_m[i];
 	}
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 0, &bvh, &c );
-	sere_collide_params params = sere_collide_params_default();
-	params.thickness = h;
-	params.iterations = 16;
-	params.rounds = 3;
+	collide_sheet_tree( &s, 0 );
+	sere_collide_params params = response_params( h, 16, 3 );
 	int64_t initial[2] = { collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, false ),
 						   collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, true ) };
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	sere_collide_stats stats;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_OK );
 	int64_t left[2] = { collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, false ),
 						collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, true ) };
 	cr_log_info( "crumpled: %lld and %lld violations before, %lld and %lld after, %d unresolved reported",
@@ -104,7 +102,7 @@ Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 	cr_assert_leq( left[1] * 4, initial[1], "more than a quarter of the edge–edge contacts remain" );
 	params.iterations = 64;
 	params.rounds = 6;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_OK );
 	cr_assert_eq( stats.unresolved, 0 );
 	cr_assert_eq( collide_violations( &s, h, SERE_COLLIDE_TOLERANCE ), 0 );
 	double after[3] = { 0.0, 0.0, 0.0 };
@@ -121,7 +119,7 @@ Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 		cr_assert_float_eq( after[k] / mass, moment[k] / mass, 1e-6, "axis %d: the centre of mass moved by %g", k,
 							( after[k] - moment[k] ) / mass );
 	}
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 /* Jeong Eq. 14 in both modes: ĥ measured before the collision pass (Algorithm 1 line 14), or the rest
@@ -241,10 +239,7 @@ static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), 
 		h[t] = 0.01f;
 	}
 	omp_set_num_threads( threads );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &bvh ), SERE_OK );
-	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	collide_sheet_tree( &s, 0 );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
 	params.rounds = 3;
@@ -254,13 +249,13 @@ static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), 
 		state.x0 = start, state.y0 = start + n, state.z0 = start + 2 * n;
 	}
 	sere_collide_stats stats;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_OK );
 	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h ), SERE_OK );
 	*contacts_out = stats.contacts;
 	*edge_contacts_out = stats.edge_contacts;
 	if ( edges != NULL )
 	{
-		const sere_edge_contact* listed = sere_collide_edge_contacts( c, edge_count );
+		const sere_edge_contact* listed = sere_collide_edge_contacts( s.c, edge_count );
 		*edges = malloc( sizeof( sere_edge_contact ) * (size_t) ( *edge_count + 1 ) );
 		memcpy( *edges, listed, sizeof( sere_edge_contact ) * (size_t) *edge_count );
 	}
@@ -273,7 +268,7 @@ static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), 
 		memcpy( out + (size_t) k * all, arrays[k], sizeof( float ) * all );
 	}
 	free( h );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 	return out;
 }
 
