@@ -11,19 +11,26 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Point j of points gets coordinates uniform in [−half[j], half[j]], drawn axis by axis (the x
+ * of every point, then the y, then the z). */
+static void random_points( uint64_t* state, int count, float* const points[], const double half[] )
+{
+	for ( int i = 0; i < 3; ++i )
+	{
+		for ( int j = 0; j < count; ++j )
+		{
+			points[j][i] = (float) ( 2.0 * half[j] * sere_test_unit( state ) - half[j] );
+		}
+	}
+}
+
 Test( collide, closest_point_matches_double_reference )
 {
 	uint64_t state = 4;
 	for ( int k = 0; k < 20000; ++k )
 	{
 		float a[3], b[3], c[3], p[3];
-		for ( int i = 0; i < 3; ++i )
-		{
-			a[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			b[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			c[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			p[i] = (float) ( 3.0 * sere_test_unit( &state ) - 1.5 );
-		}
+		random_points( &state, 4, ( float* const[] ){ a, b, c, p }, ( const double[] ){ 1.0, 1.0, 1.0, 1.5 } );
 		if ( k % 10 == 1 )
 		{
 			/* slivers and fully degenerate triangles: c on the line ab, or all three equal */
@@ -258,8 +265,6 @@ Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 	collide_sheet_release( &s );
 }
 
-/* One vertex over the middle of a triangle, everything else far away: a single contact whose
- * solution is known in closed form. */
 /* Slivers and collapsed triangles take closest_point's nearest-edge fallback, which the
  * eight-wide test hands back to the scalar code: pairs and weights must still be exact. */
 Test( collide, pairs_match_brute_force_with_degenerate_triangles )
@@ -304,6 +309,8 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 	collide_sheet_release( &s );
 }
 
+/* One vertex over the middle of a triangle, everything else far away: a single contact whose
+ * solution is known in closed form. */
 Test( collide, single_contact_shared_by_inverse_mass )
 {
 	/* triangle 0 = (0, 1, 2) in z = 0; triangle 1 = (3, 4, 5) holds the vertex 3 above it */
@@ -350,6 +357,26 @@ Test( collide, single_contact_shared_by_inverse_mass )
 	sere_bvh_destroy( bvh );
 }
 
+/* Builds the tree and a collide workspace on the two triangles (0, 1, 2) and (3, 4, 5) and
+ * resolves once, with the start-of-step positions x0, y0, z0 unless x0 is NULL; the caller
+ * destroys *bvh and *c. */
+static sere_collide_stats resolve_two( float* x, float* y, float* z, float* vx, float* vy, float* vz, float* inv_m,
+									   const float* x0, const float* y0, const float* z0,
+									   const sere_collide_params* params, sere_bvh** bvh, sere_collide** c )
+{
+	static const int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
+	cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( *bvh, 0, c ), SERE_OK );
+	sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
+	if ( x0 != NULL )
+	{
+		state.x0 = x0, state.y0 = y0, state.z0 = z0;
+	}
+	sere_collide_stats stats;
+	cr_assert_eq( sere_collide_resolve( *c, *bvh, &state, params, &stats ), SERE_OK );
+	return stats;
+}
+
 /* A vertex the step carried through a triangle: detection finds it below, 0.02 under the
  * plane; at the start of the step it was 0.03 above. Without the start-of-step positions the
  * push continues downward (the gap becomes −thickness); with them it goes back up to
@@ -357,7 +384,6 @@ Test( collide, single_contact_shared_by_inverse_mass )
  * corner sinks by λ / 3. Tolerance 1e-7: float rounding of one exact push. */
 Test( collide, start_of_step_side_returns_a_vertex_through_a_triangle )
 {
-	int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
 	float inv_m[6] = { 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f };
 	float x0[6] = { 0.0f, 1.0f, 0.0f, 1.0f / 3.0f, 5.0f, 5.0f };
 	float y0[6] = { 0.0f, 0.0f, 1.0f, 1.0f / 3.0f, 5.0f, 6.0f };
@@ -371,16 +397,9 @@ Test( collide, start_of_step_side_returns_a_vertex_through_a_triangle )
 		memcpy( x, x0, sizeof( x ) ), memcpy( y, y0, sizeof( y ) ), memcpy( z, z0, sizeof( z ) );
 		z[3] = -0.02f;
 		sere_bvh* bvh;
-		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
 		sere_collide* c;
-		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
-		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
-		if ( history )
-		{
-			state.x0 = x0, state.y0 = y0, state.z0 = z0;
-		}
-		sere_collide_stats stats;
-		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		sere_collide_stats stats =
+			resolve_two( x, y, z, vx, vy, vz, inv_m, history ? x0 : NULL, y0, z0, &params, &bvh, &c );
 		cr_assert_eq( stats.contacts, 1 );
 		cr_assert_eq( stats.unresolved, 0 );
 		int32_t count;
@@ -405,13 +424,7 @@ Test( collide, closest_segments_match_double_reference )
 	for ( int k = 0; k < 20000; ++k )
 	{
 		float p0[3], p1[3], q0[3], q1[3];
-		for ( int i = 0; i < 3; ++i )
-		{
-			p0[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			p1[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			q0[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			q1[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-		}
+		random_points( &state, 4, ( float* const[] ){ p0, p1, q0, q1 }, ( const double[] ){ 1.0, 1.0, 1.0, 1.0 } );
 		/* parallel segments (overlapping or not), and segments of zero length */
 		bool parallel = k % 10 == 1, point = k % 20 == 3 || k % 20 == 5;
 		if ( parallel )
@@ -477,16 +490,9 @@ Test( collide, edge_contact_pushes_crossing_edges_back_to_their_side )
 		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings ), SERE_OK );
 		cr_assert_eq( crossings, 2 );
 		sere_bvh* bvh;
-		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
 		sere_collide* c;
-		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
-		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
-		if ( history )
-		{
-			state.x0 = x0, state.y0 = y0, state.z0 = z0;
-		}
-		sere_collide_stats stats;
-		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		sere_collide_stats stats =
+			resolve_two( x, y, z, vx, vy, vz, inv_m, history ? x0 : NULL, y0, z0, &params, &bvh, &c );
 		cr_assert_eq( stats.contacts, 0, "no vertex is near the other triangle" );
 		cr_assert_eq( stats.edge_contacts, 1 );
 		cr_assert_eq( stats.unresolved, 0 );
