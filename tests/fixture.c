@@ -1,19 +1,16 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fixture.h"
 
+#include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 
 double sere_test_unit( uint64_t* state )
 {
-	/* splitmix64: a fixed-seed generator so fixtures are identical run to run */
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	z ^= z >> 31;
-	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
+	return sere_splitmix_unit( state );
 }
 
 void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, double width, double height, double jitter,
@@ -188,4 +185,19 @@ int sere_test_remove_tree( const char* dir )
 	char command[1100];
 	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
 	return system( command );
+}
+
+void sere_test_expect_one_line( const char* what, const char* err )
+{
+	const char* newline = strchr( err, '\n' );
+	cr_expect( newline != NULL && newline[1] == '\0', "%s: not one line: %s", what, err );
+}
+
+int sere_test_expect_error( const char* args, const char* phrase )
+{
+	char err[4096];
+	int code = sere_test_run( args, err, sizeof( err ) );
+	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
+	sere_test_expect_one_line( args, err );
+	return code;
 }

@@ -23,7 +23,7 @@ void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, doubl
 						   int vein_row, uint64_t seed );
 void sere_test_plane_free( sere_test_plane* plane );
 
-/* splitmix64 in [0, 1): the fixed-seed generator of every fixture. */
+/* splitmix64 in [0, 1) (sere_splitmix_unit): the fixed-seed generator of every fixture. */
 double sere_test_unit( uint64_t* state );
 
 /* Crumpled sheets: a smooth random displacement field (eight plane waves of wavelength 0.2 to
@@ -57,3 +57,10 @@ int sere_test_run( const char* args, char* err, size_t err_size );
 
 /* Removes a test's scratch directory and all in it (rm -rf); the shell's status, 0 when done. */
 int sere_test_remove_tree( const char* dir );
+
+/* Expects err to be one line ending in a newline (the CLI's error style); what names the run. */
+void sere_test_expect_one_line( const char* what, const char* err );
+
+/* Runs "BIN ARGS" (sere_test_run) and expects stderr to be one line that contains phrase;
+ * returns the exit status for the caller to check. */
+int sere_test_expect_error( const char* args, const char* phrase );

@@ -16,13 +16,7 @@
 
 static void expect_error( const char* args, const char* phrase )
 {
-	char err[4096];
-	int code = sere_test_run( args, err, sizeof( err ) );
-	cr_expect_neq( code, 0, "'%s' should fail", args );
-	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
-	/* one line, ending in a newline */
-	char* newline = strchr( err, '\n' );
-	cr_expect( newline != NULL && newline[1] == '\0', "'%s': not one line: %s", args, err );
+	cr_expect_neq( sere_test_expect_error( args, phrase ), 0, "'%s' should fail", args );
 }
 
 Test( cli, bad_input_one_clear_line )

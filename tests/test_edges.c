@@ -18,12 +18,6 @@
 
 /* ---- helpers -------------------------------------------------------------------------------- */
 
-static void expect_one_line( const char* what, const char* err )
-{
-	const char* newline = strchr( err, '\n' );
-	cr_expect( newline != NULL && newline[1] == '\0', "%s: not one line: %s", what, err );
-}
-
 static char* read_text( const char* path )
 {
 	FILE* f = fopen( path, "rb" );
@@ -226,7 +220,7 @@ Test( edges, leaf_name_not_utf8_is_refused )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	snprintf( where, sizeof( where ), "%s:1: name is not UTF-8 text (byte 0xE9 at character 4)", path );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
-	expect_one_line( "latin1", err );
+	sere_test_expect_one_line( "latin1", err );
 	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
@@ -272,7 +266,7 @@ Test( edges, long_preset_comment_stays_a_comment )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	snprintf( where, sizeof( where ), "%s:3: stiffness = 2 is out of range", preset );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
-	expect_one_line( "preset", err );
+	sere_test_expect_one_line( "preset", err );
 	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
@@ -296,7 +290,7 @@ Test( edges, long_chain_line_keeps_line_numbers )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	snprintf( where, sizeof( where ), "%s:2: unknown keyword 'bogus'", path );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
-	expect_one_line( "chain", err );
+	sere_test_expect_one_line( "chain", err );
 
 	/* the tail of a long comment is not read as a keyword */
 	text[0] = '#';
@@ -349,7 +343,7 @@ Test( edges, too_few_points_names_a_count_that_builds )
 	for ( int k = 0; k < 2; ++k )
 	{
 		cr_expect_neq( sere_test_run( commands[k], err, sizeof( err ) ), 0, "%s", commands[k] );
-		expect_one_line( commands[k], err );
+		sere_test_expect_one_line( commands[k], err );
 		const char* hint = strstr( err, "; --points " );
 		cr_assert_not_null( strstr( err, "data/leaves/maple.leaf: --points 10 is too few" ), "%s", err );
 		cr_assert_not_null( hint, "%s", err );
@@ -374,7 +368,7 @@ Test( edges, empty_out_is_refused )
 		cr_expect_neq( sere_test_run( commands[k], err, sizeof( err ) ), 0, "%s", commands[k] );
 		cr_expect_not_null( strstr( err, "--out needs a directory name" ), "%s: %s", commands[k], err );
 		cr_expect_null( strstr( err, "Success" ), "%s", err );
-		expect_one_line( commands[k], err );
+		sere_test_expect_one_line( commands[k], err );
 	}
 	cr_expect( had_summary || stat( "/summary.json", &info ) != 0, "sere run wrote into /" );
 }
@@ -389,7 +383,7 @@ Test( edges, summary_json_directory_is_refused )
 	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 300 --frames 2 --out %s", dir );
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	cr_expect_not_null( strstr( err, path ), "the message does not name %s: %s", path, err );
-	expect_one_line( "summary.json", err );
+	sere_test_expect_one_line( "summary.json", err );
 	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
@@ -404,7 +398,7 @@ Test( edges, wilt_out_that_is_a_file )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	cr_expect_not_null( strstr( err, "Not a directory" ), "%s", err );
 	cr_expect_null( strstr( err, "Success" ), "%s", err );
-	expect_one_line( "wilt", err );
+	sere_test_expect_one_line( "wilt", err );
 	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
 }
 
@@ -477,7 +471,7 @@ Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 	cr_expect_not_null( strstr( err, "sere run: cannot write " ), "%s", err );
 	cr_expect_not_null( strstr( err, "/frames/frame_" ), "the message does not name the file: %s", err );
 	cr_expect_not_null( strstr( err, reason ), "expected '%s' in: %s", reason, err );
-	expect_one_line( "full disk", err );
+	sere_test_expect_one_line( "full disk", err );
 
 	char path[512];
 	snprintf( path, sizeof( path ), "%s/summary.json", dir );
