@@ -187,6 +187,27 @@ int sere_test_remove_tree( const char* dir )
 	return system( command );
 }
 
+int sere_test_run_in( const char* format, const char* dir, char* err, size_t err_size )
+{
+	char args[2048];
+	snprintf( args, sizeof( args ), format, dir );
+	return sere_test_run( args, err, err_size );
+}
+
+char* sere_test_scratch( const char* name )
+{
+	char* dir = malloc( 64 );
+	snprintf( dir, 64, "/tmp/sere-%s-XXXXXX", name );
+	cr_assert_not_null( mkdtemp( dir ), "cannot make %s", dir );
+	return dir;
+}
+
+void sere_test_scratch_remove( char* dir )
+{
+	cr_expect_eq( sere_test_remove_tree( dir ), 0, "cannot remove %s", dir );
+	free( dir );
+}
+
 void sere_test_expect_one_line( const char* what, const char* err )
 {
 	const char* newline = strchr( err, '\n' );

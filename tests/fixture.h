@@ -55,8 +55,16 @@ int sere_test_stdout( const char* args, char* out, size_t out_size );
  * terminated, cut at err_size − 1); returns the exit status, 128 when it did not exit. */
 int sere_test_run( const char* args, char* err, size_t err_size );
 
+/* sere_test_run of ARGS = format with dir for its one %s (an output directory). */
+int sere_test_run_in( const char* format, const char* dir, char* err, size_t err_size );
+
 /* Removes a test's scratch directory and all in it (rm -rf); the shell's status, 0 when done. */
 int sere_test_remove_tree( const char* dir );
+
+/* A fresh scratch directory /tmp/sere-NAME-XXXXXX (mkdtemp, asserted), its path malloc'd. */
+char* sere_test_scratch( const char* name );
+/* Expects the scratch directory removed (sere_test_remove_tree) and frees its path. */
+void sere_test_scratch_remove( char* dir );
 
 /* Expects err to be one line ending in a newline (the CLI's error style); what names the run. */
 void sere_test_expect_one_line( const char* what, const char* err );

@@ -188,8 +188,7 @@ static void weird_leaf( const char* dir, char* path, size_t size )
 
 Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 {
-	char dir[] = "/tmp/sere-edges-json-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-json" );
 	char leaf[512], args[2048], out[16384], path[512];
 	weird_leaf( dir, leaf, sizeof( leaf ) );
 	snprintf( args, sizeof( args ), "model %s --points 300 --json", leaf );
@@ -206,13 +205,12 @@ Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 	cr_expect( json_valid( summary ), "summary.json is not JSON:\n%s", summary );
 	cr_expect_not_null( strstr( summary, "\"status\": \"complete\"" ), "%s", summary );
 	free( summary );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, leaf_name_not_utf8_is_refused )
 {
-	char dir[] = "/tmp/sere-edges-utf8-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-utf8" );
 	char path[512], args[1024], err[4096], where[600];
 	snprintf( path, sizeof( path ), "%s/latin1.leaf", dir );
 	write_text( path, "name caf\xe9\nbase 0 0\noutline 3\n0 0\n1 0\n0 1\n" );
@@ -221,7 +219,7 @@ Test( edges, leaf_name_not_utf8_is_refused )
 	snprintf( where, sizeof( where ), "%s:1: name is not UTF-8 text (byte 0xE9 at character 4)", path );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
 	sere_test_expect_one_line( "latin1", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 static void expect_seed( const char* dir, const char* preset, const char* expected )
@@ -239,8 +237,7 @@ static void expect_seed( const char* dir, const char* preset, const char* expect
 
 Test( edges, long_preset_comment_stays_a_comment )
 {
-	char dir[] = "/tmp/sere-edges-preset-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-preset" );
 	/* 1023 characters of comment, then "seed=7": a 1024-byte line buffer used to cut it there
 	 * and apply the tail */
 	static char text[8192];
@@ -267,13 +264,12 @@ Test( edges, long_preset_comment_stays_a_comment )
 	snprintf( where, sizeof( where ), "%s:3: stiffness = 2 is out of range", preset );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
 	sere_test_expect_one_line( "preset", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, long_chain_line_keeps_line_numbers )
 {
-	char dir[] = "/tmp/sere-edges-chain-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-chain" );
 	char* chain = read_text( "data/seasons/maple.chain" );
 	cr_assert_not_null( chain );
 	/* line 1: a 3000-character comment; line 2: a mistake */
@@ -304,15 +300,14 @@ Test( edges, long_chain_line_keeps_line_numbers )
 	cr_expect_not_null( strstr( err, "missing.schedule" ), "the chain was not accepted: %s", err );
 	free( text );
 	free( chain );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 /* ---- silent limits --------------------------------------------------------------------------- */
 
 Test( edges, more_than_1023_mesh_frames_are_all_written, .timeout = 240 )
 {
-	char dir[] = "/tmp/sere-edges-frames-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-frames" );
 	char args[1024], err[4096], path[512];
 	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 100 --every 1 --frames 1100 --out %s",
 			  dir );
@@ -330,7 +325,7 @@ Test( edges, more_than_1023_mesh_frames_are_all_written, .timeout = 240 )
 	}
 	cr_expect_eq( listed, 1101, "leaf.pvd lists %d frames", listed );
 	free( pvd );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, too_few_points_names_a_count_that_builds )
@@ -375,22 +370,21 @@ Test( edges, empty_out_is_refused )
 
 Test( edges, summary_json_directory_is_refused )
 {
-	char dir[] = "/tmp/sere-edges-dir-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
-	char path[512], args[1024], err[4096];
+	char* dir = sere_test_scratch( "edges-dir" );
+	char path[512], err[4096];
 	snprintf( path, sizeof( path ), "%s/summary.json", dir );
 	cr_assert_eq( mkdir( path, 0755 ), 0 );
-	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 300 --frames 2 --out %s", dir );
-	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
+	cr_expect_neq(
+		sere_test_run_in( "run data/leaves/wisteria.leaf --points 300 --frames 2 --out %s", dir, err, sizeof( err ) ),
+		0 );
 	cr_expect_not_null( strstr( err, path ), "the message does not name %s: %s", path, err );
 	sere_test_expect_one_line( "summary.json", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, wilt_out_that_is_a_file )
 {
-	char dir[] = "/tmp/sere-edges-wilt-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-wilt" );
 	char path[512], args[1024], err[4096];
 	snprintf( path, sizeof( path ), "%s/file", dir );
 	write_text( path, "x\n" );
@@ -399,7 +393,7 @@ Test( edges, wilt_out_that_is_a_file )
 	cr_expect_not_null( strstr( err, "Not a directory" ), "%s", err );
 	cr_expect_null( strstr( err, "Success" ), "%s", err );
 	sere_test_expect_one_line( "wilt", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 /* PLY files whose size matches their header: vertices of as many floats as the header lists
@@ -431,8 +425,7 @@ static void expect_whole_ply( const char* path )
 
 Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 {
-	char dir[] = "/tmp/sere-edges-full-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-full" );
 	/* A 256 KiB tmpfs holds frame 0 and a few more (root, as here and in CI); where mounting is
 	 * not allowed, a file-size limit makes the first VTP fail with EFBIG instead. */
 	int mounted = mount( "tmpfs", dir, "tmpfs", 0, "size=256k" ) == 0;
@@ -511,5 +504,5 @@ Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 	{
 		cr_expect_eq( umount( dir ), 0 );
 	}
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }

@@ -193,8 +193,9 @@ Test( litter, dries_to_the_end_unless_frames_says_otherwise )
 	char dir[64], err[4096];
 	make_dir( dir, sizeof( dir ), "dry" );
 	char args[512];
-	snprintf( args, sizeof( args ), "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --out %s", dir );
-	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_test_run_in( "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --out %s", dir, err,
+									sizeof( err ) ),
+				  0, "%s", err );
 	cr_expect_eq( err[0], '\0', "nothing on stderr: %s", err );
 	char* summary = read_output( dir, "summary.json" );
 	const char* at = strstr( summary, "\"frames\": " );
