@@ -9,7 +9,7 @@
 
 #define COLLIDE_PI 3.14159265358979323846
 
-void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed )
+float collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed )
 {
 	sere_test_plane plane;
 	sere_test_plane_grid( &plane, nx, ny, 1.0, (double) ny / nx, 0.2, 0, seed );
@@ -34,6 +34,7 @@ void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed
 		s->y[i] = (float) s->v[i];
 		s->inv_m[i] = 1.0f;
 	}
+	return s->cell;
 }
 
 void collide_sheet_free( collide_sheet* s )
@@ -105,9 +106,7 @@ void collide_sheet_crumple( collide_sheet* s, double amplitude, double noise, ui
 	sere_test_crumple_make( &field, amplitude, seed );
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
-		float p[3];
-		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, p );
-		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
+		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, s->x + i, s->y + i, s->z + i );
 	}
 }
 

@@ -23,7 +23,8 @@ typedef struct collide_sheet
 	sere_collide* c;
 } collide_sheet;
 
-void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed );
+/* Makes the sheet of nx × ny cells; returns the cell width. */
+float collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed );
 void collide_sheet_free( collide_sheet* s );
 
 /* The tree over the sheet's triangles and a collide workspace of the given capacity on it. */

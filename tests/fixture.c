@@ -164,7 +164,7 @@ void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_
 	}
 }
 
-void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float out[3] )
+void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float* x, float* y, float* z )
 {
 	double d[3] = { 0.0, 0.0, 0.0 };
 	for ( int m = 0; m < 8; ++m )
@@ -175,9 +175,9 @@ void sere_test_crumple_point( sere_test_crumple* field, double u, double v, doub
 			d[a] += field->wave[m][3 + a] * phase;
 		}
 	}
-	out[0] = (float) ( u + d[0] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
-	out[1] = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
-	out[2] = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	*x = (float) ( u + d[0] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	*y = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	*z = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 }
 
 int sere_test_remove_tree( const char* dir )

@@ -36,8 +36,10 @@ typedef struct sere_test_crumple
 } sere_test_crumple;
 
 void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_t seed );
-/* The displaced point of rest position (u, v, 0), plus noise · (uniform − 0.5) per axis. */
-void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float out[3] );
+/* The displaced point of rest position (u, v, 0), plus noise · (uniform − 0.5) per axis, into
+ * *x, *y, *z (a sheet's arrays at the point's index). */
+void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float* x, float* y,
+							  float* z );
 
 /* The sere binary under test: $SERE_BIN (make test sets it), else build/sere. */
 const char* sere_test_bin( void );

@@ -231,8 +231,7 @@ Test( collide, listed_detection_equals_search_while_the_sheet_moves )
 Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 7 );
-	float h = 0.3f * s.cell, gap = 1.47f * h, d = 0.24f * h;
+	float h = 0.3f * collide_sheet_make( &s, 36, 24, 7 ), gap = 1.47f * h, d = 0.24f * h;
 	collide_sheet_fold( &s, gap );
 	collide_sheet_tree( &s, 1 << 16 );
 	int32_t before = -1;
@@ -766,14 +765,13 @@ Test( collide, bad_arguments_are_refused )
 	collide_sheet_release( &s );
 }
 
+/* A flat sheet and a thickness of 3/4 of a cell: every vertex is closer than that to triangles
+ * it is not a corner of (across the far edge of its own triangles), but all of them have a
+ * corner joined to it by an edge, so no contact may be reported. */
 Test( collide, neighbours_in_the_sheet_are_not_contacts )
 {
-	/* A flat sheet and a thickness of 3/4 of a cell: every vertex is closer than that to
-	 * triangles it is not a corner of (across the far edge of its own triangles), but all of
-	 * them have a corner joined to it by an edge, so no contact may be reported. */
 	collide_sheet s;
-	collide_sheet_make( &s, 30, 20, 9 );
-	float h = 0.75f * s.cell;
+	float h = 0.75f * collide_sheet_make( &s, 30, 20, 9 );
 	int64_t close = 0;
 	for ( int32_t i = 0; i < s.n; ++i )
 	{

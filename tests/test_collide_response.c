@@ -71,8 +71,7 @@ Test( collide, response_separates_u_fold )
 Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 9 );
-	float h = 0.3f * s.cell;
+	float h = 0.3f * collide_sheet_make( &s, 36, 24, 9 );
 	collide_sheet_crumple( &s, 0.4, 0.3 * h, 13 );
 	for ( int32_t i = 0; i < s.n; ++i )
 	{

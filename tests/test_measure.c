@@ -143,9 +143,7 @@ static void measure_crumple( measure_sheet* s, double amplitude, double noise, u
 	sere_test_crumple_make( &field, amplitude, seed );
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
-		float p[3];
-		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, p );
-		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
+		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, s->x + i, s->y + i, s->z + i );
 	}
 }
 
