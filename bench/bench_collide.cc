@@ -48,15 +48,6 @@ enum Shape
 	kDense,
 };
 
-double unit( uint64_t* state )
-{
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	z ^= z >> 31;
-	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
-}
-
 template <typename T> struct Aligned
 {
 	T* data = nullptr;
@@ -173,11 +164,13 @@ struct Scene
 			double wave[8][6];
 			for ( auto& w : wave )
 			{
-				double angle = 2.0 * kPi * unit( &state ), k = 2.0 * kPi * ( 2.0 + 3.0 * unit( &state ) );
-				w[0] = k * std::cos( angle ), w[1] = k * std::sin( angle ), w[2] = 2.0 * kPi * unit( &state );
-				w[3] = 0.0125 * ( 2.0 * unit( &state ) - 1.0 );
-				w[4] = 0.0125 * ( 2.0 * unit( &state ) - 1.0 );
-				w[5] = 0.025 * ( 2.0 * unit( &state ) - 1.0 );
+				double angle = 2.0 * kPi * sere_splitmix_unit( &state ),
+					   k = 2.0 * kPi * ( 2.0 + 3.0 * sere_splitmix_unit( &state ) );
+				w[0] = k * std::cos( angle ), w[1] = k * std::sin( angle ),
+				w[2] = 2.0 * kPi * sere_splitmix_unit( &state );
+				w[3] = 0.0125 * ( 2.0 * sere_splitmix_unit( &state ) - 1.0 );
+				w[4] = 0.0125 * ( 2.0 * sere_splitmix_unit( &state ) - 1.0 );
+				w[5] = 0.025 * ( 2.0 * sere_splitmix_unit( &state ) - 1.0 );
 			}
 			for ( int32_t k = 0; k < n; ++k )
 			{
@@ -189,7 +182,7 @@ struct Scene
 				}
 				x.data[k] = (float) ( u[k] + d[0] );
 				y.data[k] = (float) ( v[k] + d[1] );
-				z.data[k] = (float) ( d[2] + 0.3 * thickness * ( unit( &state ) - 0.5 ) );
+				z.data[k] = (float) ( d[2] + 0.3 * thickness * ( sere_splitmix_unit( &state ) - 0.5 ) );
 			}
 		}
 		else if ( shape == kFolded )
@@ -602,48 +595,65 @@ void BM_embree_search( benchmark::State& state, Shape shape )
 
 } // namespace
 
-BENCHMARK_CAPTURE( BM_bvh_refit, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_bvh_refit, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_bvh_build, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_detect, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_detect, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_detect, waved, kWaved )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_detect, folded, kFolded )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_respond, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_respond, waved, kWaved )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_respond, folded, kFolded )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_frame, flat, kFlat )->Args( { 1, 1 } )->Args( { 2, 1 } )->Args( { 2, 2 } )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_pass, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_pass, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_pass, dense, kDense )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_pass_listed, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_pass_listed, dense, kDense )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_detect, dense, kDense )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_search, dense, kDense )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_embree_search, dense, kDense )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_ref_pairs, dense, kDense )->Unit( benchmark::kMillisecond );
-BENCHMARK_CAPTURE( BM_collide_ref_edge_pairs, dense, kDense )->Unit( benchmark::kMillisecond );
-BENCHMARK_CAPTURE( BM_collide_frame, dried, kDried )
-	->Args( { 1, 1 } )
-	->Args( { 2, 1 } )
-	->Args( { 2, 2 } )
-	->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_frame, waved, kWaved )
-	->Args( { 1, 1 } )
-	->Args( { 2, 1 } )
-	->Args( { 2, 2 } )
-	->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_frame, folded, kFolded )
-	->Args( { 1, 1 } )
-	->Args( { 2, 1 } )
-	->Args( { 2, 2 } )
-	->UseRealTime();
+namespace
+{
+
+// Which shapes each benchmark runs on, registered under the names BENCHMARK_CAPTURE gives
+// (BM_collide_detect/dense/2/real_time): one row a benchmark in place of a line a pair.
+enum Runs
+{
+	kThreads, // 1 and 2 threads, real time
+	kFrames,  // (threads, collision rounds) = (1, 1), (2, 1), (2, 2), real time
+	kOnce,	  // the brute-force references, in milliseconds
+};
+
+struct Registration
+{
+	const char* name;
+	void ( *run )( benchmark::State&, Shape );
+	Runs runs;
+	std::vector<Shape> shapes;
+};
+
+const char* const kShapeNames[] = { "flat", "dried", "waved", "folded", "dense" };
+
+const int kRegistered = [] {
+	const Registration table[] = {
+		{ "BM_bvh_refit", BM_bvh_refit, kThreads, { kFlat, kDried } },
+		{ "BM_bvh_build", BM_bvh_build, kThreads, { kDried } },
+		{ "BM_collide_detect", BM_collide_detect, kThreads, { kFlat, kDried, kWaved, kFolded, kDense } },
+		{ "BM_collide_respond", BM_collide_respond, kThreads, { kDried, kWaved, kFolded } },
+		{ "BM_collide_frame", BM_collide_frame, kFrames, { kFlat, kDried, kWaved, kFolded } },
+		{ "BM_collide_pass", BM_collide_pass, kThreads, { kFlat, kDried, kDense } },
+		{ "BM_collide_pass_listed", BM_collide_pass_listed, kThreads, { kFlat, kDense } },
+		{ "BM_collide_search", BM_collide_search, kThreads, { kFlat, kDried, kWaved, kDense } },
+		{ "BM_embree_search", BM_embree_search, kThreads, { kFlat, kDried, kWaved, kDense } },
+		{ "BM_collide_ref_pairs", BM_collide_ref_pairs, kOnce, { kDried, kDense } },
+		{ "BM_collide_ref_edge_pairs", BM_collide_ref_edge_pairs, kOnce, { kDried, kDense } },
+	};
+	for ( const Registration& row : table )
+	{
+		for ( Shape shape : row.shapes )
+		{
+			std::string name = std::string( row.name ) + "/" + kShapeNames[shape];
+			benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark( name.c_str(), row.run, shape );
+			if ( row.runs == kThreads )
+			{
+				b->Arg( 1 )->Arg( 2 )->UseRealTime();
+			}
+			else if ( row.runs == kFrames )
+			{
+				b->Args( { 1, 1 } )->Args( { 2, 1 } )->Args( { 2, 2 } )->UseRealTime();
+			}
+			else
+			{
+				b->Unit( benchmark::kMillisecond );
+			}
+		}
+	}
+	return 0;
+}();
+
+} // namespace
+
 BENCHMARK( BM_collide_restore_voronoi )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_search, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_search, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_search, waved, kWaved )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_embree_search, flat, kFlat )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_embree_search, dried, kDried )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_embree_search, waved, kWaved )->Arg( 1 )->Arg( 2 )->UseRealTime();
-BENCHMARK_CAPTURE( BM_collide_ref_pairs, dried, kDried )->Unit( benchmark::kMillisecond );
-BENCHMARK_CAPTURE( BM_collide_ref_edge_pairs, dried, kDried )->Unit( benchmark::kMillisecond );

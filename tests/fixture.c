@@ -1,19 +1,16 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fixture.h"
 
+#include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 
 double sere_test_unit( uint64_t* state )
 {
-	/* splitmix64: a fixed-seed generator so fixtures are identical run to run */
-	uint64_t z = ( *state += 0x9e3779b97f4a7c15ull );
-	z = ( z ^ ( z >> 30 ) ) * 0xbf58476d1ce4e5b9ull;
-	z = ( z ^ ( z >> 27 ) ) * 0x94d049bb133111ebull;
-	z ^= z >> 31;
-	return (double) ( z >> 11 ) * ( 1.0 / 9007199254740992.0 );
+	return sere_splitmix_unit( state );
 }
 
 void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, double width, double height, double jitter,
@@ -167,7 +164,7 @@ void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_
 	}
 }
 
-void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float out[3] )
+void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float* x, float* y, float* z )
 {
 	double d[3] = { 0.0, 0.0, 0.0 };
 	for ( int m = 0; m < 8; ++m )
@@ -178,9 +175,9 @@ void sere_test_crumple_point( sere_test_crumple* field, double u, double v, doub
 			d[a] += field->wave[m][3 + a] * phase;
 		}
 	}
-	out[0] = (float) ( u + d[0] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
-	out[1] = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
-	out[2] = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	*x = (float) ( u + d[0] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	*y = (float) ( v + d[1] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
+	*z = (float) ( d[2] + noise * ( sere_test_unit( &field->state ) - 0.5 ) );
 }
 
 int sere_test_remove_tree( const char* dir )
@@ -188,4 +185,40 @@ int sere_test_remove_tree( const char* dir )
 	char command[1100];
 	snprintf( command, sizeof( command ), "rm -rf '%s'", dir );
 	return system( command );
+}
+
+int sere_test_run_in( const char* format, const char* dir, char* err, size_t err_size )
+{
+	char args[2048];
+	snprintf( args, sizeof( args ), format, dir );
+	return sere_test_run( args, err, err_size );
+}
+
+char* sere_test_scratch( const char* name )
+{
+	char* dir = malloc( 64 );
+	snprintf( dir, 64, "/tmp/sere-%s-XXXXXX", name );
+	cr_assert_not_null( mkdtemp( dir ), "cannot make %s", dir );
+	return dir;
+}
+
+void sere_test_scratch_remove( char* dir )
+{
+	cr_expect_eq( sere_test_remove_tree( dir ), 0, "cannot remove %s", dir );
+	free( dir );
+}
+
+void sere_test_expect_one_line( const char* what, const char* err )
+{
+	const char* newline = strchr( err, '\n' );
+	cr_expect( newline != NULL && newline[1] == '\0', "%s: not one line: %s", what, err );
+}
+
+int sere_test_expect_error( const char* args, const char* phrase )
+{
+	char err[4096];
+	int code = sere_test_run( args, err, sizeof( err ) );
+	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
+	sere_test_expect_one_line( args, err );
+	return code;
 }

@@ -23,7 +23,7 @@ void sere_test_plane_grid( sere_test_plane* plane, int32_t nx, int32_t ny, doubl
 						   int vein_row, uint64_t seed );
 void sere_test_plane_free( sere_test_plane* plane );
 
-/* splitmix64 in [0, 1): the fixed-seed generator of every fixture. */
+/* splitmix64 in [0, 1) (sere_splitmix_unit): the fixed-seed generator of every fixture. */
 double sere_test_unit( uint64_t* state );
 
 /* Crumpled sheets: a smooth random displacement field (eight plane waves of wavelength 0.2 to
@@ -36,8 +36,10 @@ typedef struct sere_test_crumple
 } sere_test_crumple;
 
 void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_t seed );
-/* The displaced point of rest position (u, v, 0), plus noise · (uniform − 0.5) per axis. */
-void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float out[3] );
+/* The displaced point of rest position (u, v, 0), plus noise · (uniform − 0.5) per axis, into
+ * *x, *y, *z (a sheet's arrays at the point's index). */
+void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float* x, float* y,
+							  float* z );
 
 /* The sere binary under test: $SERE_BIN (make test sets it), else build/sere. */
 const char* sere_test_bin( void );
@@ -55,5 +57,20 @@ int sere_test_stdout( const char* args, char* out, size_t out_size );
  * terminated, cut at err_size − 1); returns the exit status, 128 when it did not exit. */
 int sere_test_run( const char* args, char* err, size_t err_size );
 
+/* sere_test_run of ARGS = format with dir for its one %s (an output directory). */
+int sere_test_run_in( const char* format, const char* dir, char* err, size_t err_size );
+
 /* Removes a test's scratch directory and all in it (rm -rf); the shell's status, 0 when done. */
 int sere_test_remove_tree( const char* dir );
+
+/* A fresh scratch directory /tmp/sere-NAME-XXXXXX (mkdtemp, asserted), its path malloc'd. */
+char* sere_test_scratch( const char* name );
+/* Expects the scratch directory removed (sere_test_remove_tree) and frees its path. */
+void sere_test_scratch_remove( char* dir );
+
+/* Expects err to be one line ending in a newline (the CLI's error style); what names the run. */
+void sere_test_expect_one_line( const char* what, const char* err );
+
+/* Runs "BIN ARGS" (sere_test_run) and expects stderr to be one line that contains phrase;
+ * returns the exit status for the caller to check. */
+int sere_test_expect_error( const char* args, const char* phrase );

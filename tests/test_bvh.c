@@ -74,6 +74,19 @@ static void bvh_sheet_bump( bvh_sheet* s, double amplitude, double noise, uint64
 	}
 }
 
+/* A sheet of bvh_sheet_make, bumped by bvh_sheet_bump (noise in cells) when amplitude > 0, and
+ * the tree over it. */
+static sere_bvh* bvh_sheet_start( bvh_sheet* s, int32_t nx, int32_t ny, uint64_t seed, double amplitude,
+								  double noise_cells, uint64_t bump_seed )
+{
+	bvh_sheet_make( s, nx, ny, seed );
+	if ( amplitude > 0.0 )
+	{
+		bvh_sheet_bump( s, amplitude, noise_cells * s->cell, bump_seed );
+	}
+	return bvh_sheet_tree( s );
+}
+
 /* Rolls the sheet around the y axis into a spiral of decreasing radius (a large deformation:
  * far-apart triangles end up next to each other), then twists it about x. */
 static void bvh_sheet_roll( bvh_sheet* s )
@@ -147,9 +160,7 @@ static void bvh_check_queries( const sere_bvh* bvh, const bvh_sheet* s, uint64_t
 Test( bvh, query_matches_brute_force_after_build_and_refit )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 40, 30, 11 );
-	bvh_sheet_bump( &s, 0.02, 0.3 * s.cell, 5 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 40, 30, 11, 0.02, 0.3, 5 );
 	bvh_check_queries( bvh, &s, 1 );
 	/* refit only, after deformations that move triangles far from where the tree put them */
 	bvh_sheet_roll( &s );
@@ -176,29 +187,36 @@ static void bvh_group_visit( void* context, int32_t triangle, uint32_t lanes )
 	hits->calls += 1;
 }
 
+/* A group of count boxes around SERE_BVH_WIDTH consecutive vertices from a random first one
+ * (returned), each of a random radius up to radius_cells cells. */
+static int32_t bvh_group_near( const bvh_sheet* s, sere_bvh_group* group, int count, double radius_cells,
+							   uint64_t* state )
+{
+	group->count = count;
+	int32_t base = (int32_t) ( sere_test_unit( state ) * ( s->n - SERE_BVH_WIDTH ) );
+	for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+	{
+		int32_t i = base + k;
+		float r = (float) ( radius_cells * s->cell * sere_test_unit( state ) );
+		group->lo_x[k] = s->x[i] - r, group->lo_y[k] = s->y[i] - r, group->lo_z[k] = s->z[i] - r;
+		group->hi_x[k] = s->x[i] + r, group->hi_y[k] = s->y[i] + r, group->hi_z[k] = s->z[i] + r;
+	}
+	return base;
+}
+
 /* A group query reports each triangle once, with exactly the lanes whose box overlaps the
  * triangle's box; unused lanes and lanes with a NaN bound report nothing. */
 Test( bvh, group_query_matches_brute_force )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 40, 30, 12 );
-	bvh_sheet_bump( &s, 0.05, 0.5 * s.cell, 2 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 40, 30, 12, 0.05, 0.5, 2 );
 	uint32_t* lanes = calloc( (size_t) s.triangles, sizeof( uint32_t ) );
 	uint64_t state = 9;
 	for ( int g = 0; g < 200; ++g )
 	{
-		sere_bvh_group group;
-		group.count = 1 + g % SERE_BVH_WIDTH;
 		/* boxes around nearby vertices (a group's usual shape), one of them NaN now and then */
-		int32_t base = (int32_t) ( sere_test_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
-		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-		{
-			int32_t i = base + k;
-			float r = (float) ( 2.0 * s.cell * sere_test_unit( &state ) );
-			group.lo_x[k] = s.x[i] - r, group.lo_y[k] = s.y[i] - r, group.lo_z[k] = s.z[i] - r;
-			group.hi_x[k] = s.x[i] + r, group.hi_y[k] = s.y[i] + r, group.hi_z[k] = s.z[i] + r;
-		}
+		sere_bvh_group group;
+		bvh_group_near( &s, &group, 1 + g % SERE_BVH_WIDTH, 2.0, &state );
 		if ( g % 5 == 0 )
 		{
 			group.hi_y[g % group.count] = NAN;
@@ -256,9 +274,7 @@ static void bvh_log_visit( void* context, int32_t triangle, uint32_t lanes )
 Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 40, 30, 12 );
-	bvh_sheet_bump( &s, 0.05, 0.5 * s.cell, 2 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 40, 30, 12, 0.05, 0.5, 2 );
 	int32_t capacity = s.triangles;
 	bvh_visit_log plain = { malloc( sizeof( int32_t ) * (size_t) capacity ),
 							malloc( sizeof( uint32_t ) * (size_t) capacity ), 0, capacity };
@@ -273,15 +289,7 @@ Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
 			cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
 		}
 		sere_bvh_group group;
-		group.count = 1 + g % SERE_BVH_WIDTH;
-		int32_t base = (int32_t) ( sere_test_unit( &state ) * ( s.n - SERE_BVH_WIDTH ) );
-		for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
-		{
-			int32_t i = base + k;
-			float r = (float) ( 3.0 * s.cell * sere_test_unit( &state ) );
-			group.lo_x[k] = s.x[i] - r, group.lo_y[k] = s.y[i] - r, group.lo_z[k] = s.z[i] - r;
-			group.hi_x[k] = s.x[i] + r, group.hi_y[k] = s.y[i] + r, group.hi_z[k] = s.z[i] + r;
-		}
+		int32_t base = bvh_group_near( &s, &group, 1 + g % SERE_BVH_WIDTH, 3.0, &state );
 		/* below every index, around the group's own, and above every index */
 		int32_t floor = g % 3 == 0 ? -1 : ( g % 3 == 1 ? base + g % 7 : s.n - 1 );
 		plain.count = above.count = 0;
@@ -312,8 +320,7 @@ Test( bvh, group_query_above_is_the_plain_query_filtered_in_order )
 Test( bvh, refit_boxes_exact_and_structure )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 50, 40, 3 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 50, 40, 3, 0.0, 0.0, 0 );
 	bvh_sheet_roll( &s );
 	bvh_sheet_bump( &s, 0.1, 0.5 * s.cell, 4 );
 	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
@@ -373,8 +380,7 @@ Test( bvh, refit_boxes_exact_and_structure )
 Test( bvh, quality_ratio_grows_with_deformation_and_triggers_rebuild )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 40, 40, 8 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 40, 40, 8, 0.0, 0.0, 0 );
 	/* the same sums over the same boxes: exactly 1 */
 	cr_assert_eq( sere_bvh_quality_ratio( bvh ), 1.0 );
 	cr_assert( !sere_bvh_needs_rebuild( bvh, SERE_BVH_REBUILD_RATIO ) );
@@ -408,9 +414,7 @@ Test( bvh, quality_ratio_grows_with_deformation_and_triggers_rebuild )
 Test( bvh, quality_ratio_ignores_uniform_shrinking )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 30, 30, 2 );
-	bvh_sheet_bump( &s, 0.05, 0.2 * s.cell, 3 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 30, 30, 2, 0.05, 0.2, 3 );
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		s.x[i] *= 0.6f, s.y[i] *= 0.6f, s.z[i] *= 0.6f;
@@ -425,8 +429,7 @@ Test( bvh, quality_ratio_ignores_uniform_shrinking )
 Test( bvh, build_and_refit_identical_with_one_and_two_threads )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 60, 40, 6 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 60, 40, 6, 0.0, 0.0, 0 );
 	bvh_sheet_roll( &s );
 	int32_t nodes;
 	const sere_bvh_node* node = sere_bvh_nodes( bvh, &nodes );
@@ -461,8 +464,7 @@ Test( bvh, build_and_refit_identical_with_one_and_two_threads )
 Test( bvh, nonfinite_positions_are_refused )
 {
 	bvh_sheet s;
-	bvh_sheet_make( &s, 10, 10, 1 );
-	sere_bvh* bvh = bvh_sheet_tree( &s );
+	sere_bvh* bvh = bvh_sheet_start( &s, 10, 10, 1, 0.0, 0.0, 0 );
 	int32_t nodes;
 	const sere_bvh_node* node = sere_bvh_nodes( bvh, &nodes );
 	sere_bvh_node* before = malloc( sizeof( sere_bvh_node ) * (size_t) nodes );

@@ -38,6 +38,34 @@ static double* v_system( sere_model* model, int32_t nx, int32_t ny, double lambd
 	return b;
 }
 
+/* The V system of v_system at λ = 100 with its matrix and the SGS preconditioner built on it. */
+typedef struct sgs_system
+{
+	sere_model model;
+	sere_osmosis* o;
+	sere_osmosis_report report;
+	double* b;
+	const sere_csr* a;
+	int32_t n;
+	sere_sgs* g;
+} sgs_system;
+
+static void sgs_system_make( sgs_system* s, int32_t nx, int32_t ny )
+{
+	s->b = v_system( &s->model, nx, ny, 100.0, &s->o, &s->report );
+	s->a = sere_osmosis_matrix( s->o );
+	s->n = s->a->rows;
+	cr_assert_eq( sere_sgs_create( s->a, &s->g ), SERE_OK );
+}
+
+static void sgs_system_free( sgs_system* s )
+{
+	sere_sgs_destroy( s->g );
+	sere_osmosis_destroy( s->o );
+	sere_model_destroy( &s->model );
+	free( s->b );
+}
+
 /* Dense Gaussian elimination with partial pivoting: solves m z = r (m, r overwritten). */
 static void dense_solve( double* m, double* r, double* z, int32_t n )
 {
@@ -94,100 +122,87 @@ static double relative_residual( const sere_csr* a, const double* b, const doubl
 
 Test( sgs, coloring_separates_neighbors )
 {
-	sere_model model;
-	sere_osmosis* o;
-	sere_osmosis_report report;
-	double* b = v_system( &model, 14, 9, 100.0, &o, &report );
-	const sere_csr* a = sere_osmosis_matrix( o );
-	sere_sgs* g;
-	cr_assert_eq( sere_sgs_create( a, &g ), SERE_OK );
-	cr_expect_gt( g->colors, 1 );
-	cr_expect_leq( g->colors, SERE_SGS_MAX_COLORS );
+	sgs_system s;
+	sgs_system_make( &s, 14, 9 );
+	cr_expect_gt( s.g->colors, 1 );
+	cr_expect_leq( s.g->colors, SERE_SGS_MAX_COLORS );
 	int32_t seen = 0;
-	for ( int32_t i = 0; i < a->rows; ++i )
+	for ( int32_t i = 0; i < s.a->rows; ++i )
 	{
-		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		for ( int32_t k = s.a->row_ptr[i]; k < s.a->row_ptr[i + 1]; ++k )
 		{
-			cr_expect( a->col[k] == i || g->color[a->col[k]] != g->color[i], "rows %d and %d share color %d", i,
-					   a->col[k], g->color[i] );
+			cr_expect( s.a->col[k] == i || s.g->color[s.a->col[k]] != s.g->color[i], "rows %d and %d share color %d", i,
+					   s.a->col[k], s.g->color[i] );
 		}
 	}
 	/* every row has one position, inside its color's chunks */
-	for ( int32_t c = 0; c < g->colors; ++c )
+	for ( int32_t c = 0; c < s.g->colors; ++c )
 	{
-		for ( int32_t at = g->color_chunk[c] * SERE_SELL_C; at < g->color_chunk[c + 1] * SERE_SELL_C; ++at )
+		for ( int32_t at = s.g->color_chunk[c] * SERE_SELL_C; at < s.g->color_chunk[c + 1] * SERE_SELL_C; ++at )
 		{
-			if ( g->row[at] >= 0 )
+			if ( s.g->row[at] >= 0 )
 			{
-				cr_expect_eq( g->color[g->row[at]], c );
+				cr_expect_eq( s.g->color[s.g->row[at]], c );
 				seen += 1;
 			}
 		}
 	}
-	cr_expect_eq( seen, a->rows );
-	sere_sgs_destroy( g );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
-	free( b );
+	cr_expect_eq( seen, s.a->rows );
+	sgs_system_free( &s );
 }
 
 /* sere_sgs_apply against M = (D + L) D⁻¹ (D + U) formed densely from the coloring (L: entries
  * toward earlier colors) and solved by Gaussian elimination. */
 Test( sgs, apply_matches_dense_reference )
 {
-	sere_model model;
-	sere_osmosis* o;
-	sere_osmosis_report report;
-	double* b = v_system( &model, 10, 7, 100.0, &o, &report );
-	const sere_csr* a = sere_osmosis_matrix( o );
-	const int32_t n = a->rows;
-	sere_sgs* g;
-	cr_assert_eq( sere_sgs_create( a, &g ), SERE_OK );
-	double *lower = calloc( (size_t) n * n, sizeof( double ) ), *upper = calloc( (size_t) n * n, sizeof( double ) );
-	double *m = calloc( (size_t) n * n, sizeof( double ) ), *d = calloc( n, sizeof( double ) );
-	for ( int32_t i = 0; i < n; ++i )
+	sgs_system s;
+	sgs_system_make( &s, 10, 7 );
+	double *lower = calloc( (size_t) s.n * s.n, sizeof( double ) ),
+		   *upper = calloc( (size_t) s.n * s.n, sizeof( double ) );
+	double *m = calloc( (size_t) s.n * s.n, sizeof( double ) ), *d = calloc( s.n, sizeof( double ) );
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
-		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		for ( int32_t k = s.a->row_ptr[i]; k < s.a->row_ptr[i + 1]; ++k )
 		{
-			int32_t j = a->col[k];
+			int32_t j = s.a->col[k];
 			if ( j == i )
 			{
-				d[i] = a->val[k];
-				lower[(size_t) i * n + i] = upper[(size_t) i * n + i] = a->val[k];
+				d[i] = s.a->val[k];
+				lower[(size_t) i * s.n + i] = upper[(size_t) i * s.n + i] = s.a->val[k];
 			}
-			else if ( g->color[j] < g->color[i] )
+			else if ( s.g->color[j] < s.g->color[i] )
 			{
-				lower[(size_t) i * n + j] = a->val[k];
+				lower[(size_t) i * s.n + j] = s.a->val[k];
 			}
 			else
 			{
-				upper[(size_t) i * n + j] = a->val[k];
+				upper[(size_t) i * s.n + j] = s.a->val[k];
 			}
 		}
 	}
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
-		for ( int32_t j = 0; j < n; ++j )
+		for ( int32_t j = 0; j < s.n; ++j )
 		{
 			double sum = 0.0;
-			for ( int32_t k = 0; k < n; ++k )
+			for ( int32_t k = 0; k < s.n; ++k )
 			{
-				sum += lower[(size_t) i * n + k] / d[k] * upper[(size_t) k * n + j];
+				sum += lower[(size_t) i * s.n + k] / d[k] * upper[(size_t) k * s.n + j];
 			}
-			m[(size_t) i * n + j] = sum;
+			m[(size_t) i * s.n + j] = sum;
 		}
 	}
-	double *r = malloc( sizeof( double ) * n ), *z = malloc( sizeof( double ) * n ),
-		   *ref = malloc( sizeof( double ) * n );
+	double *r = malloc( sizeof( double ) * s.n ), *z = malloc( sizeof( double ) * s.n ),
+		   *ref = malloc( sizeof( double ) * s.n );
 	double largest = 0.0;
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		r[i] = sin( 0.7 * i ) + 0.2;
 	}
-	cr_assert_eq( sere_sgs_apply( g, r, z ), SERE_OK );
-	dense_solve( m, r, ref, n );
+	cr_assert_eq( sere_sgs_apply( s.g, r, z ), SERE_OK );
+	dense_solve( m, r, ref, s.n );
 	double worst = 0.0;
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		worst = fmax( worst, fabs( z[i] - ref[i] ) );
 		largest = fmax( largest, fabs( ref[i] ) );
@@ -197,34 +212,25 @@ Test( sgs, apply_matches_dense_reference )
 	 * ~1e-14 of the solution; 1e-11 leaves room and is far below a wrong sweep (O(1)). */
 	cr_expect_leq( worst, 1e-11 * largest, "SGS differs from the dense solve by %g of %g", worst, largest );
 	free( lower ), free( upper ), free( m ), free( d ), free( r ), free( z ), free( ref );
-	sere_sgs_destroy( g );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
-	free( b );
+	sgs_system_free( &s );
 }
 
 /* M⁻¹ is symmetric: xᵀM⁻¹y = yᵀM⁻¹x, and positive: xᵀM⁻¹x > 0. */
 Test( sgs, preconditioner_is_symmetric_positive )
 {
-	sere_model model;
-	sere_osmosis* o;
-	sere_osmosis_report report;
-	double* b = v_system( &model, 30, 20, 100.0, &o, &report );
-	const sere_csr* a = sere_osmosis_matrix( o );
-	const int32_t n = a->rows;
-	sere_sgs* g;
-	cr_assert_eq( sere_sgs_create( a, &g ), SERE_OK );
-	double *x = malloc( sizeof( double ) * n ), *y = malloc( sizeof( double ) * n );
-	double *mx = malloc( sizeof( double ) * n ), *my = malloc( sizeof( double ) * n );
-	for ( int32_t i = 0; i < n; ++i )
+	sgs_system s;
+	sgs_system_make( &s, 30, 20 );
+	double *x = malloc( sizeof( double ) * s.n ), *y = malloc( sizeof( double ) * s.n );
+	double *mx = malloc( sizeof( double ) * s.n ), *my = malloc( sizeof( double ) * s.n );
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		x[i] = sin( 1.7 * i + 0.3 );
 		y[i] = cos( 0.9 * i );
 	}
-	cr_assert_eq( sere_sgs_apply( g, x, mx ), SERE_OK );
-	cr_assert_eq( sere_sgs_apply( g, y, my ), SERE_OK );
+	cr_assert_eq( sere_sgs_apply( s.g, x, mx ), SERE_OK );
+	cr_assert_eq( sere_sgs_apply( s.g, y, my ), SERE_OK );
 	double xmy = 0.0, ymx = 0.0, xmx = 0.0, norm = 0.0;
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		xmy += x[i] * my[i];
 		ymx += y[i] * mx[i];
@@ -237,10 +243,7 @@ Test( sgs, preconditioner_is_symmetric_positive )
 	cr_expect_leq( fabs( xmy - ymx ), 1e-12 * norm, "xᵀM⁻¹y = %.17g, yᵀM⁻¹x = %.17g", xmy, ymx );
 	cr_expect_gt( xmx, 0.0 );
 	free( x ), free( y ), free( mx ), free( my );
-	sere_sgs_destroy( g );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
-	free( b );
+	sgs_system_free( &s );
 }
 
 /* The solve reaches the tolerance on the true residual (checked here independently), in fewer
@@ -248,69 +251,63 @@ Test( sgs, preconditioner_is_symmetric_positive )
  * with the Jacobi PCG's solution to what the tolerance permits. */
 Test( sgs, cg_converges_deterministically, .timeout = 60 )
 {
-	sere_model model;
-	sere_osmosis* o;
-	sere_osmosis_report report;
-	double* b = v_system( &model, 60, 40, 100.0, &o, &report );
-	const sere_csr* a = sere_osmosis_matrix( o );
-	const int32_t n = a->rows;
-	sere_sgs* g;
+	sgs_system s;
+	sgs_system_make( &s, 60, 40 );
 	sere_sell* sell;
 	sere_cg_workspace* w;
-	cr_assert_eq( sere_sgs_create( a, &g ), SERE_OK );
-	cr_assert_eq( sere_sell_create( a, SERE_SELL_SIGMA, &sell ), SERE_OK );
-	cr_assert_eq( sere_cg_create( n, &w ), SERE_OK );
+	cr_assert_eq( sere_sell_create( s.a, SERE_SELL_SIGMA, &sell ), SERE_OK );
+	cr_assert_eq( sere_cg_create( s.n, &w ), SERE_OK );
 	double* x[3];
-	double* jacobi = malloc( sizeof( double ) * n );
+	double* jacobi = malloc( sizeof( double ) * s.n );
 	sere_cg_result result[3], jacobi_result;
 	const double tolerance = 1e-10;
 	for ( int t = 0; t < 3; ++t )
 	{
 		omp_set_num_threads( t + 1 );
-		x[t] = malloc( sizeof( double ) * n );
-		for ( int32_t i = 0; i < n; ++i )
+		x[t] = malloc( sizeof( double ) * s.n );
+		for ( int32_t i = 0; i < s.n; ++i )
 		{
 			x[t][i] = 0.1 * cos( 0.02 * i ); /* warm start */
 		}
-		cr_assert_eq( sere_cg_solve_sgs( w, g, b, x[t], tolerance, 5000, &result[t] ), SERE_OK );
+		cr_assert_eq( sere_cg_solve_sgs( w, s.g, s.b, x[t], tolerance, 5000, &result[t] ), SERE_OK );
 		cr_expect_leq( result[t].residual, tolerance );
 	}
 	for ( int t = 1; t < 3; ++t )
 	{
 		cr_expect_eq( result[t].iterations, result[0].iterations );
 		cr_expect_eq( memcmp( &result[t].residual, &result[0].residual, sizeof( double ) ), 0 );
-		cr_expect_eq( memcmp( x[t], x[0], sizeof( double ) * n ), 0, "%d threads differ from 1", t + 1 );
+		cr_expect_eq( memcmp( x[t], x[0], sizeof( double ) * s.n ), 0, "%d threads differ from 1", t + 1 );
 	}
 	/* The reported residual is the true one: recomputed here with the CSR product, it agrees to
-	 * the rounding of the two computations of r = b − Ax, which may sum a row in different orders
+	 * the rounding of the two computations of r = s.b − Ax, which may sum a row in different orders
 	 * (another compiler vectorizes them differently). Component i of a computed r is off by at
 	 * most k ε (Σ_j |a_ij x_j| + |b_i|) for a row of k − 1 entries (the standard bound on a
-	 * recursive sum), so the two relative residuals differ by at most twice that norm over ‖b‖.
-	 * At 1e-10 the cancellation in b − Ax is deep: this bound, not a fixed fraction of the
+	 * recursive sum), so the two relative residuals differ by at most twice that norm over ‖s.b‖.
+	 * At 1e-10 the cancellation in s.b − Ax is deep: this bound, not a fixed fraction of the
 	 * residual, is what rounding allows. */
-	double check = relative_residual( a, b, x[0] );
+	double check = relative_residual( s.a, s.b, x[0] );
 	double bound2 = 0.0, bb = 0.0;
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
-		double row = fabs( b[i] );
-		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		double row = fabs( s.b[i] );
+		for ( int32_t k = s.a->row_ptr[i]; k < s.a->row_ptr[i + 1]; ++k )
 		{
-			row += fabs( a->val[k] * x[0][a->col[k]] );
+			row += fabs( s.a->val[k] * x[0][s.a->col[k]] );
 		}
-		double k_eps = (double) ( a->row_ptr[i + 1] - a->row_ptr[i] + 1 ) * DBL_EPSILON;
+		double k_eps = (double) ( s.a->row_ptr[i + 1] - s.a->row_ptr[i] + 1 ) * DBL_EPSILON;
 		bound2 += ( k_eps * row ) * ( k_eps * row );
-		bb += b[i] * b[i];
+		bb += s.b[i] * s.b[i];
 	}
 	double bound = 2.0 * sqrt( bound2 / bb );
 	cr_expect_leq( fabs( check - result[0].residual ), bound, "reported %g, recomputed %g, rounding bound %g",
 				   result[0].residual, check, bound );
 	cr_expect_leq( check, tolerance + bound, "the recomputed residual %g misses the tolerance", check );
 	omp_set_num_threads( 2 );
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		jacobi[i] = 0.1 * cos( 0.02 * i );
 	}
-	cr_assert_eq( sere_cg_solve( w, sell, b, jacobi, tolerance, 5000, &jacobi_result ), SERE_OK );
+	cr_assert_eq( sere_cg_solve( w, sell, s.b, jacobi, tolerance, 5000, &jacobi_result ), SERE_OK );
 	/* SGS must save at least a third of the iterations: PCG iterations go with √κ, and SGS
 	 * divides κ of a diffusion-dominated system by about 4 (BM_PCG, plane tree: 579 → 289). */
 	cr_expect_lt( 3 * result[0].iterations, 2 * jacobi_result.iterations, "SGS %d iterations, Jacobi %d",
@@ -318,18 +315,16 @@ Test( sgs, cg_converges_deterministically, .timeout = 60 )
 	/* Both solutions have relative residual ≤ 1e-10; their difference is bounded by
 	 * κ(A) · 2e-10 relative, with κ(A) ≲ 10⁴ on this system: 1e-5 of the solution's size. */
 	double worst = 0.0, largest = 0.0;
-	for ( int32_t i = 0; i < n; ++i )
+	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		worst = fmax( worst, fabs( x[0][i] - jacobi[i] ) );
 		largest = fmax( largest, fabs( jacobi[i] ) );
 	}
 	cr_expect_leq( worst, 1e-5 * largest, "SGS and Jacobi solutions differ by %g of %g", worst, largest );
-	free( x[0] ), free( x[1] ), free( x[2] ), free( jacobi ), free( b );
+	free( x[0] ), free( x[1] ), free( x[2] ), free( jacobi );
 	sere_cg_destroy( w );
 	sere_sell_destroy( sell );
-	sere_sgs_destroy( g );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	sgs_system_free( &s );
 }
 
 Test( sgs, rejects_bad_patterns_and_matrices )

@@ -16,13 +16,7 @@
 
 static void expect_error( const char* args, const char* phrase )
 {
-	char err[4096];
-	int code = sere_test_run( args, err, sizeof( err ) );
-	cr_expect_neq( code, 0, "'%s' should fail", args );
-	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
-	/* one line, ending in a newline */
-	char* newline = strchr( err, '\n' );
-	cr_expect( newline != NULL && newline[1] == '\0', "'%s': not one line: %s", args, err );
+	cr_expect_neq( sere_test_expect_error( args, phrase ), 0, "'%s' should fail", args );
 }
 
 Test( cli, bad_input_one_clear_line )
@@ -80,8 +74,7 @@ static long file_size( const char* path )
 
 Test( cli, interrupted_run_leaves_complete_outputs )
 {
-	char dir[] = "/tmp/sere-interrupt-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "interrupt" );
 	pid_t pid = fork();
 	cr_assert_geq( pid, 0 );
 	if ( pid == 0 )
@@ -156,16 +149,16 @@ Test( cli, interrupted_run_leaves_complete_outputs )
 	cr_assert_eq( fscanf( pipe, "%d", &tmp_count ), 1 );
 	pclose( pipe );
 	cr_expect_eq( tmp_count, 0 );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( cli, osmosis_dump_is_a_solved_system )
 {
-	char dir[] = "/tmp/sere-dump-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
-	char command[1024], err[4096];
-	snprintf( command, sizeof( command ), "osmosis data/leaves/wisteria.leaf --points 300 --steps 2 --dump %s", dir );
-	cr_assert_eq( sere_test_run( command, err, sizeof( err ) ), 0, "%s", err );
+	char* dir = sere_test_scratch( "dump" );
+	char err[4096];
+	cr_assert_eq( sere_test_run_in( "osmosis data/leaves/wisteria.leaf --points 300 --steps 2 --dump %s", dir, err,
+									sizeof( err ) ),
+				  0, "%s", err );
 	/* Read A (symmetric, lower triangle), b and x back and check A x = b: CG stopped at a
 	 * relative residual of 1e-10 and %.17g round-trips doubles, so 1e-9 leaves room. */
 	char path[512];
@@ -224,13 +217,12 @@ Test( cli, osmosis_dump_is_a_solved_system )
 	snprintf( path, sizeof( path ), "%s/particles.csv", dir );
 	cr_expect_gt( file_size( path ), 0 );
 	free( ei ), free( ej ), free( ev ), free( vec[0] ), free( vec[1] ), free( ax );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( cli, rerun_replaces_old_frames_only )
 {
-	char dir[] = "/tmp/sere-rerun-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "rerun" );
 	char path[512], args[1024], err[4096];
 	snprintf( path, sizeof( path ), "%s/frames", dir );
 	cr_assert_eq( mkdir( path, 0755 ), 0 );
@@ -261,5 +253,5 @@ Test( cli, rerun_replaces_old_frames_only )
 	}
 	snprintf( path, sizeof( path ), "%s/frames/frame_00002.ply", dir );
 	cr_expect_gt( file_size( path ), 0, "the new run's last frame is missing" );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }

@@ -1,3 +1,4 @@
+#include "collide_sheet.h"
 #include "fixture.h"
 #include "mesh/measure.h"
 #include "ref/collide_ref.h"
@@ -10,247 +11,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define COLLIDE_PI 3.14159265358979323846
-
-/* A jittered grid sheet of width 1 (the shared plane fixture; jitter ±0.1 cell keeps every
- * triangle taller than the 0.3-cell thickness the tests use, so the flat sheet has no contact)
- * with velocities and unit inverse masses, plus one Voronoi particle per triangle after the triangle layer (the
- * sere_model layout); u, v keep the plane coordinates so every shape is made from rest. */
-typedef struct collide_sheet
+/* Point j of points gets coordinates uniform in [−half[j], half[j]], drawn axis by axis (the x
+ * of every point, then the y, then the z). */
+static void random_points( uint64_t* state, int count, float* const points[], const double half[] )
 {
-	int32_t n, triangles;
-	float *x, *y, *z, *vx, *vy, *vz, *inv_m;
-	double *u, *v;
-	int32_t* tri;
-	float cell;
-} collide_sheet;
-
-static void collide_sheet_make( collide_sheet* s, int32_t nx, int32_t ny, uint64_t seed )
-{
-	sere_test_plane plane;
-	sere_test_plane_grid( &plane, nx, ny, 1.0, (double) ny / nx, 0.2, 0, seed );
-	s->n = plane.mesh.point_count;
-	s->triangles = plane.mesh.triangle_count;
-	s->cell = 1.0f / (float) nx;
-	size_t bytes = sizeof( float ) * (size_t) sere_pad( s->n + s->triangles );
-	float** arrays[] = { &s->x, &s->y, &s->z, &s->vx, &s->vy, &s->vz, &s->inv_m };
-	for ( int k = 0; k < 7; ++k )
+	for ( int i = 0; i < 3; ++i )
 	{
-		*arrays[k] = sere_alloc( bytes );
-	}
-	s->u = plane.x;
-	s->v = plane.y;
-	s->tri = plane.tri;
-	free( plane.veins );
-	for ( int32_t i = 0; i < s->n; ++i )
-	{
-		s->x[i] = (float) s->u[i];
-		s->y[i] = (float) s->v[i];
-		s->inv_m[i] = 1.0f;
-	}
-}
-
-static void collide_sheet_free( collide_sheet* s )
-{
-	float* arrays[] = { s->x, s->y, s->z, s->vx, s->vy, s->vz, s->inv_m };
-	for ( int k = 0; k < 7; ++k )
-	{
-		sere_free( arrays[k] );
-	}
-	free( s->u );
-	free( s->v );
-	free( s->tri );
-}
-
-/* The tree over the sheet's triangles and a collide workspace of the given capacity on it. */
-static void collide_sheet_tree( const collide_sheet* s, int32_t capacity, sere_bvh** bvh, sere_collide** c )
-{
-	cr_assert_eq( sere_bvh_create( s->tri, s->triangles, s->n, s->x, s->y, s->z, bvh ), SERE_OK );
-	cr_assert_eq( sere_collide_create( *bvh, capacity, c ), SERE_OK );
-}
-
-static void collide_sheet_release( collide_sheet* s, sere_bvh* bvh, sere_collide* c )
-{
-	sere_collide_destroy( c );
-	sere_bvh_destroy( bvh );
-	collide_sheet_free( s );
-}
-
-static void collide_sheet_flat( collide_sheet* s )
-{
-	for ( int32_t i = 0; i < s->n; ++i )
-	{
-		s->x[i] = (float) s->u[i], s->y[i] = (float) s->v[i], s->z[i] = 0.0f;
-	}
-}
-
-/* U-fold across x: the half u < a stays at z = 0, a half circle of radius gap / 2 follows, and
- * the rest comes back above at z = gap, so the two halves face each other at distance gap. */
-static void collide_sheet_fold( collide_sheet* s, double gap )
-{
-	double r = 0.5 * gap, a = 0.5 * ( 1.0 - COLLIDE_PI * r );
-	for ( int32_t i = 0; i < s->n; ++i )
-	{
-		double u = s->u[i];
-		if ( u <= a )
+		for ( int j = 0; j < count; ++j )
 		{
-			s->x[i] = (float) u, s->z[i] = 0.0f;
-		}
-		else if ( u <= a + COLLIDE_PI * r )
-		{
-			s->x[i] = (float) ( a + r * sin( ( u - a ) / r ) );
-			s->z[i] = (float) ( r - r * cos( ( u - a ) / r ) );
-		}
-		else
-		{
-			s->x[i] = (float) ( a - ( u - a - COLLIDE_PI * r ) ), s->z[i] = (float) gap;
-		}
-		s->y[i] = (float) s->v[i];
-	}
-}
-
-/* Crumpled: a smooth random displacement field (eight plane waves of wavelength 0.2 to 0.5 in
- * all three axes) of the given amplitude, plus per-vertex noise, from a fixed seed. Large
- * amplitudes fold the sheet through itself. */
-static void collide_sheet_crumple( collide_sheet* s, double amplitude, double noise, uint64_t seed )
-{
-	sere_test_crumple field;
-	sere_test_crumple_make( &field, amplitude, seed );
-	for ( int32_t i = 0; i < s->n; ++i )
-	{
-		float p[3];
-		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, p );
-		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
-	}
-}
-
-static int collide_cmp_pair( const void* a, const void* b )
-{
-	const int32_t *p = a, *q = b;
-	if ( p[0] != q[0] )
-	{
-		return p[0] < q[0] ? -1 : 1;
-	}
-	return ( p[1] > q[1] ) - ( p[1] < q[1] );
-}
-
-static int collide_cmp_quad( const void* a, const void* b )
-{
-	const int32_t *p = a, *q = b;
-	for ( int k = 0; k < 4; ++k )
-	{
-		if ( p[k] != q[k] )
-		{
-			return p[k] < q[k] ? -1 : 1;
+			points[j][i] = (float) ( 2.0 * half[j] * sere_test_unit( state ) - half[j] );
 		}
 	}
-	return 0;
-}
-
-/* Asserts that the edge–edge contacts of the last detection are the brute-force pair set
- * (sere_collide_ref_edge_pairs) exactly, each with the parameters and distance of the scalar
- * sere_closest_points_segments bit for bit (the detection tests pairs eight at a time with
- * selects built to give the same bits); returns the pair count. */
-static int32_t collide_check_edge_pairs( const float* x, const float* y, const float* z, const int32_t* tri,
-										 int32_t triangles, sere_collide* c, float h, const char* what )
-{
-	int64_t capacity = 1 << 20;
-	int32_t* ends = malloc( sizeof( int32_t ) * 4 * (size_t) capacity );
-	float* weights = malloc( sizeof( float ) * 2 * (size_t) capacity );
-	int64_t expected = sere_collide_ref_edge_pairs( x, y, z, tri, triangles, h, ends, weights, capacity );
-	cr_assert_leq( expected, capacity );
-	int32_t count;
-	const sere_edge_contact* contacts = sere_collide_edge_contacts( c, &count );
-	cr_assert_eq( count, expected, "%s: BVH finds %d edge pairs, brute force %lld", what, count, (long long) expected );
-	int32_t* found = malloc( sizeof( int32_t ) * 4 * (size_t) ( count + 1 ) );
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		const sere_edge_contact* e = contacts + k;
-		found[4 * k] = e->a0, found[4 * k + 1] = e->a1, found[4 * k + 2] = e->b0, found[4 * k + 3] = e->b1;
-		cr_assert( e->a0 < e->a1 && e->b0 < e->b1 && e->a0 < e->b0, "%s: edge contact %d not in order", what, k );
-		float p0[3] = { x[e->a0], y[e->a0], z[e->a0] }, p1[3] = { x[e->a1], y[e->a1], z[e->a1] };
-		float q0[3] = { x[e->b0], y[e->b0], z[e->b0] }, q1[3] = { x[e->b1], y[e->b1], z[e->b1] }, w[2];
-		float d2 = sere_closest_points_segments( p0, p1, q0, q1, w );
-		cr_assert( e->s == w[0] && e->t == w[1] && e->distance == sqrtf( d2 ),
-				   "%s: edge contact %d: (%.9g %.9g) at %.9g, scalar (%.9g %.9g) at %.9g", what, k, e->s, e->t,
-				   e->distance, w[0], w[1], sqrtf( d2 ) );
-		cr_assert( e->distance < h && e->s > 0.0f && e->s < 1.0f && e->t > 0.0f && e->t < 1.0f, "%s: edge contact %d",
-				   what, k );
-	}
-	qsort( found, (size_t) count, 4 * sizeof( int32_t ), collide_cmp_quad );
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		cr_assert( collide_cmp_quad( found + 4 * k, ends + 4 * k ) == 0, "%s: edge pair %d differs", what, k );
-	}
-	free( found );
-	free( ends );
-	free( weights );
-	return count;
-}
-
-/* Detects with the BVH (already built or refit for the current positions) and asserts the
- * contact set equals the brute-force pair set exactly, for both kinds; returns the
- * vertex–triangle pair count and writes the edge–edge one to *edge_count (may be NULL). */
-static int32_t collide_check_pairs( collide_sheet* s, sere_bvh* bvh, sere_collide* c, float h, const char* what,
-									int32_t* edge_count )
-{
-	int32_t count = -1;
-	cr_assert_eq( sere_collide_detect( c, bvh, s->x, s->y, s->z, h, &count ), SERE_OK, "%s", what );
-	int64_t capacity = 1 << 20;
-	int32_t* rv = malloc( sizeof( int32_t ) * (size_t) capacity );
-	int32_t* rt = malloc( sizeof( int32_t ) * (size_t) capacity );
-	int64_t expected = sere_collide_ref_pairs( s->x, s->y, s->z, s->n, s->tri, s->triangles, h, rv, rt, capacity );
-	cr_assert_eq( count, expected, "%s: BVH finds %d pairs, brute force %lld", what, count, (long long) expected );
-	int32_t listed;
-	const sere_contact* contacts = sere_collide_contacts( c, &listed );
-	cr_assert_eq( listed, count );
-	int32_t* pairs = malloc( sizeof( int32_t ) * 2 * (size_t) ( count + 1 ) );
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		pairs[2 * k] = contacts[k].vertex;
-		pairs[2 * k + 1] = contacts[k].triangle;
-		cr_assert( contacts[k].distance < h, "%s: contact %d at %g", what, k, contacts[k].distance );
-		/* Detection tests pairs eight at a time with selects in place of closest_point's
-		 * branches, built to give the same bits: weights and distance must equal the scalar
-		 * sere_closest_point_triangle exactly (tolerance 0), whichever path a pair took. */
-		const int32_t* v = s->tri + 3 * contacts[k].triangle;
-		int32_t i = contacts[k].vertex;
-		float p[3] = { s->x[i], s->y[i], s->z[i] }, corner[3][3], w[3];
-		for ( int r = 0; r < 3; ++r )
-		{
-			corner[r][0] = s->x[v[r]], corner[r][1] = s->y[v[r]], corner[r][2] = s->z[v[r]];
-		}
-		float d2 = sere_closest_point_triangle( p, corner[0], corner[1], corner[2], w );
-		cr_assert( contacts[k].u == w[0] && contacts[k].v == w[1] && contacts[k].w == w[2] &&
-					   contacts[k].distance == sqrtf( d2 ),
-				   "%s: contact %d (%d, %d): weights (%.9g %.9g %.9g) at %.9g, scalar (%.9g %.9g %.9g) at %.9g", what,
-				   k, i, contacts[k].triangle, contacts[k].u, contacts[k].v, contacts[k].w, contacts[k].distance, w[0],
-				   w[1], w[2], sqrtf( d2 ) );
-	}
-	qsort( pairs, (size_t) count, 2 * sizeof( int32_t ), collide_cmp_pair );
-	for ( int32_t k = 0; k < count; ++k )
-	{
-		cr_assert( pairs[2 * k] == rv[k] && pairs[2 * k + 1] == rt[k], "%s: pair %d differs", what, k );
-	}
-	free( pairs );
-	free( rv );
-	free( rt );
-	int32_t edges = collide_check_edge_pairs( s->x, s->y, s->z, s->tri, s->triangles, c, h, what );
-	if ( edge_count != NULL )
-	{
-		*edge_count = edges;
-	}
-	return count;
-}
-
-/* Pairs of either kind closer than (1 − tolerance) × h by brute force. */
-static int64_t collide_violations( const collide_sheet* s, float h, float tolerance )
-{
-	int32_t dummy;
-	return sere_collide_ref_pairs( s->x, s->y, s->z, s->n, s->tri, s->triangles, h * ( 1.0f - tolerance ), &dummy,
-								   &dummy, 0 ) +
-		   sere_collide_ref_edge_pairs( s->x, s->y, s->z, s->tri, s->triangles, h * ( 1.0f - tolerance ), &dummy, NULL,
-										0 );
 }
 
 Test( collide, closest_point_matches_double_reference )
@@ -259,13 +30,7 @@ Test( collide, closest_point_matches_double_reference )
 	for ( int k = 0; k < 20000; ++k )
 	{
 		float a[3], b[3], c[3], p[3];
-		for ( int i = 0; i < 3; ++i )
-		{
-			a[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			b[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			c[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			p[i] = (float) ( 3.0 * sere_test_unit( &state ) - 1.5 );
-		}
+		random_points( &state, 4, ( float* const[] ){ a, b, c, p }, ( const double[] ){ 1.0, 1.0, 1.0, 1.5 } );
 		if ( k % 10 == 1 )
 		{
 			/* slivers and fully degenerate triangles: c on the line ab, or all three equal */
@@ -298,12 +63,8 @@ Test( collide, closest_point_matches_double_reference )
 Test( collide, pairs_match_brute_force_on_random_deformations )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 5 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
-	cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "flat", NULL ), 0 );
+	float h = collide_sheet_open( &s, 36, 24, 5, 1 << 16 );
+	cr_assert_eq( collide_check_pairs( &s, s.bvh, s.c, h, "flat", NULL ), 0 );
 	/* noise of 3 cells in every axis: neighbourhoods interpenetrate, many contacts beyond the
 	 * vertices joined by an edge (which do not count) */
 	for ( uint64_t seed = 1; seed <= 3; ++seed )
@@ -316,88 +77,80 @@ Test( collide, pairs_match_brute_force_on_random_deformations )
 			s.z[i] = (float) ( 3.0 * s.cell * ( sere_test_unit( &state ) - 0.5 ) );
 		}
 		/* refit only: the tree was built on the flat sheet */
-		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 		int32_t edges = 0;
-		int32_t refit = collide_check_pairs( &s, bvh, c, h, "noise, refit", &edges );
+		int32_t refit = collide_check_pairs( &s, s.bvh, s.c, h, "noise, refit", &edges );
 		cr_assert_gt( refit, 100, "refit found %d", refit );
 		cr_assert_gt( edges, 100, "refit found %d edge pairs", edges );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
-		cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "noise, rebuilt", NULL ), refit );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( collide_check_pairs( &s, s.bvh, s.c, h, "noise, rebuilt", NULL ), refit );
 		collide_sheet_flat( &s );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	}
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, pairs_match_brute_force_on_u_fold )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 6 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	float h = collide_sheet_open( &s, 36, 24, 6, 1 << 16 );
 	/* below the thickness the halves touch everywhere: about every vertex is in contact */
 	collide_sheet_fold( &s, 0.8 * h );
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	int32_t near_edges = 0;
-	int32_t near = collide_check_pairs( &s, bvh, c, h, "fold 0.8h, refit", &near_edges );
+	int32_t near = collide_check_pairs( &s, s.bvh, s.c, h, "fold 0.8h, refit", &near_edges );
 	cr_assert_gt( near, s.n );
 	/* the halves' edges cross over each other in projection, about two per edge */
 	cr_assert_gt( near_edges, s.n / 2 );
-	cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
-	collide_check_pairs( &s, bvh, c, h, "fold 0.8h, rebuilt", NULL );
+	cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
+	collide_check_pairs( &s, s.bvh, s.c, h, "fold 0.8h, rebuilt", NULL );
 	/* above it only the tight bend itself (radius 0.6h) is closer than h */
 	collide_sheet_fold( &s, 1.2 * h );
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	int32_t far_edges = 0;
-	int32_t far = collide_check_pairs( &s, bvh, c, h, "fold 1.2h", &far_edges );
+	int32_t far = collide_check_pairs( &s, s.bvh, s.c, h, "fold 1.2h", &far_edges );
 	cr_assert_lt( far, near / 20 );
 	cr_assert_lt( far_edges, near_edges / 20 );
 	int32_t count;
-	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	const sere_contact* contacts = sere_collide_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		const int32_t* v = s.tri + 3 * contacts[k].triangle;
 		cr_assert( fabs( s.u[contacts[k].vertex] - 0.5 ) < 2.0 * s.cell && fabs( s.u[v[0]] - 0.5 ) < 2.0 * s.cell,
 				   "contact away from the bend" );
 	}
-	const sere_edge_contact* edge_contacts = sere_collide_edge_contacts( c, &count );
+	const sere_edge_contact* edge_contacts = sere_collide_edge_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		cr_assert( fabs( s.u[edge_contacts[k].a0] - 0.5 ) < 2.0 * s.cell &&
 					   fabs( s.u[edge_contacts[k].b0] - 0.5 ) < 2.0 * s.cell,
 				   "edge contact away from the bend" );
 	}
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, pairs_match_brute_force_on_crumpled_sheet )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 7 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	float h = collide_sheet_open( &s, 36, 24, 7, 1 << 16 );
 	const double amplitudes[] = { 0.05, 0.2, 0.4 };
 	int32_t most = 0, most_edges = 0;
 	for ( int k = 0; k < 3; ++k )
 	{
 		collide_sheet_crumple( &s, amplitudes[k], 0.3 * h, 11 + (uint64_t) k );
-		cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 		int32_t edges = 0;
-		int32_t refit = collide_check_pairs( &s, bvh, c, h, "crumpled, refit", &edges );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
-		cr_assert_eq( collide_check_pairs( &s, bvh, c, h, "crumpled, rebuilt", NULL ), refit );
+		int32_t refit = collide_check_pairs( &s, s.bvh, s.c, h, "crumpled, refit", &edges );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( collide_check_pairs( &s, s.bvh, s.c, h, "crumpled, rebuilt", NULL ), refit );
 		most = refit > most ? refit : most;
 		most_edges = edges > most_edges ? edges : most_edges;
 		collide_sheet_flat( &s );
-		cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_bvh_build( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	}
 	cr_assert_gt( most, 50, "the strongest crumple must fold the sheet onto itself" );
 	cr_assert_gt( most_edges, 50, "the strongest crumple must bring edges across each other" );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 /* A detection served by the candidate list (collide.c, SKIN) must find what a search finds: the
@@ -478,54 +231,45 @@ Test( collide, listed_detection_equals_search_while_the_sheet_moves )
 Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 7 );
-	float h = 0.3f * s.cell, gap = 1.47f * h, d = 0.24f * h;
+	float h = 0.3f * collide_sheet_make( &s, 36, 24, 7 ), gap = 1.47f * h, d = 0.24f * h;
 	collide_sheet_fold( &s, gap );
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	collide_sheet_tree( &s, 1 << 16 );
 	int32_t before = -1;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
-	cr_assert_eq( sere_collide_list_uses( c ), 0 );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
+	cr_assert_eq( sere_collide_list_uses( s.c ), 0 );
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		s.z[i] = d + s.z[i] * ( gap - 2.0f * d ) / gap;
 	}
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
 	int32_t edges = 0;
-	int32_t count = collide_check_pairs( &s, bvh, c, h, "closed fold", &edges );
-	cr_assert_eq( sere_collide_list_uses( c ), 1, "the list must serve a move within its skin" );
+	int32_t count = collide_check_pairs( &s, s.bvh, s.c, h, "closed fold", &edges );
+	cr_assert_eq( sere_collide_list_uses( s.c ), 1, "the list must serve a move within its skin" );
 	cr_assert_gt( count, 10 * ( before + 10 ), "closing the fold must bring the halves within the thickness" );
 	cr_assert_gt( edges, 100 );
 	sere_collide* fresh;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s.bvh, 1 << 16, &fresh ), SERE_OK );
 	int32_t fresh_count = -1;
-	cr_assert_eq( sere_collide_detect( fresh, bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( fresh, s.bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
 	int32_t n_a, n_b, e_a, e_b;
-	const sere_contact* a = sere_collide_contacts( c, &n_a );
+	const sere_contact* a = sere_collide_contacts( s.c, &n_a );
 	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
-	const sere_edge_contact* ea = sere_collide_edge_contacts( c, &e_a );
+	const sere_edge_contact* ea = sere_collide_edge_contacts( s.c, &e_a );
 	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
 	cr_assert( n_a == n_b && e_a == e_b );
 	/* tolerance 0: the same pairs through the same exact test, in the same order */
 	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0 );
 	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0 );
 	sere_collide_destroy( fresh );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
-/* One vertex over the middle of a triangle, everything else far away: a single contact whose
- * solution is known in closed form. */
 /* Slivers and collapsed triangles take closest_point's nearest-edge fallback, which the
  * eight-wide test hands back to the scalar code: pairs and weights must still be exact. */
 Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 {
 	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 9 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	float h = collide_sheet_open( &s, 36, 24, 9, 1 << 16 );
 	collide_sheet_fold( &s, 0.8 * h );
 	/* on the upper half, put a corner of every fifth triangle on the midpoint of the other two
 	 * (zero area), or a millionth of a cell beside it (a sliver) */
@@ -544,12 +288,12 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 		collapsed += 1;
 	}
 	cr_assert_gt( collapsed, 50 );
-	cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
-	int32_t near = collide_check_pairs( &s, bvh, c, h, "fold with collapsed triangles", NULL );
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t near = collide_check_pairs( &s, s.bvh, s.c, h, "fold with collapsed triangles", NULL );
 	cr_assert_gt( near, s.n / 2 );
 	/* some contact must lie on a collapsed triangle for the fallback to have been exercised */
 	int32_t count, on_degenerate = 0;
-	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	const sere_contact* contacts = sere_collide_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		const int32_t* v = s.tri + 3 * contacts[k].triangle;
@@ -561,9 +305,11 @@ Test( collide, pairs_match_brute_force_with_degenerate_triangles )
 		on_degenerate += area2 <= 1e-6f * ab2 * ab2;
 	}
 	cr_assert_gt( on_degenerate, 0, "no contact on a collapsed triangle: the fallback was not exercised" );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
+/* One vertex over the middle of a triangle, everything else far away: a single contact whose
+ * solution is known in closed form. */
 Test( collide, single_contact_shared_by_inverse_mass )
 {
 	/* triangle 0 = (0, 1, 2) in z = 0; triangle 1 = (3, 4, 5) holds the vertex 3 above it */
@@ -610,6 +356,26 @@ Test( collide, single_contact_shared_by_inverse_mass )
 	sere_bvh_destroy( bvh );
 }
 
+/* Builds the tree and a collide workspace on the two triangles (0, 1, 2) and (3, 4, 5) and
+ * resolves once, with the start-of-step positions x0, y0, z0 unless x0 is NULL; the caller
+ * destroys *bvh and *c. */
+static sere_collide_stats resolve_two( float* x, float* y, float* z, float* vx, float* vy, float* vz, float* inv_m,
+									   const float* x0, const float* y0, const float* z0,
+									   const sere_collide_params* params, sere_bvh** bvh, sere_collide** c )
+{
+	static const int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
+	cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( *bvh, 0, c ), SERE_OK );
+	sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
+	if ( x0 != NULL )
+	{
+		state.x0 = x0, state.y0 = y0, state.z0 = z0;
+	}
+	sere_collide_stats stats;
+	cr_assert_eq( sere_collide_resolve( *c, *bvh, &state, params, &stats ), SERE_OK );
+	return stats;
+}
+
 /* A vertex the step carried through a triangle: detection finds it below, 0.02 under the
  * plane; at the start of the step it was 0.03 above. Without the start-of-step positions the
  * push continues downward (the gap becomes −thickness); with them it goes back up to
@@ -617,7 +383,6 @@ Test( collide, single_contact_shared_by_inverse_mass )
  * corner sinks by λ / 3. Tolerance 1e-7: float rounding of one exact push. */
 Test( collide, start_of_step_side_returns_a_vertex_through_a_triangle )
 {
-	int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
 	float inv_m[6] = { 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f };
 	float x0[6] = { 0.0f, 1.0f, 0.0f, 1.0f / 3.0f, 5.0f, 5.0f };
 	float y0[6] = { 0.0f, 0.0f, 1.0f, 1.0f / 3.0f, 5.0f, 6.0f };
@@ -631,16 +396,9 @@ Test( collide, start_of_step_side_returns_a_vertex_through_a_triangle )
 		memcpy( x, x0, sizeof( x ) ), memcpy( y, y0, sizeof( y ) ), memcpy( z, z0, sizeof( z ) );
 		z[3] = -0.02f;
 		sere_bvh* bvh;
-		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
 		sere_collide* c;
-		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
-		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
-		if ( history )
-		{
-			state.x0 = x0, state.y0 = y0, state.z0 = z0;
-		}
-		sere_collide_stats stats;
-		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		sere_collide_stats stats =
+			resolve_two( x, y, z, vx, vy, vz, inv_m, history ? x0 : NULL, y0, z0, &params, &bvh, &c );
 		cr_assert_eq( stats.contacts, 1 );
 		cr_assert_eq( stats.unresolved, 0 );
 		int32_t count;
@@ -665,13 +423,7 @@ Test( collide, closest_segments_match_double_reference )
 	for ( int k = 0; k < 20000; ++k )
 	{
 		float p0[3], p1[3], q0[3], q1[3];
-		for ( int i = 0; i < 3; ++i )
-		{
-			p0[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			p1[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			q0[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-			q1[i] = (float) ( 2.0 * sere_test_unit( &state ) - 1.0 );
-		}
+		random_points( &state, 4, ( float* const[] ){ p0, p1, q0, q1 }, ( const double[] ){ 1.0, 1.0, 1.0, 1.0 } );
 		/* parallel segments (overlapping or not), and segments of zero length */
 		bool parallel = k % 10 == 1, point = k % 20 == 3 || k % 20 == 5;
 		if ( parallel )
@@ -737,16 +489,9 @@ Test( collide, edge_contact_pushes_crossing_edges_back_to_their_side )
 		cr_assert_eq( sere_crossings_count_once( x, y, z, 6, tri, 2, &crossings, 0 ), SERE_OK );
 		cr_assert_eq( crossings, 2 );
 		sere_bvh* bvh;
-		cr_assert_eq( sere_bvh_create( tri, 2, 6, x, y, z, &bvh ), SERE_OK );
 		sere_collide* c;
-		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
-		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
-		if ( history )
-		{
-			state.x0 = x0, state.y0 = y0, state.z0 = z0;
-		}
-		sere_collide_stats stats;
-		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		sere_collide_stats stats =
+			resolve_two( x, y, z, vx, vy, vz, inv_m, history ? x0 : NULL, y0, z0, &params, &bvh, &c );
 		cr_assert_eq( stats.contacts, 0, "no vertex is near the other triangle" );
 		cr_assert_eq( stats.edge_contacts, 1 );
 		cr_assert_eq( stats.unresolved, 0 );
@@ -863,366 +608,25 @@ Test( collide, neighbour_over_a_folded_face_is_a_contact )
 	}
 }
 
-/* Pairs of one kind closer than (1 − tolerance) × h by brute force. */
-static int64_t collide_violations_of( const collide_sheet* s, float h, float tolerance, bool edges )
-{
-	int32_t dummy;
-	float below = h * ( 1.0f - tolerance );
-	return edges ? sere_collide_ref_edge_pairs( s->x, s->y, s->z, s->tri, s->triangles, below, &dummy, NULL, 0 )
-				 : sere_collide_ref_pairs( s->x, s->y, s->z, s->n, s->tri, s->triangles, below, &dummy, &dummy, 0 );
-}
-
-/* The U-fold closer than the thickness: after the response no vertex is closer than the
- * thickness to a non-incident triangle and no two edges are, up to SERE_COLLIDE_TOLERANCE (0.1%:
- * Jacobi averaging approaches the target from below). At gap 0.5h the bend (radius 0.25h) is
- * tighter than the thickness allows, and the edge–edge contacts across it, several on each
- * vertex, open it slowly: 32 iterations a round (16 left 5 of them 0.4% short) and a fourth round
- * (the third's pushes left one new pair). */
-Test( collide, response_separates_u_fold )
-{
-	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 8 );
-	float h = 0.3f * s.cell;
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 0, &bvh, &c );
-	sere_collide_params params = sere_collide_params_default();
-	params.thickness = h;
-	params.iterations = 32;
-	params.rounds = 4;
-	const double gaps[] = { 0.8, 0.5 };
-	for ( int g = 0; g < 2; ++g )
-	{
-		collide_sheet_fold( &s, gaps[g] * h );
-		memset( s.vx, 0, sizeof( float ) * (size_t) s.n );
-		memset( s.vy, 0, sizeof( float ) * (size_t) s.n );
-		memset( s.vz, 0, sizeof( float ) * (size_t) s.n );
-		float* before = malloc( sizeof( float ) * (size_t) s.n );
-		memcpy( before, s.z, sizeof( float ) * (size_t) s.n );
-		cr_assert_gt( collide_violations( &s, h, SERE_COLLIDE_TOLERANCE ), s.n );
-		sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
-		sere_collide_stats stats;
-		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
-		cr_assert_gt( stats.contacts, s.n );
-		cr_assert_eq( stats.unresolved, 0 );
-		int64_t left = collide_violations( &s, h, SERE_COLLIDE_TOLERANCE );
-		cr_assert_eq( left, 0, "gap %gh: %lld pairs still closer than the thickness", gaps[g], (long long) left );
-		/* velocities carry the displacement: Δv = Δx / dt, to float rounding of the division */
-		for ( int32_t i = 0; i < s.n; ++i )
-		{
-			float expected = ( s.z[i] - before[i] ) / params.dt;
-			cr_assert( fabsf( s.vz[i] - expected ) <= 1e-3f * ( 1.0f + fabsf( expected ) ), "velocity %d", i );
-		}
-		free( before );
-	}
-	collide_sheet_release( &s, bvh, c );
-}
-
-/* A sheet crumpled through itself cannot be separated by proximity pushes where it truly
- * intersects; the response must still clear almost every contact and report what is left. Its
- * edges pass through each other there, each in several edge–edge contacts sharing vertices.
- * Every contact takes the smallest share among its members (so that it moves no momentum),
- * which clears crowded contacts more slowly than giving each vertex the mean of its own did:
- * with 16 iterations and 3 rounds 6 of 75 vertex–triangle and 41 of 177 edge–edge pairs remain
- * (the per-vertex mean left 5 and 33); 64 iterations and 6 rounds more clear every one. The
- * masses differ from vertex to vertex (1 to 4), and the centre of mass does not move. */
-Test( collide, response_on_crumpled_sheet_is_bounded_and_moves_no_momentum )
-{
-	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 9 );
-	float h = 0.3f * s.cell;
-	collide_sheet_crumple( &s, 0.4, 0.3 * h, 13 );
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		s.inv_m[i] = 1.0f / (float) ( 1 + i % 4 );
-	}
-	double moment[3] = { 0.0, 0.0, 0.0 }, mass = 0.0;
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		moment[0] += s.x[i] / s.inv_m[i], moment[1] += s.y[i] / s.inv_m[i], moment[2] += s.z[i] / s.inv_m[i];
-		mass += 1.0 / s.inv_m[i];
-	}
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 0, &bvh, &c );
-	sere_collide_params params = sere_collide_params_default();
-	params.thickness = h;
-	params.iterations = 16;
-	params.rounds = 3;
-	int64_t initial[2] = { collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, false ),
-						   collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, true ) };
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
-	sere_collide_stats stats;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
-	int64_t left[2] = { collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, false ),
-						collide_violations_of( &s, h, SERE_COLLIDE_TOLERANCE, true ) };
-	cr_log_info( "crumpled: %lld and %lld violations before, %lld and %lld after, %d unresolved reported",
-				 (long long) initial[0], (long long) initial[1], (long long) left[0], (long long) left[1],
-				 stats.unresolved );
-	cr_assert_gt( initial[0], 50 );
-	cr_assert_gt( initial[1], 50 );
-	cr_assert_leq( left[0] * 10, initial[0], "more than a tenth of the vertex–triangle contacts remain" );
-	cr_assert_leq( left[1] * 4, initial[1], "more than a quarter of the edge–edge contacts remain" );
-	params.iterations = 64;
-	params.rounds = 6;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
-	cr_assert_eq( stats.unresolved, 0 );
-	cr_assert_eq( collide_violations( &s, h, SERE_COLLIDE_TOLERANCE ), 0 );
-	double after[3] = { 0.0, 0.0, 0.0 };
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		cr_assert( isfinite( s.x[i] ) && isfinite( s.y[i] ) && isfinite( s.z[i] ) && isfinite( s.vz[i] ) );
-		after[0] += s.x[i] / s.inv_m[i], after[1] += s.y[i] / s.inv_m[i], after[2] += s.z[i] / s.inv_m[i];
-	}
-	/* Each contact's pushes sum to zero momentum exactly; what is left is float rounding of
-	 * positions near 1 (6e-8) over a few thousand moved vertices of mass up to 4, summed:
-	 * 1e-6 of the total mass, against a centroid motion of ~1e-4 cell when the shares differed. */
-	for ( int k = 0; k < 3; ++k )
-	{
-		cr_assert_float_eq( after[k] / mass, moment[k] / mass, 1e-6, "axis %d: the centre of mass moved by %g", k,
-							( after[k] - moment[k] ) / mass );
-	}
-	collide_sheet_release( &s, bvh, c );
-}
-
-/* Jeong Eq. 14 in both modes: ĥ measured before the collision pass (Algorithm 1 line 14), or the rest
- * thickness h. */
-Test( collide, voronoi_restore_eq14 )
-{
-	collide_sheet s;
-	collide_sheet_make( &s, 20, 16, 10 );
-	collide_sheet_crumple( &s, 0.1, 0.0, 3 );
-	int32_t n = s.n, f = s.triangles;
-	uint64_t state = 2;
-	/* Voronoi particles scattered around their triangles, velocities random */
-	for ( int32_t i = 0; i < n + f; ++i )
-	{
-		s.vx[i] = (float) ( sere_test_unit( &state ) - 0.5 );
-		s.vy[i] = (float) ( sere_test_unit( &state ) - 0.5 );
-		s.vz[i] = (float) ( sere_test_unit( &state ) - 0.5 );
-	}
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		const int32_t* v = s.tri + 3 * t;
-		s.x[n + t] =
-			( s.x[v[0]] + s.x[v[1]] + s.x[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
-		s.y[n + t] =
-			( s.y[v[0]] + s.y[v[1]] + s.y[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
-		s.z[n + t] =
-			( s.z[v[0]] + s.z[v[1]] + s.z[v[2]] ) / 3.0f + (float) ( 0.02 * ( sere_test_unit( &state ) - 0.5 ) );
-	}
-	float* h_hat = malloc( sizeof( float ) * (size_t) f );
-	double* h_ref = malloc( sizeof( double ) * (size_t) f );
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, h_hat, 0 ), SERE_OK );
-	sere_collide_ref_measure_h( s.x, s.y, s.z, s.tri, f, n, h_ref );
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		/* offsets of 0.01 with unit-size coordinates: float error ~1e-7 × |x| */
-		cr_assert( fabs( h_hat[t] - h_ref[t] ) < 1e-6, "ĥ %d: %g vs %g", t, h_hat[t], h_ref[t] );
-	}
-
-	/* the layer moves (a collision pass would), then both modes restore */
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		s.z[i] += (float) ( 0.002 * sin( 9.0 * s.u[i] ) );
-	}
-	float* rest = malloc( sizeof( float ) * (size_t) f );
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		rest[t] = t % 3 == 0 ? -0.06f : 0.01f; /* signed, as h_vein and h_surf of Table 2 */
-	}
-	const float* modes[2] = { h_hat, rest };
-	size_t all = (size_t) ( n + f );
-	double *dx = malloc( sizeof( double ) * all ), *dy = malloc( sizeof( double ) * all ),
-		   *dz = malloc( sizeof( double ) * all ), *dvx = malloc( sizeof( double ) * all ),
-		   *dvy = malloc( sizeof( double ) * all ), *dvz = malloc( sizeof( double ) * all ),
-		   *dh = malloc( sizeof( double ) * (size_t) f );
-	for ( int m = 0; m < 2; ++m )
-	{
-		for ( size_t i = 0; i < all; ++i )
-		{
-			dx[i] = s.x[i], dy[i] = s.y[i], dz[i] = s.z[i], dvx[i] = s.vx[i], dvy[i] = s.vy[i], dvz[i] = s.vz[i];
-		}
-		for ( int32_t t = 0; t < f; ++t )
-		{
-			dh[t] = modes[m][t];
-		}
-		cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, modes[m], 0 ),
-					  SERE_OK );
-		sere_collide_ref_restore_voronoi( dx, dy, dz, dvx, dvy, dvz, s.tri, f, n, dh );
-		for ( int32_t t = 0; t < f; ++t )
-		{
-			int32_t i = n + t;
-			/* position: centroid + h n in float against double, coordinates ≤ 1.5 and |h| ≤ 0.06:
-			 * a few ulps of the coordinates (2e-7) */
-			cr_assert( fabs( s.x[i] - dx[i] ) < 1e-6 && fabs( s.y[i] - dy[i] ) < 1e-6 && fabs( s.z[i] - dz[i] ) < 1e-6,
-					   "mode %d: particle %d off Jeong Eq. 14", m, t );
-			/* velocity: the corner mean, three additions and a division in float */
-			cr_assert( fabs( s.vx[i] - dvx[i] ) < 1e-6 && fabs( s.vy[i] - dvy[i] ) < 1e-6 &&
-						   fabs( s.vz[i] - dvz[i] ) < 1e-6,
-					   "mode %d: velocity %d is not the corner mean", m, t );
-		}
-		/* measuring again gives back the thickness used (the particle sits on the normal line) */
-		float* again = malloc( sizeof( float ) * (size_t) f );
-		cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again, 0 ), SERE_OK );
-		for ( int32_t t = 0; t < f; ++t )
-		{
-			cr_assert( fabsf( again[t] - modes[m][t] ) < 1e-6f, "mode %d: %d measures %g, restored %g", m, t, again[t],
-					   modes[m][t] );
-		}
-		free( again );
-	}
-	free( dx ), free( dy ), free( dz ), free( dvx ), free( dvy ), free( dvz ), free( dh );
-	free( rest );
-	free( h_hat );
-	free( h_ref );
-	collide_sheet_free( &s );
-}
-
-/* Runs one collision pass (three rounds) plus the Voronoi restore with the given thread count
- * and returns the state as one buffer, the first detection's contacts of each kind, and (when
- * edges is not NULL) a copy of the last detection's edge–edge contacts (*edge_count of them). */
-static float* collide_run_pass( int threads, void ( *shape )( collide_sheet* ), bool history, int32_t* contacts_out,
-								int32_t* edge_contacts_out, sere_edge_contact** edges, int32_t* edge_count )
-{
-	collide_sheet s;
-	collide_sheet_make( &s, 36, 24, 12 );
-	shape( &s );
-	int32_t n = s.n, f = s.triangles;
-	/* start-of-step positions: the shape moved off the sheet by up to half the thickness, so
-	 * some contacts keep their detection side and others take the opposite one */
-	float* start = malloc( sizeof( float ) * 3 * (size_t) n );
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		start[i] = s.x[i], start[n + i] = s.y[i];
-		start[2 * n + i] = s.z[i] + 0.15f * s.cell * sinf( 0.7f * (float) i );
-	}
-	float* h = malloc( sizeof( float ) * (size_t) f );
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		h[t] = 0.01f;
-	}
-	omp_set_num_threads( threads );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &bvh ), SERE_OK );
-	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
-	sere_collide_params params = sere_collide_params_default();
-	params.thickness = 0.3f * s.cell;
-	params.rounds = 3;
-	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
-	if ( history )
-	{
-		state.x0 = start, state.y0 = start + n, state.z0 = start + 2 * n;
-	}
-	sere_collide_stats stats;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
-	cr_assert_eq( sere_collide_restore_voronoi( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, 0 ), SERE_OK );
-	*contacts_out = stats.contacts;
-	*edge_contacts_out = stats.edge_contacts;
-	if ( edges != NULL )
-	{
-		const sere_edge_contact* listed = sere_collide_edge_contacts( c, edge_count );
-		*edges = malloc( sizeof( sere_edge_contact ) * (size_t) ( *edge_count + 1 ) );
-		memcpy( *edges, listed, sizeof( sere_edge_contact ) * (size_t) *edge_count );
-	}
-	free( start );
-	size_t all = (size_t) ( n + f );
-	float* out = malloc( sizeof( float ) * 6 * all );
-	const float* arrays[6] = { s.x, s.y, s.z, s.vx, s.vy, s.vz };
-	for ( int k = 0; k < 6; ++k )
-	{
-		memcpy( out + (size_t) k * all, arrays[k], sizeof( float ) * all );
-	}
-	free( h );
-	collide_sheet_release( &s, bvh, c );
-	return out;
-}
-
-static void collide_shape_fold( collide_sheet* s )
-{
-	collide_sheet_fold( s, 0.8 * 0.3 * s->cell );
-}
-
-static void collide_shape_crumple( collide_sheet* s )
-{
-	collide_sheet_crumple( s, 0.3, 0.1 * s->cell, 21 );
-}
-
-/* Three threads as well as two: the detection lists, the gather lists (a counting sort split
- * over threads) and the response's share of vertices (cut by gather work) all depend on the
- * team size, the result must not. */
-Test( collide, identical_with_one_two_and_three_threads )
-{
-	void ( *shapes[2] )( collide_sheet* ) = { collide_shape_fold, collide_shape_crumple };
-	int saved = omp_get_max_threads();
-	for ( int run = 0; run < 4; ++run )
-	{
-		int k = run % 2;
-		bool history = run >= 2;
-		int32_t c[3], e[3], listed[3];
-		sere_edge_contact* edges[3];
-		float* result[3];
-		for ( int t = 0; t < 3; ++t )
-		{
-			result[t] = collide_run_pass( t + 1, shapes[k], history, c + t, e + t, edges + t, listed + t );
-		}
-		collide_sheet probe;
-		collide_sheet_make( &probe, 36, 24, 12 );
-		size_t bytes = sizeof( float ) * 6 * (size_t) ( probe.n + probe.triangles );
-		collide_sheet_free( &probe );
-		/* the fold's contacts exceed the sequential-response threshold (512 of both kinds),
-		 * exercising the parallel response; the crumple's (about 130 and 360) stay below it */
-		cr_assert_gt( c[0], k == 0 ? 512 : 20, "shape %d: %d contacts", k, c[0] );
-		cr_assert_gt( e[0], k == 0 ? 512 : 20, "shape %d: %d edge contacts", k, e[0] );
-		for ( int t = 1; t < 3; ++t )
-		{
-			cr_assert_eq( c[0], c[t] );
-			cr_assert_eq( e[0], e[t] );
-			cr_assert_eq( listed[0], listed[t] );
-			cr_assert_eq( memcmp( edges[0], edges[t], sizeof( sere_edge_contact ) * (size_t) listed[0] ), 0,
-						  "shape %d, history %d: 1 and %d threads list different edge contacts", k, history, t + 1 );
-			cr_assert_eq( memcmp( result[0], result[t], bytes ), 0, "shape %d, history %d: 1 and %d threads differ", k,
-						  history, t + 1 );
-		}
-		if ( history )
-		{
-			/* the start-of-step sides disagree with some detection sides, so the push differs */
-			int32_t c0, e0;
-			float* plain = collide_run_pass( 1, shapes[k], false, &c0, &e0, NULL, NULL );
-			cr_assert_neq( memcmp( result[0], plain, bytes ), 0, "shape %d: start-of-step sides changed nothing", k );
-			free( plain );
-		}
-		for ( int t = 0; t < 3; ++t )
-		{
-			free( result[t] );
-			free( edges[t] );
-		}
-	}
-	omp_set_num_threads( saved );
-}
-
 Test( collide, nonfinite_inputs_are_refused )
 {
 	collide_sheet s;
 	collide_sheet_make( &s, 12, 10, 1 );
 	collide_shape_fold( &s );
 	int32_t n = s.n, f = s.triangles;
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &bvh ), SERE_OK );
-	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	cr_assert_eq( sere_bvh_create( s.tri, f, n, s.x, s.y, s.z, &s.bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s.bvh, 0, &s.c ), SERE_OK );
 	size_t bytes = sizeof( float ) * (size_t) ( n + f );
 	float* saved = malloc( 3 * bytes );
 	memcpy( saved, s.x, bytes ), memcpy( saved + n + f, s.y, bytes ), memcpy( saved + 2 * ( n + f ), s.z, bytes );
 
 	s.x[7] = NAN;
 	int32_t count = 0;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_NONFINITE );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
 	s.x[7] = saved[7];
 	cr_assert( memcmp( saved, s.x, bytes ) == 0 && memcmp( saved + n + f, s.y, bytes ) == 0 &&
 				   memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0,
@@ -1231,15 +635,15 @@ Test( collide, nonfinite_inputs_are_refused )
 	/* a NaN velocity on a vertex in contact */
 	s.vz[0] = INFINITY;
 	bool touched = false;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, params.thickness, &count ), SERE_OK );
-	const sere_contact* contacts = sere_collide_contacts( c, &count );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, params.thickness, &count ), SERE_OK );
+	const sere_contact* contacts = sere_collide_contacts( s.c, &count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
 		touched = touched || contacts[k].vertex == 0 || s.tri[3 * contacts[k].triangle] == 0 ||
 				  s.tri[3 * contacts[k].triangle + 1] == 0 || s.tri[3 * contacts[k].triangle + 2] == 0;
 	}
 	cr_assert( touched, "vertex 0 should be in contact in the fold" );
-	cr_assert_eq( sere_collide_respond( c, bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_respond( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
 	s.vz[0] = 0.0f;
 
@@ -1249,7 +653,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	start[0] = NAN;
 	sere_collide_state history = state;
 	history.x0 = s.x, history.y0 = s.y, history.z0 = start;
-	const sere_contact* listed = sere_collide_contacts( c, &count );
+	const sere_contact* listed = sere_collide_contacts( s.c, &count );
 	float* sides = malloc( sizeof( float ) * (size_t) count );
 	for ( int32_t k = 0; k < count; ++k )
 	{
@@ -1260,7 +664,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	{
 		start[i] = -s.z[i];
 	}
-	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_NONFINITE );
+	cr_assert_eq( sere_collide_respond( s.c, s.bvh, &history, &params, NULL ), SERE_ERR_NONFINITE );
 	cr_assert( memcmp( saved + 2 * ( n + f ), s.z, bytes ) == 0, "positions changed on error" );
 	for ( int32_t k = 0; k < count; ++k )
 	{
@@ -1268,8 +672,8 @@ Test( collide, nonfinite_inputs_are_refused )
 	}
 	free( sides );
 	history.y0 = NULL;
-	cr_assert_eq( sere_collide_respond( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
-	cr_assert_eq( sere_collide_resolve( c, bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_respond( s.c, s.bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &history, &params, NULL ), SERE_ERR_ARGUMENT );
 	free( start );
 	s.vz[0] = INFINITY;
 
@@ -1300,7 +704,7 @@ Test( collide, nonfinite_inputs_are_refused )
 	}
 	free( h );
 	free( saved );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
@@ -1308,73 +712,68 @@ Test( collide, capacity_overflow_is_reported_and_reserve_fixes_it )
 	collide_sheet s;
 	collide_sheet_make( &s, 20, 16, 2 );
 	collide_shape_fold( &s );
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 16, &bvh, &c );
+	collide_sheet_tree( &s, 16 );
 	float* saved = malloc( sizeof( float ) * (size_t) s.n );
 	memcpy( saved, s.z, sizeof( float ) * (size_t) s.n );
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = 0.3f * s.cell;
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	sere_collide_stats stats;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_ERR_CAPACITY );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_ERR_CAPACITY );
 	/* the capacity holds each kind: the larger count is what it must grow to */
 	int32_t needed = stats.contacts > stats.edge_contacts ? stats.contacts : stats.edge_contacts;
 	cr_assert_gt( stats.contacts, 16 );
 	cr_assert_gt( stats.edge_contacts, 16 );
 	cr_assert_eq( memcmp( saved, s.z, sizeof( float ) * (size_t) s.n ), 0, "positions changed on overflow" );
 	int32_t listed;
-	sere_collide_contacts( c, &listed );
+	sere_collide_contacts( s.c, &listed );
 	cr_assert_eq( listed, 0 );
-	sere_collide_edge_contacts( c, &listed );
+	sere_collide_edge_contacts( s.c, &listed );
 	cr_assert_eq( listed, 0 );
-	cr_assert_eq( sere_collide_reserve( c, needed ), SERE_OK );
+	cr_assert_eq( sere_collide_reserve( s.c, needed ), SERE_OK );
 	int32_t found;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, params.thickness, &found ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, params.thickness, &found ), SERE_OK );
 	cr_assert_eq( found, stats.contacts );
-	sere_collide_edge_contacts( c, &listed );
+	sere_collide_edge_contacts( s.c, &listed );
 	cr_assert_eq( listed, stats.edge_contacts );
 	free( saved );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
 Test( collide, bad_arguments_are_refused )
 {
 	collide_sheet s;
 	collide_sheet_make( &s, 6, 6, 1 );
-	sere_bvh* bvh;
-	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
-	sere_collide* c;
-	cr_assert_eq( sere_collide_create( bvh, -1, &c ), SERE_ERR_ARGUMENT );
-	cr_assert_null( c );
-	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &s.bvh ), SERE_OK );
+	cr_assert_eq( sere_collide_create( s.bvh, -1, &s.c ), SERE_ERR_ARGUMENT );
+	cr_assert_null( s.c );
+	cr_assert_eq( sere_collide_create( s.bvh, 0, &s.c ), SERE_OK );
 	int32_t count;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, 0.0f, &count ), SERE_ERR_ARGUMENT );
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, NAN, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, 0.0f, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, NAN, &count ), SERE_ERR_ARGUMENT );
 	sere_collide_params params = sere_collide_params_default();
 	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
 	params.dt = 0.0f;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
 	params = sere_collide_params_default();
 	params.rounds = 0;
-	cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, NULL ), SERE_ERR_ARGUMENT );
 	/* a workspace made for another mesh */
 	sere_bvh* other;
 	int32_t one[3] = { 0, 1, 2 };
 	cr_assert_eq( sere_bvh_create( one, 1, 3, s.x, s.y, s.z, &other ), SERE_OK );
-	cr_assert_eq( sere_collide_detect( c, other, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_detect( s.c, other, s.x, s.y, s.z, 0.01f, &count ), SERE_ERR_ARGUMENT );
 	sere_bvh_destroy( other );
-	collide_sheet_release( &s, bvh, c );
+	collide_sheet_release( &s );
 }
 
+/* A flat sheet and a thickness of 3/4 of a cell: every vertex is closer than that to triangles
+ * it is not a corner of (across the far edge of its own triangles), but all of them have a
+ * corner joined to it by an edge, so no contact may be reported. */
 Test( collide, neighbours_in_the_sheet_are_not_contacts )
 {
-	/* A flat sheet and a thickness of 3/4 of a cell: every vertex is closer than that to
-	 * triangles it is not a corner of (across the far edge of its own triangles), but all of
-	 * them have a corner joined to it by an edge, so no contact may be reported. */
 	collide_sheet s;
-	collide_sheet_make( &s, 30, 20, 9 );
-	float h = 0.75f * s.cell;
+	float h = 0.75f * collide_sheet_make( &s, 30, 20, 9 );
 	int64_t close = 0;
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
@@ -1408,153 +807,11 @@ Test( collide, neighbours_in_the_sheet_are_not_contacts )
 		}
 	}
 	cr_assert_gt( close_edges, s.n / 2 );
-	sere_bvh* bvh;
-	sere_collide* c;
-	collide_sheet_tree( &s, 1 << 16, &bvh, &c );
+	collide_sheet_tree( &s, 1 << 16 );
 	int32_t count = -1;
-	cr_assert_eq( sere_collide_detect( c, bvh, s.x, s.y, s.z, h, &count ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, h, &count ), SERE_OK );
 	cr_expect_eq( count, 0, "%d contacts between neighbours in a flat sheet", count );
-	sere_collide_edge_contacts( c, &count );
+	sere_collide_edge_contacts( s.c, &count );
 	cr_expect_eq( count, 0, "%d edge contacts between neighbours in a flat sheet", count );
-	collide_sheet_release( &s, bvh, c );
-}
-
-/* A sheet with Voronoi particles off their places, random velocities and masses in [0.5, 2]. */
-static void conserving_sheet( collide_sheet* s, uint64_t seed )
-{
-	collide_sheet_make( s, 36, 24, seed );
-	int32_t n = s->n, f = s->triangles;
-	uint64_t state = seed;
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		s->z[i] = (float) ( 0.05 * sin( 7.0 * s->u[i] + 3.0 * s->v[i] ) );
-	}
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		const int32_t* v = s->tri + 3 * t;
-		s->x[n + t] =
-			( s->x[v[0]] + s->x[v[1]] + s->x[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
-		s->y[n + t] =
-			( s->y[v[0]] + s->y[v[1]] + s->y[v[2]] ) / 3.0f + (float) ( 0.01 * ( sere_test_unit( &state ) - 0.5 ) );
-		s->z[n + t] = ( s->z[v[0]] + s->z[v[1]] + s->z[v[2]] ) / 3.0f + (float) ( 0.02 * sere_test_unit( &state ) );
-	}
-	for ( int32_t i = 0; i < n + f; ++i )
-	{
-		s->vx[i] = (float) ( sere_test_unit( &state ) - 0.5 );
-		s->vy[i] = (float) ( sere_test_unit( &state ) - 0.5 );
-		s->vz[i] = (float) ( sere_test_unit( &state ) - 0.5 );
-		s->inv_m[i] = (float) ( 1.0 / ( 0.5 + 1.5 * sere_test_unit( &state ) ) );
-	}
-}
-
-/* Jeong Eq. 14 only where the collision response moved a corner and left the Voronoi particle on the
- * wrong side of its triangle (Sec. 5.3): those are put back on the normal line at h with the
- * velocity change Δx/Δt, every other Voronoi particle stays bit for bit. */
-Test( collide, restore_moved_applies_eq14_only_where_collisions_moved )
-{
-	collide_sheet s, before;
-	conserving_sheet( &s, 21 );
-	conserving_sheet( &before, 21 );
-	int32_t n = s.n, f = s.triangles;
-	const float dt = 0.002f;
-	float* h = malloc( sizeof( float ) * (size_t) f );
-	uint8_t* moved = calloc( (size_t) n, 1 );
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		h[t] = t % 3 == 0 ? -0.06f : 0.01f;
-	}
-	/* nothing moved: nothing is touched, bit for bit (no velocity from nowhere) */
-	cr_assert_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, dt, 0 ),
-				  SERE_OK );
-	cr_expect_eq( memcmp( s.z, before.z, sizeof( float ) * (size_t) ( n + f ) ), 0 );
-	cr_expect_eq( memcmp( s.vz, before.vz, sizeof( float ) * (size_t) ( n + f ) ), 0 );
-	for ( int32_t i = 0; i < n; i += 7 )
-	{
-		moved[i] = 1;
-	}
-	/* which side of its triangle each Voronoi particle is on before the restore */
-	float* side = malloc( sizeof( float ) * (size_t) f );
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, side, 0 ), SERE_OK );
-	cr_assert_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, dt, 0 ),
-				  SERE_OK );
-	float* again = malloc( sizeof( float ) * (size_t) f );
-	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, again, 0 ), SERE_OK );
-	int32_t restored = 0;
-	for ( int32_t t = 0; t < f; ++t )
-	{
-		const int32_t* v = s.tri + 3 * t;
-		int32_t i = n + t;
-		/* the conserving sheet puts the Voronoi particles near +z of their triangles: on the side
-		 * h puts them for most with h = 0.01, through the triangle for most with h = -0.06 */
-		if ( ( moved[v[0]] | moved[v[1]] | moved[v[2]] ) && !( side[t] * h[t] > 0.0f ) )
-		{
-			restored += 1;
-			/* on the normal line at h: float rounding of unit-size coordinates */
-			cr_assert( fabsf( again[t] - h[t] ) < 1e-6f, "%d measures %g, restored %g", t, again[t], h[t] );
-			/* Δv = Δx/Δt; the quotient amplifies the coordinates' rounding (1e-7) by 1/dt */
-			float expected = before.vz[i] + ( s.z[i] - before.z[i] ) / dt;
-			cr_assert( fabsf( s.vz[i] - expected ) < 1e-3f * ( 1.0f + fabsf( expected ) ), "velocity %d: %g, not %g", t,
-					   s.vz[i], expected );
-		}
-		else
-		{
-			cr_assert( s.x[i] == before.x[i] && s.y[i] == before.y[i] && s.z[i] == before.z[i] &&
-						   s.vz[i] == before.vz[i],
-					   "triangle %d: no moved corner, or its Voronoi particle on its side, but it changed", t );
-		}
-	}
-	cr_assert( restored > 0 && restored < f, "%d of %d triangles restored", restored, f );
-	cr_expect_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, NULL, dt, 0 ),
-				  SERE_ERR_ARGUMENT );
-	cr_expect_eq( sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, 0.0f, 0 ),
-				  SERE_ERR_ARGUMENT );
-	free( again );
-	free( side );
-	free( moved );
-	free( h );
-	collide_sheet_free( &before );
-	collide_sheet_free( &s );
-}
-
-Test( collide, restore_moved_is_deterministic )
-{
-	float* result[2];
-	for ( int threads = 1; threads <= 2; ++threads )
-	{
-		omp_set_num_threads( threads );
-		collide_sheet s;
-		conserving_sheet( &s, 33 );
-		int32_t n = s.n, f = s.triangles;
-		float* h = malloc( sizeof( float ) * (size_t) f );
-		uint8_t* moved = calloc( (size_t) n, 1 );
-		for ( int32_t t = 0; t < f; ++t )
-		{
-			h[t] = t % 2 == 0 ? 0.01f : -0.01f; /* half of them through their triangle */
-		}
-		for ( int32_t i = 0; i < n; i += 3 )
-		{
-			moved[i] = 1;
-		}
-		cr_assert_eq(
-			sere_collide_restore_voronoi_moved( s.x, s.y, s.z, s.vx, s.vy, s.vz, s.tri, f, n, h, moved, 0.002f, 0 ),
-			SERE_OK );
-		collide_sheet fresh;
-		conserving_sheet( &fresh, 33 );
-		cr_assert_neq( memcmp( fresh.z + n, s.z + n, sizeof( float ) * (size_t) f ), 0, "nothing was restored" );
-		collide_sheet_free( &fresh );
-		result[threads - 1] = malloc( sizeof( float ) * 4 * (size_t) ( n + f ) );
-		memcpy( result[threads - 1], s.x, sizeof( float ) * (size_t) ( n + f ) );
-		memcpy( result[threads - 1] + n + f, s.y, sizeof( float ) * (size_t) ( n + f ) );
-		memcpy( result[threads - 1] + 2 * ( n + f ), s.z, sizeof( float ) * (size_t) ( n + f ) );
-		memcpy( result[threads - 1] + 3 * ( n + f ), s.vz, sizeof( float ) * (size_t) ( n + f ) );
-		if ( threads == 2 )
-		{
-			cr_expect_eq( memcmp( result[0], result[1], sizeof( float ) * 4 * (size_t) ( n + f ) ), 0,
-						  "1 and 2 threads differ" );
-		}
-		free( moved );
-		free( h );
-		collide_sheet_free( &s );
-	}
-	free( result[0] ), free( result[1] );
+	collide_sheet_release( &s );
 }

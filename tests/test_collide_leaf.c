@@ -1,6 +1,7 @@
 /* Self-collision on the shipped leaves (the issue's case): random smooth deformations and a
  * crumple of real leaf meshes; the BVH must find exactly the brute-force pair sets, vertex–triangle
  * and edge–edge. */
+#include "collide_sheet.h"
 #include "drying/model.h"
 #include "read/leafload.h"
 #include "ref/collide_ref.h"
@@ -17,26 +18,6 @@ typedef struct pair
 {
 	int32_t v, t;
 } pair;
-
-static int compare_pair( const void* pa, const void* pb )
-{
-	const pair* a = pa;
-	const pair* b = pb;
-	return a->v != b->v ? ( a->v > b->v ) - ( a->v < b->v ) : ( a->t > b->t ) - ( a->t < b->t );
-}
-
-static int compare_quad( const void* pa, const void* pb )
-{
-	const int32_t *a = pa, *b = pb;
-	for ( int k = 0; k < 4; ++k )
-	{
-		if ( a[k] != b[k] )
-		{
-			return a[k] < b[k] ? -1 : 1;
-		}
-	}
-	return 0;
-}
 
 /* The edge–edge contacts of the last detection equal the brute-force pair set exactly; returns
  * their count. */
@@ -56,10 +37,10 @@ static int32_t check_edge_pairs( const sere_collide* collide, const float* x, co
 		found[4 * c] = contacts[c].a0, found[4 * c + 1] = contacts[c].a1;
 		found[4 * c + 2] = contacts[c].b0, found[4 * c + 3] = contacts[c].b1;
 	}
-	qsort( found, (size_t) listed, 4 * sizeof( int32_t ), compare_quad );
+	qsort( found, (size_t) listed, 4 * sizeof( int32_t ), collide_cmp_quad );
 	for ( int32_t c = 0; c < listed && c < brute; ++c )
 	{
-		cr_assert( compare_quad( found + 4 * c, expected + 4 * c ) == 0, "%s: edge pair %d differs", what, c );
+		cr_assert( collide_cmp_quad( found + 4 * c, expected + 4 * c ) == 0, "%s: edge pair %d differs", what, c );
 	}
 	free( found );
 	free( expected );
@@ -139,8 +120,8 @@ Test( collide_leaf, bvh_equals_brute_force_on_deformed_leaves )
 			{
 				expected[c] = ( pair ){ rv[c], rt[c] };
 			}
-			qsort( found, (size_t) listed, sizeof( pair ), compare_pair );
-			qsort( expected, (size_t) brute, sizeof( pair ), compare_pair );
+			qsort( found, (size_t) listed, sizeof( pair ), collide_cmp_pair );
+			qsort( expected, (size_t) brute, sizeof( pair ), collide_cmp_pair );
 			cr_expect_eq( listed, brute, "%s shape %d: BVH %d pairs, brute force %lld", names[k], shape, listed,
 						  (long long) brute );
 			for ( int32_t c = 0; c < listed && c < brute; ++c )

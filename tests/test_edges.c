@@ -18,12 +18,6 @@
 
 /* ---- helpers -------------------------------------------------------------------------------- */
 
-static void expect_one_line( const char* what, const char* err )
-{
-	const char* newline = strchr( err, '\n' );
-	cr_expect( newline != NULL && newline[1] == '\0', "%s: not one line: %s", what, err );
-}
-
 static char* read_text( const char* path )
 {
 	FILE* f = fopen( path, "rb" );
@@ -194,8 +188,7 @@ static void weird_leaf( const char* dir, char* path, size_t size )
 
 Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 {
-	char dir[] = "/tmp/sere-edges-json-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-json" );
 	char leaf[512], args[2048], out[16384], path[512];
 	weird_leaf( dir, leaf, sizeof( leaf ) );
 	snprintf( args, sizeof( args ), "model %s --points 300 --json", leaf );
@@ -212,13 +205,12 @@ Test( edges, leaf_name_with_quote_and_control_characters_gives_valid_json )
 	cr_expect( json_valid( summary ), "summary.json is not JSON:\n%s", summary );
 	cr_expect_not_null( strstr( summary, "\"status\": \"complete\"" ), "%s", summary );
 	free( summary );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, leaf_name_not_utf8_is_refused )
 {
-	char dir[] = "/tmp/sere-edges-utf8-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-utf8" );
 	char path[512], args[1024], err[4096], where[600];
 	snprintf( path, sizeof( path ), "%s/latin1.leaf", dir );
 	write_text( path, "name caf\xe9\nbase 0 0\noutline 3\n0 0\n1 0\n0 1\n" );
@@ -226,8 +218,8 @@ Test( edges, leaf_name_not_utf8_is_refused )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	snprintf( where, sizeof( where ), "%s:1: name is not UTF-8 text (byte 0xE9 at character 4)", path );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
-	expect_one_line( "latin1", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_expect_one_line( "latin1", err );
+	sere_test_scratch_remove( dir );
 }
 
 static void expect_seed( const char* dir, const char* preset, const char* expected )
@@ -245,8 +237,7 @@ static void expect_seed( const char* dir, const char* preset, const char* expect
 
 Test( edges, long_preset_comment_stays_a_comment )
 {
-	char dir[] = "/tmp/sere-edges-preset-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-preset" );
 	/* 1023 characters of comment, then "seed=7": a 1024-byte line buffer used to cut it there
 	 * and apply the tail */
 	static char text[8192];
@@ -272,14 +263,13 @@ Test( edges, long_preset_comment_stays_a_comment )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	snprintf( where, sizeof( where ), "%s:3: stiffness = 2 is out of range", preset );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
-	expect_one_line( "preset", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_expect_one_line( "preset", err );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, long_chain_line_keeps_line_numbers )
 {
-	char dir[] = "/tmp/sere-edges-chain-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-chain" );
 	char* chain = read_text( "data/seasons/maple.chain" );
 	cr_assert_not_null( chain );
 	/* line 1: a 3000-character comment; line 2: a mistake */
@@ -296,7 +286,7 @@ Test( edges, long_chain_line_keeps_line_numbers )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	snprintf( where, sizeof( where ), "%s:2: unknown keyword 'bogus'", path );
 	cr_expect_not_null( strstr( err, where ), "expected '%s' in: %s", where, err );
-	expect_one_line( "chain", err );
+	sere_test_expect_one_line( "chain", err );
 
 	/* the tail of a long comment is not read as a keyword */
 	text[0] = '#';
@@ -310,15 +300,14 @@ Test( edges, long_chain_line_keeps_line_numbers )
 	cr_expect_not_null( strstr( err, "missing.schedule" ), "the chain was not accepted: %s", err );
 	free( text );
 	free( chain );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 /* ---- silent limits --------------------------------------------------------------------------- */
 
 Test( edges, more_than_1023_mesh_frames_are_all_written, .timeout = 240 )
 {
-	char dir[] = "/tmp/sere-edges-frames-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-frames" );
 	char args[1024], err[4096], path[512];
 	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 100 --every 1 --frames 1100 --out %s",
 			  dir );
@@ -336,7 +325,7 @@ Test( edges, more_than_1023_mesh_frames_are_all_written, .timeout = 240 )
 	}
 	cr_expect_eq( listed, 1101, "leaf.pvd lists %d frames", listed );
 	free( pvd );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, too_few_points_names_a_count_that_builds )
@@ -349,7 +338,7 @@ Test( edges, too_few_points_names_a_count_that_builds )
 	for ( int k = 0; k < 2; ++k )
 	{
 		cr_expect_neq( sere_test_run( commands[k], err, sizeof( err ) ), 0, "%s", commands[k] );
-		expect_one_line( commands[k], err );
+		sere_test_expect_one_line( commands[k], err );
 		const char* hint = strstr( err, "; --points " );
 		cr_assert_not_null( strstr( err, "data/leaves/maple.leaf: --points 10 is too few" ), "%s", err );
 		cr_assert_not_null( hint, "%s", err );
@@ -374,29 +363,28 @@ Test( edges, empty_out_is_refused )
 		cr_expect_neq( sere_test_run( commands[k], err, sizeof( err ) ), 0, "%s", commands[k] );
 		cr_expect_not_null( strstr( err, "--out needs a directory name" ), "%s: %s", commands[k], err );
 		cr_expect_null( strstr( err, "Success" ), "%s", err );
-		expect_one_line( commands[k], err );
+		sere_test_expect_one_line( commands[k], err );
 	}
 	cr_expect( had_summary || stat( "/summary.json", &info ) != 0, "sere run wrote into /" );
 }
 
 Test( edges, summary_json_directory_is_refused )
 {
-	char dir[] = "/tmp/sere-edges-dir-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
-	char path[512], args[1024], err[4096];
+	char* dir = sere_test_scratch( "edges-dir" );
+	char path[512], err[4096];
 	snprintf( path, sizeof( path ), "%s/summary.json", dir );
 	cr_assert_eq( mkdir( path, 0755 ), 0 );
-	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 300 --frames 2 --out %s", dir );
-	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
+	cr_expect_neq(
+		sere_test_run_in( "run data/leaves/wisteria.leaf --points 300 --frames 2 --out %s", dir, err, sizeof( err ) ),
+		0 );
 	cr_expect_not_null( strstr( err, path ), "the message does not name %s: %s", path, err );
-	expect_one_line( "summary.json", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_expect_one_line( "summary.json", err );
+	sere_test_scratch_remove( dir );
 }
 
 Test( edges, wilt_out_that_is_a_file )
 {
-	char dir[] = "/tmp/sere-edges-wilt-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-wilt" );
 	char path[512], args[1024], err[4096];
 	snprintf( path, sizeof( path ), "%s/file", dir );
 	write_text( path, "x\n" );
@@ -404,8 +392,8 @@ Test( edges, wilt_out_that_is_a_file )
 	cr_expect_neq( sere_test_run( args, err, sizeof( err ) ), 0 );
 	cr_expect_not_null( strstr( err, "Not a directory" ), "%s", err );
 	cr_expect_null( strstr( err, "Success" ), "%s", err );
-	expect_one_line( "wilt", err );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_expect_one_line( "wilt", err );
+	sere_test_scratch_remove( dir );
 }
 
 /* PLY files whose size matches their header: vertices of as many floats as the header lists
@@ -437,8 +425,7 @@ static void expect_whole_ply( const char* path )
 
 Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 {
-	char dir[] = "/tmp/sere-edges-full-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "edges-full" );
 	/* A 256 KiB tmpfs holds frame 0 and a few more (root, as here and in CI); where mounting is
 	 * not allowed, a file-size limit makes the first VTP fail with EFBIG instead. */
 	int mounted = mount( "tmpfs", dir, "tmpfs", 0, "size=256k" ) == 0;
@@ -477,7 +464,7 @@ Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 	cr_expect_not_null( strstr( err, "sere run: cannot write " ), "%s", err );
 	cr_expect_not_null( strstr( err, "/frames/frame_" ), "the message does not name the file: %s", err );
 	cr_expect_not_null( strstr( err, reason ), "expected '%s' in: %s", reason, err );
-	expect_one_line( "full disk", err );
+	sere_test_expect_one_line( "full disk", err );
 
 	char path[512];
 	snprintf( path, sizeof( path ), "%s/summary.json", dir );
@@ -517,5 +504,5 @@ Test( edges, full_disk_stops_with_one_line_and_a_summary, .timeout = 120 )
 	{
 		cr_expect_eq( umount( dir ), 0 );
 	}
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }

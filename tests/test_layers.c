@@ -28,15 +28,28 @@ Test( layers, counts_solve_rejects_impossible )
 	cr_expect_eq( sere_counts_solve( -5, 51102, &n, &b ), SERE_ERR_COUNTS );
 }
 
+/* The double layer (sere_model_from_triangles) on a jittered grid with a vein row. */
+static void layers_build( sere_test_plane* plane, int32_t nx, int32_t ny, double width, double height, double jitter,
+						  uint64_t seed, const sere_layer_params* params, sere_model* model )
+{
+	sere_test_plane_grid( plane, nx, ny, width, height, jitter, 1, seed );
+	cr_assert_eq( sere_model_from_triangles( &plane->mesh, params, model ), SERE_OK );
+}
+
+static void layers_free( sere_test_plane* plane, sere_model* model )
+{
+	sere_model_destroy( model );
+	sere_test_plane_free( plane );
+}
+
 Test( layers, double_layer_counts_and_springs )
 {
-	sere_test_plane plane;
-	sere_test_plane_grid( &plane, 12, 8, 1.2, 0.8, 0.3, 1, 7 );
 	sere_layer_params params = sere_layer_params_default();
 	params.h_vein = -0.02;
 	params.h_surf = 0.005;
+	sere_test_plane plane;
 	sere_model model;
-	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &params, &model ), SERE_OK );
+	layers_build( &plane, 12, 8, 1.2, 0.8, 0.3, 7, &params, &model );
 	int32_t n = plane.mesh.point_count, b = plane.mesh.boundary_count;
 	cr_expect_eq( model.triangle_count, 2 * n - b - 2 );
 	cr_expect_eq( model.p.count, 3 * n - b - 2 );
@@ -97,18 +110,16 @@ Test( layers, double_layer_counts_and_springs )
 		sere_model_triangle_normal( &model, t, normal );
 		cr_expect_float_eq( normal[2], 1.0f, 1e-6f, "triangle %d must be counter-clockwise", t );
 	}
-	sere_model_destroy( &model );
-	sere_test_plane_free( &plane );
+	layers_free( &plane, &model );
 }
 
 Test( layers, tau_and_masses )
 {
-	sere_test_plane plane;
-	sere_test_plane_grid( &plane, 16, 10, 1.6, 1.0, 0.25, 1, 11 );
 	sere_layer_params params = sere_layer_params_default();
 	params.D = 2.0;
+	sere_test_plane plane;
 	sere_model model;
-	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &params, &model ), SERE_OK );
+	layers_build( &plane, 16, 10, 1.6, 1.0, 0.25, 11, &params, &model );
 	int32_t n = model.triangle_particles;
 	/* Jeong Eq. 1: τ = 1 at the base and 0 at the farthest particle; Jeong Eq. 2 maps it onto [m_min, m_max]. */
 	cr_expect_float_eq( model.p.tau[model.base], 1.0f, 0.0f );
@@ -148,8 +159,7 @@ Test( layers, tau_and_masses )
 		double mean = ( model.p.m0[v[0]] + model.p.m0[v[1]] + model.p.m0[v[2]] ) / 3.0;
 		cr_assert( fabs( model.p.m0[n + t] - mean ) <= 1e-15 );
 	}
-	sere_model_destroy( &model );
-	sere_test_plane_free( &plane );
+	layers_free( &plane, &model );
 }
 
 Test( layers, rejects_bad_meshes )

@@ -48,6 +48,17 @@ static char* read_all( const char* path, long* size )
 	return data;
 }
 
+/* The file name in the output directory dir, read whole (read_all); asserts it could be read. */
+static char* read_output( const char* dir, const char* name )
+{
+	char path[256];
+	snprintf( path, sizeof( path ), "%s/%s", dir, name );
+	long size;
+	char* data = read_all( path, &size );
+	cr_assert_not_null( data, "cannot read %s", path );
+	return data;
+}
+
 static void expect_same_file( const char* a, const char* b )
 {
 	long size_a = -1, size_b = -1;
@@ -67,6 +78,18 @@ static int litter( const char* dir, const char* extra, char* err, size_t err_siz
 	return sere_test_run( args, err, err_size );
 }
 
+/* Two fresh directories (make_dir) holding the litter written on one thread in the first and
+ * on two in the second. */
+static void litter_one_and_two( char* first, char* second, size_t size, const char* first_name,
+								const char* second_name )
+{
+	char err[4096];
+	make_dir( first, size, first_name );
+	make_dir( second, size, second_name );
+	cr_assert_eq( litter( first, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( litter( second, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+}
+
 static int count_of( const char* text, const char* phrase )
 {
 	int count = 0;
@@ -79,21 +102,15 @@ static int count_of( const char* text, const char* phrase )
 
 Test( litter, same_scene_on_one_and_two_threads )
 {
-	char one[64], two[64], err[4096], a[128], b[128];
-	make_dir( one, sizeof( one ), "t1" );
-	make_dir( two, sizeof( two ), "t2" );
-	cr_assert_eq( litter( one, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
-	cr_assert_eq( litter( two, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	char one[64], two[64], a[128], b[128];
+	litter_one_and_two( one, two, sizeof( one ), "t1", "t2" );
 	snprintf( a, sizeof( a ), "%s/litter.ply", one );
 	snprintf( b, sizeof( b ), "%s/litter.ply", two );
 	expect_same_file( a, b );
 	snprintf( a, sizeof( a ), "%s/litter.png", one );
 	struct stat info;
 	cr_expect( stat( a, &info ) == 0 && info.st_size > 0, "no %s", a );
-	snprintf( a, sizeof( a ), "%s/summary.json", one );
-	long size;
-	char* summary = read_all( a, &size );
-	cr_assert_not_null( summary );
+	char* summary = read_output( one, "summary.json" );
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 4, "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"failed\": 0" ), "%s", summary );
 	free( summary );
@@ -104,10 +121,7 @@ Test( litter, same_scene_on_one_and_two_threads )
 Test( litter, rerun_redoes_missing_and_cut_leaves_only )
 {
 	char whole[64], resumed[64], err[4096], path[160], other[160];
-	make_dir( whole, sizeof( whole ), "whole" );
-	make_dir( resumed, sizeof( resumed ), "resumed" );
-	cr_assert_eq( litter( whole, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
-	cr_assert_eq( litter( resumed, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
+	litter_one_and_two( whole, resumed, sizeof( whole ), "whole", "resumed" );
 	/* a crash: one leaf never written, another cut short */
 	snprintf( path, sizeof( path ), "%s/leaves/leaf_00001.ply", resumed );
 	cr_assert_eq( unlink( path ), 0 );
@@ -122,10 +136,7 @@ Test( litter, rerun_redoes_missing_and_cut_leaves_only )
 	snprintf( other, sizeof( other ), "%s/litter.ply", resumed );
 	expect_same_file( path, other );
 	/* the two damaged leaves dried again, the others kept */
-	snprintf( path, sizeof( path ), "%s/summary.json", resumed );
-	long size;
-	char* summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	char* summary = read_output( resumed, "summary.json" );
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 2, "%s", summary );
 	cr_expect_eq( count_of( summary, "\"status\": \"resumed\"" ), 2, "%s", summary );
 	free( summary );
@@ -134,9 +145,7 @@ Test( litter, rerun_redoes_missing_and_cut_leaves_only )
 	make_dir( changed, sizeof( changed ), "changed" );
 	cr_assert_eq( litter( changed, "--threads 1", err, sizeof( err ) ), 0, "%s", err );
 	cr_assert_eq( litter( changed, "--threads 1 --frames 10", err, sizeof( err ) ), 0, "%s", err );
-	snprintf( path, sizeof( path ), "%s/summary.json", changed );
-	summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	summary = read_output( changed, "summary.json" );
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 4, "%s", summary );
 	free( summary );
 	cr_expect_eq( sere_test_remove_tree( whole ), 0 );
@@ -164,10 +173,7 @@ Test( litter, failed_leaf_is_reported_and_costs_no_other )
 		struct stat info;
 		cr_expect( stat( path, &info ) == 0 && ( i == 1 ) == S_ISDIR( info.st_mode ), "%s", path );
 	}
-	snprintf( path, sizeof( path ), "%s/summary.json", dir );
-	long size;
-	char* summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	char* summary = read_output( dir, "summary.json" );
 	cr_expect_eq( count_of( summary, "\"status\": \"dried\"" ), 3, "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"index\": 1," ), "%s", summary );
 	cr_expect_not_null( strstr( summary, "is a directory, not a file\"" ), "%s", summary );
@@ -184,16 +190,14 @@ Test( litter, failed_leaf_is_reported_and_costs_no_other )
  * --frames stops it wet, and says nothing of it on stderr: the user chose it. */
 Test( litter, dries_to_the_end_unless_frames_says_otherwise )
 {
-	char dir[64], err[4096], path[160];
+	char dir[64], err[4096];
 	make_dir( dir, sizeof( dir ), "dry" );
 	char args[512];
-	snprintf( args, sizeof( args ), "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --out %s", dir );
-	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
+	cr_assert_eq( sere_test_run_in( "litter --leaves 1 --seed 6 --points 400 --preset plane-tree --out %s", dir, err,
+									sizeof( err ) ),
+				  0, "%s", err );
 	cr_expect_eq( err[0], '\0', "nothing on stderr: %s", err );
-	snprintf( path, sizeof( path ), "%s/summary.json", dir );
-	long size;
-	char* summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	char* summary = read_output( dir, "summary.json" );
 	const char* at = strstr( summary, "\"frames\": " );
 	long frames = -1;
 	cr_assert( at != NULL && sscanf( at, "\"frames\": %ld", &frames ) == 1, "%s", summary );
@@ -209,9 +213,7 @@ Test( litter, dries_to_the_end_unless_frames_says_otherwise )
 			  dir );
 	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
 	cr_expect_eq( err[0], '\0', "nothing on stderr: %s", err );
-	snprintf( path, sizeof( path ), "%s/summary.json", dir );
-	summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	summary = read_output( dir, "summary.json" );
 	cr_expect_not_null( strstr( summary, "\"frames\": 30, \"desiccated\": false" ), "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"desiccated\": 0" ), "%s", summary );
 	free( summary );
@@ -223,18 +225,14 @@ Test( litter, dries_to_the_end_unless_frames_says_otherwise )
  * dries the others again, whose files hold another species. */
 Test( litter, preset_sets_every_leaf_and_is_part_of_the_leaf_file )
 {
-	char dir[64], err[4096], path[160];
+	char dir[64], err[4096];
 	make_dir( dir, sizeof( dir ), "preset" );
 	cr_assert_eq( litter( dir, "--threads 2 --preset plane-tree", err, sizeof( err ) ), 0, "%s", err );
-	snprintf( path, sizeof( path ), "%s/summary.json", dir );
-	long size;
-	char* summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	char* summary = read_output( dir, "summary.json" );
 	cr_expect_eq( count_of( summary, "\"preset\": \"plane-tree\"" ), 4, "%s", summary );
 	free( summary );
 	cr_assert_eq( litter( dir, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
-	summary = read_all( path, &size );
-	cr_assert_not_null( summary );
+	summary = read_output( dir, "summary.json" );
 	cr_expect_eq( count_of( summary, "\"preset\": \"plane-tree\"" ), 1, "%s", summary );
 	cr_expect_not_null( strstr( summary, "\"index\": 1, \"species\": \"plane\"" ), "%s", summary );
 	cr_expect_eq( count_of( summary, "\"status\": \"resumed\"" ), 1, "%s", summary );
@@ -286,12 +284,8 @@ Test( litter, progress_lines_on_stderr )
 
 static void expect_error( const char* args, const char* phrase )
 {
-	char err[4096];
-	int code = sere_test_run( args, err, sizeof( err ) );
+	int code = sere_test_expect_error( args, phrase );
 	cr_expect_eq( code, 2, "'%s' should fail with 2, not %d", args, code );
-	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
-	char* newline = strchr( err, '\n' );
-	cr_expect( newline != NULL && newline[1] == '\0', "'%s': not one line: %s", args, err );
 }
 
 Test( litter, bad_options_one_clear_line )
@@ -312,10 +306,7 @@ Test( litter, glb_opens_in_assimp_with_the_ply_counts )
 	make_dir( dir, sizeof( dir ), "glb" );
 	cr_assert_eq( litter( dir, "--threads 2", err, sizeof( err ) ), 0, "%s", err );
 	/* the counts and the first vertex of litter.ply, the scene the .glb must hold */
-	snprintf( path, sizeof( path ), "%s/litter.ply", dir );
-	long size;
-	char* ply = read_all( path, &size );
-	cr_assert_not_null( ply );
+	char* ply = read_output( dir, "litter.ply" );
 	int vertices = 0, triangles = 0;
 	const char* at = strstr( ply, "element vertex " );
 	cr_assert( at != NULL && sscanf( at, "element vertex %d", &vertices ) == 1 );
@@ -388,10 +379,7 @@ Test( litter, same_scene_on_one_two_and_three_ranks )
 		snprintf( other, sizeof( other ), "%s/litter.ply", dir );
 		expect_same_file( path, other );
 		/* every rank dried its share: the summary names each rank */
-		snprintf( other, sizeof( other ), "%s/summary.json", dir );
-		long size;
-		char* summary = read_all( other, &size );
-		cr_assert_not_null( summary );
+		char* summary = read_output( dir, "summary.json" );
 		for ( int r = 0; r < ranks; ++r )
 		{
 			char rank[32];

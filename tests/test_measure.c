@@ -143,10 +143,16 @@ static void measure_crumple( measure_sheet* s, double amplitude, double noise, u
 	sere_test_crumple_make( &field, amplitude, seed );
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
-		float p[3];
-		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, p );
-		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
+		sere_test_crumple_point( &field, s->u[i], s->v[i], noise, s->x + i, s->y + i, s->z + i );
 	}
+}
+
+/* A sheet of jitter 0.2 (measure_sheet_make from seed) crumpled from crumple_seed. */
+static void measure_crumpled( measure_sheet* s, int32_t nx, int32_t ny, double width, double height, int vein_row,
+							  uint64_t seed, double amplitude, double noise, uint64_t crumple_seed )
+{
+	measure_sheet_make( s, nx, ny, width, height, 0.2, vein_row, seed );
+	measure_crumple( s, amplitude, noise, crumple_seed );
 }
 
 static int64_t measure_fast_count( const measure_sheet* s )
@@ -169,8 +175,7 @@ Test( measure, crossings_match_brute_force_on_crumpled_sheets )
 	for ( uint64_t seed = 1; seed <= 4; ++seed )
 	{
 		measure_sheet s;
-		measure_sheet_make( &s, 24, 16, 1.0, 0.75, 0.2, 0, seed );
-		measure_crumple( &s, 0.9 + 0.1 * (double) seed, 0.01, 100 + seed );
+		measure_crumpled( &s, 24, 16, 1.0, 0.75, 0, seed, 0.9 + 0.1 * (double) seed, 0.01, 100 + seed );
 		int32_t collapsed = 0, pinched = 0, shared = 0, repeated = 0;
 		if ( seed >= 2 )
 		{
@@ -276,8 +281,7 @@ Test( measure, crossings_on_sheet_folded_through_itself )
 Test( measure, crossings_same_for_one_and_two_threads )
 {
 	measure_sheet s;
-	measure_sheet_make( &s, 70, 70, 1.0, 1.0, 0.2, 0, 8 );
-	measure_crumple( &s, 1.0, 0.005, 21 );
+	measure_crumpled( &s, 70, 70, 1.0, 1.0, 0, 8, 1.0, 0.005, 21 );
 	sere_crossings* c;
 	cr_assert_eq( sere_crossings_create( s.tri, s.triangles, s.n, &c ), SERE_OK );
 	int saved = omp_get_max_threads();
@@ -303,8 +307,7 @@ Test( measure, crossings_same_for_one_and_two_threads )
 Test( measure, crossings_exact_when_the_grid_coarsens )
 {
 	measure_sheet s;
-	measure_sheet_make( &s, 20, 14, 1.0, 0.7, 0.2, 0, 12 );
-	measure_crumple( &s, 1.0, 0.01, 31 );
+	measure_crumpled( &s, 20, 14, 1.0, 0.7, 0, 12, 1.0, 0.01, 31 );
 	int32_t far[3] = { s.n / 3, s.n / 2, s.n - 5 };
 	float where[3][3] = { { 1000.0f, 3.0f, -2.0f }, { -5.0f, 900.0f, 40.0f }, { 0.5f, -0.5f, -800.0f } };
 	for ( int k = 0; k < 3; ++k )
@@ -721,8 +724,7 @@ Test( measure, dihedrals_and_area_match_reference )
 	for ( uint64_t seed = 1; seed <= 3; ++seed )
 	{
 		measure_sheet s;
-		measure_sheet_make( &s, 20, 16, 1.0, 0.8, 0.2, 1, seed );
-		measure_crumple( &s, 0.3, 0.01, 40 + seed );
+		measure_crumpled( &s, 20, 16, 1.0, 0.8, 1, seed, 0.3, 0.01, 40 + seed );
 		sere_shape_input in = measure_input( &s );
 		double* fast = malloc( sizeof( double ) * (size_t) s.edges );
 		double* ref = malloc( sizeof( double ) * (size_t) s.edges );
@@ -753,8 +755,7 @@ Test( measure, dihedrals_and_area_match_reference )
 Test( measure, shape_same_for_one_and_two_threads )
 {
 	measure_sheet s;
-	measure_sheet_make( &s, 40, 30, 1.0, 0.75, 0.2, 1, 13 );
-	measure_crumple( &s, 0.6, 0.01, 51 );
+	measure_crumpled( &s, 40, 30, 1.0, 0.75, 1, 13, 0.6, 0.01, 51 );
 	sere_shape_input in = measure_input( &s );
 	sere_shape one, two;
 	int saved = omp_get_max_threads();

@@ -3,6 +3,7 @@
  * vertices stay bitwise where they were and the border stays exactly the outline; every
  * triangle stays counter-clockwise; the smallest angle grows and interior edges come near the
  * target h; the area is the polygon's; two runs give the same arrays; bad meshes are refused. */
+#include "core/geometry.h"
 #include "mesh/bspline.h"
 #include "mesh/meshopt.h"
 #include "mesh/triangulate.h"
@@ -72,17 +73,17 @@ static outline maple_outline( void )
 	}
 	fclose( f );
 	cr_assert_geq( n, 40, "maple key points: %d", n );
-	double twice = 0.0;
-	for ( int32_t i = 0, j = n - 1; i < n; j = i++ )
+	double xy[512];
+	for ( int32_t i = 0; i < n; ++i )
 	{
-		twice += kx[j] * ky[i] - kx[i] * ky[j];
+		xy[2 * i] = kx[i], xy[2 * i + 1] = ky[i];
 	}
-	for ( int32_t i = 1, j = n - 1; twice < 0.0 && i < j; ++i, --j )
+	if ( sere_polygon_area( xy, n ) < 0.0 )
 	{
-		double t = kx[i];
-		kx[i] = kx[j], kx[j] = t;
-		t = ky[i];
-		ky[i] = ky[j], ky[j] = t;
+		for ( int32_t i = 1; i < n; ++i )
+		{
+			kx[i] = xy[2 * ( n - i )], ky[i] = xy[2 * ( n - i ) + 1];
+		}
 	}
 	return outline_sample( kx, ky, n, 200 );
 }

@@ -11,14 +11,39 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A jittered grid double layer; the T layer is particles [0, N) with springs [0, t_springs). */
-static void grid_model( sere_model* model, int32_t nx, int32_t ny, double width, double height )
+/* A jittered grid double layer; the T layer is particles [0, N) with springs [0, t_springs);
+ * returns N. */
+static int32_t grid_model( sere_model* model, int32_t nx, int32_t ny, double width, double height )
 {
 	sere_test_plane plane;
 	sere_test_plane_grid( &plane, nx, ny, width, height, 0.3, 1, 5 );
 	sere_layer_params params = sere_layer_params_default();
 	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &params, model ), SERE_OK );
 	sere_test_plane_free( &plane );
+	return model->triangle_particles;
+}
+
+/* One osmosis step on the model's particles (Jeong Eq. 9, 10). */
+static sere_status model_step( sere_osmosis* o, sere_model* model, const sere_osmosis_params* params,
+							   sere_osmosis_report* report )
+{
+	return sere_osmosis_step( o, model->p.x, model->p.y, model->p.z, model->p.tau, model->p.M, model->p.w, model->p.m,
+							  params, report );
+}
+
+/* The default osmosis parameters with diffusion λ in [lo, hi]. */
+static sere_osmosis_params lambda_params( double lo, double hi )
+{
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.lambda_min = lo;
+	params.lambda_max = hi;
+	return params;
+}
+
+static void osmosis_free( sere_osmosis* o, sere_model* model )
+{
+	sere_osmosis_destroy( o );
+	sere_model_destroy( model );
 }
 
 static sere_osmosis* t_layer( const sere_model* model )
@@ -44,13 +69,9 @@ Test( osmosis, matrix_is_symmetric )
 	sere_model model;
 	grid_model( &model, 14, 9, 1.4, 0.9 );
 	sere_osmosis* o = t_layer( &model );
-	sere_osmosis_params params = sere_osmosis_params_default();
-	params.lambda_min = 0.5;
-	params.lambda_max = 20.0;
+	sere_osmosis_params params = lambda_params( 0.5, 20.0 );
 	sere_osmosis_report report;
-	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
-									 &params, &report ),
-				  SERE_OK );
+	cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 	const sere_csr* a = sere_osmosis_matrix( o );
 	int32_t n = a->rows;
 	double *x = malloc( sizeof( double ) * n ), *y = malloc( sizeof( double ) * n );
@@ -72,20 +93,16 @@ Test( osmosis, matrix_is_symmetric )
 	/* HPCG's symmetry test: |xᵀAy − yᵀAx| at rounding level of the sums (1e-14 of their size). */
 	cr_expect_leq( fabs( xay - yax ), 1e-14 * norm );
 	free( x ), free( y ), free( ax ), free( ay );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	osmosis_free( o, &model );
 }
 
 Test( osmosis, matches_literal_eq9 )
 {
 	sere_model model;
-	grid_model( &model, 10, 7, 1.0, 0.7 );
-	int32_t n = model.triangle_particles;
+	int32_t n = grid_model( &model, 10, 7, 1.0, 0.7 );
 	double* w_ref = malloc( sizeof( double ) * model.p.capacity );
 	sere_osmosis* o = t_layer( &model );
-	sere_osmosis_params params = sere_osmosis_params_default();
-	params.lambda_min = 0.3;
-	params.lambda_max = 40.0;
+	sere_osmosis_params params = lambda_params( 0.3, 40.0 );
 	params.dt = 0.05;
 	params.water_rate = -0.05;
 	params.tolerance = 1e-14;
@@ -99,9 +116,7 @@ Test( osmosis, matches_literal_eq9 )
 										 params.lambda_max, params.water_rate, w_ref ),
 				  SERE_OK );
 	sere_osmosis_report report;
-	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
-									 &params, &report ),
-				  SERE_OK );
+	cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 	/* w = M c turns the paper's nonsymmetric Jeong Eq. 9 into the SPD form with the same solution;
 	 * CG to 1e-14 and a pivoted dense solve agree to 1e-10 relative (the issue's bar). */
 	for ( int32_t i = 0; i < n; ++i )
@@ -112,15 +127,13 @@ Test( osmosis, matches_literal_eq9 )
 		cr_assert_eq( model.p.m[i], model.p.M[i] + model.p.w[i] ); /* Jeong Eq. 10 */
 	}
 	free( w_ref );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	osmosis_free( o, &model );
 }
 
 Test( osmosis, conservative_mode_conserves_water )
 {
 	sere_model model;
-	grid_model( &model, 16, 10, 1.6, 1.0 );
-	int32_t n = model.triangle_particles;
+	int32_t n = grid_model( &model, 16, 10, 1.6, 1.0 );
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		model.p.w[i] *= 1.0 + 0.8 * cos( 1.3 * i );
@@ -137,22 +150,18 @@ Test( osmosis, conservative_mode_conserves_water )
 	sere_osmosis_report report;
 	for ( int step = 0; step < 20; ++step )
 	{
-		cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
-										 model.p.m, &params, &report ),
-					  SERE_OK );
+		cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 	}
 	/* Flow only moves water: the row sums telescope, so the total changes only by rounding and
 	 * the CG residual (1e-14), well inside the issue's 1e-12. */
 	cr_expect_leq( fabs( total( model.p.w, 0, n ) - before ), 1e-12 * before );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	osmosis_free( o, &model );
 }
 
 Test( osmosis, fig8_large_lambda_equalizes_concentration )
 {
 	sere_model model;
-	grid_model( &model, 12, 8, 1.2, 0.8 );
-	int32_t n = model.triangle_particles;
+	int32_t n = grid_model( &model, 12, 8, 1.2, 0.8 );
 	/* Fig. 8b: some particles lose water, so concentrations M/m differ. */
 	for ( int32_t i = 0; i < n; i += 3 )
 	{
@@ -165,9 +174,7 @@ Test( osmosis, fig8_large_lambda_equalizes_concentration )
 	params.water_rate = 0.0;
 	params.tolerance = 1e-13;
 	sere_osmosis_report report;
-	cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w, model.p.m,
-									 &params, &report ),
-				  SERE_OK );
+	cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 	double lo = INFINITY, hi = 0.0;
 	for ( int32_t i = 0; i < n; ++i )
 	{
@@ -176,16 +183,14 @@ Test( osmosis, fig8_large_lambda_equalizes_concentration )
 	}
 	/* With λΔt ~ 1e4 per unit length the residual spread is O(1/(λΔt)) of the initial one. */
 	cr_expect_leq( hi - lo, 1e-4 * hi, "concentration spread %g", hi - lo );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	osmosis_free( o, &model );
 }
 
 /* Fig. 9: a rectangle with solute stripes, water supplied at one point, run to equilibrium. */
 static void fig9( int osmotic, double* stripe_water )
 {
 	sere_model model;
-	grid_model( &model, 24, 12, 2.0, 1.0 );
-	int32_t n = model.triangle_particles;
+	int32_t n = grid_model( &model, 24, 12, 2.0, 1.0 );
 	int32_t supply = -1;
 	double best = INFINITY;
 	for ( int32_t i = 0; i < n; ++i )
@@ -214,9 +219,7 @@ static void fig9( int osmotic, double* stripe_water )
 	sere_osmosis_report report;
 	for ( int step = 0; step < 60; ++step )
 	{
-		cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
-										 model.p.m, &params, &report ),
-					  SERE_OK );
+		cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 	}
 	double sum[3] = { 0 }, count[3] = { 0 };
 	for ( int32_t i = 0; i < n; ++i )
@@ -230,8 +233,7 @@ static void fig9( int osmotic, double* stripe_water )
 	{
 		stripe_water[k] = sum[k] / count[k];
 	}
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	osmosis_free( o, &model );
 }
 
 Test( osmosis, fig9_osmosis_keeps_low_solute_dry_diffusion_equalizes )
@@ -250,8 +252,7 @@ Test( osmosis, fig9_osmosis_keeps_low_solute_dry_diffusion_equalizes )
 static double rim_relative_water( double lambda )
 {
 	sere_model model;
-	grid_model( &model, 20, 12, 1.6, 1.0 );
-	int32_t n = model.triangle_particles;
+	int32_t n = grid_model( &model, 20, 12, 1.6, 1.0 );
 	double* w0 = malloc( sizeof( double ) * n );
 	memcpy( w0, model.p.w, sizeof( double ) * n );
 	sere_osmosis* o = t_layer( &model );
@@ -263,9 +264,7 @@ static double rim_relative_water( double lambda )
 	/* Half dehydrated, as in Fig. 16. */
 	while ( total( model.p.w, 0, n ) > 0.5 * total( w0, 0, n ) )
 	{
-		cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
-										 model.p.m, &params, &report ),
-					  SERE_OK );
+		cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 	}
 	double rim = 0.0;
 	int32_t count = 0;
@@ -278,8 +277,7 @@ static double rim_relative_water( double lambda )
 		}
 	}
 	free( w0 );
-	sere_osmosis_destroy( o );
-	sere_model_destroy( &model );
+	osmosis_free( o, &model );
 	return rim / count;
 }
 
@@ -301,21 +299,16 @@ Test( osmosis, deterministic_across_threads )
 		sere_model model;
 		grid_model( &model, 60, 40, 3.0, 2.0 );
 		sere_osmosis* o = t_layer( &model );
-		sere_osmosis_params params = sere_osmosis_params_default();
-		params.lambda_min = 0.1;
-		params.lambda_max = 10.0;
+		sere_osmosis_params params = lambda_params( 0.1, 10.0 );
 		sere_osmosis_report report;
 		for ( int step = 0; step < 5; ++step )
 		{
-			cr_assert_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
-											 model.p.m, &params, &report ),
-						  SERE_OK );
+			cr_assert_eq( model_step( o, &model, &params, &report ), SERE_OK );
 		}
 		result[t] = malloc( sizeof( double ) * model.triangle_particles );
 		memcpy( result[t], model.p.w, sizeof( double ) * model.triangle_particles );
 		cr_assert_gt( model.triangle_particles, 2 * SERE_CG_BLOCK ); /* several blocks, so both threads work */
-		sere_osmosis_destroy( o );
-		sere_model_destroy( &model );
+		osmosis_free( o, &model );
 	}
 	cr_expect_eq( memcmp( result[0], result[1], sizeof( double ) * 61 * 41 ), 0 );
 	free( result[0] ), free( result[1] );

@@ -157,78 +157,83 @@ Test( params, defaults_are_the_kernel_defaults )
 	cr_expect_eq( d.leaf.collide.iterations, sere_collide_params_default().iterations );
 }
 
-Test( params, every_row_round_trips_through_set_and_summary )
+/* Runs check on every row of the table with the default parameters, fresh for each row. */
+static void each_row( void ( *check )( const sere_param* row, sere_sim_params* p ) )
 {
 	int count;
 	const sere_param* table = sere_params_table( &count );
 	for ( int i = 0; i < count; ++i )
 	{
-		const sere_param* row = table + i;
 		sere_sim_params p = sere_sim_params_default();
-		/* m_min may not pass m_max (1 by default): its lower bound instead */
-		double value = strcmp( row->name, "m_min" ) == 0 ? row->lo : other_value( row, sere_params_get( &p, row ) );
-		char assignment[128], err[256] = "";
-		snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, value );
-		cr_assert_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), 0, "%s: %s", assignment, err );
-		cr_expect_eq( sere_params_get( &p, row ), value, "%s: read back %.17g", assignment,
-					  sere_params_get( &p, row ) );
-		if ( row->also != 0 )
-		{
-			sere_param second = *row;
-			second.offset = row->also;
-			cr_expect_eq( sere_params_get( &p, &second ), value, "%s: its second place differs", row->name );
-		}
+		check( table + i, &p );
+	}
+}
 
-		char* json = NULL;
-		size_t size = 0;
-		FILE* f = open_memstream( &json, &size );
-		cr_assert_not_null( f );
-		sere_params_print_json( &p, f, "" );
-		fclose( f );
-		const char* text = json_value( json, row->name );
-		cr_assert_not_null( text, "%s missing from the summary", row->name );
-		char* end = NULL;
-		strtod( text, &end );
-		cr_expect( end != text, "%s: '%.20s' is not a number", row->name, text );
-		sere_sim_params again = sere_sim_params_default();
-		char reset[128];
-		snprintf( reset, sizeof( reset ), "%s=%.*s", row->name, (int) ( end - text ), text );
-		cr_expect_eq( sere_params_set( &again, reset, err, sizeof( err ) ), 0, "%s: %s", reset, err );
-		cr_expect_eq( sere_params_get( &again, row ), value, "%s: the summary's %s reads back differently", row->name,
-					  reset );
-		free( json );
+static void round_trip( const sere_param* row, sere_sim_params* p )
+{
+	/* m_min may not pass m_max (1 by default): its lower bound instead */
+	double value = strcmp( row->name, "m_min" ) == 0 ? row->lo : other_value( row, sere_params_get( p, row ) );
+	char assignment[128], err[256] = "";
+	snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, value );
+	cr_assert_eq( sere_params_set( p, assignment, err, sizeof( err ) ), 0, "%s: %s", assignment, err );
+	cr_expect_eq( sere_params_get( p, row ), value, "%s: read back %.17g", assignment, sere_params_get( p, row ) );
+	if ( row->also != 0 )
+	{
+		sere_param second = *row;
+		second.offset = row->also;
+		cr_expect_eq( sere_params_get( p, &second ), value, "%s: its second place differs", row->name );
+	}
+
+	char* json = NULL;
+	size_t size = 0;
+	FILE* f = open_memstream( &json, &size );
+	cr_assert_not_null( f );
+	sere_params_print_json( p, f, "" );
+	fclose( f );
+	const char* text = json_value( json, row->name );
+	cr_assert_not_null( text, "%s missing from the summary", row->name );
+	char* end = NULL;
+	strtod( text, &end );
+	cr_expect( end != text, "%s: '%.20s' is not a number", row->name, text );
+	sere_sim_params again = sere_sim_params_default();
+	char reset[128];
+	snprintf( reset, sizeof( reset ), "%s=%.*s", row->name, (int) ( end - text ), text );
+	cr_expect_eq( sere_params_set( &again, reset, err, sizeof( err ) ), 0, "%s: %s", reset, err );
+	cr_expect_eq( sere_params_get( &again, row ), value, "%s: the summary's %s reads back differently", row->name,
+				  reset );
+	free( json );
+}
+
+Test( params, every_row_round_trips_through_set_and_summary )
+{
+	each_row( round_trip );
+}
+
+static void refuse_outside_range( const sere_param* row, sere_sim_params* p )
+{
+	char assignment[128], err[256] = "";
+	double outside = row->hi + ( fabs( row->hi ) + 1.0 );
+	snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, outside );
+	cr_expect_eq( sere_params_set( p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted", assignment );
+	cr_expect( strstr( err, row->name ) != NULL && strstr( err, "out of range" ) != NULL, "%s: '%s'", assignment, err );
+	if ( isfinite( row->lo ) )
+	{
+		snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, row->lo - ( fabs( row->lo ) + 1.0 ) );
+		cr_expect_eq( sere_params_set( p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
+					  assignment );
+	}
+	if ( row->type != SERE_PARAM_DOUBLE && row->type != SERE_PARAM_FLOAT )
+	{
+		snprintf( assignment, sizeof( assignment ), "%s=%g", row->name, row->lo + 0.5 );
+		cr_expect_eq( sere_params_set( p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
+					  assignment );
+		cr_expect( strstr( err, "whole number" ) != NULL, "%s: '%s'", assignment, err );
 	}
 }
 
 Test( params, ranges_refuse_with_the_key_and_range )
 {
-	int count;
-	const sere_param* table = sere_params_table( &count );
-	for ( int i = 0; i < count; ++i )
-	{
-		const sere_param* row = table + i;
-		sere_sim_params p = sere_sim_params_default();
-		char assignment[128], err[256] = "";
-		double outside = row->hi + ( fabs( row->hi ) + 1.0 );
-		snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, outside );
-		cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
-					  assignment );
-		cr_expect( strstr( err, row->name ) != NULL && strstr( err, "out of range" ) != NULL, "%s: '%s'", assignment,
-				   err );
-		if ( isfinite( row->lo ) )
-		{
-			snprintf( assignment, sizeof( assignment ), "%s=%.17g", row->name, row->lo - ( fabs( row->lo ) + 1.0 ) );
-			cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
-						  assignment );
-		}
-		if ( row->type != SERE_PARAM_DOUBLE && row->type != SERE_PARAM_FLOAT )
-		{
-			snprintf( assignment, sizeof( assignment ), "%s=%g", row->name, row->lo + 0.5 );
-			cr_expect_eq( sere_params_set( &p, assignment, err, sizeof( err ) ), SERE_ERR_ARGUMENT, "%s accepted",
-						  assignment );
-			cr_expect( strstr( err, "whole number" ) != NULL, "%s: '%s'", assignment, err );
-		}
-	}
+	each_row( refuse_outside_range );
 	char err[256];
 	sere_sim_params p = sere_sim_params_default();
 	cr_expect_eq( sere_params_set( &p, "no_such_key=1", err, sizeof( err ) ), SERE_ERR_ARGUMENT );

@@ -208,17 +208,28 @@ static sere_pbd* make_solver( const test_mesh* m, const float* rest )
 	return pbd;
 }
 
-Test( pbd, single_spring_reaches_rest_length )
+/* Projects a lone spring of rest length 1 from x = (0, 2) with inverse masses 1 and inv_m1;
+ * returns the report, the positions in x. */
+static sere_pbd_report spring_project( const sere_pbd_params* params, float inv_m1, float x[2] )
 {
 	int32_t a = 0, b = 1;
-	float rest = 1.0f, inv_m[2] = { 1.0f, 3.0f };
-	float x[2] = { 0.0f, 2.0f }, y[2] = { 0.0f, 0.0f }, z[2] = { 0.0f, 0.0f };
+	float rest = 1.0f, inv_m[2] = { 1.0f, inv_m1 };
+	float y[2] = { 0.0f, 0.0f }, z[2] = { 0.0f, 0.0f };
+	x[0] = 0.0f, x[1] = 2.0f;
 	sere_pbd* pbd;
 	cr_assert_eq( sere_pbd_create( &a, &b, 1, 2, &pbd ), SERE_OK );
 	cr_assert_eq( sere_pbd_set_rest( pbd, &rest ), SERE_OK );
-	sere_pbd_params params = sere_pbd_params_default();
 	sere_pbd_report report;
-	cr_assert_eq( sere_pbd_project( pbd, x, y, z, inv_m, &params, &report ), SERE_OK );
+	cr_assert_eq( sere_pbd_project( pbd, x, y, z, inv_m, params, &report ), SERE_OK );
+	sere_pbd_destroy( pbd );
+	return report;
+}
+
+Test( pbd, single_spring_reaches_rest_length )
+{
+	sere_pbd_params params = sere_pbd_params_default();
+	float x[2];
+	sere_pbd_report report = spring_project( &params, 3.0f, x );
 	/* One projection solves a lone constraint; float rounding of the few operations: 1e-6. */
 	cr_expect_float_eq( x[1] - x[0], 1.0f, 1e-6f );
 	/* The correction splits by inverse mass: the end three times heavier moves a third as far. */
@@ -227,20 +238,12 @@ Test( pbd, single_spring_reaches_rest_length )
 	/* Residuals are taken before each projection, so convergence shows in the second sweep. */
 	cr_expect( !report.hit_cap && report.iterations == 2 && report.max_strain < 1e-6f, "%d sweeps, strain %g",
 			   report.iterations, report.max_strain );
-	sere_pbd_destroy( pbd );
 }
 
 static float spring_after( const sere_pbd_params* params )
 {
-	int32_t a = 0, b = 1;
-	float rest = 1.0f, inv_m[2] = { 1.0f, 1.0f };
-	float x[2] = { 0.0f, 2.0f }, y[2] = { 0.0f, 0.0f }, z[2] = { 0.0f, 0.0f };
-	sere_pbd* pbd;
-	cr_assert_eq( sere_pbd_create( &a, &b, 1, 2, &pbd ), SERE_OK );
-	cr_assert_eq( sere_pbd_set_rest( pbd, &rest ), SERE_OK );
-	sere_pbd_report report;
-	cr_assert_eq( sere_pbd_project( pbd, x, y, z, inv_m, params, &report ), SERE_OK );
-	sere_pbd_destroy( pbd );
+	float x[2];
+	spring_project( params, 1.0f, x );
 	return x[1] - x[0];
 }
 
@@ -325,17 +328,24 @@ Test( pbd, jacobi_converges_on_the_stretched_patch )
 	patch_converges( 1.2f, 1 );
 }
 
+/* The double layer (double_layer) with its V springs (kind 1) shortened to 0.9 of their rest
+ * length, and a solver on it. */
+static sere_pbd* shrunk_solver( test_mesh* m, int32_t nx, int32_t ny, float spacing, float h, float jitter )
+{
+	double_layer( m, nx, ny, spacing, h, jitter );
+	for ( int32_t s = 0; s < m->count; ++s )
+	{
+		m->rest[s] *= m->kind[s] == 1 ? 0.9f : 1.0f;
+	}
+	return make_solver( m, m->rest );
+}
+
 /* Runs a solver variant on a 60 × 40 double layer with shortened V springs at the current
  * thread count and returns the positions. */
 static float* shrunk_layer_after( int variant )
 {
 	test_mesh m;
-	double_layer( &m, 60, 40, 0.05f, 0.01f, 0.2f );
-	for ( int32_t s = 0; s < m.count; ++s )
-	{
-		m.rest[s] *= m.kind[s] == 1 ? 0.9f : 1.0f;
-	}
-	sere_pbd* pbd = make_solver( &m, m.rest );
+	sere_pbd* pbd = shrunk_solver( &m, 60, 40, 0.05f, 0.01f, 0.2f );
 	/* More particles than one band holds: the sweeps run bands and cuts in parallel. */
 	cr_assert_gt( sere_pbd_get_info( pbd ).bands, 1 );
 	sere_pbd_params params = sere_pbd_params_default();
@@ -374,12 +384,7 @@ static float* shrunk_layer_after( int variant )
 static int32_t shrunk_step( float rho, float* xyz, int32_t* n )
 {
 	test_mesh m;
-	double_layer( &m, 40, 30, 0.05f, 0.01f, 0.2f );
-	for ( int32_t s = 0; s < m.count; ++s )
-	{
-		m.rest[s] *= m.kind[s] == 1 ? 0.9f : 1.0f;
-	}
-	sere_pbd* pbd = make_solver( &m, m.rest );
+	sere_pbd* pbd = shrunk_solver( &m, 40, 30, 0.05f, 0.01f, 0.2f );
 	sere_pbd_params params = sere_pbd_params_default();
 	params.compliance = 1e-7f; /* α̃ = 0.025 */
 	params.tolerance = 1e-5f;
@@ -625,12 +630,7 @@ Test( pbd, shrinking_voronoi_layer_becomes_the_concave_side )
 	 * upper layer the inner side of the bend (Fig. 2c, Fig. 14a): the rim rises toward the
 	 * Voronoi side relative to the centre. */
 	test_mesh m;
-	double_layer( &m, 16, 16, 0.1f, 0.03f, 0.2f );
-	for ( int32_t s = 0; s < m.count; ++s )
-	{
-		m.rest[s] *= m.kind[s] == 1 ? 0.9f : 1.0f;
-	}
-	sere_pbd* pbd = make_solver( &m, m.rest );
+	sere_pbd* pbd = shrunk_solver( &m, 16, 16, 0.1f, 0.03f, 0.2f );
 	sere_pbd_params params = sere_pbd_params_default();
 	params.max_iterations = 3000;
 	sere_pbd_report report;

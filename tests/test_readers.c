@@ -310,11 +310,11 @@ static void check_series( const char* pvd_path, const char* frames_dir, const ch
 
 Test( readers, run_frames_open_in_vtk )
 {
-	char dir[] = "/tmp/sere-readers-run-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
-	char args[1024], err[4096], text[65536];
-	snprintf( args, sizeof( args ), "run data/leaves/wisteria.leaf --points 300 --frames 3 --out %s", dir );
-	cr_assert_eq( sere_test_run( args, err, sizeof( err ) ), 0, "%s", err );
+	char* dir = sere_test_scratch( "readers-run" );
+	char err[4096], text[65536];
+	cr_assert_eq(
+		sere_test_run_in( "run data/leaves/wisteria.leaf --points 300 --frames 3 --out %s", dir, err, sizeof( err ) ),
+		0, "%s", err );
 	/* the triangle layer's point count is the model's (summary.json counts both layers) */
 	cr_assert_eq( sere_test_stdout( "model data/leaves/wisteria.leaf --points 300 --json", text, sizeof( text ) ), 0 );
 	int points = json_int( text, "triangle_particles" ), particles = json_int( text, "particles" );
@@ -334,13 +334,12 @@ Test( readers, run_frames_open_in_vtk )
 	snprintf( frames, sizeof( frames ), "%s/frames", dir );
 	/* frames 0 to 3: with fewer than 24 frames every one is written */
 	check_series( path, frames, "frames/", 4, points, triangles, arrays, 4 );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }
 
 Test( readers, wilt_frames_open_in_vtk )
 {
-	char dir[] = "/tmp/sere-readers-wilt-XXXXXX";
-	cr_assert_not_null( mkdtemp( dir ) );
+	char* dir = sere_test_scratch( "readers-wilt" );
 	char args[1024], json[8192];
 	snprintf( args, sizeof( args ), "wilt --frames 3 --format ply,vtp --json --out %s", dir );
 	cr_assert_eq( sere_test_stdout( args, json, sizeof( json ) ), 0, "sere %s failed", args );
@@ -364,5 +363,5 @@ Test( readers, wilt_frames_open_in_vtk )
 	cr_expect( uv->tuples == points && uv->components == 2 && uv->nonfinite == 0 && uv->min >= 0.0 && uv->max <= 1.0,
 			   "%s: texture coordinates %d x %d, %d not finite, in [%g, %g]", path, uv->tuples, uv->components,
 			   uv->nonfinite, uv->min, uv->max );
-	cr_expect_eq( sere_test_remove_tree( dir ), 0 );
+	sere_test_scratch_remove( dir );
 }

@@ -285,24 +285,23 @@ Test( render, dry_color_endpoints_midpoint_and_clamping )
 	float rgb[3];
 	/* The blend runs in double and rounds once to float: 1e-6 covers that rounding. */
 	const float tolerance = 1e-6f;
-	sere_render_dry_color( 1.0, rgb );
-	cr_assert_float_eq( rgb[0], 0.30f, tolerance );
-	cr_assert_float_eq( rgb[1], 0.55f, tolerance );
-	cr_assert_float_eq( rgb[2], 0.18f, tolerance );
-	sere_render_dry_color( 0.0, rgb );
-	cr_assert_float_eq( rgb[0], 0.55f, tolerance );
-	cr_assert_float_eq( rgb[1], 0.38f, tolerance );
-	cr_assert_float_eq( rgb[2], 0.20f, tolerance );
-	sere_render_dry_color( 0.5, rgb );
-	cr_assert_float_eq( rgb[0], 0.425f, tolerance );
-	cr_assert_float_eq( rgb[1], 0.465f, tolerance );
-	cr_assert_float_eq( rgb[2], 0.19f, tolerance );
-	sere_render_dry_color( 1.7, rgb );
-	cr_assert_float_eq( rgb[1], 0.55f, tolerance );
-	sere_render_dry_color( -3.0, rgb );
-	cr_assert_float_eq( rgb[1], 0.38f, tolerance );
-	sere_render_dry_color( NAN, rgb );
-	cr_assert_float_eq( rgb[1], 0.38f, tolerance, "NaN water must show as dry" );
+	/* fresh, dry, halfway; past either end clamps to that end, and NaN water shows as dry */
+	const struct
+	{
+		double water;
+		float rgb[3];
+	} cases[] = {
+		{ 1.0, { 0.30f, 0.55f, 0.18f } }, { 0.0, { 0.55f, 0.38f, 0.20f } },	 { 0.5, { 0.425f, 0.465f, 0.19f } },
+		{ 1.7, { 0.30f, 0.55f, 0.18f } }, { -3.0, { 0.55f, 0.38f, 0.20f } }, { NAN, { 0.55f, 0.38f, 0.20f } },
+	};
+	for ( size_t k = 0; k < sizeof( cases ) / sizeof( cases[0] ); ++k )
+	{
+		sere_render_dry_color( cases[k].water, rgb );
+		for ( int c = 0; c < 3; ++c )
+		{
+			cr_assert_float_eq( rgb[c], cases[k].rgb[c], tolerance, "water %g, channel %d", cases[k].water, c );
+		}
+	}
 	float water[2] = { 0.25f, 0.75f }, many[6];
 	sere_render_dry_colors( water, 2, many );
 	cr_assert_float_eq( many[0], 0.4875f, tolerance );

@@ -338,12 +338,9 @@ Test( season_cli, outputs_threads_and_the_exact_distribution, .timeout = 120 )
 
 static void expect_season_error( const char* args, const char* phrase )
 {
-	char err[4096];
-	int code = run_season( args, err, sizeof( err ) );
-	cr_expect_neq( code, 0, "'%s' should fail", args );
-	cr_expect_not_null( strstr( err, phrase ), "'%s': expected '%s' in: %s", args, phrase, err );
-	char* newline = strchr( err, '\n' );
-	cr_expect( newline != NULL && newline[1] == '\0', "'%s': not one line: %s", args, err );
+	char command[1100];
+	snprintf( command, sizeof( command ), "season %s", args );
+	cr_expect_neq( sere_test_expect_error( command, phrase ), 0, "'%s' should fail", command );
 }
 
 Test( season_cli, bad_input_one_clear_line )

@@ -91,9 +91,7 @@ static void bits_sheet_make( bits_sheet* s, int32_t nx, double amplitude, uint64
 	sere_test_crumple_make( &field, amplitude, seed );
 	for ( int32_t i = 0; i < s->n; ++i )
 	{
-		float p[3];
-		sere_test_crumple_point( &field, s->u[i], s->v[i], 0.3 / nx, p );
-		s->x[i] = p[0], s->y[i] = p[1], s->z[i] = p[2];
+		sere_test_crumple_point( &field, s->u[i], s->v[i], 0.3 / nx, s->x + i, s->y + i, s->z + i );
 		s->inv_m[i] = i % 97 == 0 ? 0.0f : 1.0f / ( 0.5f + (float) ( i % 5 ) * 0.25f );
 	}
 	bits_edges( s );
