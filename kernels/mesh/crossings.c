@@ -57,6 +57,19 @@ bool sere_segment_crosses_triangle( const double p_in[3], const double q_in[3], 
 	return ( s0 > 0.0 && s1 > 0.0 && s2 > 0.0 ) || ( s0 < 0.0 && s1 < 0.0 && s2 < 0.0 );
 }
 
+bool sere_edge_crosses_triangle( const double p[3], const double q[3], int32_t ea, int32_t eb, const int32_t v[3],
+								 const float* x, const float* y, const float* z )
+{
+	if ( v[0] == ea || v[1] == ea || v[2] == ea || v[0] == eb || v[1] == eb || v[2] == eb )
+	{
+		return false;
+	}
+	double a[3] = { x[v[0]], y[v[0]], z[v[0]] };
+	double b[3] = { x[v[1]], y[v[1]], z[v[1]] };
+	double c[3] = { x[v[2]], y[v[2]], z[v[2]] };
+	return sere_segment_crosses_triangle( p, q, a, b, c );
+}
+
 typedef struct crossing_box
 {
 	float lo[3], hi[3];
@@ -415,15 +428,7 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 						{
 							continue;
 						}
-						const int32_t* v = t->v;
-						if ( v[0] == ea || v[1] == ea || v[2] == ea || v[0] == eb || v[1] == eb || v[2] == eb )
-						{
-							continue;
-						}
-						double a[3] = { x[v[0]], y[v[0]], z[v[0]] };
-						double b[3] = { x[v[1]], y[v[1]], z[v[1]] };
-						double cc[3] = { x[v[2]], y[v[2]], z[v[2]] };
-						found += sere_segment_crosses_triangle( p, q, a, b, cc );
+						found += sere_edge_crosses_triangle( p, q, ea, eb, t->v, x, y, z );
 					}
 				}
 			}

@@ -54,25 +54,6 @@ typedef struct segment_list
 	int32_t count, capacity;
 } segment_list;
 
-static int segment_push( segment_list* list, int32_t a, int32_t b )
-{
-	if ( list->count == list->capacity )
-	{
-		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
-		int32_t* pairs = capacity > 0 ? sere_array_resize( list->pairs, capacity, 2 * sizeof( int32_t ) ) : NULL;
-		if ( pairs == NULL )
-		{
-			return -1;
-		}
-		list->pairs = pairs;
-		list->capacity = capacity;
-	}
-	list->pairs[2 * list->count] = a;
-	list->pairs[2 * list->count + 1] = b;
-	list->count += 1;
-	return 0;
-}
-
 /* Cumulative arc length of a polyline of count points. */
 static double* arc_lengths( const double* xy, int32_t count, int closed )
 {
@@ -322,11 +303,16 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 				double px, py;
 				point_at( xy, s, vein->count, vein->count - 1, previous_a + ( a - previous_a ) * q / pieces, &px, &py );
 				int32_t vertex = point_push( points, px, py, 1 );
-				if ( vertex < 0 || segment_push( segments, previous, vertex ) != 0 )
+				const int32_t segment[2] = { previous, vertex };
+				int32_t* pairs = vertex < 0 ? NULL
+											: sere_array_append( segments->pairs, &segments->count, &segments->capacity,
+																 256, segment, sizeof( segment ) );
+				if ( pairs == NULL )
 				{
 					status = SERE_ERR_MEMORY;
 					goto done;
 				}
+				segments->pairs = pairs;
 				previous = vertex;
 			}
 			previous_a = a;

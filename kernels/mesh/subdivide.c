@@ -220,20 +220,14 @@ sere_status sere_subdivide( const sere_tri_mesh* in, int32_t iterations, float m
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	for ( int32_t i = 0; i < 3 * in->triangle_count; ++i )
+	if ( !sere_array_indices_valid( in->tri, 3 * (int64_t) in->triangle_count, in->vertex_count ) )
 	{
-		if ( in->tri[i] < 0 || in->tri[i] >= in->vertex_count )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
-	for ( int32_t i = 0; i < in->vertex_count; ++i )
+	const float* coordinates[] = { in->x, in->y, in->z, in->u, in->v };
+	if ( !sere_array_finite( coordinates, 5, in->vertex_count ) )
 	{
-		if ( !isfinite( in->x[i] ) || !isfinite( in->y[i] ) || !isfinite( in->z[i] ) || !isfinite( in->u[i] ) ||
-			 !isfinite( in->v[i] ) )
-		{
-			return SERE_ERR_NONFINITE;
-		}
+		return SERE_ERR_NONFINITE;
 	}
 	sere_tri_mesh current;
 	sere_status status = sere_tri_mesh_create( &current, in->vertex_count, in->triangle_count );

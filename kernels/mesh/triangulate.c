@@ -93,19 +93,9 @@ static int grow( mesh* m, int32_t extra )
 
 static int push( mesh* m, int32_t value )
 {
-	if ( m->stack_count == m->stack_capacity )
-	{
-		int32_t capacity = sere_array_capacity( m->stack_capacity, (int64_t) m->stack_count + 1, 1024 );
-		int32_t* stack = capacity > 0 ? sere_array_resize( m->stack, capacity, sizeof( int32_t ) ) : NULL;
-		if ( stack == NULL )
-		{
-			return -1;
-		}
-		m->stack = stack;
-		m->stack_capacity = capacity;
-	}
-	m->stack[m->stack_count++] = value;
-	return 0;
+	int32_t* stack = sere_array_append( m->stack, &m->stack_count, &m->stack_capacity, 1024, &value, sizeof( value ) );
+	m->stack = stack != NULL ? stack : m->stack;
+	return stack != NULL ? 0 : -1;
 }
 
 static int32_t add_triangle( mesh* m, int32_t a, int32_t b, int32_t c )
@@ -368,21 +358,10 @@ typedef struct edge_list
 
 static int edge_push( edge_list* list, int32_t x, int32_t y )
 {
-	if ( list->count == list->capacity )
-	{
-		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 64 );
-		int32_t* e = capacity > 0 ? sere_array_resize( list->e, capacity, 2 * sizeof( int32_t ) ) : NULL;
-		if ( e == NULL )
-		{
-			return -1;
-		}
-		list->e = e;
-		list->capacity = capacity;
-	}
-	list->e[2 * list->count] = x;
-	list->e[2 * list->count + 1] = y;
-	list->count += 1;
-	return 0;
+	const int32_t edge[2] = { x, y };
+	int32_t* e = sere_array_append( list->e, &list->count, &list->capacity, 64, edge, sizeof( edge ) );
+	list->e = e != NULL ? e : list->e;
+	return e != NULL ? 0 : -1;
 }
 
 /* Strictly inside segment a–b (collinear, between the end points). */
