@@ -16,14 +16,10 @@ sere_status sere_tri_mesh_create( sere_tri_mesh* mesh, int32_t vertex_count, int
 	}
 	size_t n = (size_t) sere_pad( vertex_count > 0 ? vertex_count : 1 );
 	size_t t = (size_t) sere_pad( 3 * ( triangle_count > 0 ? triangle_count : 1 ) );
-	mesh->x = sere_alloc( n * sizeof( float ) );
-	mesh->y = sere_alloc( n * sizeof( float ) );
-	mesh->z = sere_alloc( n * sizeof( float ) );
-	mesh->u = sere_alloc( n * sizeof( float ) );
-	mesh->v = sere_alloc( n * sizeof( float ) );
+	float** columns[] = { &mesh->x, &mesh->y, &mesh->z, &mesh->u, &mesh->v };
+	bool allocated = sere_alloc_floats( columns, 5, n );
 	mesh->tri = sere_alloc( t * sizeof( int32_t ) );
-	if ( mesh->x == NULL || mesh->y == NULL || mesh->z == NULL || mesh->u == NULL || mesh->v == NULL ||
-		 mesh->tri == NULL )
+	if ( !allocated || mesh->tri == NULL )
 	{
 		sere_tri_mesh_destroy( mesh );
 		return SERE_ERR_MEMORY;
