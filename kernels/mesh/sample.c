@@ -16,36 +16,26 @@ static double segment_distance2( double px, double py, double ax, double ay, dou
 	return dx * dx + dy * dy;
 }
 
-/* A growable point list. */
+/* A growable point list; vein marks the points placed on a vein or at the outline's base. */
+typedef struct sample_point
+{
+	double x, y;
+	uint8_t vein;
+} sample_point;
+
 typedef struct point_list
 {
-	double* x;
-	double* y;
-	uint8_t* vein;
+	sample_point* p;
 	int32_t count, capacity;
 } point_list;
 
-static int point_push( point_list* list, double x, double y, uint8_t vein )
+/* Index of the new point, or -1 when out of memory. */
+static int32_t point_push( point_list* list, double x, double y, uint8_t vein )
 {
-	if ( list->count == list->capacity )
-	{
-		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
-		double* nx = capacity > 0 ? sere_array_resize( list->x, capacity, sizeof( double ) ) : NULL;
-		list->x = nx != NULL ? nx : list->x;
-		double* ny = nx != NULL ? sere_array_resize( list->y, capacity, sizeof( double ) ) : NULL;
-		list->y = ny != NULL ? ny : list->y;
-		uint8_t* nv = ny != NULL ? sere_array_resize( list->vein, capacity, 1 ) : NULL;
-		if ( nv == NULL )
-		{
-			return -1;
-		}
-		list->vein = nv;
-		list->capacity = capacity;
-	}
-	list->x[list->count] = x;
-	list->y[list->count] = y;
-	list->vein[list->count] = vein;
-	return list->count++;
+	const sample_point point = { x, y, vein };
+	sample_point* p = sere_array_append( list->p, &list->count, &list->capacity, 256, &point, sizeof( point ) );
+	list->p = p != NULL ? p : list->p;
+	return p != NULL ? list->count - 1 : -1;
 }
 
 typedef struct segment_list
@@ -188,7 +178,7 @@ static double nearest_point2( const grid* g, const point_list* points, double x,
 			}
 			for ( int32_t k = g->head[j * g->nx + i]; k >= 0; k = g->next[k] )
 			{
-				double dx = points->x[k] - x, dy = points->y[k] - y;
+				double dx = points->p[k].x - x, dy = points->p[k].y - y;
 				best = fmin( best, dx * dx + dy * dy );
 			}
 		}
@@ -465,9 +455,12 @@ static sere_status copy_out( const point_list* points, const segment_list* segme
 	{
 		return SERE_ERR_MEMORY;
 	}
-	memcpy( out->x, points->x, sizeof( double ) * (size_t) points->count );
-	memcpy( out->y, points->y, sizeof( double ) * (size_t) points->count );
-	memcpy( out->vein, points->vein, (size_t) points->count );
+	for ( int32_t k = 0; k < points->count; ++k )
+	{
+		out->x[k] = points->p[k].x;
+		out->y[k] = points->p[k].y;
+		out->vein[k] = points->p[k].vein;
+	}
 	if ( segments->count > 0 )
 	{
 		memcpy( out->segments, segments->pairs, sizeof( int32_t ) * 2 * (size_t) segments->count );
@@ -508,14 +501,14 @@ static double* outline_polygon( const point_list* points, int32_t b, double box[
 	double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
 	for ( int32_t k = 0; k < b; ++k )
 	{
-		polygon[2 * k] = points->x[k];
-		polygon[2 * k + 1] = points->y[k];
-		x0 = fmin( x0, points->x[k] ), x1 = fmax( x1, points->x[k] );
-		y0 = fmin( y0, points->y[k] ), y1 = fmax( y1, points->y[k] );
+		polygon[2 * k] = points->p[k].x;
+		polygon[2 * k + 1] = points->p[k].y;
+		x0 = fmin( x0, points->p[k].x ), x1 = fmax( x1, points->p[k].x );
+		y0 = fmin( y0, points->p[k].y ), y1 = fmax( y1, points->p[k].y );
 	}
 	for ( int32_t k = b; k < points->count; ++k )
 	{
-		if ( !sere_point_in_polygon( polygon, b, points->x[k], points->y[k] ) )
+		if ( !sere_point_in_polygon( polygon, b, points->p[k].x, points->p[k].y ) )
 		{
 			free( polygon );
 			*status = SERE_ERR_GEOMETRY; /* a vein point outside the resampled outline */
@@ -604,8 +597,8 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	{
 		int32_t a = k < b ? k : segments.pairs[2 * ( k - b )];
 		int32_t c = k < b ? ( k + 1 ) % b : segments.pairs[2 * ( k - b ) + 1];
-		seg_x[2 * k] = points.x[a], seg_y[2 * k] = points.y[a];
-		seg_x[2 * k + 1] = points.x[c], seg_y[2 * k + 1] = points.y[c];
+		seg_x[2 * k] = points.p[a].x, seg_y[2 * k] = points.p[a].y;
+		seg_x[2 * k + 1] = points.p[c].x, seg_y[2 * k + 1] = points.p[c].y;
 	}
 	double *slot_x = NULL, *slot_y = NULL;
 	if ( bucket_segments( &segment_grid, seg_x, seg_y, segment_count, cells_per_segment, &slot_x, &slot_y ) != SERE_OK )
@@ -616,7 +609,7 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	}
 	for ( int32_t k = 0; k < points.count; ++k )
 	{
-		grid_insert( &point_grid, grid_cell( &point_grid, points.x[k], points.y[k] ), k );
+		grid_insert( &point_grid, grid_cell( &point_grid, points.p[k].x, points.p[k].y ), k );
 	}
 
 	status = best_candidates( params, fill, polygon, b, &points, &point_grid, &segment_grid, slot_x, slot_y, x0, y0, x1,
@@ -632,14 +625,14 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	{
 		goto fail;
 	}
-	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
+	free( points.p ), free( segments.pairs ), free( outline_s );
 	free( seg_x ), free( seg_y );
 	grid_free( &point_grid );
 	grid_free( &segment_grid );
 	return SERE_OK;
 
 fail:
-	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
+	free( points.p ), free( segments.pairs ), free( outline_s );
 	free( seg_x ), free( seg_y );
 	grid_free( &point_grid );
 	grid_free( &segment_grid );
