@@ -208,6 +208,23 @@ static double nearest_segment2( const grid* g, const double* sx, const double* s
 	return best;
 }
 
+/* Where each vein but the midvein branches off its parent: the arc length along the parent of
+ * the point nearest the vein's first point. */
+static void branch_points( const sere_leaf_shape* shape, double* const* lengths, double* branch_at )
+{
+	for ( int32_t v = 0; v < shape->vein_count; ++v )
+	{
+		const sere_vein* vein = shape->veins + v;
+		if ( vein->parent >= 0 )
+		{
+			const sere_vein* parent = shape->veins + vein->parent;
+			const double* xy = shape->vein_xy + 2 * vein->first;
+			branch_at[v] = project_on( shape->vein_xy + 2 * parent->first, lengths[vein->parent], parent->count,
+									   parent->count - 1, xy[0], xy[1] );
+		}
+	}
+}
+
 static sere_status place_veins( const sere_leaf_shape* shape, double spacing, point_list* points,
 								segment_list* segments )
 {
@@ -238,17 +255,7 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 		}
 		start_vertex[v] = vein->parent < 0 ? 0 : -1;
 	}
-	for ( int32_t v = 0; v < veins; ++v )
-	{
-		const sere_vein* vein = shape->veins + v;
-		if ( vein->parent >= 0 )
-		{
-			const sere_vein* parent = shape->veins + vein->parent;
-			const double* xy = shape->vein_xy + 2 * vein->first;
-			branch_at[v] = project_on( shape->vein_xy + 2 * parent->first, lengths[vein->parent], parent->count,
-									   parent->count - 1, xy[0], xy[1] );
-		}
-	}
+	branch_points( shape, lengths, branch_at );
 	/* Parents come before their children (the shape validator checks parent < index). */
 	for ( int32_t v = 0; v < veins; ++v )
 	{
