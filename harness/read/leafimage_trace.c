@@ -22,25 +22,6 @@ static double coverage( const reader* r, int x, int y )
 	return r->ink_max[i] > 0 ? fmin( 1.0, (double) r->ink[i] / r->ink_max[i] ) : 0.0;
 }
 
-static int push( points* p, double x, double y )
-{
-	if ( p->count == p->capacity )
-	{
-		int32_t capacity = sere_array_capacity( p->capacity, (int64_t) p->count + 1, 1024 );
-		double* xy = capacity > 0 ? sere_array_resize( p->xy, capacity, 2 * sizeof( double ) ) : NULL;
-		if ( xy == NULL )
-		{
-			return -1;
-		}
-		p->xy = xy;
-		p->capacity = capacity;
-	}
-	p->xy[2 * p->count] = x;
-	p->xy[2 * p->count + 1] = y;
-	p->count += 1;
-	return 0;
-}
-
 /* The inside and outside pixel of the crack leaving corner (cx, cy) in direction d (0 +x, 1 +y,
  * 2 -x, 3 -y; y down), with the inside on the walker's right as seen on screen. */
 static void crack_pixels( int cx, int cy, int d, int* in, int* out )
@@ -71,10 +52,13 @@ static sere_status trace_outline( reader* r, int32_t region_count, points* out )
 		crack_pixels( cx, cy, d, in, outside );
 		double ci = fmax( 0.5, coverage( r, in[0], in[1] ) ), co = fmin( 0.5, coverage( r, outside[0], outside[1] ) );
 		double t = fmin( 0.98, fmax( 0.02, ci + co - 0.5 ) );
-		if ( push( out, in[0] + 0.5 + t * ( outside[0] - in[0] ), in[1] + 0.5 + t * ( outside[1] - in[1] ) ) != 0 )
+		const double point[2] = { in[0] + 0.5 + t * ( outside[0] - in[0] ), in[1] + 0.5 + t * ( outside[1] - in[1] ) };
+		double* xy = sere_array_append( out->xy, &out->count, &out->capacity, 1024, point, sizeof( point ) );
+		if ( xy == NULL )
 		{
 			return leafimage_fail( r, SERE_ERR_MEMORY, "out of memory tracing the outline" );
 		}
+		out->xy = xy;
 		cx += step[d][0], cy += step[d][1];
 		int turned = 0;
 		for ( int k = 3; k <= 5 && !turned; ++k ) /* left, straight, right */

@@ -1,5 +1,6 @@
 #include "core/array.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -28,6 +29,52 @@ void* sere_array_resize( void* array, int32_t count, size_t element )
 		return NULL;
 	}
 	return realloc( array, (size_t) count * element );
+}
+
+void* sere_array_append( void* array, int32_t* count, int32_t* capacity, int32_t first, const void* item,
+						 size_t element )
+{
+	if ( *count == *capacity )
+	{
+		int32_t grown = sere_array_capacity( *capacity, (int64_t) *count + 1, first );
+		void* resized = grown > 0 ? sere_array_resize( array, grown, element ) : NULL;
+		if ( resized == NULL )
+		{
+			return NULL;
+		}
+		array = resized;
+		*capacity = grown;
+	}
+	memcpy( (char*) array + (size_t) *count * element, item, element );
+	*count += 1;
+	return array;
+}
+
+bool sere_array_indices_valid( const int32_t* index, int64_t count, int32_t bound )
+{
+	for ( int64_t k = 0; k < count; ++k )
+	{
+		if ( index[k] < 0 || index[k] >= bound )
+		{
+			return false;
+		}
+	}
+	return true;
+}
+
+bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count )
+{
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		for ( int32_t a = 0; a < array_count; ++a )
+		{
+			if ( !isfinite( arrays[a][i] ) )
+			{
+				return false;
+			}
+		}
+	}
+	return true;
 }
 
 static int compare_items( const void* pa, const void* pb )

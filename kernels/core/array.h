@@ -1,6 +1,8 @@
-/* sere — the one growable-array step and the one sort of (key, index) pairs shared by every room. */
+/* sere — the one growable-array step, the one sort of (key, index) pairs and the checks of index
+ * and coordinate arrays shared by every room. */
 #pragma once
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -17,6 +19,21 @@ int32_t sere_array_capacity( int32_t capacity, int64_t need, int32_t first );
 /* realloc for count elements of element bytes, the byte count checked for overflow. NULL on
  * failure, and then array is still the caller's, unchanged. */
 void* sere_array_resize( void* array, int32_t count, size_t element );
+
+/* Appends one element of element bytes, copied from item, to array, which holds *count elements
+ * and has room for *capacity: a full array grows first, to sere_array_capacity( *capacity,
+ * *count + 1, first ). Returns the array, moved or not, with *count and *capacity updated; NULL on
+ * failure, and then array, *count and *capacity are unchanged and the array is still the
+ * caller's. */
+void* sere_array_append( void* array, int32_t* count, int32_t* capacity, int32_t first, const void* item,
+						 size_t element );
+
+/* Whether each of the count indices lies in [0, bound): the triangles or edges of a mesh name only
+ * its vertices. */
+bool sere_array_indices_valid( const int32_t* index, int64_t count, int32_t bound );
+
+/* Whether the first count entries of each of the array_count float arrays are finite. */
+bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count );
 
 /* A sort key and the index of what it belongs to; value rides along unsorted. */
 typedef struct sere_sort_item

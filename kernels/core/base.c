@@ -77,3 +77,16 @@ void sere_free( void* memory )
 {
 	free( memory );
 }
+
+bool sere_alloc_floats( float** const* arrays, int32_t array_count, size_t count )
+{
+	for ( int32_t k = 0; k < array_count; ++k )
+	{
+		*arrays[k] = sere_alloc( count * sizeof( float ) );
+		if ( *arrays[k] == NULL )
+		{
+			return false;
+		}
+	}
+	return true;
+}

@@ -1,6 +1,7 @@
 /* sere — status codes, aligned allocation and padding shared by every kernel. */
 #pragma once
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -59,6 +60,11 @@ const char* sere_status_text( sere_status status );
 /* Zeroed, SERE_ALIGN-aligned memory; NULL on failure or when bytes is 0. */
 void* sere_alloc( size_t bytes );
 void sere_free( void* memory );
+
+/* sere_alloc of count floats into each *arrays[k], k < array_count, in order: the float columns
+ * of a structure of arrays. false when one fails; the arrays allocated before it are the
+ * caller's to free either way. */
+bool sere_alloc_floats( float** const* arrays, int32_t array_count, size_t count );
 
 /* n rounded up to a multiple of SERE_PAD. */
 static inline int32_t sere_pad( int32_t n )

@@ -454,6 +454,135 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	return SERE_OK;
 }
 
+/* Lines 2–6: osmotic flow on each layer, then the masses (Jeong Eq. 10, inside the kernel).
+ * SERE_ERR_NO_CONVERGE of a layer's CG is no failure: the frame goes on with its water. */
+static sere_status osmotic_flow( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
+{
+	sere_particles* p = &sim->model->p;
+	const int32_t n = sim->model->triangle_particles, f = sim->model->triangle_count;
+	memcpy( sim->w_frame, p->w, sizeof( double ) * (size_t) p->count );
+	sere_osmosis_params layer = params->osmosis;
+	layer.dt = params->dt;
+	sere_osmosis_report report;
+	layer.water_rate = params->water_rate_t;
+	sere_status status =
+		sere_osmosis_step( sim->osmosis_t, p->x, p->y, p->z, p->tau, p->M, p->w, p->m, &layer, &report );
+	stats->cg_iterations_t = report.iterations;
+	if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
+	{
+		return status;
+	}
+	layer.water_rate = params->water_rate_v;
+	status = sere_osmosis_step( sim->osmosis_v, p->x, p->y, p->z, p->tau, p->M, p->w, p->m, &layer, &report );
+	stats->cg_iterations_v = report.iterations;
+	if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
+	{
+		return status;
+	}
+	if ( params->local_stop )
+	{
+		local_stop( sim );
+	}
+	/* Sec. 6: when either layer is completely desiccated, flow and shrinkage stop so the
+	 * leaf does not return to its flat shape. */
+	sim->desiccated = layer_water( p->w, 0, n ) <= 0.0 || layer_water( p->w, n, f ) <= 0.0;
+	return status;
+}
+
+/* Lines 7–9: rest lengths from masses (Jeong Eq. 11–12), handed to the PBD workspace. */
+static sere_status shrink_rest( sere_leaf_sim* sim, const sere_leaf_params* params )
+{
+	sere_model* model = sim->model;
+	sere_status status = sere_shrink( model->s.a, model->s.b, model->s.kind, model->s.rest0, model->s.rest, 0,
+									  model->s.count, model->p.m, model->p.m0, &params->shrink, sim->threads );
+	if ( status == SERE_OK )
+	{
+		status = sere_pbd_set_rest( sim->pbd, model->s.rest );
+	}
+	if ( status == SERE_OK )
+	{
+		sim->thickness_scale = sere_leaf_thickness_scale( model );
+	}
+	return status;
+}
+
+/* Line 23: self-collision of the triangle layer, with ĥ stored just before (Jeong Sec. 5.3) and
+ * the layer kept as it was, so the caller sees which corners the response moved. */
+static sere_status self_collide( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
+{
+	sere_model* model = sim->model;
+	sere_particles* p = &model->p;
+	const int32_t n = model->triangle_particles, f = model->triangle_count;
+	sere_status status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat, sim->threads );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	memcpy( sim->xc, p->x, sizeof( float ) * (size_t) n );
+	memcpy( sim->yc, p->y, sizeof( float ) * (size_t) n );
+	memcpy( sim->zc, p->z, sizeof( float ) * (size_t) n );
+	sere_collide_state state = { p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m, sim->x0, sim->y0, sim->z0 };
+	sere_collide_params collide = params->collide;
+	collide.dt = params->dt;
+	if ( params->scale_thickness )
+	{
+		collide.thickness *= sim->thickness_scale;
+	}
+	sere_collide_stats collide_stats;
+	status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
+	/* A crumpled leaf can have more contacts than the workspace holds: grow it (rare, so
+	 * the allocation stays out of the steady state) and run the pass again. */
+	for ( int grow = 0; status == SERE_ERR_CAPACITY && grow < 8; ++grow )
+	{
+		sim->contact_capacity *= 2;
+		status = sere_collide_reserve( sim->collide, sim->contact_capacity );
+		if ( status == SERE_OK )
+		{
+			status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
+		}
+	}
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	stats->contacts = collide_stats.contacts;
+	stats->edge_contacts = collide_stats.edge_contacts;
+	stats->unresolved = collide_stats.unresolved;
+	stats->collision_thickness = collide.thickness;
+	return SERE_OK;
+}
+
+/* The step's PBD parameters: the frame's dt, and with soften the stiffness eased as the leaf
+ * dries (a quarter of it when dry), by the relative water content of the whole leaf. */
+static sere_pbd_params projection_params( const sere_leaf_sim* sim, const sere_leaf_params* params )
+{
+	const sere_particles* p = &sim->model->p;
+	sere_pbd_params pbd = params->pbd;
+	pbd.dt = params->dt;
+	if ( params->soften && sim->water0 > 0.0 )
+	{
+		double rwc = ( layer_water( p->w, 0, p->count ) ) / sim->water0;
+		pbd.stiffness = (float) ( params->pbd.stiffness * ( 0.25 + 0.75 * fmin( 1.0, rwc ) ) );
+	}
+	return pbd;
+}
+
+/* The frame's water per layer and relative to the start, and its wall time by part from the
+ * clock readings before osmosis, dynamics, collisions and after. */
+static void report_frame( const sere_leaf_sim* sim, const double wall[4], sere_leaf_stats* stats )
+{
+	const sere_particles* p = &sim->model->p;
+	const int32_t n = sim->model->triangle_particles, f = sim->model->triangle_count;
+	stats->water_t = layer_water( p->w, 0, n );
+	stats->water_v = layer_water( p->w, n, f );
+	stats->relative_water = sim->water0 > 0.0 ? ( stats->water_t + stats->water_v ) / sim->water0 : 0.0;
+	stats->desiccated = sim->desiccated;
+	stats->osmosis_ms = 1e3 * ( wall[1] - wall[0] );
+	stats->dynamics_ms = 1e3 * ( wall[2] - wall[1] );
+	stats->collisions_ms = 1e3 * ( wall[3] - wall[2] );
+	stats->total_ms = 1e3 * ( wall[3] - wall[0] );
+}
+
 sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
 {
 	memset( stats, 0, sizeof( *stats ) );
@@ -470,51 +599,24 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	sere_status status = SERE_OK;
 	double t0 = omp_get_wtime();
 
-	/* Lines 2–6: osmotic flow on each layer, then the masses (Jeong Eq. 10, inside the kernel). */
+	/* Lines 2–9: osmosis, then shrinkage; both stop for good once a layer is dry (Sec. 6). */
 	if ( !sim->desiccated )
 	{
-		memcpy( sim->w_frame, p->w, sizeof( double ) * (size_t) p->count );
-		sere_osmosis_params layer = params->osmosis;
-		layer.dt = params->dt;
-		sere_osmosis_report report;
-		layer.water_rate = params->water_rate_t;
-		status = sere_osmosis_step( sim->osmosis_t, p->x, p->y, p->z, p->tau, p->M, p->w, p->m, &layer, &report );
-		stats->cg_iterations_t = report.iterations;
+		status = osmotic_flow( sim, params, stats );
 		if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
 		{
 			return status;
 		}
-		layer.water_rate = params->water_rate_v;
-		status = sere_osmosis_step( sim->osmosis_v, p->x, p->y, p->z, p->tau, p->M, p->w, p->m, &layer, &report );
-		stats->cg_iterations_v = report.iterations;
-		if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
-		{
-			return status;
-		}
-		if ( params->local_stop )
-		{
-			local_stop( sim );
-		}
-		/* Sec. 6: when either layer is completely desiccated, flow and shrinkage stop so the
-		 * leaf does not return to its flat shape. */
-		sim->desiccated = layer_water( p->w, 0, n ) <= 0.0 || layer_water( p->w, n, f ) <= 0.0;
 	}
 	double t1 = omp_get_wtime();
 
-	/* Lines 7–9: rest lengths from masses (Jeong Eq. 11–12). */
 	if ( !sim->desiccated )
 	{
-		status = sere_shrink( model->s.a, model->s.b, model->s.kind, model->s.rest0, model->s.rest, 0, model->s.count,
-							  p->m, p->m0, &params->shrink, sim->threads );
-		if ( status == SERE_OK )
-		{
-			status = sere_pbd_set_rest( sim->pbd, model->s.rest );
-		}
+		status = shrink_rest( sim, params );
 		if ( status != SERE_OK )
 		{
 			return status;
 		}
-		sim->thickness_scale = sere_leaf_thickness_scale( model );
 	}
 	status = set_weights( sim, params );
 	if ( status != SERE_OK )
@@ -538,13 +640,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 
 	/* Lines 17–22: projection of the T, V and L constraints, one colored Gauss–Seidel. */
-	sere_pbd_params pbd = params->pbd;
-	pbd.dt = params->dt;
-	if ( params->soften && sim->water0 > 0.0 )
-	{
-		double rwc = ( layer_water( p->w, 0, p->count ) ) / sim->water0;
-		pbd.stiffness = (float) ( params->pbd.stiffness * ( 0.25 + 0.75 * fmin( 1.0, rwc ) ) );
-	}
+	sere_pbd_params pbd = projection_params( sim, params );
 	status = project( sim, params, &pbd, stats );
 	if ( status != SERE_OK )
 	{
@@ -578,42 +674,11 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	 * triangles it moved back on their normals (Jeong Eq. 14), with ĥ stored just before (Sec. 5.3). */
 	if ( params->collisions && params->collide.thickness > 0.0f )
 	{
-		status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat, sim->threads );
+		status = self_collide( sim, params, stats );
 		if ( status != SERE_OK )
 		{
 			return status;
 		}
-		memcpy( sim->xc, p->x, sizeof( float ) * (size_t) n );
-		memcpy( sim->yc, p->y, sizeof( float ) * (size_t) n );
-		memcpy( sim->zc, p->z, sizeof( float ) * (size_t) n );
-		sere_collide_state state = { p->x, p->y, p->z, p->vx, p->vy, p->vz, p->inv_m, sim->x0, sim->y0, sim->z0 };
-		sere_collide_params collide = params->collide;
-		collide.dt = params->dt;
-		if ( params->scale_thickness )
-		{
-			collide.thickness *= sim->thickness_scale;
-		}
-		sere_collide_stats collide_stats;
-		status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
-		/* A crumpled leaf can have more contacts than the workspace holds: grow it (rare, so
-		 * the allocation stays out of the steady state) and run the pass again. */
-		for ( int grow = 0; status == SERE_ERR_CAPACITY && grow < 8; ++grow )
-		{
-			sim->contact_capacity *= 2;
-			status = sere_collide_reserve( sim->collide, sim->contact_capacity );
-			if ( status == SERE_OK )
-			{
-				status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
-			}
-		}
-		if ( status != SERE_OK )
-		{
-			return status;
-		}
-		stats->contacts = collide_stats.contacts;
-		stats->edge_contacts = collide_stats.edge_contacts;
-		stats->unresolved = collide_stats.unresolved;
-		stats->collision_thickness = collide.thickness;
 #pragma omp parallel for simd num_threads( sere_team_for( sim->threads ) ) schedule( static )
 		for ( int32_t i = 0; i < n; ++i )
 		{
@@ -629,14 +694,8 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 	double t3 = omp_get_wtime();
 
-	stats->water_t = layer_water( p->w, 0, n );
-	stats->water_v = layer_water( p->w, n, f );
-	stats->relative_water = sim->water0 > 0.0 ? ( stats->water_t + stats->water_v ) / sim->water0 : 0.0;
-	stats->desiccated = sim->desiccated;
-	stats->osmosis_ms = 1e3 * ( t1 - t0 );
-	stats->dynamics_ms = 1e3 * ( t2 - t1 );
-	stats->collisions_ms = 1e3 * ( t3 - t2 );
-	stats->total_ms = 1e3 * ( t3 - t0 );
+	const double wall[4] = { t0, t1, t2, t3 };
+	report_frame( sim, wall, stats );
 	return SERE_OK;
 }
 

@@ -47,18 +47,33 @@ bool sere_segment_crosses_triangle( const double p_in[3], const double q_in[3], 
 	}
 	/* The edge volumes are antisymmetric in the edge's ends (the cross product negates exactly),
 	 * so the two triangles of a shared edge see the same volume with opposite signs there. */
-	double d[3], pa[3], pb[3], pc[3], w[3];
+	double d[3], corner[3][3];
 	sub3( q, p, d );
-	sub3( a, p, pa );
-	sub3( b, p, pb );
-	sub3( c, p, pc );
-	cross3( pa, pb, w );
-	double s0 = dot3( d, w );
-	cross3( pb, pc, w );
-	double s1 = dot3( d, w );
-	cross3( pc, pa, w );
-	double s2 = dot3( d, w );
-	return ( s0 > 0.0 && s1 > 0.0 && s2 > 0.0 ) || ( s0 < 0.0 && s1 < 0.0 && s2 < 0.0 );
+	sub3( a, p, corner[0] );
+	sub3( b, p, corner[1] );
+	sub3( c, p, corner[2] );
+	double volume[3];
+	for ( int k = 0; k < 3; ++k )
+	{
+		double w[3];
+		cross3( corner[k], corner[k == 2 ? 0 : k + 1], w );
+		volume[k] = dot3( d, w );
+	}
+	return ( volume[0] > 0.0 && volume[1] > 0.0 && volume[2] > 0.0 ) ||
+		   ( volume[0] < 0.0 && volume[1] < 0.0 && volume[2] < 0.0 );
+}
+
+bool sere_edge_crosses_triangle( const double p[3], const double q[3], int32_t ea, int32_t eb, const int32_t v[3],
+								 const float* x, const float* y, const float* z )
+{
+	if ( v[0] == ea || v[1] == ea || v[2] == ea || v[0] == eb || v[1] == eb || v[2] == eb )
+	{
+		return false;
+	}
+	double a[3] = { x[v[0]], y[v[0]], z[v[0]] };
+	double b[3] = { x[v[1]], y[v[1]], z[v[1]] };
+	double c[3] = { x[v[2]], y[v[2]], z[v[2]] };
+	return sere_segment_crosses_triangle( p, q, a, b, c );
 }
 
 typedef struct crossing_box
@@ -420,15 +435,7 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 						{
 							continue;
 						}
-						const int32_t* v = t->v;
-						if ( v[0] == ea || v[1] == ea || v[2] == ea || v[0] == eb || v[1] == eb || v[2] == eb )
-						{
-							continue;
-						}
-						double a[3] = { x[v[0]], y[v[0]], z[v[0]] };
-						double b[3] = { x[v[1]], y[v[1]], z[v[1]] };
-						double cc[3] = { x[v[2]], y[v[2]], z[v[2]] };
-						found += sere_segment_crosses_triangle( p, q, a, b, cc );
+						found += sere_edge_crosses_triangle( p, q, ea, eb, t->v, x, y, z );
 					}
 				}
 			}

@@ -3,6 +3,7 @@
 
 #include "mesh/measure.h"
 
+#include "core/array.h"
 #include "core/internal/team.h"
 #include "mesh/internal/measure_shared.h"
 
@@ -49,12 +50,9 @@ sere_status sere_measure_validate( const sere_shape_input* in )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	for ( size_t k = 0; k < 3 * (size_t) in->triangle_count; ++k )
+	if ( !sere_array_indices_valid( in->tri, 3 * (int64_t) in->triangle_count, in->vertex_count ) )
 	{
-		if ( in->tri[k] < 0 || in->tri[k] >= in->vertex_count )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
 	for ( int32_t e = 0; e < in->edge_count; ++e )
 	{
@@ -64,22 +62,12 @@ sere_status sere_measure_validate( const sere_shape_input* in )
 			return SERE_ERR_ARGUMENT;
 		}
 	}
-	for ( int32_t k = 0; k < in->midvein_count; ++k )
+	if ( !sere_array_indices_valid( in->midvein, in->midvein_count, in->vertex_count ) )
 	{
-		if ( in->midvein[k] < 0 || in->midvein[k] >= in->vertex_count )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
-	for ( int32_t i = 0; i < in->vertex_count; ++i )
-	{
-		if ( !isfinite( in->x[i] ) || !isfinite( in->y[i] ) || !isfinite( in->z[i] ) || !isfinite( in->u[i] ) ||
-			 !isfinite( in->v[i] ) )
-		{
-			return SERE_ERR_NONFINITE;
-		}
-	}
-	return SERE_OK;
+	const float* coordinates[] = { in->x, in->y, in->z, in->u, in->v };
+	return sere_array_finite( coordinates, 5, in->vertex_count ) ? SERE_OK : SERE_ERR_NONFINITE;
 }
 
 typedef struct edge_key
@@ -164,17 +152,25 @@ static sere_status shape_adjacency( const sere_shape_input* in, int32_t* edge_tr
 	return status;
 }
 
-/* (b − a) × (c − a) of triangle t: twice its area times its unit normal. */
-static void triangle_cross( const sere_shape_input* in, int32_t t, double n[3] )
+/* The corners a, b, c of triangle t and n = (b − a) × (c − a): twice its area times its unit
+ * normal. */
+static void triangle_corners( const sere_shape_input* in, int32_t t, double a[3], double b[3], double c[3],
+							  double n[3] )
 {
 	const int32_t* v = in->tri + 3 * (size_t) t;
-	double a[3], b[3], c[3], ab[3], ac[3];
+	double ab[3], ac[3];
 	sere_measure_position( in, v[0], a );
 	sere_measure_position( in, v[1], b );
 	sere_measure_position( in, v[2], c );
 	sub3( b, a, ab );
 	sub3( c, a, ac );
 	cross3( ab, ac, n );
+}
+
+static void triangle_cross( const sere_shape_input* in, int32_t t, double n[3] )
+{
+	double a[3], b[3], c[3];
+	triangle_corners( in, t, a, b, c, n );
 }
 
 void sere_measure_unit_normal( const sere_shape_input* in, int32_t t, double n[3] )
@@ -508,14 +504,8 @@ static void shape_measure_all( const sere_shape_input* in, const int32_t* edge_t
 	double area = 0.0, moment[3] = { 0.0, 0.0, 0.0 }, normal[3] = { 0.0, 0.0, 0.0 };
 	for ( int32_t t = 0; t < tc; ++t )
 	{
-		const int32_t* v = in->tri + 3 * (size_t) t;
-		double a[3], b[3], c[3], ab[3], ac[3], n[3];
-		sere_measure_position( in, v[0], a );
-		sere_measure_position( in, v[1], b );
-		sere_measure_position( in, v[2], c );
-		sub3( b, a, ab );
-		sub3( c, a, ac );
-		cross3( ab, ac, n );
+		double a[3], b[3], c[3], n[3];
+		triangle_corners( in, t, a, b, c, n );
 		double at = 0.5 * sqrt( dot3( n, n ) );
 		for ( int k = 0; k < 3; ++k )
 		{

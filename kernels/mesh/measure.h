@@ -35,6 +35,12 @@ extern "C"
 bool sere_segment_crosses_triangle( const double p[3], const double q[3], const double a[3], const double b[3],
 									const double c[3] );
 
+/* sere_segment_crosses_triangle for the mesh edge ea–eb with ends p, q and the mesh triangle
+ * with corners v, at the float positions x, y, z converted to double. False when the two share
+ * a vertex: a triangle's own edges and the edges meeting it at a corner never cross it. */
+bool sere_edge_crosses_triangle( const double p[3], const double q[3], int32_t ea, int32_t eb, const int32_t v[3],
+								 const float* x, const float* y, const float* z );
+
 /* Workspace of the fast crossing counter: the unique undirected edges of the triangles and a
  * uniform grid over the triangles' boxes, all allocated once. */
 typedef struct sere_crossings sere_crossings;

@@ -16,36 +16,26 @@ static double segment_distance2( double px, double py, double ax, double ay, dou
 	return dx * dx + dy * dy;
 }
 
-/* A growable point list. */
+/* A growable point list; vein marks the points placed on a vein or at the outline's base. */
+typedef struct sample_point
+{
+	double x, y;
+	uint8_t vein;
+} sample_point;
+
 typedef struct point_list
 {
-	double* x;
-	double* y;
-	uint8_t* vein;
+	sample_point* p;
 	int32_t count, capacity;
 } point_list;
 
-static int point_push( point_list* list, double x, double y, uint8_t vein )
+/* Index of the new point, or -1 when out of memory. */
+static int32_t point_push( point_list* list, double x, double y, uint8_t vein )
 {
-	if ( list->count == list->capacity )
-	{
-		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
-		double* nx = capacity > 0 ? sere_array_resize( list->x, capacity, sizeof( double ) ) : NULL;
-		list->x = nx != NULL ? nx : list->x;
-		double* ny = nx != NULL ? sere_array_resize( list->y, capacity, sizeof( double ) ) : NULL;
-		list->y = ny != NULL ? ny : list->y;
-		uint8_t* nv = ny != NULL ? sere_array_resize( list->vein, capacity, 1 ) : NULL;
-		if ( nv == NULL )
-		{
-			return -1;
-		}
-		list->vein = nv;
-		list->capacity = capacity;
-	}
-	list->x[list->count] = x;
-	list->y[list->count] = y;
-	list->vein[list->count] = vein;
-	return list->count++;
+	const sample_point point = { x, y, vein };
+	sample_point* p = sere_array_append( list->p, &list->count, &list->capacity, 256, &point, sizeof( point ) );
+	list->p = p != NULL ? p : list->p;
+	return p != NULL ? list->count - 1 : -1;
 }
 
 typedef struct segment_list
@@ -53,25 +43,6 @@ typedef struct segment_list
 	int32_t* pairs;
 	int32_t count, capacity;
 } segment_list;
-
-static int segment_push( segment_list* list, int32_t a, int32_t b )
-{
-	if ( list->count == list->capacity )
-	{
-		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 256 );
-		int32_t* pairs = capacity > 0 ? sere_array_resize( list->pairs, capacity, 2 * sizeof( int32_t ) ) : NULL;
-		if ( pairs == NULL )
-		{
-			return -1;
-		}
-		list->pairs = pairs;
-		list->capacity = capacity;
-	}
-	list->pairs[2 * list->count] = a;
-	list->pairs[2 * list->count + 1] = b;
-	list->count += 1;
-	return 0;
-}
 
 /* Cumulative arc length of a polyline of count points. */
 static double* arc_lengths( const double* xy, int32_t count, int closed )
@@ -207,7 +178,7 @@ static double nearest_point2( const grid* g, const point_list* points, double x,
 			}
 			for ( int32_t k = g->head[j * g->nx + i]; k >= 0; k = g->next[k] )
 			{
-				double dx = points->x[k] - x, dy = points->y[k] - y;
+				double dx = points->p[k].x - x, dy = points->p[k].y - y;
 				best = fmin( best, dx * dx + dy * dy );
 			}
 		}
@@ -235,6 +206,23 @@ static double nearest_segment2( const grid* g, const double* sx, const double* s
 		}
 	}
 	return best;
+}
+
+/* Where each vein but the midvein branches off its parent: the arc length along the parent of
+ * the point nearest the vein's first point. */
+static void branch_points( const sere_leaf_shape* shape, double* const* lengths, double* branch_at )
+{
+	for ( int32_t v = 0; v < shape->vein_count; ++v )
+	{
+		const sere_vein* vein = shape->veins + v;
+		if ( vein->parent >= 0 )
+		{
+			const sere_vein* parent = shape->veins + vein->parent;
+			const double* xy = shape->vein_xy + 2 * vein->first;
+			branch_at[v] = project_on( shape->vein_xy + 2 * parent->first, lengths[vein->parent], parent->count,
+									   parent->count - 1, xy[0], xy[1] );
+		}
+	}
 }
 
 static sere_status place_veins( const sere_leaf_shape* shape, double spacing, point_list* points,
@@ -267,17 +255,7 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 		}
 		start_vertex[v] = vein->parent < 0 ? 0 : -1;
 	}
-	for ( int32_t v = 0; v < veins; ++v )
-	{
-		const sere_vein* vein = shape->veins + v;
-		if ( vein->parent >= 0 )
-		{
-			const sere_vein* parent = shape->veins + vein->parent;
-			const double* xy = shape->vein_xy + 2 * vein->first;
-			branch_at[v] = project_on( shape->vein_xy + 2 * parent->first, lengths[vein->parent], parent->count,
-									   parent->count - 1, xy[0], xy[1] );
-		}
-	}
+	branch_points( shape, lengths, branch_at );
 	/* Parents come before their children (the shape validator checks parent < index). */
 	for ( int32_t v = 0; v < veins; ++v )
 	{
@@ -322,11 +300,16 @@ static sere_status place_veins( const sere_leaf_shape* shape, double spacing, po
 				double px, py;
 				point_at( xy, s, vein->count, vein->count - 1, previous_a + ( a - previous_a ) * q / pieces, &px, &py );
 				int32_t vertex = point_push( points, px, py, 1 );
-				if ( vertex < 0 || segment_push( segments, previous, vertex ) != 0 )
+				const int32_t segment[2] = { previous, vertex };
+				int32_t* pairs = vertex < 0 ? NULL
+											: sere_array_append( segments->pairs, &segments->count, &segments->capacity,
+																 256, segment, sizeof( segment ) );
+				if ( pairs == NULL )
 				{
 					status = SERE_ERR_MEMORY;
 					goto done;
 				}
+				segments->pairs = pairs;
 				previous = vertex;
 			}
 			previous_a = a;
@@ -479,9 +462,12 @@ static sere_status copy_out( const point_list* points, const segment_list* segme
 	{
 		return SERE_ERR_MEMORY;
 	}
-	memcpy( out->x, points->x, sizeof( double ) * (size_t) points->count );
-	memcpy( out->y, points->y, sizeof( double ) * (size_t) points->count );
-	memcpy( out->vein, points->vein, (size_t) points->count );
+	for ( int32_t k = 0; k < points->count; ++k )
+	{
+		out->x[k] = points->p[k].x;
+		out->y[k] = points->p[k].y;
+		out->vein[k] = points->p[k].vein;
+	}
 	if ( segments->count > 0 )
 	{
 		memcpy( out->segments, segments->pairs, sizeof( int32_t ) * 2 * (size_t) segments->count );
@@ -522,14 +508,14 @@ static double* outline_polygon( const point_list* points, int32_t b, double box[
 	double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
 	for ( int32_t k = 0; k < b; ++k )
 	{
-		polygon[2 * k] = points->x[k];
-		polygon[2 * k + 1] = points->y[k];
-		x0 = fmin( x0, points->x[k] ), x1 = fmax( x1, points->x[k] );
-		y0 = fmin( y0, points->y[k] ), y1 = fmax( y1, points->y[k] );
+		polygon[2 * k] = points->p[k].x;
+		polygon[2 * k + 1] = points->p[k].y;
+		x0 = fmin( x0, points->p[k].x ), x1 = fmax( x1, points->p[k].x );
+		y0 = fmin( y0, points->p[k].y ), y1 = fmax( y1, points->p[k].y );
 	}
 	for ( int32_t k = b; k < points->count; ++k )
 	{
-		if ( !sere_point_in_polygon( polygon, b, points->x[k], points->y[k] ) )
+		if ( !sere_point_in_polygon( polygon, b, points->p[k].x, points->p[k].y ) )
 		{
 			free( polygon );
 			*status = SERE_ERR_GEOMETRY; /* a vein point outside the resampled outline */
@@ -618,8 +604,8 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	{
 		int32_t a = k < b ? k : segments.pairs[2 * ( k - b )];
 		int32_t c = k < b ? ( k + 1 ) % b : segments.pairs[2 * ( k - b ) + 1];
-		seg_x[2 * k] = points.x[a], seg_y[2 * k] = points.y[a];
-		seg_x[2 * k + 1] = points.x[c], seg_y[2 * k + 1] = points.y[c];
+		seg_x[2 * k] = points.p[a].x, seg_y[2 * k] = points.p[a].y;
+		seg_x[2 * k + 1] = points.p[c].x, seg_y[2 * k + 1] = points.p[c].y;
 	}
 	double *slot_x = NULL, *slot_y = NULL;
 	if ( bucket_segments( &segment_grid, seg_x, seg_y, segment_count, cells_per_segment, &slot_x, &slot_y ) != SERE_OK )
@@ -630,7 +616,7 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	}
 	for ( int32_t k = 0; k < points.count; ++k )
 	{
-		grid_insert( &point_grid, grid_cell( &point_grid, points.x[k], points.y[k] ), k );
+		grid_insert( &point_grid, grid_cell( &point_grid, points.p[k].x, points.p[k].y ), k );
 	}
 
 	status = best_candidates( params, fill, polygon, b, &points, &point_grid, &segment_grid, slot_x, slot_y, x0, y0, x1,
@@ -646,14 +632,14 @@ sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_pa
 	{
 		goto fail;
 	}
-	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
+	free( points.p ), free( segments.pairs ), free( outline_s );
 	free( seg_x ), free( seg_y );
 	grid_free( &point_grid );
 	grid_free( &segment_grid );
 	return SERE_OK;
 
 fail:
-	free( points.x ), free( points.y ), free( points.vein ), free( segments.pairs ), free( outline_s );
+	free( points.p ), free( segments.pairs ), free( outline_s );
 	free( seg_x ), free( seg_y );
 	grid_free( &point_grid );
 	grid_free( &segment_grid );

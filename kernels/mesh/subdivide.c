@@ -16,14 +16,10 @@ sere_status sere_tri_mesh_create( sere_tri_mesh* mesh, int32_t vertex_count, int
 	}
 	size_t n = (size_t) sere_pad( vertex_count > 0 ? vertex_count : 1 );
 	size_t t = (size_t) sere_pad( 3 * ( triangle_count > 0 ? triangle_count : 1 ) );
-	mesh->x = sere_alloc( n * sizeof( float ) );
-	mesh->y = sere_alloc( n * sizeof( float ) );
-	mesh->z = sere_alloc( n * sizeof( float ) );
-	mesh->u = sere_alloc( n * sizeof( float ) );
-	mesh->v = sere_alloc( n * sizeof( float ) );
+	float** columns[] = { &mesh->x, &mesh->y, &mesh->z, &mesh->u, &mesh->v };
+	bool allocated = sere_alloc_floats( columns, 5, n );
 	mesh->tri = sere_alloc( t * sizeof( int32_t ) );
-	if ( mesh->x == NULL || mesh->y == NULL || mesh->z == NULL || mesh->u == NULL || mesh->v == NULL ||
-		 mesh->tri == NULL )
+	if ( !allocated || mesh->tri == NULL )
 	{
 		sere_tri_mesh_destroy( mesh );
 		return SERE_ERR_MEMORY;
@@ -220,20 +216,14 @@ sere_status sere_subdivide( const sere_tri_mesh* in, int32_t iterations, float m
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	for ( int32_t i = 0; i < 3 * in->triangle_count; ++i )
+	if ( !sere_array_indices_valid( in->tri, 3 * (int64_t) in->triangle_count, in->vertex_count ) )
 	{
-		if ( in->tri[i] < 0 || in->tri[i] >= in->vertex_count )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
+		return SERE_ERR_ARGUMENT;
 	}
-	for ( int32_t i = 0; i < in->vertex_count; ++i )
+	const float* coordinates[] = { in->x, in->y, in->z, in->u, in->v };
+	if ( !sere_array_finite( coordinates, 5, in->vertex_count ) )
 	{
-		if ( !isfinite( in->x[i] ) || !isfinite( in->y[i] ) || !isfinite( in->z[i] ) || !isfinite( in->u[i] ) ||
-			 !isfinite( in->v[i] ) )
-		{
-			return SERE_ERR_NONFINITE;
-		}
+		return SERE_ERR_NONFINITE;
 	}
 	sere_tri_mesh current;
 	sere_status status = sere_tri_mesh_create( &current, in->vertex_count, in->triangle_count );

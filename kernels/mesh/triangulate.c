@@ -93,19 +93,9 @@ static int grow( mesh* m, int32_t extra )
 
 static int push( mesh* m, int32_t value )
 {
-	if ( m->stack_count == m->stack_capacity )
-	{
-		int32_t capacity = sere_array_capacity( m->stack_capacity, (int64_t) m->stack_count + 1, 1024 );
-		int32_t* stack = capacity > 0 ? sere_array_resize( m->stack, capacity, sizeof( int32_t ) ) : NULL;
-		if ( stack == NULL )
-		{
-			return -1;
-		}
-		m->stack = stack;
-		m->stack_capacity = capacity;
-	}
-	m->stack[m->stack_count++] = value;
-	return 0;
+	int32_t* stack = sere_array_append( m->stack, &m->stack_count, &m->stack_capacity, 1024, &value, sizeof( value ) );
+	m->stack = stack != NULL ? stack : m->stack;
+	return stack != NULL ? 0 : -1;
 }
 
 static int32_t add_triangle( mesh* m, int32_t a, int32_t b, int32_t c )
@@ -368,21 +358,10 @@ typedef struct edge_list
 
 static int edge_push( edge_list* list, int32_t x, int32_t y )
 {
-	if ( list->count == list->capacity )
-	{
-		int32_t capacity = sere_array_capacity( list->capacity, (int64_t) list->count + 1, 64 );
-		int32_t* e = capacity > 0 ? sere_array_resize( list->e, capacity, 2 * sizeof( int32_t ) ) : NULL;
-		if ( e == NULL )
-		{
-			return -1;
-		}
-		list->e = e;
-		list->capacity = capacity;
-	}
-	list->e[2 * list->count] = x;
-	list->e[2 * list->count + 1] = y;
-	list->count += 1;
-	return 0;
+	const int32_t edge[2] = { x, y };
+	int32_t* e = sere_array_append( list->e, &list->count, &list->capacity, 64, edge, sizeof( edge ) );
+	list->e = e != NULL ? e : list->e;
+	return e != NULL ? 0 : -1;
 }
 
 /* Strictly inside segment a–b (collinear, between the end points). */
@@ -537,6 +516,250 @@ void sere_triangulation_destroy( sere_triangulation* triangulation )
 	memset( triangulation, 0, sizeof( *triangulation ) );
 }
 
+/* The snapping frame: the lower corner of the input's bounding box and the grid cells per unit.
+ * Every point must be finite and every segment end an input point. */
+static sere_status snap_frame( const sere_cdt_input* input, double* x0, double* y0, double* scale )
+{
+	const int32_t n = input->point_count;
+	double lo_x = INFINITY, lo_y = INFINITY, hi_x = -INFINITY, hi_y = -INFINITY;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( !isfinite( input->x[i] ) || !isfinite( input->y[i] ) )
+		{
+			return SERE_ERR_NONFINITE;
+		}
+		lo_x = fmin( lo_x, input->x[i] ), hi_x = fmax( hi_x, input->x[i] );
+		lo_y = fmin( lo_y, input->y[i] ), hi_y = fmax( hi_y, input->y[i] );
+	}
+	for ( int32_t s = 0; s < 2 * input->segment_count; ++s )
+	{
+		if ( input->segments[s] < 0 || input->segments[s] >= n )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
+	double extent = fmax( hi_x - lo_x, hi_y - lo_y );
+	if ( !( extent > 0.0 ) )
+	{
+		return SERE_ERR_GEOMETRY;
+	}
+	*x0 = lo_x, *y0 = lo_y;
+	*scale = (double) ( ( (int64_t) 1 << GRID_BITS ) - 1 ) / extent;
+	return SERE_OK;
+}
+
+/* Snaps the points to the grid and inserts them into the super triangle in Morton order, so each
+ * insertion starts its walk next to the previous point. Equal keys are equal snapped points: the
+ * first in input order represents them (out's vertex_map and merged_count). -1 when out of memory. */
+static int insert_points( mesh* m, int32_t* vt, sere_sort_item* order, const sere_cdt_input* input, double x0,
+						  double y0, double scale, sere_triangulation* out )
+{
+	const int32_t n = input->point_count;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		m->p[i].x = (int64_t) llround( ( input->x[i] - x0 ) * scale );
+		m->p[i].y = (int64_t) llround( ( input->y[i] - y0 ) * scale );
+		order[i].key = spread32( (uint64_t) m->p[i].x ) | ( spread32( (uint64_t) m->p[i].y ) << 1 );
+		order[i].index = i;
+		vt[i] = -1;
+	}
+	sere_sort_items( order, n );
+	for ( int32_t k = 0; k < n; ++k )
+	{
+		int32_t i = order[k].index;
+		out->vertex_map[i] = ( k > 0 && order[k].key == order[k - 1].key ) ? out->vertex_map[order[k - 1].index] : i;
+		out->merged_count += out->vertex_map[i] != i;
+	}
+	const int32_t s0 = n, s1 = n + 1, s2 = n + 2;
+	m->p[s0] = ( ipoint ){ -SUPER_COORD, -SUPER_COORD };
+	m->p[s1] = ( ipoint ){ SUPER_COORD, -SUPER_COORD };
+	m->p[s2] = ( ipoint ){ 0, SUPER_COORD };
+	m->point_count = n + 3;
+	add_triangle( m, s0, s1, s2 );
+	vt[s0] = vt[s1] = vt[s2] = 0;
+	for ( int32_t k = 0; k < n; ++k )
+	{
+		int32_t i = order[k].index;
+		if ( out->vertex_map[i] == i && insert_point( m, vt, i ) != 0 )
+		{
+			return -1;
+		}
+	}
+	return 0;
+}
+
+/* The outline must be counter-clockwise (positive area) on the snapped grid. */
+static int counter_clockwise( const mesh* m, const int32_t* outline, int32_t count )
+{
+	int128 area2 = 0;
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		ipoint a = m->p[outline[i]], b = m->p[outline[( i + 1 ) % count]];
+		area2 += (int128) a.x * b.y - (int128) b.x * a.y;
+	}
+	return area2 > 0;
+}
+
+/* Constraints: the outline's edges, then the vein segments. A segment passing through a point is
+ * split there and both halves inserted. */
+static sere_status insert_constraints( mesh* m, int32_t* vt, const sere_cdt_input* input, const int32_t* vertex_map,
+									   edge_list* crossing )
+{
+	sere_status status = SERE_OK;
+	int32_t total = input->boundary_count + input->segment_count;
+	edge_list pending = { 0 };
+	for ( int32_t s = total - 1; s >= 0 && status == SERE_OK; --s )
+	{
+		int32_t a = s < input->boundary_count ? s : input->segments[2 * ( s - input->boundary_count )];
+		int32_t b = s < input->boundary_count ? ( s + 1 ) % input->boundary_count
+											  : input->segments[2 * ( s - input->boundary_count ) + 1];
+		if ( edge_push( &pending, vertex_map[a], vertex_map[b] ) != 0 )
+		{
+			status = SERE_ERR_MEMORY;
+		}
+	}
+	while ( status == SERE_OK && pending.count > 0 )
+	{
+		pending.count -= 1;
+		int32_t a = pending.e[2 * pending.count], b = pending.e[2 * pending.count + 1];
+		if ( a == b )
+		{
+			continue;
+		}
+		int32_t through;
+		status = insert_segment( m, vt, a, b, crossing, &through );
+		if ( status == SERE_OK && through >= 0 &&
+			 ( edge_push( &pending, through, b ) != 0 || edge_push( &pending, a, through ) != 0 ) )
+		{
+			status = SERE_ERR_MEMORY;
+		}
+	}
+	free( pending.e );
+	return status;
+}
+
+/* Exterior: every triangle reachable from a super corner (a vertex n or past) without crossing a
+ * constraint. -1 when out of memory. */
+static int mark_exterior( mesh* m, int32_t n, uint8_t* exterior )
+{
+	m->stack_count = 0;
+	for ( int32_t t = 0; t < m->count; ++t )
+	{
+		if ( m->v[3 * t] >= n || m->v[3 * t + 1] >= n || m->v[3 * t + 2] >= n )
+		{
+			exterior[t] = 1;
+			if ( push( m, t ) != 0 )
+			{
+				return -1;
+			}
+		}
+	}
+	while ( m->stack_count > 0 )
+	{
+		int32_t t = m->stack[--m->stack_count];
+		for ( int k = 0; k < 3; ++k )
+		{
+			int32_t u = m->n[3 * t + k];
+			if ( u >= 0 && !exterior[u] && !m->fixed[3 * t + k] )
+			{
+				exterior[u] = 1;
+				if ( push( m, u ) != 0 )
+				{
+					return -1;
+				}
+			}
+		}
+	}
+	return 0;
+}
+
+/* A boundary edge with the domain on both sides or neither means the outline touches itself; a
+ * vein segment outside the outline shows up as a constrained edge between two exterior
+ * triangles. */
+static int constraints_bound_domain( const mesh* m, const uint8_t* exterior )
+{
+	for ( int32_t t = 0; t < m->count; ++t )
+	{
+		for ( int k = 0; k < 3; ++k )
+		{
+			int32_t u = m->n[3 * t + k];
+			if ( m->fixed[3 * t + k] && exterior[t] && ( u < 0 || exterior[u] ) )
+			{
+				return 0;
+			}
+		}
+	}
+	return 1;
+}
+
+/* Restore the Delaunay property on every unconstrained interior edge: Lawson's flips terminate,
+ * and locally Delaunay everywhere means constrained Delaunay. -1 when out of memory. */
+static int restore_delaunay( mesh* m, int32_t* vt, const uint8_t* exterior )
+{
+	m->stack_count = 0;
+	for ( int32_t t = 0; t < m->count; ++t )
+	{
+		for ( int k = 0; !exterior[t] && k < 3; ++k )
+		{
+			if ( push( m, 3 * t + k ) != 0 )
+			{
+				return -1;
+			}
+		}
+	}
+	while ( m->stack_count > 0 )
+	{
+		int32_t code = m->stack[--m->stack_count];
+		int32_t t = code / 3;
+		int k = code % 3;
+		int32_t u = m->n[3 * t + k];
+		if ( u < 0 || m->fixed[3 * t + k] || exterior[t] || exterior[u] )
+		{
+			continue;
+		}
+		int j = back_edge( m, u, t );
+		int32_t a = m->v[3 * t + k], b = m->v[3 * t + next3( k )], c = m->v[3 * t + prev3( k )], d = m->v[3 * u + j];
+		if ( incircle( m->p[a], m->p[b], m->p[c], m->p[d] ) <= 0 )
+		{
+			continue;
+		}
+		flip( m, t, k );
+		vt[a] = t, vt[b] = t, vt[d] = t, vt[c] = u;
+		for ( int q = 0; q < 3; ++q )
+		{
+			if ( push( m, 3 * t + q ) != 0 || push( m, 3 * u + q ) != 0 )
+			{
+				return -1;
+			}
+		}
+	}
+	return 0;
+}
+
+/* The interior triangles, in mesh order, into out->tri. */
+static sere_status copy_interior( const mesh* m, const uint8_t* exterior, sere_triangulation* out )
+{
+	int32_t inside = 0;
+	for ( int32_t t = 0; t < m->count; ++t )
+	{
+		inside += !exterior[t];
+	}
+	out->tri = malloc( sizeof( int32_t ) * 3 * (size_t) ( inside > 0 ? inside : 1 ) );
+	if ( out->tri == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	for ( int32_t t = 0; t < m->count; ++t )
+	{
+		if ( !exterior[t] )
+		{
+			memcpy( out->tri + 3 * out->triangle_count, m->v + 3 * t, sizeof( int32_t ) * 3 );
+			out->triangle_count += 1;
+		}
+	}
+	return SERE_OK;
+}
+
 sere_status sere_triangulate( const sere_cdt_input* input, sere_triangulation* out )
 {
 	memset( out, 0, sizeof( *out ) );
@@ -546,247 +769,53 @@ sere_status sere_triangulate( const sere_cdt_input* input, sere_triangulation* o
 	{
 		return SERE_ERR_ARGUMENT;
 	}
+	double x0, y0, scale;
+	sere_status status = snap_frame( input, &x0, &y0, &scale );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
 	const int32_t n = input->point_count;
-	double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		if ( !isfinite( input->x[i] ) || !isfinite( input->y[i] ) )
-		{
-			return SERE_ERR_NONFINITE;
-		}
-		x0 = fmin( x0, input->x[i] ), x1 = fmax( x1, input->x[i] );
-		y0 = fmin( y0, input->y[i] ), y1 = fmax( y1, input->y[i] );
-	}
-	for ( int32_t s = 0; s < 2 * input->segment_count; ++s )
-	{
-		if ( input->segments[s] < 0 || input->segments[s] >= n )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
-	}
-	double extent = fmax( x1 - x0, y1 - y0 );
-	if ( !( extent > 0.0 ) )
-	{
-		return SERE_ERR_GEOMETRY;
-	}
-	const double scale = (double) ( ( (int64_t) 1 << GRID_BITS ) - 1 ) / extent;
-
-	sere_status status = SERE_OK;
 	mesh m = { 0 };
 	edge_list crossing = { 0 };
-	int32_t* vt = NULL;
 	uint8_t* exterior = NULL;
 	sere_sort_item* order = malloc( sizeof( sere_sort_item ) * (size_t) n );
 	m.p = malloc( sizeof( ipoint ) * ( (size_t) n + 3 ) );
-	vt = malloc( sizeof( int32_t ) * ( (size_t) n + 3 ) );
+	int32_t* vt = malloc( sizeof( int32_t ) * ( (size_t) n + 3 ) );
 	out->vertex_map = malloc( sizeof( int32_t ) * (size_t) n );
-	if ( order == NULL || m.p == NULL || vt == NULL || out->vertex_map == NULL || grow( &m, 2 * n + 8 ) != 0 )
+	if ( order == NULL || m.p == NULL || vt == NULL || out->vertex_map == NULL || grow( &m, 2 * n + 8 ) != 0 ||
+		 insert_points( &m, vt, order, input, x0, y0, scale, out ) != 0 )
 	{
 		status = SERE_ERR_MEMORY;
 		goto done;
 	}
-	for ( int32_t i = 0; i < n; ++i )
+	if ( !counter_clockwise( &m, out->vertex_map, input->boundary_count ) )
 	{
-		m.p[i].x = (int64_t) llround( ( input->x[i] - x0 ) * scale );
-		m.p[i].y = (int64_t) llround( ( input->y[i] - y0 ) * scale );
-		order[i].key = spread32( (uint64_t) m.p[i].x ) | ( spread32( (uint64_t) m.p[i].y ) << 1 );
-		order[i].index = i;
-		vt[i] = -1;
+		status = SERE_ERR_GEOMETRY;
+		goto done;
 	}
-	/* Morton order: each insertion starts its walk next to the previous point. Equal keys are
-	 * equal snapped points: the first in input order represents them. */
-	sere_sort_items( order, n );
-	for ( int32_t k = 0; k < n; ++k )
+	status = insert_constraints( &m, vt, input, out->vertex_map, &crossing );
+	if ( status != SERE_OK )
 	{
-		int32_t i = order[k].index;
-		out->vertex_map[i] = ( k > 0 && order[k].key == order[k - 1].key ) ? out->vertex_map[order[k - 1].index] : i;
-		out->merged_count += out->vertex_map[i] != i;
+		goto done;
 	}
-	const int32_t s0 = n, s1 = n + 1, s2 = n + 2;
-	m.p[s0] = ( ipoint ){ -SUPER_COORD, -SUPER_COORD };
-	m.p[s1] = ( ipoint ){ SUPER_COORD, -SUPER_COORD };
-	m.p[s2] = ( ipoint ){ 0, SUPER_COORD };
-	m.point_count = n + 3;
-	add_triangle( &m, s0, s1, s2 );
-	vt[s0] = vt[s1] = vt[s2] = 0;
-	for ( int32_t k = 0; k < n; ++k )
-	{
-		int32_t i = order[k].index;
-		if ( out->vertex_map[i] == i && insert_point( &m, vt, i ) != 0 )
-		{
-			status = SERE_ERR_MEMORY;
-			goto done;
-		}
-	}
-
-	/* The outline must be counter-clockwise (positive area) on the snapped grid. */
-	{
-		int128 area2 = 0;
-		for ( int32_t i = 0; i < input->boundary_count; ++i )
-		{
-			ipoint a = m.p[out->vertex_map[i]], b = m.p[out->vertex_map[( i + 1 ) % input->boundary_count]];
-			area2 += (int128) a.x * b.y - (int128) b.x * a.y;
-		}
-		if ( area2 <= 0 )
-		{
-			status = SERE_ERR_GEOMETRY;
-			goto done;
-		}
-	}
-	/* Constraints: the outline's edges, then the vein segments. A segment passing through a
-	 * point is split there and both halves inserted. */
-	int32_t total = input->boundary_count + input->segment_count;
-	edge_list pending = { 0 };
-	for ( int32_t s = total - 1; s >= 0; --s )
-	{
-		int32_t a = s < input->boundary_count ? s : input->segments[2 * ( s - input->boundary_count )];
-		int32_t b = s < input->boundary_count ? ( s + 1 ) % input->boundary_count
-											  : input->segments[2 * ( s - input->boundary_count ) + 1];
-		if ( edge_push( &pending, out->vertex_map[a], out->vertex_map[b] ) != 0 )
-		{
-			free( pending.e );
-			status = SERE_ERR_MEMORY;
-			goto done;
-		}
-	}
-	while ( pending.count > 0 )
-	{
-		pending.count -= 1;
-		int32_t a = pending.e[2 * pending.count], b = pending.e[2 * pending.count + 1];
-		if ( a == b )
-		{
-			continue;
-		}
-		int32_t through;
-		status = insert_segment( &m, vt, a, b, &crossing, &through );
-		if ( status != SERE_OK )
-		{
-			free( pending.e );
-			goto done;
-		}
-		if ( through >= 0 && ( edge_push( &pending, through, b ) != 0 || edge_push( &pending, a, through ) != 0 ) )
-		{
-			free( pending.e );
-			status = SERE_ERR_MEMORY;
-			goto done;
-		}
-	}
-	free( pending.e );
-
-	/* Exterior: every triangle reachable from a super corner without crossing a constraint. */
 	exterior = calloc( (size_t) m.count, 1 );
-	if ( exterior == NULL )
+	if ( exterior == NULL || mark_exterior( &m, n, exterior ) != 0 )
 	{
 		status = SERE_ERR_MEMORY;
 		goto done;
 	}
-	m.stack_count = 0;
-	for ( int32_t t = 0; t < m.count; ++t )
+	if ( !constraints_bound_domain( &m, exterior ) )
 	{
-		if ( m.v[3 * t] >= n || m.v[3 * t + 1] >= n || m.v[3 * t + 2] >= n )
-		{
-			exterior[t] = 1;
-			if ( push( &m, t ) != 0 )
-			{
-				status = SERE_ERR_MEMORY;
-				goto done;
-			}
-		}
+		status = SERE_ERR_GEOMETRY;
+		goto done;
 	}
-	while ( m.stack_count > 0 )
-	{
-		int32_t t = m.stack[--m.stack_count];
-		for ( int k = 0; k < 3; ++k )
-		{
-			int32_t u = m.n[3 * t + k];
-			if ( u >= 0 && !exterior[u] && !m.fixed[3 * t + k] )
-			{
-				exterior[u] = 1;
-				if ( push( &m, u ) != 0 )
-				{
-					status = SERE_ERR_MEMORY;
-					goto done;
-				}
-			}
-		}
-	}
-	/* A boundary edge with the domain on both sides or neither means the outline touches
-	 * itself; a vein segment outside the outline shows up as a constrained edge between two
-	 * exterior triangles. */
-	for ( int32_t t = 0; t < m.count; ++t )
-	{
-		for ( int k = 0; k < 3; ++k )
-		{
-			int32_t u = m.n[3 * t + k];
-			if ( m.fixed[3 * t + k] && exterior[t] && ( u < 0 || exterior[u] ) )
-			{
-				status = SERE_ERR_GEOMETRY;
-				goto done;
-			}
-		}
-	}
-
-	/* Restore the Delaunay property on every unconstrained interior edge: Lawson's flips
-	 * terminate, and locally Delaunay everywhere means constrained Delaunay. */
-	m.stack_count = 0;
-	for ( int32_t t = 0; t < m.count; ++t )
-	{
-		for ( int k = 0; !exterior[t] && k < 3; ++k )
-		{
-			if ( push( &m, 3 * t + k ) != 0 )
-			{
-				status = SERE_ERR_MEMORY;
-				goto done;
-			}
-		}
-	}
-	while ( m.stack_count > 0 )
-	{
-		int32_t code = m.stack[--m.stack_count];
-		int32_t t = code / 3;
-		int k = code % 3;
-		int32_t u = m.n[3 * t + k];
-		if ( u < 0 || m.fixed[3 * t + k] || exterior[t] || exterior[u] )
-		{
-			continue;
-		}
-		int j = back_edge( &m, u, t );
-		int32_t a = m.v[3 * t + k], b = m.v[3 * t + next3( k )], c = m.v[3 * t + prev3( k )], d = m.v[3 * u + j];
-		if ( incircle( m.p[a], m.p[b], m.p[c], m.p[d] ) <= 0 )
-		{
-			continue;
-		}
-		flip( &m, t, k );
-		vt[a] = t, vt[b] = t, vt[d] = t, vt[c] = u;
-		for ( int q = 0; q < 3; ++q )
-		{
-			if ( push( &m, 3 * t + q ) != 0 || push( &m, 3 * u + q ) != 0 )
-			{
-				status = SERE_ERR_MEMORY;
-				goto done;
-			}
-		}
-	}
-
-	int32_t inside = 0;
-	for ( int32_t t = 0; t < m.count; ++t )
-	{
-		inside += !exterior[t];
-	}
-	out->tri = malloc( sizeof( int32_t ) * 3 * (size_t) ( inside > 0 ? inside : 1 ) );
-	if ( out->tri == NULL )
+	if ( restore_delaunay( &m, vt, exterior ) != 0 )
 	{
 		status = SERE_ERR_MEMORY;
 		goto done;
 	}
-	for ( int32_t t = 0; t < m.count; ++t )
-	{
-		if ( !exterior[t] )
-		{
-			memcpy( out->tri + 3 * out->triangle_count, m.v + 3 * t, sizeof( int32_t ) * 3 );
-			out->triangle_count += 1;
-		}
-	}
+	status = copy_interior( &m, exterior, out );
 
 done:
 	free( order );

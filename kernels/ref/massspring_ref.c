@@ -59,6 +59,18 @@ static void ref_euler( sere_massspring_particles* p, const sere_massspring_param
 	}
 }
 
+/* Tang Eq. 2's p for structural spring s: the relative position d of its second end from its
+ * first after a step of dt at the current velocities. Returns |p|. */
+static float ref_spring_after( const sere_massspring_topology* topology, const sere_massspring_particles* p, int32_t s,
+							   float dt, float d[3] )
+{
+	const int32_t a = topology->a[s], b = topology->b[s];
+	d[0] = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
+	d[1] = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
+	d[2] = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
+	return sqrtf( d[0] * d[0] + d[1] * d[1] + d[2] * d[2] );
+}
+
 /* One sweep of Tang Eq. 2 over the structural springs: the relative position after the step
  * must stay within τ_c of the natural length, and each violating spring is moved onto the band
  * narrowed by the tolerance δ. Returns the largest correction over the rest length; counts the
@@ -71,10 +83,9 @@ static float ref_limit_sweep( const sere_massspring_topology* topology, sere_mas
 	for ( int32_t s = 0; s < topology->structural_count; ++s )
 	{
 		const int32_t a = topology->a[s], b = topology->b[s];
-		float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
-		float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
-		float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
-		float len = sqrtf( px * px + py * py + pz * pz );
+		float d[3];
+		float len = ref_spring_after( topology, p, s, dt, d );
+		const float px = d[0], py = d[1], pz = d[2];
 		float rest = topology->rest0[s] * ( 1.0f - params->shrink );
 		float target = len;
 		if ( len > rest * ( 1.0f + tau - delta ) )
@@ -116,11 +127,8 @@ static int ref_within_band( const sere_massspring_topology* topology, const sere
 	int within = 1;
 	for ( int32_t s = 0; s < topology->structural_count; ++s )
 	{
-		const int32_t a = topology->a[s], b = topology->b[s];
-		float px = ( p->x[b] - p->x[a] ) + dt * ( p->vx[b] - p->vx[a] );
-		float py = ( p->y[b] - p->y[a] ) + dt * ( p->vy[b] - p->vy[a] );
-		float pz = ( p->z[b] - p->z[a] ) + dt * ( p->vz[b] - p->vz[a] );
-		float ratio = sqrtf( px * px + py * py + pz * pz ) / ( topology->rest0[s] * ( 1.0f - params->shrink ) );
+		float d[3];
+		float ratio = ref_spring_after( topology, p, s, dt, d ) / ( topology->rest0[s] * ( 1.0f - params->shrink ) );
 		if ( ratio > 1.0f + tau || ratio < 1.0f - tau )
 		{
 			within = 0;

@@ -39,15 +39,7 @@ int64_t sere_crossings_ref_count( const float* x, const float* y, const float* z
 			double p[3] = { x[i], y[i], z[i] }, q[3] = { x[j], y[j], z[j] };
 			for ( int32_t s = 0; s < tri_count; ++s )
 			{
-				const int32_t* v = tri + 3 * (size_t) s;
-				if ( v[0] == i || v[1] == i || v[2] == i || v[0] == j || v[1] == j || v[2] == j )
-				{
-					continue;
-				}
-				double a[3] = { x[v[0]], y[v[0]], z[v[0]] };
-				double b[3] = { x[v[1]], y[v[1]], z[v[1]] };
-				double c[3] = { x[v[2]], y[v[2]], z[v[2]] };
-				count += sere_segment_crosses_triangle( p, q, a, b, c );
+				count += sere_edge_crosses_triangle( p, q, i, j, tri + 3 * (size_t) s, x, y, z );
 			}
 		}
 	}

@@ -102,21 +102,16 @@ static sere_status plant_alloc( sere_plant* p, int32_t leaf_count, int32_t joint
 	p->joint_first = sere_alloc( nl * sizeof( int32_t ) );
 	p->vertex_first = sere_alloc( nl * sizeof( int32_t ) );
 	p->triangle_first = sere_alloc( nl * sizeof( int32_t ) );
-	p->onset = sere_alloc( nl * sizeof( float ) );
-	p->leaf_t = sere_alloc( nl * sizeof( float ) );
+	float** leaf[] = { &p->onset, &p->leaf_t };
+	bool leaves_allocated = sere_alloc_floats( leaf, 2, nl );
 	p->leaf_stats = sere_alloc( nl * sizeof( sere_pose_stats ) );
 	p->joint = sere_alloc( nv * sizeof( int32_t ) );
 	float** arrays[] = { &p->ox, &p->oy, &p->oz, &p->x, &p->y,	&p->z,	&p->rx,
 						 &p->ry, &p->rz, &p->u,	 &p->v, &p->tx, &p->ty, &p->tz };
-	int failed = 0;
-	for ( size_t k = 0; k < sizeof( arrays ) / sizeof( arrays[0] ); ++k )
-	{
-		*arrays[k] = sere_alloc( nv * sizeof( float ) );
-		failed |= *arrays[k] == NULL;
-	}
+	bool allocated = sere_alloc_floats( arrays, (int32_t) ( sizeof( arrays ) / sizeof( arrays[0] ) ), nv );
 	p->tri = sere_alloc( (size_t) sere_pad( 3 * triangles ) * sizeof( int32_t ) );
-	if ( failed || p->joint_first == NULL || p->vertex_first == NULL || p->triangle_first == NULL || p->onset == NULL ||
-		 p->leaf_t == NULL || p->leaf_stats == NULL || p->joint == NULL || p->tri == NULL )
+	if ( !allocated || !leaves_allocated || p->joint_first == NULL || p->vertex_first == NULL ||
+		 p->triangle_first == NULL || p->leaf_stats == NULL || p->joint == NULL || p->tri == NULL )
 	{
 		return SERE_ERR_MEMORY;
 	}

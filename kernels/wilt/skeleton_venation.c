@@ -26,16 +26,14 @@ sere_status sere_skel_alloc( sere_skeleton* s, int32_t joint_count )
 {
 	memset( s, 0, sizeof( *s ) );
 	size_t n = (size_t) sere_pad( joint_count > 0 ? joint_count : 1 );
-	s->x = sere_alloc( n * sizeof( float ) );
-	s->y = sere_alloc( n * sizeof( float ) );
-	s->z = sere_alloc( n * sizeof( float ) );
+	float** position[] = { &s->x, &s->y, &s->z };
+	float** shape[] = { &s->bend, &s->delay };
+	bool allocated = sere_alloc_floats( position, 3, n );
 	s->parent = sere_alloc( n * sizeof( int32_t ) );
 	s->end = sere_alloc( n * sizeof( int32_t ) );
 	s->vein = sere_alloc( n * sizeof( int32_t ) );
-	s->bend = sere_alloc( n * sizeof( float ) );
-	s->delay = sere_alloc( n * sizeof( float ) );
-	if ( s->x == NULL || s->y == NULL || s->z == NULL || s->parent == NULL || s->end == NULL || s->vein == NULL ||
-		 s->bend == NULL || s->delay == NULL )
+	allocated = sere_alloc_floats( shape, 2, n ) && allocated;
+	if ( !allocated || s->parent == NULL || s->end == NULL || s->vein == NULL )
 	{
 		sere_skeleton_destroy( s );
 		return SERE_ERR_MEMORY;
