@@ -272,11 +272,14 @@ uninstall:
 		[ "$$d" = . ] && d=""; rmdir "$(DEST)/$$d" 2>/dev/null && echo "rmdir $(DEST)/$$d"; \
 	done; true
 
-# The layering of the rooms (scripts/layer-check.sh), the equation table (docs/EQUATIONS.md), then the headers as a user gets them: each compiles alone as C17 and as C++17 with every warning
-# an error, and sere.h includes every public header.
+# The layering of the rooms (scripts/layer-check.sh), the equation table (docs/EQUATIONS.md), the
+# sizes (scripts/size-check.py: no file over 1000 lines, no function over 120), then the headers as a
+# user gets them: each compiles alone as C17 and as C++17 with every warning an error, and sere.h
+# includes every public header.
 header-check:
 	@bash scripts/layer-check.sh
 	@python3 scripts/equations-check.py
+	@python3 scripts/size-check.py
 	@for h in $(filter-out kernels/sere.h,$(PUBLIC_H)); do \
 		grep -q "^#include \"$${h#kernels/}\"" kernels/sere.h || { echo "kernels/sere.h does not include $${h#kernels/}" >&2; exit 1; }; \
 	done

@@ -4,6 +4,7 @@
 #include "drying/model.h"
 #include "drying/osmosis.h"
 #include "fixture.h"
+#include "ref/osmosis_ref.h"
 #include "solve/cg.h"
 
 #include <criterion/criterion.h>
@@ -64,46 +65,6 @@ static void sgs_system_free( sgs_system* s )
 	sere_osmosis_destroy( s->o );
 	sere_model_destroy( &s->model );
 	free( s->b );
-}
-
-/* Dense Gaussian elimination with partial pivoting: solves m z = r (m, r overwritten). */
-static void dense_solve( double* m, double* r, double* z, int32_t n )
-{
-	for ( int32_t c = 0; c < n; ++c )
-	{
-		int32_t pivot = c;
-		for ( int32_t i = c + 1; i < n; ++i )
-		{
-			pivot = fabs( m[(size_t) i * n + c] ) > fabs( m[(size_t) pivot * n + c] ) ? i : pivot;
-		}
-		for ( int32_t k = 0; k < n; ++k )
-		{
-			double t = m[(size_t) c * n + k];
-			m[(size_t) c * n + k] = m[(size_t) pivot * n + k];
-			m[(size_t) pivot * n + k] = t;
-		}
-		double t = r[c];
-		r[c] = r[pivot];
-		r[pivot] = t;
-		for ( int32_t i = c + 1; i < n; ++i )
-		{
-			double f = m[(size_t) i * n + c] / m[(size_t) c * n + c];
-			for ( int32_t k = c; k < n; ++k )
-			{
-				m[(size_t) i * n + k] -= f * m[(size_t) c * n + k];
-			}
-			r[i] -= f * r[c];
-		}
-	}
-	for ( int32_t i = n - 1; i >= 0; --i )
-	{
-		double sum = r[i];
-		for ( int32_t k = i + 1; k < n; ++k )
-		{
-			sum -= m[(size_t) i * n + k] * z[k];
-		}
-		z[i] = sum / m[(size_t) i * n + i];
-	}
 }
 
 static double relative_residual( const sere_csr* a, const double* b, const double* x )
@@ -200,7 +161,7 @@ Test( sgs, apply_matches_dense_reference )
 		r[i] = sin( 0.7 * i ) + 0.2;
 	}
 	cr_assert_eq( sere_sgs_apply( s.g, r, z ), SERE_OK );
-	dense_solve( m, r, ref, s.n );
+	cr_assert_eq( sere_dense_ref_solve( m, r, ref, s.n ), SERE_OK );
 	double worst = 0.0;
 	for ( int32_t i = 0; i < s.n; ++i )
 	{

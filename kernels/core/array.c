@@ -1,4 +1,9 @@
+/* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
+#define _GNU_SOURCE
+
 #include "core/array.h"
+
+#include "core/internal/team.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -75,6 +80,17 @@ bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t
 		}
 	}
 	return true;
+}
+
+bool sere_array_finite_xyz( const float* x, const float* y, const float* z, int32_t count, int32_t threads )
+{
+	int bad = 0;
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( | : bad )
+	for ( int32_t i = 0; i < count; ++i )
+	{
+		bad |= !( isfinite( x[i] ) && isfinite( y[i] ) && isfinite( z[i] ) );
+	}
+	return bad == 0;
 }
 
 static int compare_items( const void* pa, const void* pb )

@@ -3,6 +3,59 @@
 #include <math.h>
 #include <stdlib.h>
 
+sere_status sere_dense_ref_solve( double* A, double* rhs, double* x, int32_t n )
+{
+	for ( int32_t col = 0; col < n; ++col )
+	{
+		int32_t pivot = col;
+		for ( int32_t r = col + 1; r < n; ++r )
+		{
+			if ( fabs( A[(size_t) r * n + col] ) > fabs( A[(size_t) pivot * n + col] ) )
+			{
+				pivot = r;
+			}
+		}
+		if ( A[(size_t) pivot * n + col] == 0.0 )
+		{
+			return SERE_ERR_GEOMETRY;
+		}
+		if ( pivot != col )
+		{
+			for ( int32_t k = 0; k < n; ++k )
+			{
+				double t = A[(size_t) col * n + k];
+				A[(size_t) col * n + k] = A[(size_t) pivot * n + k];
+				A[(size_t) pivot * n + k] = t;
+			}
+			double t = rhs[col];
+			rhs[col] = rhs[pivot];
+			rhs[pivot] = t;
+		}
+		for ( int32_t r = col + 1; r < n; ++r )
+		{
+			double f = A[(size_t) r * n + col] / A[(size_t) col * n + col];
+			if ( f != 0.0 )
+			{
+				for ( int32_t k = col; k < n; ++k )
+				{
+					A[(size_t) r * n + k] -= f * A[(size_t) col * n + k];
+				}
+				rhs[r] -= f * rhs[col];
+			}
+		}
+	}
+	for ( int32_t r = n - 1; r >= 0; --r )
+	{
+		double sum = rhs[r];
+		for ( int32_t k = r + 1; k < n; ++k )
+		{
+			sum -= A[(size_t) r * n + k] * x[k];
+		}
+		x[r] = sum / A[(size_t) r * n + r];
+	}
+	return SERE_OK;
+}
+
 sere_status sere_osmosis_ref_step( int32_t first, int32_t count, const int32_t* a, const int32_t* b,
 								   int32_t spring_count, const float* x, const float* y, const float* z,
 								   const float* tau, const double* M, const double* w, double dt, double lambda_min,
@@ -45,55 +98,7 @@ sere_status sere_osmosis_ref_step( int32_t first, int32_t count, const int32_t* 
 			A[(size_t) i * n + i] += dt * weight * M[gj];
 		}
 	}
-	for ( int32_t col = 0; col < n; ++col )
-	{
-		int32_t pivot = col;
-		for ( int32_t r = col + 1; r < n; ++r )
-		{
-			if ( fabs( A[(size_t) r * n + col] ) > fabs( A[(size_t) pivot * n + col] ) )
-			{
-				pivot = r;
-			}
-		}
-		if ( A[(size_t) pivot * n + col] == 0.0 )
-		{
-			free( A ), free( rhs ), free( E );
-			return SERE_ERR_GEOMETRY;
-		}
-		if ( pivot != col )
-		{
-			for ( int32_t k = 0; k < n; ++k )
-			{
-				double t = A[(size_t) col * n + k];
-				A[(size_t) col * n + k] = A[(size_t) pivot * n + k];
-				A[(size_t) pivot * n + k] = t;
-			}
-			double t = rhs[col];
-			rhs[col] = rhs[pivot];
-			rhs[pivot] = t;
-		}
-		for ( int32_t r = col + 1; r < n; ++r )
-		{
-			double f = A[(size_t) r * n + col] / A[(size_t) col * n + col];
-			if ( f != 0.0 )
-			{
-				for ( int32_t k = col; k < n; ++k )
-				{
-					A[(size_t) r * n + k] -= f * A[(size_t) col * n + k];
-				}
-				rhs[r] -= f * rhs[col];
-			}
-		}
-	}
-	for ( int32_t r = n - 1; r >= 0; --r )
-	{
-		double sum = rhs[r];
-		for ( int32_t k = r + 1; k < n; ++k )
-		{
-			sum -= A[(size_t) r * n + k] * w_out[first + k];
-		}
-		w_out[first + r] = sum / A[(size_t) r * n + r];
-	}
+	sere_status status = sere_dense_ref_solve( A, rhs, w_out + first, n );
 	free( A ), free( rhs ), free( E );
-	return SERE_OK;
+	return status;
 }

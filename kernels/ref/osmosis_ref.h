@@ -9,6 +9,10 @@ extern "C"
 {
 #endif
 
+/* A x = rhs for the n × n row-major A, by Gaussian elimination with partial pivoting in place
+ * (A and rhs are overwritten); SERE_ERR_GEOMETRY for a zero pivot (singular A). */
+sere_status sere_dense_ref_solve( double* A, double* rhs, double* x, int32_t n );
+
 /* (I − Δt L°) w' = w + water_rate Δt with L° of Jeong Eq. 8 (row weight 2/E_i), by Gaussian
  * elimination with partial pivoting; writes w' (not clamped) into w_out for the layer's
  * particles [first, first + count). */

@@ -1,6 +1,7 @@
 /* _GNU_SOURCE: sched_getaffinity for internal/team.h. */
 #define _GNU_SOURCE
 
+#include "core/array.h"
 #include "solve/internal/bvh_shared.h"
 
 #include <math.h>
@@ -51,17 +52,6 @@ static float range_area( const sere_bvh* bvh, int32_t begin, int32_t end )
 		box_grow( &b, bvh, bvh->order[i] );
 	}
 	return box3_area( &b );
-}
-
-static bool positions_finite( int32_t n, const float* x, const float* y, const float* z, int32_t threads )
-{
-	int bad = 0;
-#pragma omp parallel for num_threads( sere_team_for( threads ) ) reduction( | : bad ) schedule( static )
-	for ( int32_t v = 0; v < n; ++v )
-	{
-		bad |= !( isfinite( x[v] ) && isfinite( y[v] ) && isfinite( z[v] ) );
-	}
-	return bad == 0;
 }
 
 /* Reorders order[begin, end) so that position nth holds the element a full sort by key would
@@ -539,7 +529,7 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( !positions_finite( bvh->vertex_count, x, y, z, bvh->threads ) )
+	if ( !sere_array_finite_xyz( x, y, z, bvh->vertex_count, bvh->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}

@@ -4,6 +4,7 @@
  * _GNU_SOURCE: sched_getaffinity for internal/team.h. */
 #define _GNU_SOURCE
 
+#include "core/array.h"
 #include "solve/internal/pbd_shared.h"
 
 #include <float.h>
@@ -87,23 +88,6 @@ static sere_status order_particles( const int32_t* a, const int32_t* b, int32_t 
 	return SERE_OK;
 }
 
-typedef struct lane_key
-{
-	int64_t key; /* segment, then lower slot of the two ends */
-	int32_t constraint;
-} lane_key;
-
-static int compare_lane_keys( const void* p, const void* q )
-{
-	const lane_key* u = p;
-	const lane_key* v = q;
-	if ( u->key != v->key )
-	{
-		return u->key < v->key ? -1 : 1;
-	}
-	return ( u->constraint > v->constraint ) - ( u->constraint < v->constraint );
-}
-
 /* Cuts the n slots into R bands, start[0..R], each holding about the same share of the
  * constraint ends (ends[s]: ends in slots before s), so that threads get equal work (bands of
  * equal particle counts differed by 9% in constraints on the maple); the bounds sit on
@@ -175,7 +159,7 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 	const int32_t n = pbd->particle_count, count = pbd->constraint_count, colors = pbd->colors;
 	int32_t* band_of_slot = malloc( sizeof( int32_t ) * (size_t) n );
 	int32_t* ends = calloc( (size_t) n + 1, sizeof( int32_t ) );
-	lane_key* keys = malloc( sizeof( lane_key ) * (size_t) count );
+	sere_sort_item* keys = malloc( sizeof( sere_sort_item ) * (size_t) count );
 	pbd->band_start = sere_alloc( sizeof( int32_t ) * ( MAX_BANDS + 1 ) );
 	if ( band_of_slot == NULL || ends == NULL || keys == NULL || pbd->band_start == NULL )
 	{
@@ -218,8 +202,8 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 		int32_t item = ra == rb ? ra : bands + ( ra < rb ? ra : rb );
 		pbd->interface_count += ra != rb;
 		int64_t seg = (int64_t) item * colors + pbd->coloring.color[k];
-		keys[k].key = seg << 32 | (int64_t) ( sa < sb ? sa : sb );
-		keys[k].constraint = k;
+		/* segment, then the lower slot of the two ends */
+		keys[k] = ( sere_sort_item ){ (uint64_t) ( seg << 32 | (int64_t) ( sa < sb ? sa : sb ) ), k, 0 };
 		fill[seg] += 1;
 	}
 	for ( int32_t g = 0; g < segments; ++g )
@@ -234,14 +218,14 @@ static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t*
 	}
 	/* Within a segment, constraints by their lower slot: neighbors in space share SIMD steps
 	 * and cache lines. */
-	qsort( keys, (size_t) count, sizeof( lane_key ), compare_lane_keys );
+	sere_sort_items( keys, count );
 	for ( int32_t g = 0; g < segments; ++g )
 	{
 		fill[g] = pbd->segment[g];
 	}
 	for ( int32_t j = 0; j < count; ++j )
 	{
-		int32_t k = keys[j].constraint;
+		int32_t k = keys[j].index;
 		int32_t q = fill[keys[j].key >> 32]++;
 		pbd->ia[q] = 4 * pbd->slot[a[k]];
 		pbd->ib[q] = 4 * pbd->slot[b[k]];

@@ -4,6 +4,7 @@
 
 #include "wilt/internal/skeleton_shared.h"
 
+#include "core/array.h"
 #include "core/internal/team.h"
 
 #include <float.h>
@@ -444,13 +445,7 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	int bad = 0;
-#pragma omp parallel for num_threads( sere_team_for( grid->threads ) ) schedule( static ) reduction( | : bad )
-	for ( int32_t i = 0; i < vertex_count; ++i )
-	{
-		bad |= !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] );
-	}
-	if ( bad )
+	if ( !sere_array_finite_xyz( x, y, z, vertex_count, grid->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}

@@ -4,6 +4,7 @@
 
 #include "wilt/internal/skeleton_shared.h"
 
+#include "core/array.h"
 #include "core/internal/team.h"
 
 #include <float.h>
@@ -475,13 +476,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 	}
 	st.rebuilt = rebuilt;
 	int32_t n = p->vertex_count, f = p->triangle_count;
-	int bad = 0;
-#pragma omp parallel for num_threads( sere_team_for( p->threads ) ) schedule( static ) reduction( | : bad )
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		bad |= !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] );
-	}
-	if ( bad )
+	if ( !sere_array_finite_xyz( x, y, z, n, p->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}
