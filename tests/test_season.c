@@ -178,7 +178,7 @@ Test( seasonleaf, maple_from_key_points_and_mask, .timeout = 60 )
 		cr_expect_gt( moved, previous, "level %d moved %g, level %d %g", level, moved, level - 1, previous );
 		previous = moved;
 	}
-	sere_season_leaf_free( &leaf );
+	sere_season_leaf_destroy( &leaf );
 }
 
 Test( seasonleaf, silhouette_gives_the_same_leaf_outline, .timeout = 60 )
@@ -200,7 +200,7 @@ Test( seasonleaf, silhouette_gives_the_same_leaf_outline, .timeout = 60 )
 		u_lo = fmin( u_lo, leaf.u[i] ), u_hi = fmax( u_hi, leaf.u[i] );
 	}
 	cr_expect( u_lo > 0.1 && u_lo < 0.25 && u_hi > 0.75 && u_hi < 0.9, "u in [%g, %g]", u_lo, u_hi );
-	sere_season_leaf_free( &leaf );
+	sere_season_leaf_destroy( &leaf );
 }
 
 static void expect_leaf_error( sere_season_leaf_options o, const char* phrase )

@@ -817,7 +817,7 @@ static void run_close( run_state* r )
 		snapshot_free( r->shots + k );
 	}
 	free( r->rwc ), free( r->curve_t ), free( r->curve_rwc ), free( r->curve_area );
-	sere_pvd_free( &r->pvd );
+	sere_pvd_destroy( &r->pvd );
 	sere_watch_destroy( r->watch );
 	sere_leaf_destroy( r->sim );
 	if ( r->have_model )

@@ -536,7 +536,7 @@ static int grow_leaf_and_tree( const options* o, season_run* r )
 	if ( status != SERE_OK )
 	{
 		fprintf( stderr, "sere season: the L-system tree cannot grow (%s)\n", sere_status_text( status ) );
-		sere_season_leaf_free( &r->leaf );
+		sere_season_leaf_destroy( &r->leaf );
 		return 2;
 	}
 	if ( r->tree.leaf_count > o->leaves )
@@ -553,7 +553,7 @@ static int grow_leaf_and_tree( const options* o, season_run* r )
 		return 0;
 	}
 	sere_tree_destroy( &r->tree );
-	sere_season_leaf_free( &r->leaf );
+	sere_season_leaf_destroy( &r->leaf );
 	return 2;
 }
 
@@ -886,6 +886,6 @@ int sere_cmd_season( int argc, char** argv )
 	free( r->states ), free( r->exact ), free( r->sampled ), free( r->P ), free( r->counts ), free( r->snapshots );
 	free( r->day_table );
 	sere_tree_destroy( &r->tree );
-	sere_season_leaf_free( &r->leaf );
+	sere_season_leaf_destroy( &r->leaf );
 	return rc;
 }

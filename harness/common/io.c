@@ -358,7 +358,7 @@ sere_status sere_pvd_append( sere_pvd_series* series, const char* path, const ch
 	return sere_pvd_write( path, (const char* const*) series->files, series->times, series->count );
 }
 
-void sere_pvd_free( sere_pvd_series* series )
+void sere_pvd_destroy( sere_pvd_series* series )
 {
 	for ( int32_t k = 0; k < series->count; ++k )
 	{

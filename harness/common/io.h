@@ -87,7 +87,7 @@ typedef struct sere_pvd_series
 /* Appends file (a name relative to the .pvd) at time and rewrites path atomically; SERE_OK, or
  * SERE_ERR_MEMORY or SERE_ERR_IO with errno set. */
 sere_status sere_pvd_append( sere_pvd_series* series, const char* path, const char* file, double time );
-void sere_pvd_free( sere_pvd_series* series );
+void sere_pvd_destroy( sere_pvd_series* series );
 
 /* A progress bar on stderr, drawn only when stderr is a terminal. */
 typedef struct sere_progress

@@ -272,7 +272,7 @@ static float sample_gray( const float* gray, int32_t w, int32_t h, double px, do
 	return (float) ( ( 1.0 - ty ) * top + ty * bottom );
 }
 
-void sere_season_leaf_free( sere_season_leaf* leaf )
+void sere_season_leaf_destroy( sere_season_leaf* leaf )
 {
 	if ( leaf == NULL )
 	{
@@ -632,7 +632,7 @@ sere_status sere_season_leaf_build( const sere_season_leaf_options* options, ser
 done:
 	if ( status != SERE_OK )
 	{
-		sere_season_leaf_free( leaf );
+		sere_season_leaf_destroy( leaf );
 	}
 	free( gray );
 	sere_meshopt_destroy( mo );

@@ -47,7 +47,7 @@ typedef struct sere_season_leaf
  * "PATH: problem" (or "option: problem") into err and leaves nothing to free. */
 sere_status sere_season_leaf_build( const sere_season_leaf_options* options, sere_season_leaf* leaf, char* err,
 									size_t err_size );
-void sere_season_leaf_free( sere_season_leaf* leaf );
+void sere_season_leaf_destroy( sere_season_leaf* leaf );
 
 #ifdef __cplusplus
 }

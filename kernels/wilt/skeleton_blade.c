@@ -38,7 +38,7 @@ sere_status sere_leaf_skeleton_generate( double length, double width, int32_t fe
 	return SERE_OK;
 }
 
-void sere_skel_leaf_curves_free( sere_skel_leaf_curves* c )
+void sere_skel_leaf_curves_destroy( sere_skel_leaf_curves* c )
 {
 	free( c->outline );
 	free( c->mid );
@@ -191,7 +191,7 @@ static sere_status join_outline( double* sampled[3], const int32_t sampled_count
 	{
 		free( sampled[0] );
 		free( sampled[1] );
-		sere_skel_leaf_curves_free( c );
+		sere_skel_leaf_curves_destroy( c );
 		return SERE_ERR_MEMORY;
 	}
 	memcpy( c->outline, sampled[1], 2 * (size_t) nr * sizeof( double ) );
@@ -310,12 +310,12 @@ sere_status sere_skel_leaf_curves_build( const sere_leaf_skeleton* leaf, double 
 	}
 	if ( !outline_is_simple( c ) )
 	{
-		sere_skel_leaf_curves_free( c );
+		sere_skel_leaf_curves_destroy( c );
 		return sere_skel_report( check, SERE_SKELETON_SELF_INTERSECTING, -1, -1 );
 	}
 	if ( !midvein_is_inside( c ) )
 	{
-		sere_skel_leaf_curves_free( c );
+		sere_skel_leaf_curves_destroy( c );
 		return sere_skel_report( check, SERE_SKELETON_MIDVEIN_OUTSIDE, 2, -1 );
 	}
 	return sere_skel_report( check, SERE_SKELETON_OK, -1, -1 );
@@ -327,7 +327,7 @@ sere_status sere_leaf_skeleton_validate( const sere_leaf_skeleton* leaf, double 
 	sere_status status = sere_skel_leaf_curves_build( leaf, spacing, &c, check );
 	if ( status == SERE_OK )
 	{
-		sere_skel_leaf_curves_free( &c );
+		sere_skel_leaf_curves_destroy( &c );
 	}
 	return status;
 }
@@ -359,7 +359,7 @@ sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spac
 	double rows = floor( ( hi[1] - lo[1] ) / row ) + 2.0;
 	if ( columns * rows + b + c.mid_count > MAX_CURVE_POINTS )
 	{
-		sere_skel_leaf_curves_free( &c );
+		sere_skel_leaf_curves_destroy( &c );
 		return sere_skel_report( check, SERE_SKELETON_BAD_SPACING, -1, -1 );
 	}
 	int32_t capacity = (int32_t) ( columns * rows ) + b + c.mid_count;
@@ -371,7 +371,7 @@ sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spac
 		free( x );
 		free( y );
 		free( segments );
-		sere_skel_leaf_curves_free( &c );
+		sere_skel_leaf_curves_destroy( &c );
 		return SERE_ERR_MEMORY;
 	}
 	int32_t count = 0;
@@ -437,6 +437,6 @@ sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spac
 	free( x );
 	free( y );
 	free( segments );
-	sere_skel_leaf_curves_free( &c );
+	sere_skel_leaf_curves_destroy( &c );
 	return status;
 }

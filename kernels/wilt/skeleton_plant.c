@@ -115,7 +115,7 @@ static sere_status plant_alloc( sere_plant* p, int32_t leaf_count, int32_t joint
 	{
 		return SERE_ERR_MEMORY;
 	}
-	sere_status status = sere_skel_alloc( &p->joints, joints );
+	sere_status status = sere_skel_create( &p->joints, joints );
 	if ( status == SERE_OK )
 	{
 		status = sere_joint_frames_create( &p->frames, joints );

@@ -22,7 +22,7 @@ void sere_skeleton_destroy( sere_skeleton* skeleton )
 	memset( skeleton, 0, sizeof( *skeleton ) );
 }
 
-sere_status sere_skel_alloc( sere_skeleton* s, int32_t joint_count )
+sere_status sere_skel_create( sere_skeleton* s, int32_t joint_count )
 {
 	memset( s, 0, sizeof( *s ) );
 	size_t n = (size_t) sere_pad( joint_count > 0 ? joint_count : 1 );
@@ -103,7 +103,7 @@ static sere_status skeleton_order( const raw_joints* r, int32_t n, int32_t vein_
 			stack[size++] = children[k];
 		}
 	}
-	status = sere_skel_alloc( out, n );
+	status = sere_skel_create( out, n );
 	if ( status != SERE_OK )
 	{
 		goto done;
@@ -386,7 +386,7 @@ sere_status sere_skeleton_generate( const sere_leaf_skeleton* leaf, const sere_v
 	{
 		free( specs );
 		free( ends );
-		sere_skel_leaf_curves_free( &c );
+		sere_skel_leaf_curves_destroy( &c );
 		return SERE_ERR_MEMORY;
 	}
 	specs[0] = ( sere_vein_spec ){ -1, params->mid_segments, params->mid_bend, c.mid_count, c.mid };
@@ -425,7 +425,7 @@ sere_status sere_skeleton_generate( const sere_leaf_skeleton* leaf, const sere_v
 		{
 			free( specs );
 			free( ends );
-			sere_skel_leaf_curves_free( &c );
+			sere_skel_leaf_curves_destroy( &c );
 			return sere_skel_report( check, SERE_SKELETON_MIDVEIN_OUTSIDE, 2, -1 );
 		}
 		s[2] = s[0] + 0.9 * lambda * d[0];
@@ -435,6 +435,6 @@ sere_status sere_skeleton_generate( const sere_leaf_skeleton* leaf, const sere_v
 	status = sere_skeleton_create( specs, count, skeleton, check );
 	free( specs );
 	free( ends );
-	sere_skel_leaf_curves_free( &c );
+	sere_skel_leaf_curves_destroy( &c );
 	return status;
 }

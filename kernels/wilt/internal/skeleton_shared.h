@@ -75,14 +75,14 @@ double sere_skel_polyline_distance( const double* p, const double* poly, int32_t
 sere_skeleton_problem sere_skel_check_curve( const double* p, int32_t n, int32_t* point );
 
 /* Validates a leaf skeleton (Sec. 4.1) and samples its outline and midvein every `spacing`;
- * on success the caller frees c with sere_skel_leaf_curves_free. */
+ * on success the caller frees c with sere_skel_leaf_curves_destroy. */
 sere_status sere_skel_leaf_curves_build( const sere_leaf_skeleton* leaf, double spacing, sere_skel_leaf_curves* c,
 										 sere_skeleton_check* check );
 
-void sere_skel_leaf_curves_free( sere_skel_leaf_curves* c );
+void sere_skel_leaf_curves_destroy( sere_skel_leaf_curves* c );
 
 /* Arrays for joint_count joints (padded), zeroed struct on failure. */
-sere_status sere_skel_alloc( sere_skeleton* s, int32_t joint_count );
+sere_status sere_skel_create( sere_skeleton* s, int32_t joint_count );
 
 /* SERE_ERR_ARGUMENT or SERE_ERR_NONFINITE for wilt parameters out of range. */
 sere_status sere_skel_check_wilt_params( const sere_wilt_params* p );
