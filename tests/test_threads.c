@@ -96,18 +96,27 @@ Test( threads, every_object_takes_zero_to_the_limit )
 	cr_assert_eq( sere_joint_grid_create( p->x, p->y, p->z, n, &grid ), SERE_OK );
 	cr_assert_eq( sere_pierce_create( model.tri, f, n, p->x, p->y, p->z, NULL, &pierce ), SERE_OK );
 
-	expect_range( "pbd", pbd, set_sere_pbd_set_threads );
-	expect_range( "bvh", bvh, set_sere_bvh_set_threads );
-	expect_range( "collide", collide, set_sere_collide_set_threads );
-	expect_range( "cg", cg, set_sere_cg_set_threads );
-	expect_range( "sell", sell, set_sere_sell_set_threads );
-	expect_range( "sgs", sgs, set_sere_sgs_set_threads );
-	expect_range( "osmosis", osmosis, set_sere_osmosis_set_threads );
-	expect_range( "crossings", crossings, set_sere_crossings_set_threads );
-	expect_range( "massspring", ms, set_sere_massspring_set_threads );
-	expect_range( "leaf", sim, set_sere_leaf_set_threads );
-	expect_range( "joint grid", grid, set_sere_joint_grid_set_threads );
-	expect_range( "pierce", pierce, set_sere_pierce_set_threads );
+	const struct
+	{
+		const char* name;
+		void* object;
+		set_fn* set;
+	} setters[] = { { "pbd", pbd, set_sere_pbd_set_threads },
+					{ "bvh", bvh, set_sere_bvh_set_threads },
+					{ "collide", collide, set_sere_collide_set_threads },
+					{ "cg", cg, set_sere_cg_set_threads },
+					{ "sell", sell, set_sere_sell_set_threads },
+					{ "sgs", sgs, set_sere_sgs_set_threads },
+					{ "osmosis", osmosis, set_sere_osmosis_set_threads },
+					{ "crossings", crossings, set_sere_crossings_set_threads },
+					{ "massspring", ms, set_sere_massspring_set_threads },
+					{ "leaf", sim, set_sere_leaf_set_threads },
+					{ "joint grid", grid, set_sere_joint_grid_set_threads },
+					{ "pierce", pierce, set_sere_pierce_set_threads } };
+	for ( size_t k = 0; k < sizeof( setters ) / sizeof( setters[0] ); ++k )
+	{
+		expect_range( setters[k].name, setters[k].object, setters[k].set );
+	}
 
 	sere_pierce_destroy( pierce );
 	sere_joint_grid_destroy( grid );
