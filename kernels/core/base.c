@@ -78,6 +78,14 @@ void sere_free( void* memory )
 	free( memory );
 }
 
+void sere_free_all( void* const* arrays, size_t count )
+{
+	for ( size_t k = 0; k < count; ++k )
+	{
+		sere_free( arrays[k] );
+	}
+}
+
 bool sere_alloc_floats( float** const* arrays, int32_t array_count, size_t count )
 {
 	for ( int32_t k = 0; k < array_count; ++k )

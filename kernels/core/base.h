@@ -66,6 +66,9 @@ void sere_free( void* memory );
  * caller's to free either way. */
 bool sere_alloc_floats( float** const* arrays, int32_t array_count, size_t count );
 
+/* sere_free of each of the count arrays: the release of a structure of arrays. */
+void sere_free_all( void* const* arrays, size_t count );
+
 /* n rounded up to a multiple of SERE_PAD. */
 static inline int32_t sere_pad( int32_t n )
 {

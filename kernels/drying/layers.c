@@ -85,10 +85,7 @@ void sere_model_destroy( sere_model* model )
 					   p->M,		   p->m,		  p->m0,	  model->s.a, model->s.b,	   model->s.rest,
 					   model->s.rest0, model->s.kind, model->tri, model->h,	  model->tri_vein, model->boundary,
 					   model->vein,	   model->u,	  model->v,	  model->d };
-	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
-	{
-		sere_free( arrays[i] );
-	}
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	memset( model, 0, sizeof( *model ) );
 }
 

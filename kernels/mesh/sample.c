@@ -344,10 +344,8 @@ done:
 
 void sere_samples_destroy( sere_samples* samples )
 {
-	sere_free( samples->x );
-	sere_free( samples->y );
-	sere_free( samples->vein );
-	sere_free( samples->segments );
+	void* arrays[] = { samples->x, samples->y, samples->vein, samples->segments };
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	memset( samples, 0, sizeof( *samples ) );
 }
 

@@ -31,12 +31,8 @@ sere_status sere_tri_mesh_create( sere_tri_mesh* mesh, int32_t vertex_count, int
 
 void sere_tri_mesh_destroy( sere_tri_mesh* mesh )
 {
-	sere_free( mesh->x );
-	sere_free( mesh->y );
-	sere_free( mesh->z );
-	sere_free( mesh->u );
-	sere_free( mesh->v );
-	sere_free( mesh->tri );
+	void* arrays[] = { mesh->x, mesh->y, mesh->z, mesh->u, mesh->v, mesh->tri };
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	memset( mesh, 0, sizeof( *mesh ) );
 }
 

@@ -636,10 +636,7 @@ void sere_bvh_destroy( sere_bvh* bvh )
 					   bvh->lo_x,		   bvh->lo_y,		 bvh->lo_z,		  bvh->hi_x,		bvh->hi_y,
 					   bvh->hi_z,		   bvh->c_x,		 bvh->c_y,		  bvh->c_z,			bvh->order,
 					   bvh->stack,		   bvh->child_top };
-	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
-	{
-		sere_free( arrays[i] );
-	}
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	sere_free( bvh );
 }
 

@@ -306,13 +306,8 @@ void sere_cg_destroy( sere_cg_workspace* w )
 	{
 		return;
 	}
-	double* vectors[] = { w->x, w->b, w->r, w->u, w->w, w->p, w->s, w->inv_diag, w->t, w->z };
-	for ( size_t k = 0; k < sizeof( vectors ) / sizeof( vectors[0] ); ++k )
-	{
-		sere_free( vectors[k] );
-	}
-	sere_free( w->partial );
-	sere_free( w->chunk_delta );
+	void* arrays[] = { w->x, w->b, w->r, w->u, w->w, w->p, w->s, w->inv_diag, w->t, w->z, w->partial, w->chunk_delta };
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	free( w );
 }
 

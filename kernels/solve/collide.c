@@ -84,10 +84,7 @@ static void collide_free( sere_collide* c )
 					   c->push_count,		 c->cache_x,		   c->cache_y,		c->cache_z,
 					   c->cache_item,		 c->cache_target,	   c->cache_near,	c->cache_block_thread,
 					   c->cache_block_start, c->cache_block_count, c->cache_used,	c->edge_across };
-	for ( size_t i = 0; i < sizeof( arrays ) / sizeof( arrays[0] ); ++i )
-	{
-		sere_free( arrays[i] );
-	}
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 }
 
 /* (Re)allocates the arrays sized by the contact capacity; the old ones are kept on failure. */

@@ -28,14 +28,11 @@ void sere_plant_destroy( sere_plant* plant )
 	sere_skeleton_destroy( &plant->joints );
 	sere_joint_frames_destroy( &plant->frames );
 	sere_free( plant->joint );
-	float* arrays[] = { plant->ox, plant->oy, plant->oz, plant->x, plant->y,  plant->z,	 plant->rx,
-						plant->ry, plant->rz, plant->u,	 plant->v, plant->tx, plant->ty, plant->tz };
-	for ( size_t k = 0; k < sizeof( arrays ) / sizeof( arrays[0] ); ++k )
-	{
-		sere_free( arrays[k] );
-	}
-	sere_free( plant->tri );
-	sere_free( plant->leaf_stats );
+	void* arrays[] = {
+		plant->ox, plant->oy, plant->oz, plant->x,	plant->y,  plant->z,  plant->rx,  plant->ry,
+		plant->rz, plant->u,  plant->v,	 plant->tx, plant->ty, plant->tz, plant->tri, plant->leaf_stats
+	};
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	sere_pierce_destroy( plant->pierce );
 	free( plant );
 }

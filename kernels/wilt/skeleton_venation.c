@@ -11,14 +11,9 @@
 
 void sere_skeleton_destroy( sere_skeleton* skeleton )
 {
-	sere_free( skeleton->x );
-	sere_free( skeleton->y );
-	sere_free( skeleton->z );
-	sere_free( skeleton->parent );
-	sere_free( skeleton->end );
-	sere_free( skeleton->vein );
-	sere_free( skeleton->bend );
-	sere_free( skeleton->delay );
+	void* arrays[] = { skeleton->x,	  skeleton->y,	  skeleton->z,	  skeleton->parent,
+					   skeleton->end, skeleton->vein, skeleton->bend, skeleton->delay };
+	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	memset( skeleton, 0, sizeof( *skeleton ) );
 }
 
