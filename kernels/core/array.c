@@ -67,28 +67,16 @@ bool sere_array_indices_valid( const int32_t* index, int64_t count, int32_t boun
 	return true;
 }
 
-bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count )
-{
-	for ( int32_t i = 0; i < count; ++i )
-	{
-		for ( int32_t a = 0; a < array_count; ++a )
-		{
-			if ( !isfinite( arrays[a][i] ) )
-			{
-				return false;
-			}
-		}
-	}
-	return true;
-}
-
-bool sere_array_finite_xyz( const float* x, const float* y, const float* z, int32_t count, int32_t threads )
+bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count, int32_t threads )
 {
 	int bad = 0;
 #pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( | : bad )
 	for ( int32_t i = 0; i < count; ++i )
 	{
-		bad |= !( isfinite( x[i] ) && isfinite( y[i] ) && isfinite( z[i] ) );
+		for ( int32_t a = 0; a < array_count; ++a )
+		{
+			bad |= !isfinite( arrays[a][i] );
+		}
 	}
 	return bad == 0;
 }

@@ -32,11 +32,9 @@ void* sere_array_append( void* array, int32_t* count, int32_t* capacity, int32_t
  * its vertices. */
 bool sere_array_indices_valid( const int32_t* index, int64_t count, int32_t bound );
 
-/* Whether the first count entries of each of the array_count float arrays are finite. */
-bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count );
-
-/* Whether the first count points (x[i], y[i], z[i]) are finite, on `threads` threads (base.h). */
-bool sere_array_finite_xyz( const float* x, const float* y, const float* z, int32_t count, int32_t threads );
+/* Whether the first count entries of each of the array_count float arrays are finite, on
+ * `threads` threads (base.h). */
+bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count, int32_t threads );
 
 /* A sort key and the index of what it belongs to; value rides along unsorted. */
 typedef struct sere_sort_item

@@ -67,7 +67,7 @@ sere_status sere_measure_validate( const sere_shape_input* in )
 		return SERE_ERR_ARGUMENT;
 	}
 	const float* coordinates[] = { in->x, in->y, in->z, in->u, in->v };
-	return sere_array_finite( coordinates, 5, in->vertex_count ) ? SERE_OK : SERE_ERR_NONFINITE;
+	return sere_array_finite( coordinates, 5, in->vertex_count, in->threads ) ? SERE_OK : SERE_ERR_NONFINITE;
 }
 
 typedef struct edge_key

@@ -217,7 +217,7 @@ sere_status sere_subdivide( const sere_tri_mesh* in, int32_t iterations, float m
 		return SERE_ERR_ARGUMENT;
 	}
 	const float* coordinates[] = { in->x, in->y, in->z, in->u, in->v };
-	if ( !sere_array_finite( coordinates, 5, in->vertex_count ) )
+	if ( !sere_array_finite( coordinates, 5, in->vertex_count, 1 ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}

@@ -529,7 +529,7 @@ sere_status sere_bvh_build( sere_bvh* bvh, const float* x, const float* y, const
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( !sere_array_finite_xyz( x, y, z, bvh->vertex_count, bvh->threads ) )
+	if ( !sere_array_finite( ( const float* const[] ){ x, y, z }, 3, bvh->vertex_count, bvh->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}

@@ -445,7 +445,7 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( !sere_array_finite_xyz( x, y, z, vertex_count, grid->threads ) )
+	if ( !sere_array_finite( ( const float* const[] ){ x, y, z }, 3, vertex_count, grid->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}

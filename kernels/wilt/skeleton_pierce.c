@@ -476,7 +476,7 @@ sere_status sere_pierce_step( sere_pierce* p, const float* px, const float* py, 
 	}
 	st.rebuilt = rebuilt;
 	int32_t n = p->vertex_count, f = p->triangle_count;
-	if ( !sere_array_finite_xyz( x, y, z, n, p->threads ) )
+	if ( !sere_array_finite( ( const float* const[] ){ x, y, z }, 3, n, p->threads ) )
 	{
 		return SERE_ERR_NONFINITE;
 	}
