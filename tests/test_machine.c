@@ -546,4 +546,17 @@ Test( machine, table1_json_carries_the_machine, .timeout = 300 )
 	snprintf( expected, sizeof( expected ), "sere %s (commit ", sere_version() );
 	cr_expect_not_null( strstr( out, expected ), "%s", out );
 	free( out );
+
+	/* one leaf alone (for a profiler), with its sweeps and CG iterations a frame */
+	out = command_output( "table1 --json --frames 2 --threads 1 --leaf wisteria", &code );
+	cr_assert_eq( code, 0, "%s", out );
+	expect_valid_json( out );
+	cr_expect_not_null( strstr( out, "\"leaves\": [{\"leaf\": \"wisteria\"" ), "%s", out );
+	cr_expect_null( strstr( out, "maple" ), "%s", out );
+	const char* sweeps = strstr( out, "\"pbd_sweeps_per_frame\": " );
+	cr_assert_not_null( sweeps, "%s", out );
+	cr_expect_geq( atof( sweeps + strlen( "\"pbd_sweeps_per_frame\": " ) ), 1.0, "%s", out );
+	cr_expect_not_null( strstr( out, "\"cg_iterations_t_per_frame\": " ), "%s", out );
+	cr_expect_not_null( strstr( out, "\"cg_iterations_v_per_frame\": " ), "%s", out );
+	free( out );
 }

@@ -44,18 +44,19 @@ static void table1_print_head( int json, int bound, long long frames )
 	sere_machine_binding_text( &machine, binding, sizeof( binding ) );
 	printf( "ours: %s, %s, threads %s%s, sere %s (commit %s), %s\n\n", machine.cpu, machine.simd,
 			machine.bound ? "on cores " : "", binding, machine.version, machine.commit, machine.compiler );
-	printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %s\n", "leaf", "particles", "springs", "osmotic flow",
-			"dynamics", "collisions", "total", "ratio", "PBD cap hits" );
+	printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %6s | %11s | %s\n", "leaf", "particles", "springs",
+			"osmotic flow", "dynamics", "collisions", "total", "ratio", "sweeps", "CG it. T V", "PBD cap hits" );
 }
 
 /* One leaf's mean ms per frame over the run, and how often PBD hit its cap or stalled. */
 typedef struct table1_times
 {
 	double osmosis, dynamics, collisions, total;
+	double sweeps, cg_t, cg_v; /* per frame: PBD sweeps, CG iterations of each layer */
 	long long cap_hits, stalls;
 } table1_times;
 
-static void table1_print_row( int json, int k, const table1_row* row, const sere_model* model,
+static void table1_print_row( int json, int comma, const table1_row* row, const sere_model* model,
 							  const sere_sim_params* params, const table1_times* t, long long frames, int bound )
 {
 	if ( json )
@@ -63,18 +64,20 @@ static void table1_print_row( int json, int k, const table1_row* row, const sere
 		printf( "%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
 				"\"collisions_ms\": %.4f, \"total_ms\": %.4f, \"paper_osmosis_ms\": %.2f, \"paper_dynamics_ms\": %.2f, "
 				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
-				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, \"frames\": "
-				"%lld, "
-				"\"threads\": %d}",
-				k ? ", " : "", row->leaf, model->p.count, model->s.count, t->osmosis, t->dynamics, t->collisions,
+				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, "
+				"\"pbd_sweeps_per_frame\": %.2f, \"cg_iterations_t_per_frame\": %.2f, "
+				"\"cg_iterations_v_per_frame\": %.2f, \"frames\": %lld, \"threads\": %d}",
+				comma ? ", " : "", row->leaf, model->p.count, model->s.count, t->osmosis, t->dynamics, t->collisions,
 				t->total, row->osmosis, row->dynamics, row->collisions, row->total, params->leaf.pbd.tolerance,
 				params->leaf.pbd.max_iterations, t->cap_hits, params->leaf.pbd.stall, t->stalls,
-				params->leaf.pbd.compliance, frames, bound );
+				params->leaf.pbd.compliance, t->sweeps, t->cg_t, t->cg_v, frames, bound );
 		return;
 	}
-	printf( "%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %lld/%lld",
+	printf( "%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %6.1f | "
+			"%5.1f %5.1f | %lld/%lld",
 			row->leaf, model->p.count, model->s.count, t->osmosis, row->osmosis, t->dynamics, row->dynamics,
-			t->collisions, row->collisions, t->total, row->total, row->total / t->total, t->cap_hits, frames );
+			t->collisions, row->collisions, t->total, row->total, row->total / t->total, t->sweeps, t->cg_t, t->cg_v,
+			t->cap_hits, frames );
 	if ( params->leaf.pbd.stall > 0.0f )
 	{
 		printf( ", stalled %lld/%lld", t->stalls, frames );
@@ -84,7 +87,7 @@ static void table1_print_row( int json, int k, const table1_row* row, const sere
 
 /* Builds row k's leaf at its Table 1 counts, dries it for `frames` and prints its row; 1 on an
  * error (already reported). */
-static int table1_leaf( int k, const sere_option_list* sets, long long frames, int json, int bound )
+static int table1_leaf( int k, int comma, const sere_option_list* sets, long long frames, int json, int bound )
 {
 	const table1_row* row = rows + k;
 	char name[128];
@@ -110,6 +113,7 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 		status = sere_leaf_step( sim, &params.leaf, &stats );
 		t.osmosis += stats.osmosis_ms, t.dynamics += stats.dynamics_ms;
 		t.collisions += stats.collisions_ms, t.total += stats.total_ms;
+		t.sweeps += stats.pbd_iterations, t.cg_t += stats.cg_iterations_t, t.cg_v += stats.cg_iterations_v;
 		t.cap_hits += stats.pbd_hit_cap;
 		t.stalls += stats.pbd_stalled;
 	}
@@ -119,7 +123,8 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 		return 1;
 	}
 	t.osmosis /= frames, t.dynamics /= frames, t.collisions /= frames, t.total /= frames;
-	table1_print_row( json, k, row, &model, &params, &t, frames, bound );
+	t.sweeps /= frames, t.cg_t /= frames, t.cg_v /= frames;
+	table1_print_row( json, comma, row, &model, &params, &t, frames, bound );
 	sere_leaf_destroy( sim );
 	sere_model_destroy( &model );
 	return 0;
@@ -136,7 +141,8 @@ static void table1_print_tail( int json, const sere_option_list* sets )
 	printf( "\neach cell: ours / paper. A frame's projection stops when its residual is below the preset's\n"
 			"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
 			"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
-			"paper's Table 1)." );
+			"paper's Table 1). sweeps: PBD sweeps a frame; CG it.: the osmosis CG's iterations a frame on the\n"
+			"triangle (T) and Voronoi (V) layer." );
 	if ( sets->count > 0 )
 	{
 		printf( " Overrides:" );
@@ -150,12 +156,14 @@ static void table1_print_tail( int json, const sere_option_list* sets )
 
 static void table1_help( void )
 {
-	printf( "usage: sere table1 [--frames N] [--threads T] [--set key=value]... [--json]\n\n"
+	printf( "usage: sere table1 [--frames N] [--threads T] [--leaf all|maple|plane|wisteria] [--set key=value]...\n"
+			"                   [--json]\n\n"
 			"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
 			"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
 			"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
 			"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
-			"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop.\n\n"
+			"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop. --leaf runs one of\n"
+			"the three alone (for a profiler).\n\n"
 			"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
 			"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
 }
@@ -163,10 +171,12 @@ static void table1_help( void )
 int sere_cmd_table1( int argc, char** argv )
 {
 	long long frames = 20, threads = 0;
-	int json = 0;
+	int json = 0, leaf = 0;
 	sere_option_list sets = { .count = 0 };
+	static const char* const leaves[] = { "all", "maple", "plane", "wisteria", NULL };
 	const sere_option options[] = {
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
+		{ "--leaf", SERE_OPTION_CHOICE, &leaf, 0, 0, leaves },
 		sere_option_threads( &threads ),
 		sere_option_sets( &sets ),
 		sere_option_json( &json ),
@@ -179,9 +189,13 @@ int sere_cmd_table1( int argc, char** argv )
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
 	table1_print_head( json, bound, frames );
-	for ( int k = 0; k < 3; ++k )
+	for ( int k = 0, printed = 0; k < 3; ++k )
 	{
-		if ( table1_leaf( k, &sets, frames, json, bound ) != 0 )
+		if ( leaf != 0 && leaf != k + 1 )
+		{
+			continue;
+		}
+		if ( table1_leaf( k, printed++, &sets, frames, json, bound ) != 0 )
 		{
 			return 1;
 		}
