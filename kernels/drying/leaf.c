@@ -404,15 +404,16 @@ static sere_status set_weights( sere_leaf_sim* sim, const sere_leaf_params* para
 	return status;
 }
 
-/* Lines 17–22 as one XPBD step: project, meet the ground, and go on with the same multipliers
- * (warm) while the ground had to push more than the slack; converged when the residual and the
- * ground are both met before the cap. The paper's mode projects once (with its stall rule). */
+/* Lines 17–22 as one XPBD step: the projection meets the ground itself (sere_pbd_params.ground:
+ * when the sweeps converge it puts the particles below the ground onto it and goes on with the
+ * same multipliers while that pushed more than the slack), so one call is the step; converged
+ * when the residual and the ground are both met before the cap. The paper's mode projects once
+ * (with its stall rule) and then meets the ground. */
 static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, const sere_pbd_params* pbd,
 							sere_leaf_stats* stats )
 {
 	sere_particles* p = &sim->model->p;
 	const int ground = isfinite( params->ground );
-	const float slack = pbd->tolerance * sim->mean_rest * sim->thickness_scale;
 	sere_pbd_report report = { 0, 0.0f, 0 };
 	if ( pbd->compliance == 0.0f )
 	{
@@ -429,28 +430,22 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		return status;
 	}
 	sere_pbd_params step = *pbd;
-	int32_t left = pbd->max_iterations;
 	step.warm = 0;
-	while ( left > 0 )
+	step.ground = ground ? params->ground : -INFINITY;
+	step.ground_slack = pbd->tolerance * sim->mean_rest * sim->thickness_scale;
+	sere_status status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
+	if ( status != SERE_OK )
 	{
-		step.max_iterations = left;
-		sere_status status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
-		if ( status != SERE_OK )
-		{
-			return status;
-		}
-		left -= report.iterations;
-		stats->pbd_iterations += report.iterations;
-		float pushed = ground ? ground_contact( p->pz, sim->push, p->count, params->ground, sim->threads ) : 0.0f;
-		if ( !report.hit_cap && pushed <= slack )
-		{
-			stats->pbd_converged = 1;
-			break;
-		}
-		step.warm = 1;
+		return status;
 	}
+	if ( ground )
+	{
+		sere_pbd_ground_push( sim->pbd, sim->push );
+	}
+	stats->pbd_iterations = report.iterations;
 	stats->residual = report.max_strain;
-	stats->pbd_hit_cap = !stats->pbd_converged;
+	stats->pbd_converged = !report.hit_cap;
+	stats->pbd_hit_cap = report.hit_cap;
 	return SERE_OK;
 }
 

@@ -58,6 +58,8 @@ sere_pbd_params sere_pbd_params_default( void )
 		.chebyshev_rho = 0.0f,
 		.chebyshev_delay = 10,
 		.stall = 0.0f,
+		.ground = -INFINITY,
+		.ground_slack = 0.0f,
 	};
 	return params;
 }
@@ -119,6 +121,7 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->band_start );
 	sere_free( pbd->packed[0] );
 	sere_free( pbd->packed[1] );
+	sere_free( pbd->push );
 	sere_free( pbd->history[0] );
 	sere_free( pbd->history[1] );
 	sere_free( pbd->lambda_history[0] );
@@ -647,8 +650,9 @@ typedef struct solve_setup
 	float k, alpha, omega, tolerance;
 	int32_t max_iterations;
 	int xpbd, warm;
-	float rho;	   /* Chebyshev ρ, 0: off */
-	int32_t delay; /* Chebyshev: plain sweeps before the first extrapolation */
+	float ground, slack; /* the ground plane z ≥ ground (−∞: none) and the push a converged round may leave */
+	float rho;			 /* Chebyshev ρ, 0: off */
+	int32_t delay;		 /* Chebyshev: plain sweeps before the first extrapolation */
 } solve_setup;
 
 typedef struct solve_result
@@ -704,16 +708,44 @@ static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t
 	barrier_wait( pbd->barrier, threads );
 }
 
-/* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. */
+/* The ground between rounds: thread t's share of the particles below z = ground put onto it,
+ * each push added to the particle's total; then the largest push of all shares, combined. */
+static float ground_pass( sere_pbd* pbd, float ground, int t, int threads, int* parity )
+{
+	int32_t first, last;
+	share( pbd->particle_count, t, threads, &first, &last );
+	float* packed = pbd->packed[0];
+	float largest = 0.0f;
+	for ( int32_t s = first; s < last; ++s )
+	{
+		float depth = ground - packed[4 * s + 2];
+		depth = depth > 0.0f ? depth : 0.0f;
+		packed[4 * s + 2] += depth;
+		pbd->push[s] += depth;
+		largest = depth > largest ? depth : largest;
+	}
+	/* as run_pass does: the counters of the pass after the exchange start from zero */
+	atomic_store_explicit( &pbd->counters[( 1 - *parity ) * MAX_THREADS + t].value, 0, memory_order_relaxed );
+	int32_t none = 0;
+	exchange( pbd, t, threads, parity, &largest, &none );
+	return largest;
+}
+
+/* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. With a
+ * ground, a converged round is followed by the ground pass, and the sweeps go on from the same
+ * multipliers (a new round, its Chebyshev sequence restarted) until a round's ground pass moves
+ * no particle by more than the slack. */
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
 	solve_result result = { 0, 0, 0.0f, 0 };
 	const block_mode mode = setup->kind == SOLVER_TOUCH ? MODE_TOUCH : MODE_GAUSS_SEIDEL;
+	const int ground = setup->ground > -INFINITY;
 	/* Chebyshev weights (Wang 2015), the same sequence on every thread. */
 	const double rho2 = (double) setup->rho * (double) setup->rho;
 	double omega = 1.0;
 	int older = 0;
+	int32_t round_start = 0;
 	while ( result.iterations < setup->max_iterations )
 	{
 		float worst = 0.0f;
@@ -732,20 +764,35 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 			run_pass( pbd, ctx, PASS_ALL, *parity, 0, MODE_MEASURE, setup->xpbd, t, threads, &worst, &flags );
 			exchange( pbd, t, threads, parity, &worst, &flags );
 			result.flags = flags;
-			if ( flags != 0 || worst < setup->tolerance )
+			if ( flags != 0 )
 			{
-				result.strain = worst, result.converged = flags == 0;
 				break;
 			}
+			if ( worst < setup->tolerance )
+			{
+				result.strain = worst;
+				if ( !ground || ground_pass( pbd, setup->ground, t, threads, parity ) <= setup->slack )
+				{
+					result.converged = 1;
+					break;
+				}
+				round_start = result.iterations, older = 0;
+				continue;
+			}
 		}
+		const int32_t k = result.iterations - round_start;
 		if ( setup->rho > 0.0f && result.iterations < setup->max_iterations )
 		{
-			const int32_t k = result.iterations;
 			omega = k <= setup->delay		? 1.0
 					: k == setup->delay + 1 ? 2.0 / ( 2.0 - rho2 )
 											: 4.0 / ( 4.0 - rho2 * omega );
 			extrapolate( pbd, (float) omega, setup->xpbd, &older, t, threads );
 		}
+	}
+	/* At the cap the returned positions meet the ground too, unless the last round just did. */
+	if ( ground && !result.converged && result.flags == 0 && round_start != result.iterations )
+	{
+		ground_pass( pbd, setup->ground, t, threads, parity );
 	}
 	return result;
 }
@@ -809,6 +856,11 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 			share( pbd->lanes, t, threads, &first, &last );
 			memset( pbd->lambda + first, 0, sizeof( float ) * (size_t) ( last - first ) );
 		}
+		{
+			int32_t first, last;
+			share( pbd->particle_count, t, threads, &first, &last );
+			memset( pbd->push + first, 0, sizeof( float ) * (size_t) ( last - first ) );
+		}
 		/* Work lists from their start; no item projected yet in this call. The exchange below
 		 * publishes both before any pass. */
 		atomic_store_explicit( &pbd->counters[t].value, 0, memory_order_relaxed );
@@ -849,7 +901,9 @@ static sere_status check_call( const sere_pbd* pbd, const float* px, const float
 	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || params == NULL || report == NULL ||
 		 !( params->stiffness >= 0.0f && params->stiffness <= 1.0f ) || !( params->tolerance > 0.0f ) ||
 		 params->max_iterations < 1 || !( params->compliance >= 0.0f && params->compliance <= FLT_MAX ) ||
-		 !( params->chebyshev_rho >= 0.0f && params->chebyshev_rho < 1.0f ) || params->chebyshev_delay < 2 )
+		 !( params->chebyshev_rho >= 0.0f && params->chebyshev_rho < 1.0f ) || params->chebyshev_delay < 2 ||
+		 isnan( params->ground ) || params->ground == INFINITY ||
+		 !( params->ground_slack >= 0.0f && params->ground_slack <= FLT_MAX ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -875,6 +929,8 @@ static solve_setup setup_of( const sere_pbd_params* params, solver kind )
 		.max_iterations = params->max_iterations,
 		.xpbd = params->compliance > 0.0f,
 		.warm = params->warm,
+		.ground = params->ground,
+		.slack = params->ground_slack,
 		.rho = params->chebyshev_rho,
 		.delay = params->chebyshev_delay,
 	};
@@ -907,7 +963,7 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 		return status;
 	}
 	if ( !( params->relaxation > 0.0f && params->relaxation < 2.0f ) || params->linear_stiffness ||
-		 params->chebyshev_rho > 0.0f )
+		 params->chebyshev_rho > 0.0f || params->ground > -INFINITY )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -921,9 +977,27 @@ sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* p
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	solve_setup setup = { .kind = SOLVER_TOUCH, .k = 1.0f, .omega = 1.0f, .tolerance = 1.0f, .max_iterations = sweeps };
+	solve_setup setup = {
+		.kind = SOLVER_TOUCH, .k = 1.0f, .omega = 1.0f, .tolerance = 1.0f, .max_iterations = sweeps, .ground = -INFINITY
+	};
 	sere_pbd_report report;
 	return solve( pbd, px, py, pz, inv_m, &setup, &report );
+}
+
+sere_status sere_pbd_ground_push( const sere_pbd* pbd, float* push )
+{
+	if ( pbd == NULL || push == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = pbd->particle_count;
+	const int32_t threads = sere_team_for( pbd->thread_count );
+#pragma omp parallel for num_threads( threads ) schedule( static )
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		push[i] += pbd->push[pbd->slot[i]];
+	}
+	return SERE_OK;
 }
 
 sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m )

@@ -42,6 +42,13 @@ typedef struct sere_pbd_params
 	 * lowered max |C/l| by less than the fraction s: once the shrunk layers disagree the hard
 	 * constraints have no solution and the residual has a floor above λ_C. */
 	float stall;
+	/* A ground plane z ≥ ground (−INFINITY, the default: none). When the sweeps converge, the
+	 * particles below it are put onto it; if that moved one by more than ground_slack, the
+	 * sweeps go on from the same multipliers (the step continues) until the ground holds too,
+	 * within the cap. At the cap the ground is put under the returned positions once more.
+	 * sere_pbd_ground_push reports how far each particle was pushed. Gauss–Seidel only. */
+	float ground;
+	float ground_slack;
 } sere_pbd_params;
 
 /* Sweeps per stall check of sere_pbd_params.stall. */
@@ -155,6 +162,10 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 /* One sweep of sere_pbd_project's schedule, with the same loads and stores of both constraint
  * ends, but the arithmetic replaced by a copy: the memory floor of a sweep, for benchmarks.
  * Leaves the positions bitwise unchanged. */
+/* Adds to push[i] how far the ground (sere_pbd_params.ground) pushed particle i up during the
+ * last projection, summed over its sweeps. */
+sere_status sere_pbd_ground_push( const sere_pbd* pbd, float* push );
+
 sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m );
 
 /* sere_pbd_touch with `sweeps` sweeps in one call: the floor of a sere_pbd_project call that

@@ -63,6 +63,7 @@ struct sere_pbd
 	float* lambda;			   /* per lane, XPBD multipliers */
 	float* weight;			   /* per lane, XPBD compliance weight (α_j = α · weight_j); padding keeps 1 */
 	float* factor;			   /* per lane, Jacobi: the f of the block below */
+	float* push;			   /* per slot: how far the ground pushed the particle up in the last call */
 	int32_t* slot;			   /* particle → slot (its place in breadth-first order) */
 	int32_t* particle;		   /* slot → particle, for slots < particle_count */
 	int32_t* band_start;	   /* bands + 1 slot offsets, multiples of 4 but the last (particle_count) */

@@ -1,0 +1,209 @@
+/* The ground plane inside the projection (sere_pbd_params.ground): the same bits as the loop a
+ * caller would write around it (project, put the particles below the ground onto it, go on
+ * with the same multipliers while that pushed more than the slack), at any thread count. */
+#include "solve/pbd.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum
+{
+	NX = 48,
+	NY = 32,
+	N = NX * NY,
+	MAX_SPRINGS = 4 * N
+};
+
+/* A sheet lying just above the ground with its springs shortened by 3% in a band across it,
+ * so that the step pulls it together and pushes parts of it under the ground; x, y, z are the
+ * predicted positions (the whole sheet moved down, as gravity would). */
+typedef struct ground_sheet
+{
+	float x[N], y[N], z[N], inv_m[N];
+	int32_t a[MAX_SPRINGS], b[MAX_SPRINGS];
+	float rest[MAX_SPRINGS];
+	int32_t count;
+} ground_sheet;
+
+static void sheet_spring( ground_sheet* s, int32_t i, int32_t j )
+{
+	float dx = s->x[j] - s->x[i], dy = s->y[j] - s->y[i], dz = s->z[j] - s->z[i];
+	float length = sqrtf( dx * dx + dy * dy + dz * dz );
+	float band = fabsf( 0.5f * ( s->x[i] + s->x[j] ) - 0.5f * NX * 0.02f ) < 0.15f ? 0.97f : 1.0f;
+	s->a[s->count] = i, s->b[s->count] = j, s->rest[s->count] = band * length;
+	s->count += 1;
+}
+
+static void sheet_make( ground_sheet* s )
+{
+	memset( s, 0, sizeof( *s ) );
+	for ( int32_t j = 0; j < NY; ++j )
+	{
+		for ( int32_t i = 0; i < NX; ++i )
+		{
+			int32_t k = j * NX + i;
+			s->x[k] = 0.02f * (float) i, s->y[k] = 0.02f * (float) j;
+			/* a gentle wave, so the sheet bends one way or the other where it is squeezed */
+			s->z[k] = 0.002f * sinf( 0.4f * (float) i ) * cosf( 0.3f * (float) j ) - 0.001f;
+			s->inv_m[k] = 1.0f + (float) ( k % 3 );
+		}
+	}
+	for ( int32_t j = 0; j < NY; ++j )
+	{
+		for ( int32_t i = 0; i < NX; ++i )
+		{
+			int32_t k = j * NX + i;
+			if ( i + 1 < NX )
+			{
+				sheet_spring( s, k, k + 1 );
+			}
+			if ( j + 1 < NY )
+			{
+				sheet_spring( s, k, k + NX );
+			}
+			if ( i + 1 < NX && j + 1 < NY )
+			{
+				sheet_spring( s, k, k + NX + 1 );
+				sheet_spring( s, k + 1, k + NX );
+			}
+		}
+	}
+}
+
+static sere_pbd_params sheet_params( void )
+{
+	sere_pbd_params params = sere_pbd_params_default();
+	params.compliance = 1e-6f;
+	params.dt = 0.002f;
+	params.tolerance = 1e-3f;
+	params.max_iterations = 400;
+	return params;
+}
+
+static const float GROUND = 0.0f, SLACK = 1e-6f;
+
+/* The caller's loop the kernel replaces; returns the rounds (projection calls) it took. */
+static int32_t loop_step( ground_sheet* s, sere_pbd* pbd, float* push, sere_pbd_report* total )
+{
+	sere_pbd_params params = sheet_params();
+	int32_t left = params.max_iterations, rounds = 0;
+	memset( total, 0, sizeof( *total ) );
+	while ( left > 0 )
+	{
+		params.max_iterations = left;
+		sere_pbd_report report;
+		cr_assert_eq( sere_pbd_project( pbd, s->x, s->y, s->z, s->inv_m, &params, &report ), SERE_OK );
+		rounds += 1, left -= report.iterations;
+		total->iterations += report.iterations, total->max_strain = report.max_strain;
+		float pushed = 0.0f;
+		for ( int32_t i = 0; i < N; ++i )
+		{
+			float depth = fmaxf( GROUND - s->z[i], 0.0f );
+			s->z[i] += depth, push[i] += depth;
+			pushed = fmaxf( pushed, depth );
+		}
+		total->hit_cap = report.hit_cap || pushed > SLACK;
+		if ( !report.hit_cap && pushed <= SLACK )
+		{
+			break;
+		}
+		params.warm = 1;
+	}
+	return rounds;
+}
+
+static void kernel_step( ground_sheet* s, sere_pbd* pbd, float* push, sere_pbd_report* report, int32_t cap )
+{
+	sere_pbd_params params = sheet_params();
+	params.ground = GROUND, params.ground_slack = SLACK;
+	params.max_iterations = cap;
+	cr_assert_eq( sere_pbd_project( pbd, s->x, s->y, s->z, s->inv_m, &params, report ), SERE_OK );
+	cr_assert_eq( sere_pbd_ground_push( pbd, push ), SERE_OK );
+}
+
+static sere_pbd* sheet_solver( const ground_sheet* s, int32_t threads )
+{
+	sere_pbd* pbd = NULL;
+	cr_assert_eq( sere_pbd_create( s->a, s->b, s->count, N, &pbd ), SERE_OK );
+	cr_assert_eq( sere_pbd_set_rest( pbd, s->rest ), SERE_OK );
+	cr_assert_eq( sere_pbd_set_threads( pbd, threads ), SERE_OK );
+	return pbd;
+}
+
+Test( pbd_ground, the_same_bits_as_the_loop_around_the_projection )
+{
+	static ground_sheet loop, inside;
+	static float push_loop[N], push_inside[N];
+	sheet_make( &loop );
+	sere_pbd* pbd = sheet_solver( &loop, 1 );
+	sere_pbd_report by_loop, by_kernel;
+	int32_t rounds = loop_step( &loop, pbd, push_loop, &by_loop );
+	sere_pbd_destroy( pbd );
+	/* the case the kernel's rounds exist for: the ground pushed back after a converged round */
+	cr_assert_geq( rounds, 2, "%d rounds, %d sweeps, cap %d, strain %g", rounds, by_loop.iterations, by_loop.hit_cap,
+				   by_loop.max_strain );
+	cr_assert( !by_loop.hit_cap, "the loop reached the cap (%d sweeps)", by_loop.iterations );
+	for ( int32_t threads = 1; threads <= 3; ++threads )
+	{
+		sheet_make( &inside );
+		memset( push_inside, 0, sizeof( push_inside ) );
+		pbd = sheet_solver( &inside, threads );
+		kernel_step( &inside, pbd, push_inside, &by_kernel, sheet_params().max_iterations );
+		sere_pbd_destroy( pbd );
+		cr_expect_eq( by_kernel.iterations, by_loop.iterations, "%d threads", threads );
+		cr_expect_eq( by_kernel.hit_cap, 0, "%d threads", threads );
+		cr_expect_eq( memcmp( &by_kernel.max_strain, &by_loop.max_strain, sizeof( float ) ), 0 );
+		cr_expect_eq( memcmp( inside.x, loop.x, sizeof( loop.x ) ), 0, "%d threads: x", threads );
+		cr_expect_eq( memcmp( inside.y, loop.y, sizeof( loop.y ) ), 0, "%d threads: y", threads );
+		cr_expect_eq( memcmp( inside.z, loop.z, sizeof( loop.z ) ), 0, "%d threads: z", threads );
+		cr_expect_eq( memcmp( push_inside, push_loop, sizeof( push_loop ) ), 0, "%d threads: push", threads );
+	}
+}
+
+Test( pbd_ground, at_the_cap_the_positions_still_meet_the_ground )
+{
+	static ground_sheet s;
+	static float push[N];
+	sheet_make( &s );
+	sere_pbd* pbd = sheet_solver( &s, 0 );
+	sere_pbd_report report;
+	kernel_step( &s, pbd, push, &report, 3 );
+	sere_pbd_destroy( pbd );
+	cr_expect_eq( report.iterations, 3 );
+	cr_expect( report.hit_cap );
+	int32_t below = 0, pushed = 0;
+	for ( int32_t i = 0; i < N; ++i )
+	{
+		below += s.z[i] < GROUND;
+		pushed += push[i] > 0.0f;
+	}
+	cr_expect_eq( below, 0, "%d particles under the ground", below );
+	cr_expect_gt( pushed, 0, "the ground pushed nothing: the test does not reach it" );
+}
+
+Test( pbd_ground, bad_grounds_are_refused_and_leave_the_positions )
+{
+	static ground_sheet s, before;
+	sheet_make( &s );
+	before = s;
+	sere_pbd* pbd = sheet_solver( &s, 1 );
+	sere_pbd_report report;
+	const float grounds[] = { NAN, INFINITY, 0.0f, 0.0f };
+	const float slacks[] = { 0.0f, 0.0f, -1.0f, NAN };
+	for ( int k = 0; k < 4; ++k )
+	{
+		sere_pbd_params params = sheet_params();
+		params.ground = grounds[k], params.ground_slack = slacks[k];
+		cr_expect_eq( sere_pbd_project( pbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_ERR_ARGUMENT, "case %d",
+					  k );
+	}
+	sere_pbd_params params = sheet_params();
+	params.ground = GROUND;
+	cr_expect_eq( sere_pbd_project_jacobi( pbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_pbd_ground_push( pbd, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( memcmp( s.z, before.z, sizeof( s.z ) ), 0 );
+	sere_pbd_destroy( pbd );
+}
