@@ -192,6 +192,86 @@ void BM_PCG( benchmark::State& state )
 	sere_sgs_destroy( sgs );
 }
 
+// The Jacobi PCG's floor: the memory traffic of our solve's iterations with no multiplications
+// and no sums. Per iteration, as sere_cg_solve's round: one pass over the positions reading the
+// seven vectors it reads (u, p, w, s, x, r, D^-1) and writing the five it writes, then the product
+// over the SELL layout (values, columns, u gathered four lanes at a time as the kernel gathers
+// them) storing w; each combination is one add where the solve does its multiply-adds, and an
+// OpenMP barrier after each pass as in the solve. It runs as many iterations as our solve of the
+// same system takes. Args: system, threads.
+void BM_PCGFloor( benchmark::State& state )
+{
+	const int threads = static_cast<int>( state.range( 1 ) );
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sell* sell = nullptr;
+	sere_cg_workspace* w = nullptr;
+	if ( sere_sell_create( a, SERE_SELL_SIGMA, &sell ) != SERE_OK || sere_cg_create( a->rows, &w ) != SERE_OK )
+	{
+		state.SkipWithError( "layout failed" );
+		return;
+	}
+	std::vector<double> x0( a->rows, 0.0 );
+	sere_cg_result result{};
+	sere_cg_solve( w, sell, s.b.data(), x0.data(), 1e-8, 10000, &result );
+	typedef double quad __attribute__( ( vector_size( 4 * sizeof( double ) ) ) );
+	const int32_t np = sell->chunks * SERE_SELL_C;
+	// aligned as the workspace's vectors (sere_alloc): the product stores whole 4-lane vectors
+	double* vectors[7];
+	for ( double*& v : vectors )
+	{
+		v = static_cast<double*>( sere_alloc( sizeof( double ) * static_cast<size_t>( np ) ) );
+		std::fill( v, v + np, 1.0 );
+	}
+	double* __restrict u = vectors[0], * __restrict p = vectors[1], * __restrict wv = vectors[2];
+	double* __restrict sv = vectors[3], * __restrict xv = vectors[4], * __restrict r = vectors[5];
+	const double* __restrict d = vectors[6];
+	const int32_t* col = sell->local_col;
+	const double* val = sell->val;
+	const int32_t chunks = sell->chunks;
+	for ( auto _ : state )
+	{
+#pragma omp parallel num_threads( threads )
+		for ( int32_t it = 0; it < result.iterations; ++it )
+		{
+#pragma omp for simd schedule( static )
+			for ( int32_t i = 0; i < np; ++i )
+			{
+				p[i] = u[i] + p[i];
+				sv[i] = wv[i] + sv[i];
+				xv[i] = xv[i] + p[i];
+				r[i] = r[i] + sv[i];
+				u[i] = d[i] + r[i];
+			}
+#pragma omp for schedule( static )
+			for ( int32_t c = 0; c < chunks; ++c )
+			{
+				quad lo = { 0.0 }, hi = { 0.0 };
+				for ( int32_t q = sell->chunk_ptr[c]; q < sell->chunk_ptr[c + 1]; q += SERE_SELL_C )
+				{
+					const int32_t* k = col + q;
+					lo += *reinterpret_cast<const quad*>( val + q ) + quad{ u[k[0]], u[k[1]], u[k[2]], u[k[3]] };
+					hi += *reinterpret_cast<const quad*>( val + q + 4 ) + quad{ u[k[4]], u[k[5]], u[k[6]], u[k[7]] };
+				}
+				*reinterpret_cast<quad*>( wv + c * SERE_SELL_C ) = lo;
+				*reinterpret_cast<quad*>( wv + c * SERE_SELL_C + 4 ) = hi;
+			}
+		}
+		benchmark::DoNotOptimize( u );
+		benchmark::ClobberMemory();
+	}
+	state.counters["iterations"] = result.iterations;
+	state.counters["GB/s"] = benchmark::Counter( ( 12.0 * sell->chunk_ptr[chunks] + 8.0 * 13 * np ) *
+													 result.iterations * state.iterations() * 1e-9,
+												 benchmark::Counter::kIsRate );
+	for ( double* v : vectors )
+	{
+		sere_free( v );
+	}
+	sere_cg_destroy( w );
+	sere_sell_destroy( sell );
+}
+
 void BM_EigenCG( benchmark::State& state )
 {
 	Eigen::setNbThreads( static_cast<int>( state.range( 1 ) ) );
@@ -342,6 +422,11 @@ BENCHMARK( BM_SellUpdate )->ArgNames( { "layer", "threads" } )->ArgsProduct( { {
 BENCHMARK( BM_PCG )
 	->ArgNames( { "system", "threads", "sgs" } )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_PCGFloor )
+	->ArgNames( { "system", "threads" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_EigenCG )
