@@ -984,22 +984,6 @@ sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* p
 	return solve( pbd, px, py, pz, inv_m, &setup, &report );
 }
 
-sere_status sere_pbd_ground_push( const sere_pbd* pbd, float* push )
-{
-	if ( pbd == NULL || push == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	const int32_t n = pbd->particle_count;
-	const int32_t threads = sere_team_for( pbd->thread_count );
-#pragma omp parallel for num_threads( threads ) schedule( static )
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		push[i] += pbd->push[pbd->slot[i]];
-	}
-	return SERE_OK;
-}
-
 sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m )
 {
 	return sere_pbd_touch_sweeps( pbd, px, py, pz, inv_m, 1 );

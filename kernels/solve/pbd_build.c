@@ -389,6 +389,22 @@ sere_status sere_pbd_set_rest( sere_pbd* pbd, const float* rest )
 	return bad ? SERE_ERR_GEOMETRY : SERE_OK;
 }
 
+sere_status sere_pbd_ground_push( const sere_pbd* pbd, float* push )
+{
+	if ( pbd == NULL || push == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t n = pbd->particle_count;
+	const int32_t threads = sere_team_for( pbd->thread_count );
+#pragma omp parallel for num_threads( threads ) schedule( static )
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		push[i] += pbd->push[pbd->slot[i]];
+	}
+	return SERE_OK;
+}
+
 sere_status sere_pbd_set_compliance_weights( sere_pbd* pbd, const float* weight )
 {
 	if ( pbd == NULL )
