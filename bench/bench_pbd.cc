@@ -125,18 +125,13 @@ void BM_PBDColored( benchmark::State& state )
 // divides twice where PBD divides once; its floor is still BM_PBDFloor's record traffic.
 void BM_XPBDColored( benchmark::State& state )
 {
-	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
-	scene& s = maple();
-	sere_pbd_params params = sweeps( static_cast<int32_t>( state.range( 1 ) ) );
-	params.compliance = 4e-6f;
-	params.dt = 0.002f;
-	sere_pbd_report report;
-	for ( auto _ : state )
-	{
-		sere_pbd_project( s.pbd, s.x.data(), s.y.data(), s.z.data(), s.inv_m.data(), &params, &report );
-		benchmark::ClobberMemory();
-	}
-	rate( state, s.model->s.count, state.range( 1 ) );
+	project_loop( state, []( sere_pbd* pbd, float* x, float* y, float* z, const float* inv_m,
+							 const sere_pbd_params* params, sere_pbd_report* report ) {
+		sere_pbd_params step = *params;
+		step.compliance = 4e-6f;
+		step.dt = 0.002f;
+		return sere_pbd_project( pbd, x, y, z, inv_m, &step, report );
+	} );
 }
 
 // The floor of BM_PBDColored at the same threads and sweeps: the same call (entry check,
