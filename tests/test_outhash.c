@@ -156,7 +156,9 @@ Test( outhash, season_from_png_silhouette )
 /* `sere run`, Algorithm 1 whole: the frames' meshes of two presets (the green maple creases and
  * meets the collision pass; the plane tree's stiff Voronoi system takes the SGS-preconditioned
  * CG), at 1 and 2 threads. Values from the build of this test's commit (after the session's
- * speed work, which changed the plane tree's CG iterates on purpose). */
+ * speed work, which changed the plane tree's CG iterates on purpose), and taken again when the XPBD
+ * factor became one quotient (rounding only: the five presets dried to the end land within 0.06
+ * particle spacings of the shapes before). */
 static void expect_run_hash( const char* args, uint64_t expected )
 {
 	const char* frames[] = { "frames/frame_00000.ply", "frames/frame_00020.ply", "frames/frame_00040.ply",
@@ -175,10 +177,10 @@ static void expect_run_hash( const char* args, uint64_t expected )
 
 Test( outhash, run_maple_green )
 {
-	expect_run_hash( "data/leaves/maple.leaf --preset maple-green --points 400", UINT64_C( 0x6d4d1ce450c62997 ) );
+	expect_run_hash( "data/leaves/maple.leaf --preset maple-green --points 400", UINT64_C( 0x9864747b0931d4a8 ) );
 }
 
 Test( outhash, run_plane_tree )
 {
-	expect_run_hash( "data/leaves/plane.leaf --preset plane-tree --points 400", UINT64_C( 0x28f6321ddba7951d ) );
+	expect_run_hash( "data/leaves/plane.leaf --preset plane-tree --points 400", UINT64_C( 0x737d3271cb4997d6 ) );
 }

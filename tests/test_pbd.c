@@ -484,9 +484,9 @@ static float replay_spring( test_mesh* m, int32_t s, float rest, float k, float 
 	{
 		residual = c + alpha * *lambda;
 		float denominator = wsum + alpha;
-		float dlambda = denominator > 0.0f ? ( ( 0.0f - c ) - alpha * *lambda ) / denominator : 0.0f;
+		float dlambda = denominator > 0.0f ? ( 0.0f - residual ) / denominator : 0.0f;
 		*lambda = *lambda + dlambda;
-		f = ( 0.0f - dlambda ) / len;
+		f = denominator > 0.0f ? residual / ( denominator * len ) : 0.0f;
 	}
 	else
 	{
