@@ -396,42 +396,70 @@ static void sgs_upper_product( const sere_sgs* g, double* x )
 	}
 }
 
-/* w = E u = t + L̃⁻¹ (u − D t), t = L̃⁻ᵀ u (Eisenstat), and the block sums of δ = uᵀw (slot 1):
- * the forward sweep forms each chunk's w and its lane-ordered share of δ, summed per block in
- * chunk order (the same bits for any thread count). Called by every thread of a region. */
-static void sgs_product_sums( const sere_sgs* g, int32_t blocks, const double* inv_diag, const double* u, double* t,
-							  double* z, double* w, double* chunk_delta, double* partial )
+/* Forward chunk ch of E u: z = (z − Σ_L a_ij z_j) / d, z holding the backward sweep's upper
+ * sums on entry, then w = z + t and the chunk's lane-ordered share of δ = uᵀw. */
+static inline void forward_product_chunk( const sere_sgs* g, int32_t ch, const double* inv_diag, const double* u,
+										  const double* t, double* z, double* w, double* chunk_delta )
 {
-	sgs_backward( g, inv_diag, u, t, z );
-	for ( int32_t c = 0; c < g->colors; ++c )
+	lanes_t sum, v = load_lanes( z + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+	lanes_t tt = load_lanes( t + ch * LANES ), uu = load_lanes( u + ch * LANES );
+	chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], z, &sum );
+	v.lo = ( v.lo - sum.lo ) * inv.lo;
+	v.hi = ( v.hi - sum.hi ) * inv.hi;
+	store_lanes( z + ch * LANES, &v );
+	v.lo += tt.lo;
+	v.hi += tt.hi;
+	store_lanes( w + ch * LANES, &v );
+	half_t d = uu.lo * v.lo + uu.hi * v.hi;
+	chunk_delta[ch] = ( d[0] + d[1] ) + ( d[2] + d[3] );
+}
+
+/* w = E u = t + L̃⁻¹ (u − D t), t = L̃⁻ᵀ u (Eisenstat); returns δ = uᵀw. The backward sweep runs
+ * colors from_color down to 1 (the update loop of sgs_round has done the last color, which has
+ * no U entries, when from_color is colors − 2). Color 0 has no L entries, so its forward rows
+ * need only their own chunk's backward result: both run chunk by chunk in one loop. Then the
+ * forward sweep's other colors form each chunk's w and share of δ. Every thread sums the shares
+ * itself, per block in chunk order and then block by block (block_sum's order, the same bits for
+ * any thread count), after the last color's barrier: per iteration, two colors' barriers and a
+ * summing pass fewer than sweeping each color of both sweeps on its own. Called by every thread
+ * of a region. */
+static double sgs_product_sums( const sere_sgs* g, int32_t from_color, const double* inv_diag, const double* u,
+								double* t, double* z, double* w, double* chunk_delta )
+{
+	for ( int32_t c = from_color; c >= 1; --c )
 	{
 #pragma omp for schedule( static )
 		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
 		{
-			lanes_t sum, v = load_lanes( z + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
-			lanes_t tt = load_lanes( t + ch * LANES ), uu = load_lanes( u + ch * LANES );
-			chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], z, &sum );
-			v.lo = ( v.lo - sum.lo ) * inv.lo;
-			v.hi = ( v.hi - sum.hi ) * inv.hi;
-			store_lanes( z + ch * LANES, &v );
-			v.lo += tt.lo;
-			v.hi += tt.hi;
-			store_lanes( w + ch * LANES, &v );
-			half_t d = uu.lo * v.lo + uu.hi * v.hi;
-			chunk_delta[ch] = ( d[0] + d[1] ) + ( d[2] + d[3] );
+			sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, z );
 		}
 	}
 #pragma omp for schedule( static )
-	for ( int32_t blk = 0; blk < blocks; ++blk )
+	for ( int32_t ch = g->color_chunk[0]; ch < g->color_chunk[1]; ++ch )
 	{
-		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-		double delta = 0.0;
-		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
-		{
-			delta += chunk_delta[ch];
-		}
-		partial[4 * blk + 1] = delta;
+		sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, z );
+		forward_product_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
 	}
+	for ( int32_t c = 1; c < g->colors; ++c )
+	{
+#pragma omp for schedule( static )
+		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		{
+			forward_product_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
+		}
+	}
+	double delta = 0.0;
+	for ( int32_t first = 0; first < g->chunks; first += CHUNKS_PER_BLOCK )
+	{
+		const int32_t end = first + CHUNKS_PER_BLOCK < g->chunks ? first + CHUNKS_PER_BLOCK : g->chunks;
+		double block = 0.0;
+		for ( int32_t ch = first; ch < end; ++ch )
+		{
+			block += chunk_delta[ch];
+		}
+		delta += block;
+	}
+	return delta;
 }
 
 /* r = b − A x and its block sums of rᵀr (slot 0). Called by every thread of a region. */
@@ -492,8 +520,8 @@ static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, c
 }
 
 /* Into Eisenstat's variables: r̂ = L̃⁻¹ r, ŷ = L̃ᵀ x, u = D⁻¹ r̂, w = E u. s = p = 0 so that the
- * first step's p = u + 0·p is u. Returns r̂ᵀr̂. */
-static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it )
+ * first step's p = u + 0·p is u. Returns r̂ᵀr̂; δ = uᵀw goes to *delta. */
+static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it, double* delta )
 {
 	const int32_t np = g->chunks * LANES;
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
@@ -519,7 +547,9 @@ static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it 
 			partial[4 * blk] = rr;
 			partial[4 * blk + 2 + ( it & 1 )] = gamma;
 		}
-		sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
+		double d = sgs_product_sums( g, g->colors - 1, inv_diag, u, t, z, w, chunk_delta );
+#pragma omp master
+		*delta = d;
 	}
 	return block_sum( partial, blocks, 0 );
 }
@@ -534,6 +564,10 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+	/* The last color's rows have no U entries: their backward rows t = u / d (upper sums 0) are
+	 * done in the update loop, beside the u they read, when there is more than one color. */
+	const int32_t last_first = g->colors > 1 ? g->color_chunk[g->colors - 1] * LANES : np;
+	const int32_t from_color = g->colors > 1 ? g->colors - 2 : 0;
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		/* every thread steps its own copy; they stay equal */
@@ -542,7 +576,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
 		while ( my.it < round_end )
 		{
-			double delta = block_sum( partial, blocks, 1 );
+			double delta = my.delta;
 			/* γ = r̂ᵀu comes from the previous step's update sweep, into slot 2 or 3 by the
 			 * parity of the step: a thread that runs ahead into this step's update writes
 			 * the other slot while a slower one may still be reading this one. */
@@ -573,6 +607,12 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				}
 				partial[4 * blk] = rr_block;
 				partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
+				for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
+					  i < block_end( blk, np ); ++i )
+				{
+					t[i] = u[i] * inv_diag[i];
+					z[i] = 0.0;
+				}
 			}
 			double my_rr = block_sum( partial, blocks, 0 );
 			my.it += 1;
@@ -588,7 +628,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				my.done = 1;
 				break;
 			}
-			sgs_product_sums( g, blocks, inv_diag, u, t, z, w, chunk_delta, partial );
+			my.delta = sgs_product_sums( g, from_color, inv_diag, u, t, z, w, chunk_delta );
 			my.alpha_prev = alpha;
 			my.gamma_prev = gamma;
 		}
@@ -648,7 +688,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 			break;
 		}
 		previous = rel;
-		double rr_hat = sgs_restart( ws, g, st.it );
+		double rr_hat = sgs_restart( ws, g, st.it, &st.delta );
 		/* Reduce the transformed residual by the factor the true one still needs (and by half
 		 * more at every restart, should the two norms have disagreed). */
 		const double target = sqrt( rr_hat ) * ( tolerance / rel ) * safety;

@@ -143,5 +143,6 @@ typedef struct cg_state
 {
 	int32_t it;
 	double alpha_prev, gamma_prev, rel, b_norm;
+	double delta; /* the SGS solve's uᵀw for the next step (sgs_product_sums) */
 	int status, done, met, bad_diagonal, nonfinite;
 } cg_state;
