@@ -737,9 +737,13 @@ static float ground_pass( sere_pbd* pbd, float ground, int t, int threads, int* 
 }
 
 /* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. With a
- * ground, a converged round is followed by the ground pass, and the sweeps go on from the same
- * multipliers (a new round, its Chebyshev sequence restarted) until a round's ground pass moves
- * no particle by more than the slack. */
+ * ground, a sweep below the tolerance is followed by the ground pass, and the sweeps go on from
+ * the same multipliers (a new round, its Chebyshev sequence restarted) until a round's ground
+ * pass moves no particle by more than the slack. Only then does the read-only pass confirm the
+ * residual, on the positions the ground left: they are the ones returned, and a round the ground
+ * moved would only be measured to be swept again (the plane tree grounds about nine rounds a
+ * frame; this took 2–3% off its frame at one thread). A confirmation that fails starts a new
+ * round too, as the ground may have moved the positions it measured. */
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
@@ -764,6 +768,11 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 		/* The floor runs its sweeps to the cap, exchanges included. */
 		if ( setup->kind != SOLVER_TOUCH && worst < setup->tolerance )
 		{
+			if ( ground && ground_pass( pbd, setup->ground, t, threads, parity ) > setup->slack )
+			{
+				round_start = result.iterations, older = 0;
+				continue;
+			}
 			/* Residuals were taken before each projection; check the positions left. */
 			worst = 0.0f;
 			run_pass( pbd, ctx, PASS_ALL, *parity, 0, MODE_MEASURE, setup->xpbd, t, threads, &worst, &flags );
@@ -776,11 +785,11 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 			if ( worst < setup->tolerance )
 			{
 				result.strain = worst;
-				if ( !ground || ground_pass( pbd, setup->ground, t, threads, parity ) <= setup->slack )
-				{
-					result.converged = 1;
-					break;
-				}
+				result.converged = 1;
+				break;
+			}
+			if ( ground )
+			{
 				round_start = result.iterations, older = 0;
 				continue;
 			}

@@ -42,10 +42,11 @@ typedef struct sere_pbd_params
 	 * lowered max |C/l| by less than the fraction s: once the shrunk layers disagree the hard
 	 * constraints have no solution and the residual has a floor above λ_C. */
 	float stall;
-	/* A ground plane z ≥ ground (−INFINITY, the default: none). When the sweeps converge, the
-	 * particles below it are put onto it; if that moved one by more than ground_slack, the
-	 * sweeps go on from the same multipliers (the step continues) until the ground holds too,
-	 * within the cap. At the cap the ground is put under the returned positions once more.
+	/* A ground plane z ≥ ground (−INFINITY, the default: none). When a sweep's residual is below
+	 * the tolerance, the particles below it are put onto it; if that moved one by more than
+	 * ground_slack, the sweeps go on from the same multipliers (the step continues) until the
+	 * ground holds too, within the cap; the residual is then confirmed on the grounded positions,
+	 * the ones returned. At the cap the ground is put under the returned positions once more.
 	 * sere_pbd_ground_push reports how far each particle was pushed. Gauss–Seidel only. */
 	float ground;
 	float ground_slack;
