@@ -738,12 +738,9 @@ static float ground_pass( sere_pbd* pbd, float ground, int t, int threads, int* 
 
 /* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. With a
  * ground, a sweep below the tolerance is followed by the ground pass, and the sweeps go on from
- * the same multipliers (a new round, its Chebyshev sequence restarted) until a round's ground
- * pass moves no particle by more than the slack. Only then does the read-only pass confirm the
- * residual, on the positions the ground left: they are the ones returned, and a round the ground
- * moved would only be measured to be swept again (the plane tree grounds about nine rounds a
- * frame; this took 2–3% off its frame at one thread). A confirmation that fails starts a new
- * round too, as the ground may have moved the positions it measured. */
+ * the same multipliers (a new round, Chebyshev restarted) until it moves no particle by more
+ * than the slack; only then does the read-only pass confirm the residual, on the positions
+ * returned (a failed one starts a new round too). The plane tree grounds ~9 rounds a frame. */
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
