@@ -738,9 +738,8 @@ static float ground_pass( sere_pbd* pbd, float ground, int t, int threads, int* 
 
 /* Gauss–Seidel sweeps until converged (and verified) or the cap; runs on every thread. With a
  * ground, a sweep below the tolerance is followed by the ground pass, and the sweeps go on from
- * the same multipliers (a new round, Chebyshev restarted) until it moves no particle by more
- * than the slack; only then does the read-only pass confirm the residual, on the positions
- * returned (a failed one starts a new round too). The plane tree grounds ~9 rounds a frame. */
+ * the same multipliers (a new round, Chebyshev restarted) until it moves no particle beyond the
+ * slack; only then does the read-only pass confirm the residual, on the positions returned. */
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
