@@ -15,6 +15,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <vector>
@@ -192,12 +193,39 @@ void BM_PCG( benchmark::State& state )
 	sere_sgs_destroy( sgs );
 }
 
+// The barrier the solve's passes meet at (kernels/core/internal/team.h, sere_spin_barrier): a
+// count and a generation, spun on. Written again here in C++ atomics because that header's C11
+// _Atomic types do not compile as C++17; the floor must not pay libgomp's barrier, a system call
+// each, where the solve does not.
+struct spin_barrier
+{
+	alignas( 64 ) std::atomic<unsigned> arrived{ 0 };
+	alignas( 64 ) std::atomic<unsigned> generation{ 0 };
+	void wait( int threads )
+	{
+		if ( threads == 1 )
+		{
+			return;
+		}
+		unsigned g = generation.load( std::memory_order_relaxed );
+		if ( arrived.fetch_add( 1, std::memory_order_acq_rel ) == static_cast<unsigned>( threads ) - 1 )
+		{
+			arrived.store( 0, std::memory_order_relaxed );
+			generation.store( g + 1, std::memory_order_release );
+			return;
+		}
+		while ( generation.load( std::memory_order_acquire ) == g )
+		{
+		}
+	}
+};
+
 // The Jacobi PCG's floor: the memory traffic of our solve's iterations with no multiplications
 // and no sums. Per iteration, as sere_cg_solve's round: one pass over the positions reading the
 // seven vectors it reads (u, p, w, s, x, r, D^-1) and writing the five it writes, then the product
 // over the SELL layout (values, columns, u gathered four lanes at a time as the kernel gathers
-// them) storing w; each combination is one add where the solve does its multiply-adds, and an
-// OpenMP barrier after each pass as in the solve. It runs as many iterations as our solve of the
+// them) storing w; each combination is one add where the solve does its multiply-adds, and a
+// spin barrier after each pass as in the solve. It runs as many iterations as our solve of the
 // same system takes. Args: system, threads.
 void BM_PCGFloor( benchmark::State& state )
 {
@@ -229,12 +257,13 @@ void BM_PCGFloor( benchmark::State& state )
 	const int32_t* col = sell->local_col;
 	const double* val = sell->val;
 	const int32_t chunks = sell->chunks;
+	spin_barrier barrier;
 	for ( auto _ : state )
 	{
 #pragma omp parallel num_threads( threads )
 		for ( int32_t it = 0; it < result.iterations; ++it )
 		{
-#pragma omp for simd schedule( static )
+#pragma omp for simd schedule( static ) nowait
 			for ( int32_t i = 0; i < np; ++i )
 			{
 				p[i] = u[i] + p[i];
@@ -243,7 +272,8 @@ void BM_PCGFloor( benchmark::State& state )
 				r[i] = r[i] + sv[i];
 				u[i] = d[i] + r[i];
 			}
-#pragma omp for schedule( static )
+			barrier.wait( omp_get_num_threads() );
+#pragma omp for schedule( static ) nowait
 			for ( int32_t c = 0; c < chunks; ++c )
 			{
 				quad lo = { 0.0 }, hi = { 0.0 };
@@ -256,6 +286,7 @@ void BM_PCGFloor( benchmark::State& state )
 				*reinterpret_cast<quad*>( wv + c * SERE_SELL_C ) = lo;
 				*reinterpret_cast<quad*>( wv + c * SERE_SELL_C + 4 ) = hi;
 			}
+			barrier.wait( omp_get_num_threads() );
 		}
 		benchmark::DoNotOptimize( u );
 		benchmark::ClobberMemory();

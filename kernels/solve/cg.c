@@ -291,11 +291,13 @@ sere_status sere_cg_create( int32_t n, sere_cg_workspace** out )
 	}
 	w->partial = sere_alloc( sizeof( double ) * 4 * (size_t) w->block_capacity );
 	w->chunk_delta = sere_alloc( sizeof( double ) * (size_t) ( w->positions / SERE_SELL_C ) );
-	if ( failed || w->partial == NULL || w->chunk_delta == NULL )
+	w->barrier = sere_alloc( sizeof( sere_spin_barrier ) );
+	if ( failed || w->partial == NULL || w->chunk_delta == NULL || w->barrier == NULL )
 	{
 		sere_cg_destroy( w );
 		return SERE_ERR_MEMORY;
 	}
+	memset( w->barrier, 0, sizeof( sere_spin_barrier ) );
 	*out = w;
 	return SERE_OK;
 }
@@ -306,7 +308,8 @@ void sere_cg_destroy( sere_cg_workspace* w )
 	{
 		return;
 	}
-	void* arrays[] = { w->x, w->b, w->r, w->u, w->w, w->p, w->s, w->inv_diag, w->t, w->z, w->partial, w->chunk_delta };
+	void* arrays[] = { w->x,		w->b, w->r, w->u,		w->w,			w->p,	   w->s,
+					   w->inv_diag, w->t, w->z, w->partial, w->chunk_delta, w->barrier };
 	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	free( w );
 }
@@ -429,6 +432,9 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		/* every thread steps its own copy; they stay equal */
+		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		int32_t blk_first, blk_last;
+		team_share( 0, blocks, tid, team, &blk_first, &blk_last );
 		cg_state my = *st;
 		my.status = SERE_OK, my.done = 0, my.met = 0;
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
@@ -446,8 +452,7 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 				break;
 			}
 			/* p = u + βp, s = w + βs (= Ap), x += αp, r −= αs, u = D⁻¹r and rᵀr in one sweep */
-#pragma omp for schedule( static )
-			for ( int32_t blk = 0; blk < blocks; ++blk )
+			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
 			{
 				double rr_block = 0.0;
 #pragma omp simd reduction( + : rr_block )
@@ -462,6 +467,7 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 				}
 				partial[4 * blk] = rr_block;
 			}
+			sere_spin_barrier_wait( ws->barrier, team );
 			/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
 			 * step rewrites it only after every thread has passed the product's barrier, so
 			 * after reading it here. */
@@ -479,11 +485,11 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 				my.done = 1;
 				break;
 			}
-#pragma omp for schedule( static )
-			for ( int32_t blk = 0; blk < blocks; ++blk )
+			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
 			{
 				block_product_sums( a, blk, np, u, r, w, partial );
 			}
+			sere_spin_barrier_wait( ws->barrier, team );
 			my.alpha_prev = alpha;
 			my.gamma_prev = gamma;
 		}

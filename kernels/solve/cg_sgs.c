@@ -421,39 +421,46 @@ static inline void forward_product_chunk( const sere_sgs* g, int32_t ch, const d
  * forward sweep's other colors form each chunk's w and share of δ. Every thread sums the shares
  * itself, per block in chunk order and then block by block (block_sum's order, the same bits for
  * any thread count), after the last color's barrier: per iteration, two colors' barriers and a
- * summing pass fewer than sweeping each color of both sweeps on its own. Called by every thread
- * of a region. */
+ * summing pass fewer than sweeping each color of both sweeps on its own. The colors meet at the
+ * workspace's spin barrier, not at an `omp for`'s: libgomp's makes a system call at each of the
+ * 2·colors − 1 barriers of an iteration, one thread or two (team.h). Called by every thread of a
+ * region. */
 static double sgs_product_sums( const sere_sgs* g, int32_t from_color, const double* inv_diag, const double* u,
-								double* t, double* z, double* w, double* chunk_delta )
+								double* t, double* z, double* w, double* chunk_delta, sere_spin_barrier* barrier )
 {
+	const int tid = omp_get_thread_num(), team = omp_get_num_threads();
+	int32_t first, last;
 	for ( int32_t c = from_color; c >= 1; --c )
 	{
-#pragma omp for schedule( static )
-		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+		for ( int32_t ch = first; ch < last; ++ch )
 		{
 			sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, z );
 		}
+		sere_spin_barrier_wait( barrier, team );
 	}
-#pragma omp for schedule( static )
-	for ( int32_t ch = g->color_chunk[0]; ch < g->color_chunk[1]; ++ch )
+	team_share( g->color_chunk[0], g->color_chunk[1], tid, team, &first, &last );
+	for ( int32_t ch = first; ch < last; ++ch )
 	{
 		sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, z );
 		forward_product_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
 	}
+	sere_spin_barrier_wait( barrier, team );
 	for ( int32_t c = 1; c < g->colors; ++c )
 	{
-#pragma omp for schedule( static )
-		for ( int32_t ch = g->color_chunk[c]; ch < g->color_chunk[c + 1]; ++ch )
+		team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+		for ( int32_t ch = first; ch < last; ++ch )
 		{
 			forward_product_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
 		}
+		sere_spin_barrier_wait( barrier, team );
 	}
 	double delta = 0.0;
-	for ( int32_t first = 0; first < g->chunks; first += CHUNKS_PER_BLOCK )
+	for ( int32_t begin = 0; begin < g->chunks; begin += CHUNKS_PER_BLOCK )
 	{
-		const int32_t end = first + CHUNKS_PER_BLOCK < g->chunks ? first + CHUNKS_PER_BLOCK : g->chunks;
+		const int32_t end = begin + CHUNKS_PER_BLOCK < g->chunks ? begin + CHUNKS_PER_BLOCK : g->chunks;
 		double block = 0.0;
-		for ( int32_t ch = first; ch < end; ++ch )
+		for ( int32_t ch = begin; ch < end; ++ch )
 		{
 			block += chunk_delta[ch];
 		}
@@ -547,7 +554,7 @@ static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it,
 			partial[4 * blk] = rr;
 			partial[4 * blk + 2 + ( it & 1 )] = gamma;
 		}
-		double d = sgs_product_sums( g, g->colors - 1, inv_diag, u, t, z, w, chunk_delta );
+		double d = sgs_product_sums( g, g->colors - 1, inv_diag, u, t, z, w, chunk_delta, ws->barrier );
 #pragma omp master
 		*delta = d;
 	}
@@ -571,6 +578,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		/* every thread steps its own copy; they stay equal */
+		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
 		cg_state my = *st;
 		my.status = SERE_OK, my.done = 0, my.met = 0;
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
@@ -590,8 +598,9 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				my.done = 1;
 				break;
 			}
-#pragma omp for schedule( static )
-			for ( int32_t blk = 0; blk < blocks; ++blk )
+			int32_t blk_first, blk_last;
+			team_share( 0, blocks, tid, team, &blk_first, &blk_last );
+			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
 			{
 				double rr_block = 0.0, gamma_block = 0.0;
 #pragma omp simd reduction( + : rr_block, gamma_block )
@@ -614,6 +623,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 					z[i] = 0.0;
 				}
 			}
+			sere_spin_barrier_wait( ws->barrier, team );
 			double my_rr = block_sum( partial, blocks, 0 );
 			my.it += 1;
 			if ( !isfinite( my_rr ) )
@@ -628,7 +638,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				my.done = 1;
 				break;
 			}
-			my.delta = sgs_product_sums( g, from_color, inv_diag, u, t, z, w, chunk_delta );
+			my.delta = sgs_product_sums( g, from_color, inv_diag, u, t, z, w, chunk_delta, ws->barrier );
 			my.alpha_prev = alpha;
 			my.gamma_prev = gamma;
 		}

@@ -1,5 +1,4 @@
-/* nanosleep, for the barrier's back-off when a thread has lost its core; sched_getaffinity
- * for internal/team.h. */
+/* _GNU_SOURCE: sched_getaffinity and nanosleep for core/internal/team.h. */
 #define _GNU_SOURCE
 
 #include "core/internal/simd.h"
@@ -11,14 +10,11 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 /* For the block functions: each pass mode gets its own copy of the block loop (project_colors),
  * and GCC's size limits would otherwise leave the block an out-of-line call with its operands
  * in memory. */
 #define FORCE_INLINE static inline __attribute__( ( always_inline ) )
-
-#define SPIN_SECONDS 100e-6
 
 /* What one pass over a constraint block does. */
 typedef enum block_mode
@@ -332,58 +328,13 @@ FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int3
 /* ---------------------------------------------------------------------------------------
  * Threads: work claiming and the barrier. */
 
-typedef struct wait_state
-{
-	double start;
-	unsigned spins;
-} wait_state;
-
-/* One turn of a wait loop. Spin while the wait is short (a sweep is tens of µs); past
- * SPIN_SECONDS another thread has most likely lost its core to some other process, so nap
- * instead: an idle core lets the scheduler move that thread over, where spinning (or
- * yielding) would keep it queued behind the other process for a whole time slice
- * (milliseconds). */
-static void wait_step( wait_state* wait )
-{
-	if ( ++wait->spins % 1024 == 0 )
-	{
-		double now = omp_get_wtime();
-		wait->start = wait->start < 0.0 ? now : wait->start;
-		if ( now - wait->start > SPIN_SECONDS )
-		{
-			const struct timespec nap = { 0, NAP_NANOSECONDS };
-			nanosleep( &nap, NULL );
-		}
-	}
-}
-
 /* Waits until item `item` has been projected in sweep `number` of this call. */
 static void wait_done( sere_pbd* pbd, int32_t item, int32_t number )
 {
-	wait_state wait = { -1.0, 0 };
+	sere_wait wait = SERE_WAIT_START;
 	while ( atomic_load_explicit( &pbd->done[item].value, memory_order_acquire ) < number )
 	{
-		wait_step( &wait );
-	}
-}
-
-static void barrier_wait( spin_barrier* barrier, int threads )
-{
-	if ( threads == 1 )
-	{
-		return;
-	}
-	unsigned generation = atomic_load_explicit( &barrier->generation, memory_order_relaxed );
-	if ( atomic_fetch_add_explicit( &barrier->arrived, 1u, memory_order_acq_rel ) == (unsigned) threads - 1 )
-	{
-		atomic_store_explicit( &barrier->arrived, 0u, memory_order_relaxed );
-		atomic_store_explicit( &barrier->generation, generation + 1u, memory_order_release );
-		return;
-	}
-	wait_state wait = { -1.0, 0 };
-	while ( atomic_load_explicit( &barrier->generation, memory_order_acquire ) == generation )
-	{
-		wait_step( &wait );
+		sere_wait_step( &wait );
 	}
 }
 
@@ -393,7 +344,7 @@ static void exchange( sere_pbd* pbd, int t, int threads, int* parity, float* wor
 {
 	pbd->threads[t].worst[*parity] = *worst;
 	pbd->threads[t].flags[*parity] = *flags;
-	barrier_wait( pbd->barrier, threads );
+	sere_spin_barrier_wait( pbd->barrier, threads );
 	float all_worst = 0.0f;
 	int32_t all_flags = 0;
 	for ( int u = 0; u < threads; ++u )
@@ -710,7 +661,7 @@ static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t
 		extrapolate_range( pbd->lambda, pbd->lambda_history[*older], first, last, omega );
 	}
 	*older ^= 1;
-	barrier_wait( pbd->barrier, threads );
+	sere_spin_barrier_wait( pbd->barrier, threads );
 }
 
 /* The ground between rounds: thread t's share of the particles below z = ground put onto it,
@@ -829,7 +780,7 @@ static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup
 		}
 		jacobi_apply( pbd, pbd->packed[*front], pbd->packed[1 - *front], setup->omega, t, threads );
 		*front = 1 - *front;
-		barrier_wait( pbd->barrier, threads );
+		sere_spin_barrier_wait( pbd->barrier, threads );
 	}
 	return result;
 }

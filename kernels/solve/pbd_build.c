@@ -326,7 +326,7 @@ sere_status sere_pbd_create( const int32_t* a, const int32_t* b, int32_t count, 
 	pbd->threads = sere_alloc( sizeof( thread_slot ) * MAX_THREADS );
 	pbd->counters = sere_alloc( sizeof( padded_counter ) * 2 * MAX_THREADS );
 	pbd->done = sere_alloc( sizeof( padded_counter ) * ( 2 * MAX_BANDS - 1 ) );
-	pbd->barrier = sere_alloc( sizeof( spin_barrier ) );
+	pbd->barrier = sere_alloc( sizeof( sere_spin_barrier ) );
 	pbd->particle = sere_alloc( sizeof( int32_t ) * (size_t) particle_count );
 	if ( !pbd->slot || !pbd->particle || !pbd->threads || !pbd->counters || !pbd->done || !pbd->barrier )
 	{

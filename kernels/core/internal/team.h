@@ -194,3 +194,67 @@ static inline int sere_team_for( int32_t threads )
 {
 	return sere_team( threads > 0 ? threads : omp_get_max_threads() );
 }
+
+/* A sense-free spin barrier for the threads of one parallel region. libgomp's barrier (the one
+ * ending every `omp for`) makes a futex system call at each release, even for a team of one
+ * (0.4 µs a barrier at one thread on this machine's virtual CPUs, all of it the call); a PBD
+ * sweep or a CG iteration crosses several, so those kernels synchronize with this one instead
+ * (0.2–0.5 µs for two threads, nothing for one). Zeroed memory is a ready barrier. */
+typedef struct sere_spin_barrier
+{
+	_Alignas( 64 ) atomic_uint arrived;
+	_Alignas( 64 ) atomic_uint generation;
+} sere_spin_barrier;
+
+/* A waiting thread spins this long, then naps SERE_NAP_NANOSECONDS at a time. */
+#define SERE_SPIN_SECONDS	 100e-6
+#define SERE_NAP_NANOSECONDS 50000
+
+typedef struct sere_wait
+{
+	double start;
+	unsigned spins;
+} sere_wait;
+
+#define SERE_WAIT_START ( ( sere_wait ){ -1.0, 0 } )
+
+/* One turn of a wait loop. Spin while the wait is short (a sweep or an iteration is tens of µs);
+ * past SERE_SPIN_SECONDS another thread has most likely lost its core to some other process, so
+ * nap instead: an idle core lets the scheduler move that thread over, where spinning (or
+ * yielding) would keep it queued behind the other process for a whole time slice
+ * (milliseconds). */
+static inline void sere_wait_step( sere_wait* wait )
+{
+	if ( ++wait->spins % 1024 == 0 )
+	{
+		double now = omp_get_wtime();
+		wait->start = wait->start < 0.0 ? now : wait->start;
+		if ( now - wait->start > SERE_SPIN_SECONDS )
+		{
+			const struct timespec nap = { 0, SERE_NAP_NANOSECONDS };
+			nanosleep( &nap, NULL );
+		}
+	}
+}
+
+/* Waits until all `threads` threads of the region have arrived; what each wrote before is then
+ * visible to all. */
+static inline void sere_spin_barrier_wait( sere_spin_barrier* barrier, int threads )
+{
+	if ( threads == 1 )
+	{
+		return;
+	}
+	unsigned generation = atomic_load_explicit( &barrier->generation, memory_order_relaxed );
+	if ( atomic_fetch_add_explicit( &barrier->arrived, 1u, memory_order_acq_rel ) == (unsigned) threads - 1 )
+	{
+		atomic_store_explicit( &barrier->arrived, 0u, memory_order_relaxed );
+		atomic_store_explicit( &barrier->generation, generation + 1u, memory_order_release );
+		return;
+	}
+	sere_wait wait = SERE_WAIT_START;
+	while ( atomic_load_explicit( &barrier->generation, memory_order_acquire ) == generation )
+	{
+		sere_wait_step( &wait );
+	}
+}

@@ -93,9 +93,19 @@ struct sere_cg_workspace
 	int32_t positions; /* vector length: n rounded to chunks, plus a chunk of padding per SGS color */
 	int32_t block_capacity;
 	double *x, *b, *r, *u, *w, *p, *s, *inv_diag, *t, *z;
-	double* partial;	 /* 4 sums per block: rᵀr, uᵀw, rᵀu, bᵀb */
-	double* chunk_delta; /* SGS: per chunk, its share of uᵀw */
+	double* partial;			/* 4 sums per block: rᵀr, uᵀw, rᵀu, bᵀb */
+	double* chunk_delta;		/* SGS: per chunk, its share of uᵀw */
+	sere_spin_barrier* barrier; /* the steps' barrier (team.h) */
 };
+
+/* Thread `tid` of `team`'s contiguous share [*first, *last) of [begin, end), as OpenMP's static
+ * schedule cuts it (for loops that meet at a sere_spin_barrier instead of the loop's own). */
+static inline void team_share( int32_t begin, int32_t end, int tid, int team, int32_t* first, int32_t* last )
+{
+	const int64_t n = end - begin;
+	*first = begin + (int32_t) ( n * tid / team );
+	*last = begin + (int32_t) ( n * ( tid + 1 ) / team );
+}
 
 /* The solution back from layout positions to rows: x_out[row[at]] = x[at] for every position
  * holding a row (row[at] >= 0), at every position of the np. */

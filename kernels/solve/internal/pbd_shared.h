@@ -19,8 +19,6 @@ enum
 	/* Threads past this many are not started (per-thread slots live in the workspace): the one
 	 * limit of every kernel (base.h). */
 	MAX_THREADS = SERE_MAX_THREADS,
-	/* A waiting thread naps this long at a time once it has spun SPIN_SECONDS. */
-	NAP_NANOSECONDS = 50000,
 };
 
 /* Per-thread results of a pass, double-buffered by pass parity so a fast thread can publish
@@ -36,16 +34,6 @@ typedef struct padded_counter
 {
 	_Alignas( 64 ) atomic_int value;
 } padded_counter;
-
-/* A sense-free spin barrier. libgomp's barrier makes a futex system call at every release,
- * about 1 µs on this machine's virtual CPUs even for one thread; a sweep crosses several per
- * iteration, so the projection synchronizes with this one instead (0.2–0.5 µs for two threads,
- * nothing for one). */
-typedef struct spin_barrier
-{
-	_Alignas( 64 ) atomic_uint arrived;
-	_Alignas( 64 ) atomic_uint generation;
-} spin_barrier;
 
 struct sere_pbd
 {
@@ -79,5 +67,5 @@ struct sere_pbd
 	thread_slot* threads;	  /* MAX_THREADS */
 	padded_counter* counters; /* 2 × MAX_THREADS: next item of each thread's list, by pass parity */
 	padded_counter* done;	  /* per item: the sweep of the current call that last projected it */
-	spin_barrier* barrier;
+	sere_spin_barrier* barrier;
 };
