@@ -288,6 +288,103 @@ Test( sgs, cg_converges_deterministically, .timeout = 60 )
 	sgs_system_free( &s );
 }
 
+/* The coloring's smallest cases take their own paths through the solve (the last color's
+ * backward rows ride in the update loop only when there are two colors or more, and color 0's
+ * backward and forward rows share one loop): a diagonal matrix (one color, M = A, so one step
+ * solves it) and tridiag(−1, 2.5, −1) (a path: two colors), each solved at 1, 2 and 3 threads
+ * with the same bits, the true residual within the tolerance, and the solution within what the
+ * tolerance and κ ≤ 4.5 / 0.5 = 9 allow of the exact one (the diagonal's b / d; Thomas's
+ * elimination for the path, whose own rounding is near 1e-15). */
+Test( sgs, one_and_two_colors_solve )
+{
+	enum
+	{
+		N = 1000
+	};
+	static int32_t row_ptr[N + 1], col[3 * N];
+	static double val[3 * N], b[N], exact[N], x[3][N], c_prime[N];
+	for ( int colors = 1; colors <= 2; ++colors )
+	{
+		int32_t nnz = 0;
+		for ( int32_t i = 0; i < N; ++i )
+		{
+			row_ptr[i] = nnz;
+			if ( colors == 2 && i > 0 )
+			{
+				col[nnz] = i - 1, val[nnz++] = -1.0;
+			}
+			col[nnz] = i, val[nnz++] = colors == 2 ? 2.5 : 1.0 + 0.5 * ( i % 7 );
+			if ( colors == 2 && i + 1 < N )
+			{
+				col[nnz] = i + 1, val[nnz++] = -1.0;
+			}
+			b[i] = sin( 0.05 * i ) + 0.2;
+		}
+		row_ptr[N] = nnz;
+		sere_csr a = { N, nnz, row_ptr, col, val };
+		if ( colors == 1 )
+		{
+			for ( int32_t i = 0; i < N; ++i )
+			{
+				exact[i] = b[i] / val[i];
+			}
+		}
+		else
+		{
+			/* Thomas: forward elimination, back substitution */
+			double d_prime = 0.0;
+			for ( int32_t i = 0; i < N; ++i )
+			{
+				double m = 2.5 - ( i > 0 ? -1.0 * c_prime[i - 1] : 0.0 );
+				c_prime[i] = -1.0 / m;
+				d_prime = ( b[i] - ( i > 0 ? -1.0 * exact[i - 1] : 0.0 ) ) / m;
+				exact[i] = d_prime;
+			}
+			for ( int32_t i = N - 2; i >= 0; --i )
+			{
+				exact[i] -= c_prime[i] * exact[i + 1];
+			}
+		}
+		sere_sgs* g = NULL;
+		sere_cg_workspace* w = NULL;
+		cr_assert_eq( sere_sgs_create( &a, &g ), SERE_OK );
+		cr_assert_eq( g->colors, colors );
+		cr_assert_eq( sere_cg_create( N, &w ), SERE_OK );
+		const double tolerance = 1e-10;
+		sere_cg_result result[3];
+		for ( int t = 0; t < 3; ++t )
+		{
+			omp_set_num_threads( t + 1 );
+			memset( x[t], 0, sizeof( x[t] ) );
+			cr_assert_eq( sere_cg_solve_sgs( w, g, b, x[t], tolerance, 1000, &result[t] ), SERE_OK );
+			cr_expect_eq( memcmp( x[t], x[0], sizeof( x[0] ) ), 0, "%d colors: %d threads differ from 1", colors,
+						  t + 1 );
+			cr_expect_eq( result[t].iterations, result[0].iterations );
+		}
+		if ( colors == 1 )
+		{
+			cr_expect_eq( result[0].iterations, 1, "M = A takes one step, took %d", result[0].iterations );
+		}
+		else
+		{
+			/* CG's bound with κ ≤ 9 even without a preconditioner: ½ √κ ln(2 / tolerance) ≈ 36 */
+			cr_expect_leq( result[0].iterations, 36, "two colors took %d iterations", result[0].iterations );
+		}
+		cr_expect_leq( relative_residual( &a, b, x[0] ), tolerance );
+		double worst = 0.0, largest = 0.0;
+		for ( int32_t i = 0; i < N; ++i )
+		{
+			worst = fmax( worst, fabs( x[0][i] - exact[i] ) );
+			largest = fmax( largest, fabs( exact[i] ) );
+		}
+		/* relative error ≤ κ · relative residual in the 2-norm; in the max norm a factor √N more */
+		cr_expect_leq( worst, 9.0 * tolerance * sqrt( (double) N ) * largest, "%d colors: off by %g of %g", colors,
+					   worst, largest );
+		sere_cg_destroy( w );
+		sere_sgs_destroy( g );
+	}
+}
+
 Test( sgs, rejects_bad_patterns_and_matrices )
 {
 	/* 3 × 3: row 2 lacks its diagonal; then an unsymmetric pattern; then a negative diagonal */
