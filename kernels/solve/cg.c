@@ -434,7 +434,7 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 		/* every thread steps its own copy; they stay equal */
 		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
 		int32_t blk_first, blk_last;
-		team_share( 0, blocks, tid, team, &blk_first, &blk_last );
+		sere_team_share( 0, blocks, tid, team, &blk_first, &blk_last );
 		cg_state my = *st;
 		my.status = SERE_OK, my.done = 0, my.met = 0;
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;

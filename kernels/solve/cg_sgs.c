@@ -432,14 +432,14 @@ static double sgs_product_sums( const sere_sgs* g, int32_t from_color, const dou
 	int32_t first, last;
 	for ( int32_t c = from_color; c >= 1; --c )
 	{
-		team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+		sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
 		for ( int32_t ch = first; ch < last; ++ch )
 		{
 			sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, z );
 		}
 		sere_spin_barrier_wait( barrier, team );
 	}
-	team_share( g->color_chunk[0], g->color_chunk[1], tid, team, &first, &last );
+	sere_team_share( g->color_chunk[0], g->color_chunk[1], tid, team, &first, &last );
 	for ( int32_t ch = first; ch < last; ++ch )
 	{
 		sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, z );
@@ -448,7 +448,7 @@ static double sgs_product_sums( const sere_sgs* g, int32_t from_color, const dou
 	sere_spin_barrier_wait( barrier, team );
 	for ( int32_t c = 1; c < g->colors; ++c )
 	{
-		team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+		sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
 		for ( int32_t ch = first; ch < last; ++ch )
 		{
 			forward_product_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
@@ -579,6 +579,8 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 	{
 		/* every thread steps its own copy; they stay equal */
 		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		int32_t blk_first, blk_last;
+		sere_team_share( 0, blocks, tid, team, &blk_first, &blk_last );
 		cg_state my = *st;
 		my.status = SERE_OK, my.done = 0, my.met = 0;
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
@@ -598,8 +600,6 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				my.done = 1;
 				break;
 			}
-			int32_t blk_first, blk_last;
-			team_share( 0, blocks, tid, team, &blk_first, &blk_last );
 			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
 			{
 				double rr_block = 0.0, gamma_block = 0.0;

@@ -110,7 +110,8 @@ static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, i
 			}
 		}
 		/* this thread's run of vertices: its entries and touched vertices */
-		int32_t first = (int32_t) ( (int64_t) n * tid / team ), last = (int32_t) ( (int64_t) n * ( tid + 1 ) / team );
+		int32_t first, last;
+		sere_team_share( 0, n, tid, team, &first, &last );
 		int32_t entries = 0, touched = 0;
 		for ( int32_t i = first; i < last; ++i )
 		{

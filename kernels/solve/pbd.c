@@ -499,13 +499,6 @@ static void run_pass( sere_pbd* pbd, const block_context* ctx, pass_kind kind, i
 	lane_accum_finish( &acc, worst, flags );
 }
 
-/* Thread t's share [first, last) of n. */
-static void share( int32_t n, int t, int threads, int32_t* first, int32_t* last )
-{
-	*first = (int32_t) ( (int64_t) n * t / threads );
-	*last = (int32_t) ( (int64_t) n * ( t + 1 ) / threads );
-}
-
 /* Caller's arrays into records. Thread t writes the records of the bands it starts the
  * band phase with, in slot order: whole cache lines that no other thread writes (written in
  * the caller's order, the two threads' records shared lines, and at 2 threads the false
@@ -542,7 +535,7 @@ static void unpack( const float* packed, const int32_t* slot, int32_t n, float* 
 					int threads )
 {
 	int32_t first, last;
-	share( n, t, threads, &first, &last );
+	sere_team_share( 0, n, t, threads, &first, &last );
 	for ( int32_t i = first; i < last; ++i )
 	{
 		const float* record = packed + 4 * slot[i];
@@ -561,7 +554,7 @@ static __attribute__( ( noinline, aligned( 64 ) ) ) void jacobi_apply( sere_pbd*
 																	   float omega, int t, int threads )
 {
 	int32_t first, last;
-	share( pbd->particle_count, t, threads, &first, &last );
+	sere_team_share( 0, pbd->particle_count, t, threads, &first, &last );
 	const float* factor = pbd->factor;
 	const int32_t* adjacency = pbd->adjacency;
 	for ( int32_t s = first; s < last; ++s )
@@ -653,11 +646,11 @@ static void extrapolate_range( float* restrict p, float* restrict h, int32_t fir
 static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t, int threads )
 {
 	int32_t first, last;
-	share( 4 * pbd->slot_count, t, threads, &first, &last );
+	sere_team_share( 0, 4 * pbd->slot_count, t, threads, &first, &last );
 	extrapolate_range( pbd->packed[0], pbd->history[*older], first, last, omega );
 	if ( xpbd )
 	{
-		share( pbd->lanes, t, threads, &first, &last );
+		sere_team_share( 0, pbd->lanes, t, threads, &first, &last );
 		extrapolate_range( pbd->lambda, pbd->lambda_history[*older], first, last, omega );
 	}
 	*older ^= 1;
@@ -669,7 +662,7 @@ static void extrapolate( sere_pbd* pbd, float omega, int xpbd, int* older, int t
 static float ground_pass( sere_pbd* pbd, float ground, int t, int threads, int* parity )
 {
 	int32_t first, last;
-	share( pbd->particle_count, t, threads, &first, &last );
+	sere_team_share( 0, pbd->particle_count, t, threads, &first, &last );
 	float* packed = pbd->packed[0];
 	float largest = 0.0f;
 	for ( int32_t s = first; s < last; ++s )
@@ -814,12 +807,12 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 		if ( setup->xpbd && !setup->warm )
 		{
 			int32_t first, last;
-			share( pbd->lanes, t, threads, &first, &last );
+			sere_team_share( 0, pbd->lanes, t, threads, &first, &last );
 			memset( pbd->lambda + first, 0, sizeof( float ) * (size_t) ( last - first ) );
 		}
 		{
 			int32_t first, last;
-			share( pbd->particle_count, t, threads, &first, &last );
+			sere_team_share( 0, pbd->particle_count, t, threads, &first, &last );
 			memset( pbd->push + first, 0, sizeof( float ) * (size_t) ( last - first ) );
 		}
 		/* Work lists from their start; no item projected yet in this call. The exchange below

@@ -195,6 +195,16 @@ static inline int sere_team_for( int32_t threads )
 	return sere_team( threads > 0 ? threads : omp_get_max_threads() );
 }
 
+/* Thread `tid` of `team`'s contiguous share [*first, *last) of [begin, end), cut as OpenMP's
+ * static schedule cuts it: for work a kernel splits by hand, where its threads then meet at a
+ * sere_spin_barrier instead of an `omp for`'s own barrier. */
+static inline void sere_team_share( int32_t begin, int32_t end, int tid, int team, int32_t* first, int32_t* last )
+{
+	const int64_t n = (int64_t) end - begin;
+	*first = begin + (int32_t) ( n * tid / team );
+	*last = begin + (int32_t) ( n * ( tid + 1 ) / team );
+}
+
 /* A sense-free spin barrier for the threads of one parallel region. libgomp's barrier (the one
  * ending every `omp for`) makes a futex system call at each release, even for a team of one
  * (0.4 µs a barrier at one thread on this machine's virtual CPUs, all of it the call); a PBD

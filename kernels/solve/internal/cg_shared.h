@@ -98,15 +98,6 @@ struct sere_cg_workspace
 	sere_spin_barrier* barrier; /* the steps' barrier (team.h) */
 };
 
-/* Thread `tid` of `team`'s contiguous share [*first, *last) of [begin, end), as OpenMP's static
- * schedule cuts it (for loops that meet at a sere_spin_barrier instead of the loop's own). */
-static inline void team_share( int32_t begin, int32_t end, int tid, int team, int32_t* first, int32_t* last )
-{
-	const int64_t n = end - begin;
-	*first = begin + (int32_t) ( n * tid / team );
-	*last = begin + (int32_t) ( n * ( tid + 1 ) / team );
-}
-
 /* The solution back from layout positions to rows: x_out[row[at]] = x[at] for every position
  * holding a row (row[at] >= 0), at every position of the np. */
 static inline void positions_to_rows( const int32_t* row, int32_t np, const double* x, double* x_out, int32_t threads )
