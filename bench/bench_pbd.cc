@@ -122,7 +122,8 @@ void BM_PBDColored( benchmark::State& state )
 // The sweeps of a drying frame: XPBD (kernels/drying/leaf.c: compliance 4e-6 at dt 0.002, so
 // alpha~ = 1), multipliers from zero at each call. Per constraint it also loads the compliance
 // weight and the multiplier and stores the multiplier (12 bytes more than PBD's 12), and
-// divides twice where PBD divides once; its floor is still BM_PBDFloor's record traffic.
+// divides three times (strain, Δλ, factor) where PBD divides twice; its floor is still
+// BM_PBDFloor's record traffic.
 void BM_XPBDColored( benchmark::State& state )
 {
 	project_loop( state, []( sere_pbd* pbd, float* x, float* y, float* z, const float* inv_m,
