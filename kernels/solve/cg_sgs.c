@@ -255,39 +255,6 @@ sere_status sere_sgs_update( sere_sgs* g, const sere_csr* a )
 	return SERE_OK;
 }
 
-/* Sum over a chunk's slots [begin, end) of val · x[col], lane by lane in slot order. */
-static inline void chunk_sum( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
-							  lanes_t* out )
-{
-	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
-	for ( int32_t s = begin; s < end; s += LANES )
-	{
-		gather( &xlo, x, col + s );
-		gather( &xhi, x, col + s + 4 );
-		lo += *(const half_t*) ( val + s ) * xlo;
-		hi += *(const half_t*) ( val + s + 4 ) * xhi;
-	}
-	out->lo = lo;
-	out->hi = hi;
-}
-
-/* Chunk ch of a sweep: out = (in − Σ a_ij out_j) / d over the chunk's slots [ptr[ch],
- * ptr[ch + 1]) (L's for the forward sweep, U's for the backward one), and the sums to sum_out
- * when it is not NULL. */
-static inline void sweep_chunk( const sere_sgs* g, const int32_t* ptr, int32_t ch, const double* inv_diag,
-								const double* in, double* out, double* sum_out )
-{
-	lanes_t sum, v = load_lanes( in + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
-	chunk_sum( g->col, g->val, ptr[ch], ptr[ch + 1], out, &sum );
-	v.lo = ( v.lo - sum.lo ) * inv.lo;
-	v.hi = ( v.hi - sum.hi ) * inv.hi;
-	store_lanes( out + ch * LANES, &v );
-	if ( sum_out != NULL )
-	{
-		store_lanes( sum_out + ch * LANES, &sum );
-	}
-}
-
 /* Forward sweep z = L̃⁻¹ v in place (v in z on entry): color by color, each row
  * z_i = (v_i − Σ_L a_ij z_j) / d_i, the z_j of earlier colors already final. To be called by
  * every thread of a parallel region (the loop over a color's chunks is shared; its implicit
@@ -316,18 +283,6 @@ static void sgs_backward( const sere_sgs* g, const double* inv_diag, const doubl
 			sweep_chunk( g, g->upper_ptr, ch, inv_diag, u, t, upper_sum );
 		}
 	}
-}
-
-/* y = A v for chunk ch: (L v + U v) + D v. */
-static inline void sgs_chunk_product( const sere_sgs* g, int32_t ch, const double* v, double* y )
-{
-	const double* diagonal = g->val + g->upper_ptr[g->chunks];
-	lanes_t lo, up, d = load_lanes( diagonal + ch * LANES ), x = load_lanes( v + ch * LANES );
-	chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], v, &lo );
-	chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], v, &up );
-	lo.lo = ( lo.lo + up.lo ) + d.lo * x.lo;
-	lo.hi = ( lo.hi + up.hi ) + d.hi * x.hi;
-	store_lanes( y + ch * LANES, &lo );
 }
 
 sere_status sere_sgs_apply( const sere_sgs* g, const double* r, double* z )

@@ -147,3 +147,51 @@ typedef struct cg_state
 	double delta; /* the SGS solve's uᵀw for the next step (sgs_product_sums) */
 	int status, done, met, bad_diagonal, nonfinite;
 } cg_state;
+
+/* The SGS layout's chunk kernels (sere_sgs, cg.h), for its CG (cg_sgs.c) and the multigrid
+ * levels that smooth with it (cg_amg.c). */
+
+/* Sum over a chunk's slots [begin, end) of val · x[col], lane by lane in slot order. */
+static inline void chunk_sum( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
+							  lanes_t* out )
+{
+	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
+	for ( int32_t s = begin; s < end; s += LANES )
+	{
+		gather( &xlo, x, col + s );
+		gather( &xhi, x, col + s + 4 );
+		lo += *(const half_t*) ( val + s ) * xlo;
+		hi += *(const half_t*) ( val + s + 4 ) * xhi;
+	}
+	out->lo = lo;
+	out->hi = hi;
+}
+
+/* Chunk ch of a sweep: out = (in − Σ a_ij out_j) / d over the chunk's slots [ptr[ch],
+ * ptr[ch + 1]) (L's for the forward sweep, U's for the backward one), and the sums to sum_out
+ * when it is not NULL. */
+static inline void sweep_chunk( const sere_sgs* g, const int32_t* ptr, int32_t ch, const double* inv_diag,
+								const double* in, double* out, double* sum_out )
+{
+	lanes_t sum, v = load_lanes( in + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+	chunk_sum( g->col, g->val, ptr[ch], ptr[ch + 1], out, &sum );
+	v.lo = ( v.lo - sum.lo ) * inv.lo;
+	v.hi = ( v.hi - sum.hi ) * inv.hi;
+	store_lanes( out + ch * LANES, &v );
+	if ( sum_out != NULL )
+	{
+		store_lanes( sum_out + ch * LANES, &sum );
+	}
+}
+
+/* y = A v for chunk ch: (L v + U v) + D v. */
+static inline void sgs_chunk_product( const sere_sgs* g, int32_t ch, const double* v, double* y )
+{
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	lanes_t lo, up, d = load_lanes( diagonal + ch * LANES ), x = load_lanes( v + ch * LANES );
+	chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], v, &lo );
+	chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], v, &up );
+	lo.lo = ( lo.lo + up.lo ) + d.lo * x.lo;
+	lo.hi = ( lo.hi + up.hi ) + d.hi * x.hi;
+	store_lanes( y + ch * LANES, &lo );
+}
