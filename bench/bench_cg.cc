@@ -1,6 +1,7 @@
-// Osmotic flow systems of the Table 1 maple (T and V layers): our SpMV (CSR and SELL-C-sigma) and
-// Jacobi PCG at 1 and 2 threads beside Eigen 3.4's ConjugateGradient with a diagonal
-// preconditioner, same matrix, same tolerance (relative residual 1e-8), in one binary.
+// Osmotic flow systems of the Table 1 maple (T and V layers) and plane tree (V): our SpMV (CSR and
+// SELL-C-sigma) and PCG (Jacobi, SGS, aggregation multigrid) at 1 and 2 threads beside Eigen 3.4's
+// ConjugateGradient with a diagonal preconditioner and hypre's BoomerAMG PCG, same matrix, same
+// tolerance (relative residual 1e-8), in one binary.
 #include "drying/osmosis.h"
 #include "fixture.h"
 #include "solve/cg.h"
@@ -190,6 +191,50 @@ void BM_PCG( benchmark::State& state )
 												 benchmark::Counter::kIsRate );
 	sere_cg_destroy( w );
 	sere_sell_destroy( sell );
+	sere_sgs_destroy( sgs );
+}
+
+// Our aggregation multigrid PCG (sere_cg_solve_amg) on the same systems, from x = 0 to relative
+// residual 1e-8, beside hypre's BoomerAMG PCG below. Args: system, threads, refresh (0: the coarse
+// levels refreshed once, outside the timing: the solve alone; 1: refreshed for every solve, as the
+// osmosis does every frame; their aggregates are built once either way, as the osmosis builds
+// them once). Counters: the levels and the rows of the first coarse level.
+void BM_AMG( benchmark::State& state )
+{
+	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const bool refresh = state.range( 2 ) == 1;
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sgs* sgs = nullptr;
+	sere_amg* amg = nullptr;
+	sere_cg_workspace* w = nullptr;
+	if ( sere_sgs_create( a, &sgs ) != SERE_OK || sere_amg_create( a, sgs, &amg ) != SERE_OK ||
+		 sere_cg_create( a->rows, &w ) != SERE_OK )
+	{
+		state.SkipWithError( "levels failed" );
+		sere_sgs_destroy( sgs );
+		return;
+	}
+	std::vector<double> x( a->rows );
+	sere_cg_result result{};
+	sere_amg_update( amg );
+	for ( auto _ : state )
+	{
+		std::fill( x.begin(), x.end(), 0.0 );
+		if ( refresh )
+		{
+			sere_amg_update( amg );
+		}
+		sere_cg_solve_amg( w, amg, s.b.data(), x.data(), 1e-8, 10000, &result );
+		benchmark::DoNotOptimize( x.data() );
+	}
+	state.counters["iterations"] = result.iterations;
+	state.counters["residual"] = result.residual;
+	state.counters["rows"] = a->rows;
+	state.counters["levels"] = sere_amg_levels( amg );
+	state.counters["coarse_rows"] = sere_amg_rows( amg, 1 );
+	sere_cg_destroy( w );
+	sere_amg_destroy( amg );
 	sere_sgs_destroy( sgs );
 }
 
@@ -452,6 +497,11 @@ BENCHMARK( BM_SellSpMV )
 BENCHMARK( BM_SellUpdate )->ArgNames( { "layer", "threads" } )->ArgsProduct( { { 0, 1 }, { 1, 2 } } )->UseRealTime();
 BENCHMARK( BM_PCG )
 	->ArgNames( { "system", "threads", "sgs" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_AMG )
+	->ArgNames( { "system", "threads", "refresh" } )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );

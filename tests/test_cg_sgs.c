@@ -4,6 +4,7 @@
 #include "drying/model.h"
 #include "drying/osmosis.h"
 #include "fixture.h"
+#include "fixture_cg.h"
 #include "ref/osmosis_ref.h"
 #include "solve/cg.h"
 
@@ -14,77 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The V layer of a jittered grid double layer after one osmosis step at diffusion λ: its
- * assembled SPD system (owned by *o) and right-hand side (malloc'd). λ = 100 is the plane tree's
- * stiff Voronoi system in miniature, λ = 0.04 the maple's easy one. */
-static double* v_system( sere_model* model, int32_t nx, int32_t ny, double lambda, sere_osmosis** o,
-						 sere_osmosis_report* report )
-{
-	sere_test_plane plane;
-	sere_test_plane_grid( &plane, nx, ny, 1.0 * nx / 10, 1.0 * ny / 10, 0.3, 1, 5 );
-	sere_layer_params layer = sere_layer_params_default();
-	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &layer, model ), SERE_OK );
-	sere_test_plane_free( &plane );
-	cr_assert_eq( sere_osmosis_create( model->triangle_particles, model->triangle_count, model->s.a + model->t_springs,
-									   model->s.b + model->t_springs, model->v_springs, o ),
-				  SERE_OK );
-	sere_osmosis_params params = sere_osmosis_params_default();
-	params.lambda_min = params.lambda_max = lambda;
-	cr_assert_eq( sere_osmosis_step( *o, model->p.x, model->p.y, model->p.z, model->p.tau, model->p.M, model->p.w,
-									 model->p.m, &params, report ),
-				  SERE_OK );
-	int32_t n = model->triangle_count;
-	double* b = malloc( sizeof( double ) * n );
-	memcpy( b, sere_osmosis_rhs( *o ), sizeof( double ) * n );
-	return b;
-}
-
-/* The V system of v_system at λ = 100 with its matrix and the SGS preconditioner built on it. */
-typedef struct sgs_system
-{
-	sere_model model;
-	sere_osmosis* o;
-	sere_osmosis_report report;
-	double* b;
-	const sere_csr* a;
-	int32_t n;
-	sere_sgs* g;
-} sgs_system;
-
-static void sgs_system_make( sgs_system* s, int32_t nx, int32_t ny )
-{
-	s->b = v_system( &s->model, nx, ny, 100.0, &s->o, &s->report );
-	s->a = sere_osmosis_matrix( s->o );
-	s->n = s->a->rows;
-	cr_assert_eq( sere_sgs_create( s->a, &s->g ), SERE_OK );
-}
-
-static void sgs_system_free( sgs_system* s )
-{
-	sere_sgs_destroy( s->g );
-	sere_osmosis_destroy( s->o );
-	sere_model_destroy( &s->model );
-	free( s->b );
-}
-
-static double relative_residual( const sere_csr* a, const double* b, const double* x )
-{
-	double* ax = malloc( sizeof( double ) * a->rows );
-	sere_csr_spmv( a, x, ax, 0 );
-	double rr = 0.0, bb = 0.0;
-	for ( int32_t i = 0; i < a->rows; ++i )
-	{
-		rr += ( b[i] - ax[i] ) * ( b[i] - ax[i] );
-		bb += b[i] * b[i];
-	}
-	free( ax );
-	return sqrt( rr / bb );
-}
-
 Test( sgs, coloring_separates_neighbors )
 {
-	sgs_system s;
-	sgs_system_make( &s, 14, 9 );
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 14, 9 );
 	cr_expect_gt( s.g->colors, 1 );
 	cr_expect_leq( s.g->colors, SERE_SGS_MAX_COLORS );
 	int32_t seen = 0;
@@ -109,15 +43,15 @@ Test( sgs, coloring_separates_neighbors )
 		}
 	}
 	cr_expect_eq( seen, s.a->rows );
-	sgs_system_free( &s );
+	sere_test_cg_system_free( &s );
 }
 
 /* sere_sgs_apply against M = (D + L) D⁻¹ (D + U) formed densely from the coloring (L: entries
  * toward earlier colors) and solved by Gaussian elimination. */
 Test( sgs, apply_matches_dense_reference )
 {
-	sgs_system s;
-	sgs_system_make( &s, 10, 7 );
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 10, 7 );
 	double *lower = calloc( (size_t) s.n * s.n, sizeof( double ) ),
 		   *upper = calloc( (size_t) s.n * s.n, sizeof( double ) );
 	double *m = calloc( (size_t) s.n * s.n, sizeof( double ) ), *d = calloc( s.n, sizeof( double ) );
@@ -173,14 +107,14 @@ Test( sgs, apply_matches_dense_reference )
 	 * ~1e-14 of the solution; 1e-11 leaves room and is far below a wrong sweep (O(1)). */
 	cr_expect_leq( worst, 1e-11 * largest, "SGS differs from the dense solve by %g of %g", worst, largest );
 	free( lower ), free( upper ), free( m ), free( d ), free( r ), free( z ), free( ref );
-	sgs_system_free( &s );
+	sere_test_cg_system_free( &s );
 }
 
 /* M⁻¹ is symmetric: xᵀM⁻¹y = yᵀM⁻¹x, and positive: xᵀM⁻¹x > 0. */
 Test( sgs, preconditioner_is_symmetric_positive )
 {
-	sgs_system s;
-	sgs_system_make( &s, 30, 20 );
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 30, 20 );
 	double *x = malloc( sizeof( double ) * s.n ), *y = malloc( sizeof( double ) * s.n );
 	double *mx = malloc( sizeof( double ) * s.n ), *my = malloc( sizeof( double ) * s.n );
 	for ( int32_t i = 0; i < s.n; ++i )
@@ -204,7 +138,7 @@ Test( sgs, preconditioner_is_symmetric_positive )
 	cr_expect_leq( fabs( xmy - ymx ), 1e-12 * norm, "xᵀM⁻¹y = %.17g, yᵀM⁻¹x = %.17g", xmy, ymx );
 	cr_expect_gt( xmx, 0.0 );
 	free( x ), free( y ), free( mx ), free( my );
-	sgs_system_free( &s );
+	sere_test_cg_system_free( &s );
 }
 
 /* The solve reaches the tolerance on the true residual (checked here independently), in fewer
@@ -212,8 +146,8 @@ Test( sgs, preconditioner_is_symmetric_positive )
  * with the Jacobi PCG's solution to what the tolerance permits. */
 Test( sgs, cg_converges_deterministically, .timeout = 60 )
 {
-	sgs_system s;
-	sgs_system_make( &s, 60, 40 );
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 60, 40 );
 	sere_sell* sell;
 	sere_cg_workspace* w;
 	cr_assert_eq( sere_sell_create( s.a, SERE_SELL_SIGMA, &sell ), SERE_OK );
@@ -246,7 +180,7 @@ Test( sgs, cg_converges_deterministically, .timeout = 60 )
 	 * recursive sum), so the two relative residuals differ by at most twice that norm over ‖s.b‖.
 	 * At 1e-10 the cancellation in s.b − Ax is deep: this bound, not a fixed fraction of the
 	 * residual, is what rounding allows. */
-	double check = relative_residual( s.a, s.b, x[0] );
+	double check = sere_test_relative_residual( s.a, s.b, x[0] );
 	double bound2 = 0.0, bb = 0.0;
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
@@ -285,7 +219,7 @@ Test( sgs, cg_converges_deterministically, .timeout = 60 )
 	free( x[0] ), free( x[1] ), free( x[2] ), free( jacobi );
 	sere_cg_destroy( w );
 	sere_sell_destroy( sell );
-	sgs_system_free( &s );
+	sere_test_cg_system_free( &s );
 }
 
 /* The coloring's smallest cases take their own paths through the solve (the last color's
@@ -370,7 +304,7 @@ Test( sgs, one_and_two_colors_solve )
 			/* CG's bound with κ ≤ 9 even without a preconditioner: ½ √κ ln(2 / tolerance) ≈ 36 */
 			cr_expect_leq( result[0].iterations, 36, "two colors took %d iterations", result[0].iterations );
 		}
-		cr_expect_leq( relative_residual( &a, b, x[0] ), tolerance );
+		cr_expect_leq( sere_test_relative_residual( &a, b, x[0] ), tolerance );
 		double worst = 0.0, largest = 0.0;
 		for ( int32_t i = 0; i < N; ++i )
 		{
@@ -411,18 +345,25 @@ Test( sgs, rejects_bad_patterns_and_matrices )
 	sere_sgs_destroy( g );
 }
 
-/* The osmosis picks SGS for the stiff system and Jacobi for the easy one, by q (osmosis.h). */
+/* The osmosis picks multigrid for the stiffest system, SGS for a stiff one and Jacobi for the
+ * easy one, by q (osmosis.h), and each solve meets the tolerance. On this grid λ = 2000 gives
+ * q = 0.9995, λ = 100 gives 0.990 and λ = 0.04 gives 0.037. */
 Test( sgs, osmosis_picks_by_offdiagonal_ratio )
 {
-	const double lambdas[2] = { 100.0, 0.04 };
-	for ( int k = 0; k < 2; ++k )
+	const double lambdas[3] = { 2000.0, 100.0, 0.04 };
+	const sere_osmosis_precond expected[3] = { SERE_OSMOSIS_AMG, SERE_OSMOSIS_SGS, SERE_OSMOSIS_JACOBI };
+	for ( int k = 0; k < 3; ++k )
 	{
 		sere_model model;
 		sere_osmosis* o;
 		sere_osmosis_report report;
-		double* b = v_system( &model, 30, 20, lambdas[k], &o, &report );
-		cr_expect_eq( report.sgs, report.offdiag > SERE_OSMOSIS_SGS_ABOVE );
-		cr_expect_eq( report.sgs, k == 0, "lambda %g: q = %g, sgs %d", lambdas[k], report.offdiag, report.sgs );
+		double* b = sere_test_v_system( &model, 30, 20, lambdas[k], &o, &report );
+		sere_osmosis_precond by_q = report.offdiag > SERE_OSMOSIS_AMG_ABOVE	  ? SERE_OSMOSIS_AMG
+									: report.offdiag > SERE_OSMOSIS_SGS_ABOVE ? SERE_OSMOSIS_SGS
+																			  : SERE_OSMOSIS_JACOBI;
+		cr_expect_eq( report.preconditioner, by_q );
+		cr_expect_eq( report.preconditioner, expected[k], "lambda %g: q = %g, preconditioner %d", lambdas[k],
+					  report.offdiag, report.preconditioner );
 		cr_expect_leq( report.residual, sere_osmosis_params_default().tolerance );
 		sere_osmosis_destroy( o );
 		sere_model_destroy( &model );

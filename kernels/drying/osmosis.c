@@ -17,6 +17,7 @@ struct sere_osmosis
 	sere_sell* sell;		  /* a's SELL layout for the CG, built once (the pattern never changes) and
 							   * written by the assembly beside a, through sell->slot */
 	sere_sgs* sgs;			  /* a's multicolor SGS layout, built and written the same way */
+	sere_amg* amg;			  /* multigrid levels over sgs, built at the first step that needs them */
 	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
@@ -64,6 +65,7 @@ void sere_osmosis_destroy( sere_osmosis* o )
 	sere_free( o->length );
 	sere_cg_destroy( o->cg );
 	sere_sell_destroy( o->sell );
+	sere_amg_destroy( o->amg );
 	sere_sgs_destroy( o->sgs );
 	free( o );
 }
@@ -347,13 +349,33 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	}
 
 	o->history = o->history < 2 ? o->history + 1 : 2;
-	sere_cg_result result;
-	report->sgs = offdiag > SERE_OSMOSIS_SGS_ABOVE;
+	sere_cg_result result = { 0 };
+	report->preconditioner = offdiag > SERE_OSMOSIS_AMG_ABOVE	? SERE_OSMOSIS_AMG
+							 : offdiag > SERE_OSMOSIS_SGS_ABOVE ? SERE_OSMOSIS_SGS
+																: SERE_OSMOSIS_JACOBI;
+	sere_status status = SERE_OK;
+	if ( report->preconditioner == SERE_OSMOSIS_AMG && o->amg == NULL )
+	{
+		status = sere_amg_create( &o->a, o->sgs, &o->amg );
+	}
 	/* Jeong Eq. 9 solved: SPD after the change of unknown, so preconditioned CG applies. */
-	sere_status status =
-		report->sgs
-			? sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, params->tolerance, params->max_iterations, &result )
-			: sere_cg_solve( o->cg, o->sell, o->rhs, o->c, params->tolerance, params->max_iterations, &result );
+	if ( status == SERE_OK )
+	{
+		const double tol = params->tolerance;
+		const int32_t cap = params->max_iterations;
+		switch ( report->preconditioner )
+		{
+			case SERE_OSMOSIS_AMG:
+				sere_amg_update( o->amg );
+				status = sere_cg_solve_amg( o->cg, o->amg, o->rhs, o->c, tol, cap, &result );
+				break;
+			case SERE_OSMOSIS_SGS:
+				status = sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, tol, cap, &result );
+				break;
+			default:
+				status = sere_cg_solve( o->cg, o->sell, o->rhs, o->c, tol, cap, &result );
+		}
+	}
 	report->offdiag = offdiag;
 	report->iterations = result.iterations;
 	report->residual = result.residual;

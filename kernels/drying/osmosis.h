@@ -1,5 +1,5 @@
 /* sere — osmotic water flow on one layer (Sec. 4, Jeong Eq. 3–10), solved as an SPD system with the
- * CG of cg.h, Jacobi- or multicolor-SGS-preconditioned (SERE_OSMOSIS_SGS_ABOVE). */
+ * CG of cg.h, preconditioned by Jacobi, multicolor SGS or aggregation multigrid, by stiffness. */
 #pragma once
 
 #include "solve/cg.h"
@@ -46,12 +46,27 @@ sere_osmosis_params sere_osmosis_params_default( void );
  * about 1.3× the cost of one (BM_PCG). */
 #define SERE_OSMOSIS_SGS_ABOVE 0.95
 
+/* Above this q (Jacobi's κ bound 400) the system is nearly singular on its smooth vectors and
+ * the aggregation multigrid takes over (sere_cg_solve_amg). A V-cycle costs about three SGS-PCG
+ * iterations, so it pays where it saves more than two of every three: on the 30 × 20 test layer's
+ * first step SGS needs 38 iterations at q = 0.990, 64 at 0.9966 and 89 at 0.9990, the multigrid
+ * 18 at 0.9995; on the plane tree's V layer (q = 0.9999) at frame 100, 148 against 13. Its
+ * levels are built at the first such step. */
+#define SERE_OSMOSIS_AMG_ABOVE 0.995
+
+typedef enum sere_osmosis_precond
+{
+	SERE_OSMOSIS_JACOBI,
+	SERE_OSMOSIS_SGS,
+	SERE_OSMOSIS_AMG,
+} sere_osmosis_precond;
+
 typedef struct sere_osmosis_report
 {
 	int32_t iterations;
 	double residual;
-	int sgs;		/* 1: solved with the SGS preconditioner, 0: Jacobi */
-	double offdiag; /* q of the assembled system (above) */
+	sere_osmosis_precond preconditioner; /* the step's, by q */
+	double offdiag;						 /* q of the assembled system (above) */
 	double water_before, water_after;
 	int stopped; /* the layer had no water left: nothing was solved (Sec. 6) */
 } sere_osmosis_report;

@@ -193,6 +193,66 @@ sere_status sere_sgs_set_threads( sere_sgs* sgs, int32_t threads );
 sere_status sere_cg_solve_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs, const double* b, double* x,
 							   double tolerance, int32_t max_iterations, sere_cg_result* result );
 
+/* Aggregation multigrid (AMG), the strongest preconditioner here, for systems whose smooth errors
+ * SGS removes slowly: a diffusion system whose mass term is small beside its couplings (the plane
+ * tree's Voronoi layer: Σ_j |a_ij| / a_ii = 0.9999, where SGS-PCG needs 50–150 iterations a
+ * frame) is nearly singular on its smoothest vectors, which no sweep moves far.
+ *
+ * Levels: rows are grouped into aggregates (each row of a fresh group with its neighbors, in row
+ * order; leftover rows join their first grouped neighbor), and level l + 1 has one row per
+ * aggregate of level l with A_{l+1} = Pᵀ A_l P, P the aggregates' indicator (piecewise constant:
+ * an entry of A_{l+1} is the sum of the entries of A_l between two aggregates, so refreshing the
+ * values is one summation pass). Coarsening goes on while it shrinks a level to at most 4/5 of
+ * its rows; a coarsest level of at most SERE_AMG_DENSE_ROWS rows is factored (Cholesky) and solved
+ * exactly. Aggregates follow the pattern only, so they stay valid while the values change.
+ *
+ * One application is a V-cycle: a forward multicolor Gauss–Seidel sweep from zero, the residual
+ * restricted to the next level, its correction scaled by SERE_AMG_OVERCORRECT, a backward sweep.
+ * The backward sweep is the forward one's adjoint, so the preconditioner is symmetric; it is
+ * positive definite for any positive scaling when the sweeps converge (an A-norm argument: the
+ * coarse step never amplifies error, a strictly diagonally dominant or SPD level's sweeps
+ * contract), so CG applies. The scaling: unsmoothed aggregates' corrections come out too small,
+ * and 1.8 took the plane tree's V system from 18 to 12 iterations (Braess 1995 uses the same
+ * remedy). Every level's sweeps run over the SGS layout (sere_sgs) and every sum in a fixed
+ * order: the same bits for any thread count.
+ *
+ * The finest level's layout and values are the caller's sgs (built from the same a), kept current
+ * by the caller; sere_amg_update then refreshes the coarse levels from it. One solve at a time
+ * per sere_amg (it holds the coarse levels' vectors). */
+#define SERE_AMG_DENSE_ROWS	 64
+#define SERE_AMG_OVERCORRECT 1.8
+#define SERE_AMG_MAX_LEVELS	 16
+
+typedef struct sere_amg sere_amg;
+
+/* Builds the levels over fine, which must have been built from a (rows and nnz are checked).
+ * SERE_ERR_ARGUMENT for a NULL or mismatched argument or an invalid a. */
+sere_status sere_amg_create( const sere_csr* a, const sere_sgs* fine, sere_amg** out );
+void sere_amg_destroy( sere_amg* amg );
+
+/* Says the fine sgs's values changed: the next V-cycle (of a solve that needs one, or of
+ * sere_amg_apply) first recomputes the coarse values from them. That V-cycle's call returns
+ * SERE_ERR_NOT_SPD for a level with a diagonal entry that is not positive or a coarsest matrix
+ * that is not positive definite; the solves and sere_amg_apply return SERE_ERR_ARGUMENT before
+ * the first update. */
+sere_status sere_amg_update( sere_amg* amg );
+
+/* z = B r (one V-cycle) in the row numbering, for tests and callers with their own Krylov method. */
+sere_status sere_amg_apply( sere_amg* amg, const double* r, double* z );
+
+/* Levels (the finest counts), and the rows of level l (0 for l out of range). */
+int32_t sere_amg_levels( const sere_amg* amg );
+int32_t sere_amg_rows( const sere_amg* amg, int32_t level );
+
+/* The threads sere_amg_update and sere_amg_apply run with (core/base.h; SERE_ERR_ARGUMENT above
+ * SERE_MAX_THREADS). sere_cg_solve_amg runs with its workspace's count instead. */
+sere_status sere_amg_set_threads( sere_amg* amg, int32_t threads );
+
+/* sere_cg_solve preconditioned with one V-cycle of amg (as updated last) per iteration: the same
+ * arguments, statuses and result (the reported residual is the true one, computed at the end). */
+sere_status sere_cg_solve_amg( sere_cg_workspace* workspace, sere_amg* amg, const double* b, double* x,
+							   double tolerance, int32_t max_iterations, sere_cg_result* result );
+
 #ifdef __cplusplus
 }
 #endif

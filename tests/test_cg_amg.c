@@ -1,0 +1,279 @@
+/* The aggregation multigrid preconditioner (cg.h: sere_amg) and the CG it drives
+ * (sere_cg_solve_amg): its levels, symmetry and positivity, convergence against SGS on stiff
+ * systems, thread-count determinism, the smallest matrices, and bad input. */
+#include "fixture_cg.h"
+
+#include <criterion/criterion.h>
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+static sere_amg* amg_on( const sere_test_cg_system* s )
+{
+	sere_amg* m = NULL;
+	cr_assert_eq( sere_amg_create( s->a, s->g, &m ), SERE_OK );
+	cr_assert_eq( sere_amg_update( m ), SERE_OK );
+	return m;
+}
+
+/* Each level has at most 4/5 of the rows of the one before, and the last is small enough to be
+ * factored: the coarsening stops where cg.h says. */
+Test( amg, levels_shrink_to_a_dense_level )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 60, 40 );
+	sere_amg* m = amg_on( &s );
+	const int32_t levels = sere_amg_levels( m );
+	cr_expect_geq( levels, 3, "%d levels for %d rows", levels, s.n );
+	cr_expect_eq( sere_amg_rows( m, 0 ), s.n );
+	for ( int32_t l = 1; l < levels; ++l )
+	{
+		cr_expect_leq( 5 * sere_amg_rows( m, l ), 4 * sere_amg_rows( m, l - 1 ), "level %d: %d rows after %d", l,
+					   sere_amg_rows( m, l ), sere_amg_rows( m, l - 1 ) );
+		cr_expect_gt( sere_amg_rows( m, l ), 0 );
+	}
+	cr_expect_leq( sere_amg_rows( m, levels - 1 ), SERE_AMG_DENSE_ROWS );
+	cr_expect_eq( sere_amg_rows( m, levels ), 0 );
+	sere_amg_destroy( m );
+	sere_test_cg_system_free( &s );
+}
+
+/* xᵀBy = yᵀBx and xᵀBx > 0 for the V-cycle B: CG needs both. */
+Test( amg, preconditioner_is_symmetric_positive )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 30, 20 );
+	sere_amg* m = amg_on( &s );
+	double *x = malloc( sizeof( double ) * s.n ), *y = malloc( sizeof( double ) * s.n );
+	double *bx = malloc( sizeof( double ) * s.n ), *by = malloc( sizeof( double ) * s.n );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		x[i] = sin( 1.7 * i + 0.3 );
+		y[i] = cos( 0.9 * i ) + 0.5; /* a smooth part too: the coarse levels carry it */
+	}
+	cr_assert_eq( sere_amg_apply( m, x, bx ), SERE_OK );
+	cr_assert_eq( sere_amg_apply( m, y, by ), SERE_OK );
+	double xby = 0.0, ybx = 0.0, xbx = 0.0, yby = 0.0, norm = 0.0;
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		xby += x[i] * by[i];
+		ybx += y[i] * bx[i];
+		xbx += x[i] * bx[i];
+		yby += y[i] * by[i];
+		norm += fabs( x[i] * by[i] ) + fabs( y[i] * bx[i] );
+	}
+	/* The sweeps are adjoint and the coarse matrices bitwise symmetric, so the two sums differ by
+	 * rounding only: each level's sweeps and sums add a few ulps per term, which the coarse
+	 * solves of this nearly singular system (κ ≈ 10³) carry into the result; 1e-10 of the sum's
+	 * size leaves room for that, while a V-cycle without its backward sweep (not symmetric)
+	 * differs by O(1) of it. */
+	cr_expect_leq( fabs( xby - ybx ), 1e-10 * norm, "xᵀBy = %.17g, yᵀBx = %.17g", xby, ybx );
+	cr_expect_gt( xbx, 0.0 );
+	cr_expect_gt( yby, 0.0 );
+	free( x ), free( y ), free( bx ), free( by );
+	sere_amg_destroy( m );
+	sere_test_cg_system_free( &s );
+}
+
+/* The solve reaches the tolerance on the true residual (recomputed here), with the same bits at
+ * 1, 2 and 3 threads, in fewer iterations than SGS on a stiff system, and agrees with the SGS
+ * solution to what the tolerance permits. */
+static void converges_against_sgs( double lambda, int32_t nx, int32_t ny, int32_t fewer_by )
+{
+	sere_test_cg_system s;
+	s.b = sere_test_v_system( &s.model, nx, ny, lambda, &s.o, &s.report );
+	s.a = sere_osmosis_matrix( s.o );
+	s.n = s.a->rows;
+	cr_assert_eq( sere_sgs_create( s.a, &s.g ), SERE_OK );
+	sere_amg* m = amg_on( &s );
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( s.n, &w ), SERE_OK );
+	const double tolerance = 1e-10;
+	double *x[3], *sgs = malloc( sizeof( double ) * s.n );
+	sere_cg_result result[3], sgs_result;
+	for ( int t = 0; t < 3; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		x[t] = calloc( (size_t) s.n, sizeof( double ) );
+		cr_assert_eq( sere_cg_solve_amg( w, m, s.b, x[t], tolerance, 1000, &result[t] ), SERE_OK );
+		cr_expect_leq( result[t].residual, tolerance );
+	}
+	for ( int t = 1; t < 3; ++t )
+	{
+		cr_expect_eq( result[t].iterations, result[0].iterations );
+		cr_expect_eq( memcmp( x[t], x[0], sizeof( double ) * s.n ), 0, "%d threads differ from 1", t + 1 );
+	}
+	/* The reported residual is the true one: the CSR product's recomputation agrees to the
+	 * rounding of b − Ax, which at 1e-10 cancels ten digits: 1e-4 of it is far above that
+	 * rounding and far below the factor a wrong report would be off by. */
+	double check = sere_test_relative_residual( s.a, s.b, x[0] );
+	cr_expect_leq( fabs( check - result[0].residual ), 1e-4 * result[0].residual + 1e-15, "reported %g, recomputed %g",
+				   result[0].residual, check );
+	omp_set_num_threads( 2 );
+	memset( sgs, 0, sizeof( double ) * s.n );
+	cr_assert_eq( sere_cg_solve_sgs( w, s.g, s.b, sgs, tolerance, 5000, &sgs_result ), SERE_OK );
+	cr_expect_lt( fewer_by * result[0].iterations, sgs_result.iterations, "lambda %g: multigrid %d, SGS %d", lambda,
+				  result[0].iterations, sgs_result.iterations );
+	/* Two solutions of relative residual ≤ 1e-10 differ by at most κ(A) · 2e-10 relative, κ(A) ≲
+	 * 10⁵ here (1 / (1 − q) with q ≤ 0.99999): 1e-4 of the solution's size. */
+	double worst = 0.0, largest = 0.0;
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		worst = fmax( worst, fabs( x[0][i] - sgs[i] ) );
+		largest = fmax( largest, fabs( sgs[i] ) );
+	}
+	cr_expect_leq( worst, 1e-4 * largest, "multigrid and SGS solutions differ by %g of %g", worst, largest );
+	free( x[0] ), free( x[1] ), free( x[2] ), free( sgs );
+	sere_cg_destroy( w );
+	sere_amg_destroy( m );
+	sere_test_cg_system_free( &s );
+}
+
+/* λ = 100 (q = 0.990): the multigrid must at least halve SGS's iterations; λ = 2000 (q = 0.9995),
+ * where SGS's iterations grow with √κ and the multigrid's barely do, divide them by four. */
+Test( amg, cg_converges_deterministically, .timeout = 60 )
+{
+	converges_against_sgs( 100.0, 60, 40, 2 );
+	converges_against_sgs( 2000.0, 60, 40, 4 );
+}
+
+/* The smallest cases take their own paths: a diagonal matrix does not coarsen (every aggregate a
+ * single row: one level, B = D⁻¹ = A⁻¹, one step solves it); a 1 × 1 matrix; a path
+ * tridiag(−1, 2.05, −1) of 500 rows (aggregates of three, down to a dense level; κ ≈ 80) solved
+ * to 1e-12 with the same bits at 1–3 threads and within κ · 1e-12 of Thomas's solution. */
+Test( amg, small_and_diagonal_matrices )
+{
+	enum
+	{
+		N = 500
+	};
+	int32_t row_ptr[N + 1], col[3 * N];
+	double val[3 * N], b[N], x[3][N], exact[N];
+	for ( int32_t i = 0; i < N; ++i )
+	{
+		row_ptr[i] = i;
+		col[i] = i;
+		val[i] = 1.0 + 0.01 * i;
+		b[i] = sin( 0.3 * i ) + 2.0;
+	}
+	row_ptr[N] = N;
+	sere_csr diagonal = { N, N, row_ptr, col, val };
+	sere_sgs* g;
+	sere_amg* m;
+	sere_cg_workspace* w;
+	sere_cg_result result;
+	cr_assert_eq( sere_cg_create( N, &w ), SERE_OK );
+	cr_assert_eq( sere_sgs_create( &diagonal, &g ), SERE_OK );
+	cr_assert_eq( sere_amg_create( &diagonal, g, &m ), SERE_OK );
+	cr_expect_eq( sere_amg_levels( m ), 1 );
+	cr_assert_eq( sere_amg_update( m ), SERE_OK );
+	memset( x[0], 0, sizeof( x[0] ) );
+	cr_assert_eq( sere_cg_solve_amg( w, m, b, x[0], 1e-14, 10, &result ), SERE_OK );
+	cr_expect_eq( result.iterations, 1 );
+	for ( int32_t i = 0; i < N; ++i )
+	{
+		cr_expect_leq( fabs( x[0][i] - b[i] / val[i] ), 1e-15 * fabs( b[i] / val[i] ), "row %d", i );
+	}
+	sere_amg_destroy( m ), sere_sgs_destroy( g );
+
+	sere_csr one = { 1, 1, row_ptr, col, val };
+	cr_assert_eq( sere_sgs_create( &one, &g ), SERE_OK );
+	cr_assert_eq( sere_amg_create( &one, g, &m ), SERE_OK );
+	cr_assert_eq( sere_amg_update( m ), SERE_OK );
+	x[0][0] = 0.0;
+	cr_assert_eq( sere_cg_solve_amg( w, m, b, x[0], 1e-14, 10, &result ), SERE_OK );
+	cr_expect_leq( fabs( x[0][0] - b[0] / val[0] ), 1e-15 * fabs( b[0] / val[0] ) );
+	sere_amg_destroy( m ), sere_sgs_destroy( g );
+
+	int32_t nnz = 0;
+	for ( int32_t i = 0; i < N; ++i )
+	{
+		row_ptr[i] = nnz;
+		for ( int32_t j = i - 1; j <= i + 1; ++j )
+		{
+			if ( j >= 0 && j < N )
+			{
+				col[nnz] = j;
+				val[nnz++] = j == i ? 2.05 : -1.0;
+			}
+		}
+	}
+	row_ptr[N] = nnz;
+	sere_csr path = { N, nnz, row_ptr, col, val };
+	cr_assert_eq( sere_sgs_create( &path, &g ), SERE_OK );
+	cr_assert_eq( sere_amg_create( &path, g, &m ), SERE_OK );
+	cr_expect_geq( sere_amg_levels( m ), 3 );
+	cr_assert_eq( sere_amg_update( m ), SERE_OK );
+	/* Thomas's elimination for the exact solution */
+	double c[N], d[N];
+	c[0] = -1.0 / 2.05, d[0] = b[0] / 2.05;
+	for ( int32_t i = 1; i < N; ++i )
+	{
+		double den = 2.05 + c[i - 1];
+		c[i] = -1.0 / den, d[i] = ( b[i] + d[i - 1] ) / den;
+	}
+	exact[N - 1] = d[N - 1];
+	for ( int32_t i = N - 2; i >= 0; --i )
+	{
+		exact[i] = d[i] - c[i] * exact[i + 1];
+	}
+	int32_t iterations = 0;
+	for ( int t = 0; t < 3; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		memset( x[t], 0, sizeof( x[t] ) );
+		cr_assert_eq( sere_cg_solve_amg( w, m, b, x[t], 1e-12, 200, &result ), SERE_OK );
+		cr_expect_leq( result.residual, 1e-12 );
+		iterations = t == 0 ? result.iterations : iterations;
+		cr_expect_eq( result.iterations, iterations );
+		cr_expect_eq( memcmp( x[t], x[0], sizeof( x[0] ) ), 0, "%d threads differ from 1", t + 1 );
+	}
+	/* Unpreconditioned CG needs about √κ · ln(2 / 1e-12) / 2 ≈ 125 iterations on this path. */
+	cr_expect_lt( iterations, 40, "%d iterations", iterations );
+	double worst = 0.0, largest = 0.0;
+	for ( int32_t i = 0; i < N; ++i )
+	{
+		worst = fmax( worst, fabs( x[0][i] - exact[i] ) );
+		largest = fmax( largest, fabs( exact[i] ) );
+	}
+	cr_expect_leq( worst, 80.0 * 1e-12 * sqrt( (double) N ) * largest, "off by %g of %g", worst, largest );
+	omp_set_num_threads( 2 );
+	sere_amg_destroy( m ), sere_sgs_destroy( g );
+	sere_cg_destroy( w );
+}
+
+Test( amg, rejects_bad_input )
+{
+	/* [−2 1; 1 2]: a valid pattern, a negative diagonal */
+	int32_t row_ptr[] = { 0, 2, 4 }, col[] = { 0, 1, 0, 1 };
+	double val[] = { -2.0, 1.0, 1.0, 2.0 }, b[2] = { 1.0, 1.0 }, x[2] = { 0.0, 0.0 };
+	sere_csr a = { 2, 4, row_ptr, col, val };
+	sere_sgs *g, *other;
+	sere_amg* m = NULL;
+	sere_cg_workspace* w;
+	sere_cg_result result;
+	cr_assert_eq( sere_sgs_create( &a, &g ), SERE_OK );
+	cr_assert_eq( sere_cg_create( 2, &w ), SERE_OK );
+	cr_expect_eq( sere_amg_create( NULL, g, &m ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_amg_create( &a, NULL, &m ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_amg_create( &a, g, NULL ), SERE_ERR_ARGUMENT );
+	int32_t one_ptr[] = { 0, 1 }, one_col[] = { 0 };
+	double one_val[] = { 1.0 };
+	sere_csr one = { 1, 1, one_ptr, one_col, one_val };
+	cr_assert_eq( sere_sgs_create( &one, &other ), SERE_OK );
+	cr_expect_eq( sere_amg_create( &a, other, &m ), SERE_ERR_ARGUMENT, "an sgs of another matrix" );
+	cr_assert_eq( sere_amg_create( &a, g, &m ), SERE_OK );
+	cr_expect_eq( sere_cg_solve_amg( w, m, b, x, 1e-8, 10, &result ), SERE_ERR_ARGUMENT, "before the first update" );
+	cr_expect_eq( sere_amg_apply( m, b, x ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_amg_update( m ), SERE_OK );
+	cr_expect_eq( sere_cg_solve_amg( w, m, b, x, 1e-8, 10, &result ), SERE_ERR_NOT_SPD );
+	cr_expect_eq( sere_amg_apply( m, b, x ), SERE_ERR_NOT_SPD );
+	cr_expect_eq( sere_cg_solve_amg( w, m, b, x, -1.0, 10, &result ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_amg_set_threads( m, SERE_MAX_THREADS + 1 ), SERE_ERR_ARGUMENT );
+	double nan_b[2] = { NAN, 1.0 };
+	cr_expect_eq( sere_cg_solve_amg( w, m, nan_b, x, 1e-8, 10, &result ), SERE_ERR_NONFINITE );
+	sere_amg_destroy( m ), sere_sgs_destroy( g ), sere_sgs_destroy( other );
+	sere_cg_destroy( w );
+}
