@@ -18,6 +18,7 @@ struct sere_osmosis
 							   * written by the assembly beside a, through sell->slot */
 	sere_sgs* sgs;			  /* a's multicolor SGS layout, built and written the same way */
 	sere_amg* amg;			  /* multigrid levels over sgs, built at the first step that needs them */
+	int32_t amg_steps;		  /* steps solved with them, for SERE_OSMOSIS_AMG_REFRESH */
 	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
@@ -366,7 +367,10 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		switch ( report->preconditioner )
 		{
 			case SERE_OSMOSIS_AMG:
-				sere_amg_update( o->amg );
+				if ( o->amg_steps++ % SERE_OSMOSIS_AMG_REFRESH == 0 )
+				{
+					sere_amg_update( o->amg );
+				}
 				status = sere_cg_solve_amg( o->cg, o->amg, o->rhs, o->c, tol, cap, &result );
 				break;
 			case SERE_OSMOSIS_SGS:

@@ -54,6 +54,13 @@ sere_osmosis_params sere_osmosis_params_default( void );
  * levels are built at the first such step. */
 #define SERE_OSMOSIS_AMG_ABOVE 0.995
 
+/* The multigrid's coarse levels follow the matrix every this many of its steps (sere_amg_update)
+ * and lag it in between; its finest level always has the step's values. A drying layer's matrix
+ * drifts by about 10⁻³ a step: on the plane tree (200 frames of table1) the V iterations stay at
+ * 6.7 a frame whether the coarse levels follow every step, every 16th or only the first, and
+ * following every 16th instead of every step saves 0.08 ms a frame at 1 thread. */
+#define SERE_OSMOSIS_AMG_REFRESH 16
+
 typedef enum sere_osmosis_precond
 {
 	SERE_OSMOSIS_JACOBI,

@@ -217,8 +217,8 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs
  * order: the same bits for any thread count.
  *
  * The finest level's layout and values are the caller's sgs (built from the same a), kept current
- * by the caller; sere_amg_update then refreshes the coarse levels from it. One solve at a time
- * per sere_amg (it holds the coarse levels' vectors). */
+ * by the caller; sere_amg_update has the coarse levels follow them. One solve at a time per
+ * sere_amg (it holds the coarse levels' vectors). */
 #define SERE_AMG_DENSE_ROWS	 64
 #define SERE_AMG_OVERCORRECT 1.8
 #define SERE_AMG_MAX_LEVELS	 16
@@ -230,11 +230,14 @@ typedef struct sere_amg sere_amg;
 sere_status sere_amg_create( const sere_csr* a, const sere_sgs* fine, sere_amg** out );
 void sere_amg_destroy( sere_amg* amg );
 
-/* Says the fine sgs's values changed: the next V-cycle (of a solve that needs one, or of
- * sere_amg_apply) first recomputes the coarse values from them. That V-cycle's call returns
- * SERE_ERR_NOT_SPD for a level with a diagonal entry that is not positive or a coarsest matrix
- * that is not positive definite; the solves and sere_amg_apply return SERE_ERR_ARGUMENT before
- * the first update. */
+/* Says the coarse levels should follow the fine sgs's values: the next V-cycle (of a solve that
+ * needs one, or of sere_amg_apply) recomputes them. Between updates they keep their values while
+ * the finest level follows the sgs's current ones (its D⁻¹ is taken at every solve): B stays
+ * symmetric positive definite with coarse levels that lag (the argument above holds for any SPD
+ * coarse matrices), only weaker as the values drift, so a caller whose matrix drifts slowly may
+ * update every few steps (the osmosis does). A V-cycle's call returns SERE_ERR_NOT_SPD for a
+ * level with a diagonal entry that is not positive or a coarsest matrix that is not positive
+ * definite; the solves and sere_amg_apply return SERE_ERR_ARGUMENT before the first update. */
 sere_status sere_amg_update( sere_amg* amg );
 
 /* z = B r (one V-cycle) in the row numbering, for tests and callers with their own Krylov method. */

@@ -31,10 +31,10 @@ struct sere_amg
 	int32_t dense_rows; /* the dense level past the last sgs level; 0 when there is none */
 	double *dense, *factor, *dense_b, *dense_x;
 	int32_t threads;
-	/* sere_amg_update only marks the levels stale; the next V-cycle refreshes them (a solve that
-	 * starts converged never pays for it: the plane tree's triangle layer, most frames). */
-	int updated, stale;
-	sere_status refreshed; /* the last refresh's status */
+	/* sere_amg_update only marks the coarse levels stale; the next V-cycle refreshes them (a
+	 * solve that starts converged never pays for it: the plane tree's triangle layer, most
+	 * frames). coarse_bad: the last refresh found a coarse level that is not SPD. */
+	int updated, stale, coarse_bad;
 	sere_spin_barrier* barrier;
 };
 
@@ -476,25 +476,24 @@ sere_status sere_amg_update( sere_amg* m )
 	return SERE_OK;
 }
 
-/* The coarse values from the fine ones (Galerkin sums level by level), the levels' D⁻¹ and the
- * dense level's factor, when stale. */
+/* What a V-cycle needs: the finest level's D⁻¹ from the sgs's current values (every call: the
+ * caller refills them every step), and when an update asked for it the coarse values (Galerkin
+ * sums level by level), their D⁻¹ and the dense level's factor. */
 static sere_status refresh( sere_amg* m, int32_t threads )
 {
 	if ( !m->updated )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( !m->stale )
-	{
-		return m->refreshed;
-	}
 	int bad = 0;
-	for ( int32_t l = 0; l < m->levels; ++l )
+	const int32_t levels = m->stale ? m->levels : 1;
+	for ( int32_t l = 0; l < levels; ++l )
 	{
 		amg_level* L = &m->level[l];
 		const double* val = L->g->val;
 		const double* diagonal = val + L->g->upper_ptr[L->g->chunks];
 		double* next = l + 1 < m->levels ? m->level[l + 1].own->val : m->dense;
+		const int32_t targets = m->stale ? L->targets : 0;
 #pragma omp parallel num_threads( sere_team_for( threads ) )
 		{
 #pragma omp for schedule( static ) reduction( | : bad )
@@ -505,7 +504,7 @@ static sere_status refresh( sere_amg* m, int32_t threads )
 				L->inv_diag[at] = real && diagonal[at] > 0.0 ? 1.0 / diagonal[at] : 0.0;
 			}
 #pragma omp for schedule( static )
-			for ( int32_t t = 0; t < L->targets; ++t )
+			for ( int32_t t = 0; t < targets; ++t )
 			{
 				double sum = 0.0;
 				for ( int32_t q = L->sum_ptr[t]; q < L->sum_ptr[t + 1]; ++q )
@@ -516,10 +515,12 @@ static sere_status refresh( sere_amg* m, int32_t threads )
 			}
 		}
 	}
-	bad |= m->dense_rows > 0 && !factor_dense( m );
-	m->stale = 0;
-	m->refreshed = bad ? SERE_ERR_NOT_SPD : SERE_OK;
-	return m->refreshed;
+	if ( m->stale )
+	{
+		m->coarse_bad = bad || ( m->dense_rows > 0 && !factor_dense( m ) );
+		m->stale = 0;
+	}
+	return bad || m->coarse_bad ? SERE_ERR_NOT_SPD : SERE_OK;
 }
 
 /* The threads of a V-cycle: tid of team, meeting at barrier. */
