@@ -92,6 +92,21 @@ Test( osmosis, matrix_is_symmetric )
 	}
 	/* HPCG's symmetry test: |xᵀAy − yᵀAx| at rounding level of the sums (1e-14 of their size). */
 	cr_expect_leq( fabs( xay - yax ), 1e-14 * norm );
+	/* and entry by entry, exactly: both rows of a spring read its one conductance */
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+		{
+			int32_t j = a->col[k], m = a->row_ptr[j];
+			while ( m < a->row_ptr[j + 1] && a->col[m] != i )
+			{
+				m += 1;
+			}
+			cr_assert_lt( m, a->row_ptr[j + 1], "entry (%d, %d) without (%d, %d)", i, j, j, i );
+			cr_expect_eq( a->val[k], a->val[m], "a(%d, %d) = %.17g, a(%d, %d) = %.17g", i, j, a->val[k], j, i,
+						  a->val[m] );
+		}
+	}
 	free( x ), free( y ), free( ax ), free( ay );
 	osmosis_free( o, &model );
 }

@@ -9,6 +9,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The preconditioner's layouts the assembly writes beside a: Jacobi reads the SELL one, SGS and
+ * the multigrid the SGS one. A step writes the ones its predecessor used (a layer's stiffness
+ * moves slowly) and copies a into the other when its q picks the other preconditioner. */
+enum
+{
+	FILL_SELL = 1,
+	FILL_SGS = 2
+};
+
 struct sere_osmosis
 {
 	int32_t threads; /* sere_osmosis_set_threads */
@@ -19,14 +28,16 @@ struct sere_osmosis
 	sere_sgs* sgs;			  /* a's multicolor SGS layout, built and written the same way */
 	sere_amg* amg;			  /* multigrid levels over sgs, built at the first step that needs them */
 	int32_t amg_steps;		  /* steps solved with them, for SERE_OSMOSIS_AMG_REFRESH */
+	int filled;				  /* the layouts the assembly writes: FILL_SELL, FILL_SGS (the last step's) */
 	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
 	int32_t spring_count;
 	double *rhs, *c, *edge_sum, *length;
-	double* last;  /* the concentration the previous step started from */
-	double* last2; /* and the one before */
-	int history;   /* how many of last, last2 hold a step (0, 1 or 2) */
+	double* conductance; /* per spring, K_ij of Jeong Eq. 6–8 at this step (both rows read it) */
+	double* last;		 /* the concentration the previous step started from */
+	double* last2;		 /* and the one before */
+	int history;		 /* how many of last, last2 hold a step (0, 1 or 2) */
 	sere_cg_workspace* cg;
 };
 
@@ -64,6 +75,7 @@ void sere_osmosis_destroy( sere_osmosis* o )
 	sere_free( o->last2 );
 	sere_free( o->edge_sum );
 	sere_free( o->length );
+	sere_free( o->conductance );
 	sere_cg_destroy( o->cg );
 	sere_sell_destroy( o->sell );
 	sere_amg_destroy( o->amg );
@@ -92,6 +104,7 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	}
 	o->first = first;
 	o->count = count;
+	o->filled = FILL_SELL | FILL_SGS;
 	o->sa = a;
 	o->sb = b;
 	o->spring_count = spring_count;
@@ -109,9 +122,11 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	o->last2 = sere_alloc( sizeof( double ) * (size_t) count );
 	o->edge_sum = sere_alloc( sizeof( double ) * (size_t) count );
 	o->length = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
+	o->conductance = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
 	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) count );
 	if ( !o->a.row_ptr || !o->a.col || !o->a.val || !o->neighbor_spring || !o->diagonal || !o->rhs || !o->c ||
-		 !o->last || !o->last2 || !o->edge_sum || !o->length || !fill || sere_cg_create( count, &o->cg ) != SERE_OK )
+		 !o->last || !o->last2 || !o->edge_sum || !o->length || !o->conductance || !fill ||
+		 sere_cg_create( count, &o->cg ) != SERE_OK )
 	{
 		free( fill );
 		sere_osmosis_destroy( o );
@@ -191,8 +206,6 @@ const double* sere_osmosis_solution( const sere_osmosis* o )
 	return o->c;
 }
 
-/* Spring lengths |l_ij| and E_i = Σ_j |l_ij| (Jeong Eq. 3) at the current positions;
- * SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
 sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
 {
 	sere_status status = osmosis == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &osmosis->threads, threads );
@@ -205,7 +218,12 @@ sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
 	return status;
 }
 
-static sere_status spring_lengths( sere_osmosis* o, const float* x, const float* y, const float* z )
+/* Per spring at the current positions: its length |l_ij| and its conductance
+ * K_ij = λ_ij M_i M_j / (|l_ij| (M_i + M_j)) (Jeong Eq. 6–8 in c, λ_ij by τ̄ as Sec. 4 says), once
+ * for both rows it enters (they then hold the same value, bit for bit); then E_i = Σ_j |l_ij|
+ * (Jeong Eq. 3). SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
+static sere_status spring_terms( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
+								 const double* M, const sere_osmosis_params* params )
 {
 	const int32_t n = o->count;
 	int nonfinite = 0;
@@ -214,8 +232,12 @@ static sere_status spring_lengths( sere_osmosis* o, const float* x, const float*
 	{
 		int32_t i = o->sa[s], j = o->sb[s];
 		double dx = (double) x[j] - x[i], dy = (double) y[j] - y[i], dz = (double) z[j] - z[i];
-		o->length[s] = sqrt( dx * dx + dy * dy + dz * dz );
-		nonfinite |= !( o->length[s] > 0.0 ) || !isfinite( o->length[s] );
+		double length = sqrt( dx * dx + dy * dy + dz * dz );
+		double t = 0.5 * ( (double) tau[i] + (double) tau[j] );
+		double lambda = params->lambda_min * ( 1.0 - t ) + params->lambda_max * t;
+		o->length[s] = length;
+		o->conductance[s] = lambda * M[i] * M[j] / ( length * ( M[i] + M[j] ) );
+		nonfinite |= !( length > 0.0 ) || !isfinite( length );
 	}
 	if ( nonfinite )
 	{
@@ -237,8 +259,7 @@ static sere_status spring_lengths( sere_osmosis* o, const float* x, const float*
 /* The system of Jeong Eq. 8–9 for the new concentrations (made symmetric, as the mode says),
  * its right-hand side and the initial guess; returns the largest Σ_j |a_ij| / a_ii, which
  * picks the preconditioner. */
-static double assemble( sere_osmosis* o, const float* tau, const double* M, const double* w,
-						const sere_osmosis_params* params )
+static double assemble( sere_osmosis* o, const double* M, const double* w, const sere_osmosis_params* params )
 {
 	const int32_t first = o->first, n = o->count;
 	const double dt = params->dt;
@@ -246,6 +267,7 @@ static double assemble( sere_osmosis* o, const float* tau, const double* M, cons
 	 * (docs/DESIGN.md §6), one row per iteration: every row gathers from its own entries (no
 	 * atomics, the same result for any thread count). */
 	const double rate_dt = params->water_rate * dt;
+	const bool fill_sell = o->filled & FILL_SELL, fill_sgs = o->filled & FILL_SGS;
 	double offdiag = 0.0;
 #pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( max : offdiag )
 	for ( int32_t i = 0; i < n; ++i )
@@ -261,26 +283,33 @@ static double assemble( sere_osmosis* o, const float* tau, const double* M, cons
 			{
 				continue;
 			}
-			int32_t gj = first + o->a.col[k];
-			double mj = M[gj];
-			double t = 0.5 * ( (double) tau[gi] + (double) tau[gj] );
-			double lambda = params->lambda_min * ( 1.0 - t ) + params->lambda_max * t; /* λ_ij of Jeong Eq. 8 */
-			/* Jeong Eq. 6-7 in c: Δw_ij = M_i M_j (c_j − c_i) / (M_i + M_j) over |l_ij| */
-			double kij = lambda * mi * mj / ( o->length[s] * ( mi + mj ) );
+			double kij = o->conductance[s];
 			if ( params->mode == SERE_OSMOSIS_CONSERVATIVE )
 			{
 				kij *= 4.0 / ( ei + o->edge_sum[o->a.col[k]] ); /* symmetric in i and j */
 			}
 			double value = -dt * kij;
 			o->a.val[k] = value;
-			o->sell->val[o->sell->slot[k]] = value;
-			o->sgs->val[o->sgs->slot[k]] = value;
+			if ( fill_sell )
+			{
+				o->sell->val[o->sell->slot[k]] = value;
+			}
+			if ( fill_sgs )
+			{
+				o->sgs->val[o->sgs->slot[k]] = value;
+			}
 			off_sum += value;
 		}
 		double scale = params->mode == SERE_OSMOSIS_CONSERVATIVE ? 1.0 : 0.5 * ei;
 		o->a.val[o->diagonal[i]] = scale * mi - off_sum;
-		o->sell->val[o->sell->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
-		o->sgs->val[o->sgs->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
+		if ( fill_sell )
+		{
+			o->sell->val[o->sell->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
+		}
+		if ( fill_sgs )
+		{
+			o->sgs->val[o->sgs->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
+		}
 		/* Σ_j |a_ij| / a_ii: off-diagonal entries are −Δt K_ij ≤ 0, so −off_sum is their sum */
 		double ratio = -off_sum / o->a.val[o->diagonal[i]];
 		offdiag = ratio > offdiag ? ratio : offdiag;
@@ -333,11 +362,11 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		return SERE_OK;
 	}
 
-	if ( spring_lengths( o, x, y, z ) != SERE_OK )
+	if ( spring_terms( o, x, y, z, tau, M, params ) != SERE_OK )
 	{
 		return SERE_ERR_GEOMETRY;
 	}
-	double offdiag = assemble( o, tau, M, w, params );
+	double offdiag = assemble( o, M, w, params );
 	for ( int32_t k = 0; k < params->supply_count; ++k )
 	{
 		int32_t i = params->supply[k] - first;
@@ -354,8 +383,14 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	report->preconditioner = offdiag > SERE_OSMOSIS_AMG_ABOVE	? SERE_OSMOSIS_AMG
 							 : offdiag > SERE_OSMOSIS_SGS_ABOVE ? SERE_OSMOSIS_SGS
 																: SERE_OSMOSIS_JACOBI;
+	const int needed = report->preconditioner == SERE_OSMOSIS_JACOBI ? FILL_SELL : FILL_SGS;
 	sere_status status = SERE_OK;
-	if ( report->preconditioner == SERE_OSMOSIS_AMG && o->amg == NULL )
+	if ( !( o->filled & needed ) )
+	{
+		status = needed == FILL_SELL ? sere_sell_update( o->sell, &o->a ) : sere_sgs_update( o->sgs, &o->a );
+	}
+	o->filled = needed;
+	if ( status == SERE_OK && report->preconditioner == SERE_OSMOSIS_AMG && o->amg == NULL )
 	{
 		status = sere_amg_create( &o->a, o->sgs, &o->amg );
 	}
