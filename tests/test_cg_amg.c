@@ -321,6 +321,9 @@ Test( amg, rejects_bad_input )
 	cr_expect_eq( sere_amg_apply( m, b, x ), SERE_ERR_NOT_SPD );
 	cr_expect_eq( sere_cg_solve_amg( w, m, b, x, -1.0, 10, &result ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_amg_set_threads( m, SERE_MAX_THREADS + 1 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_amg_levels( NULL ), 0 );
+	cr_expect_eq( sere_amg_rows( NULL, 0 ), 0 );
+	cr_expect_eq( sere_amg_rows( m, -1 ), 0 );
 	double nan_b[2] = { NAN, 1.0 };
 	cr_expect_eq( sere_cg_solve_amg( w, m, nan_b, x, 1e-8, 10, &result ), SERE_ERR_NONFINITE );
 	sere_amg_destroy( m ), sere_sgs_destroy( g ), sere_sgs_destroy( other );

@@ -664,11 +664,15 @@ sere_status sere_amg_apply( sere_amg* m, const double* r, double* z )
 
 int32_t sere_amg_levels( const sere_amg* m )
 {
-	return m->levels + ( m->dense_rows > 0 );
+	return m == NULL ? 0 : m->levels + ( m->dense_rows > 0 );
 }
 
 int32_t sere_amg_rows( const sere_amg* m, int32_t level )
 {
+	if ( m == NULL )
+	{
+		return 0;
+	}
 	if ( level >= 0 && level < m->levels )
 	{
 		return m->level[level].g->rows;
