@@ -46,6 +46,42 @@ Test( sgs, coloring_separates_neighbors )
 	sere_test_cg_system_free( &s );
 }
 
+/* Within each window of SERE_SGS_SIGMA positions of a color the rows run from the longest U part
+ * to the shortest (ties: the longer L part first), and the layout stores little padding: on this
+ * layer 0.9% of the off-diagonal entries, against 3.0% with the rows in their numbering's order
+ * (on the maple's T layer 4.2% against 29.5%). */
+Test( sgs, layout_sorts_rows_by_length )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 60, 40 );
+	const sere_sgs* g = s.g;
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+		const int32_t begin = g->color_chunk[c] * SERE_SELL_C, end = g->color_chunk[c + 1] * SERE_SELL_C;
+		int32_t previous_u = 0, previous_l = 0;
+		for ( int32_t at = begin; at < end && g->row[at] >= 0; ++at )
+		{
+			int32_t i = g->row[at], nl = 0, nu = 0;
+			for ( int32_t k = s.a->row_ptr[i]; k < s.a->row_ptr[i + 1]; ++k )
+			{
+				nl += g->color[s.a->col[k]] < c;
+				nu += g->color[s.a->col[k]] > c;
+			}
+			if ( ( at - begin ) % SERE_SGS_SIGMA != 0 )
+			{
+				cr_expect( nu < previous_u || ( nu == previous_u && nl <= previous_l ),
+						   "color %d position %d: (U %d, L %d) after (U %d, L %d)", c, at, nu, nl, previous_u,
+						   previous_l );
+			}
+			previous_u = nu, previous_l = nl;
+		}
+	}
+	const int64_t slots = g->upper_ptr[g->chunks], offdiagonal = s.a->nnz - s.a->rows;
+	cr_expect_lt( (double) ( slots - offdiagonal ), 0.02 * (double) offdiagonal, "padding %g of the entries",
+				  (double) ( slots - offdiagonal ) / (double) offdiagonal );
+	sere_test_cg_system_free( &s );
+}
+
 /* sere_sgs_apply against M = (D + L) D⁻¹ (D + U) formed densely from the coloring (L: entries
  * toward earlier colors) and solved by Gaussian elimination. */
 Test( sgs, apply_matches_dense_reference )

@@ -82,6 +82,62 @@ static bool color_rows( sere_sgs* g, const sere_csr* a, int32_t* count )
 	return true;
 }
 
+/* A row's U and L lengths as one sort key, longer first. */
+typedef struct row_key
+{
+	int32_t key, row;
+} row_key;
+
+static int by_key( const void* left, const void* right )
+{
+	const row_key *l = left, *r = right;
+	if ( l->key != r->key )
+	{
+		return l->key > r->key ? -1 : 1;
+	}
+	return l->row < r->row ? -1 : l->row > r->row;
+}
+
+/* Within windows of SERE_SGS_SIGMA positions of one color, rows sorted by their U then L length
+ * (longest first), so that a chunk's eight rows are about as long on both sides and its slots
+ * carry little padding (a chunk is as wide as its longest row). Rows of one color share no
+ * entry, so their order within the color changes no row's sums; windows keep neighbours in the
+ * numbering near in memory. */
+static bool sort_windows( sere_sgs* g, const sere_csr* a, int32_t* position )
+{
+	row_key* keys = malloc( sizeof( row_key ) * SERE_SGS_SIGMA );
+	if ( keys == NULL )
+	{
+		return false;
+	}
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+		const int32_t begin = g->color_chunk[c] * LANES, end = g->color_chunk[c + 1] * LANES;
+		for ( int32_t w = begin; w < end; w += SERE_SGS_SIGMA )
+		{
+			int32_t count = 0;
+			for ( int32_t at = w; at < end && at < w + SERE_SGS_SIGMA && g->row[at] >= 0; ++at )
+			{
+				int32_t i = g->row[at], nl = 0, nu = 0;
+				for ( int32_t k = a->row_ptr[i]; k < a->row_ptr[i + 1]; ++k )
+				{
+					nl += g->color[a->col[k]] < c;
+					nu += g->color[a->col[k]] > c;
+				}
+				keys[count++] = ( row_key ){ nu * ( SERE_SGS_MAX_COLORS * 64 ) + nl, i };
+			}
+			qsort( keys, (size_t) count, sizeof( row_key ), by_key );
+			for ( int32_t k = 0; k < count; ++k )
+			{
+				g->row[w + k] = keys[k].row;
+				position[keys[k].row] = w + k;
+			}
+		}
+	}
+	free( keys );
+	return true;
+}
+
 /* The slots of every chunk from the CSR rows: the L part, the U part (columns as positions,
  * position: row → its position) and the diagonal after them; padding stays inert. */
 static void fill_slots( sere_sgs* g, const sere_csr* a, const int32_t* position, size_t slots )
@@ -187,6 +243,10 @@ sere_status sere_sgs_create( const sere_csr* a, sere_sgs** out )
 	{
 		position[i] = next[g->color[i]]++;
 		g->row[position[i]] = i;
+	}
+	if ( !sort_windows( g, a, position ) )
+	{
+		return sgs_fail( g, scratch, SERE_ERR_MEMORY );
 	}
 	/* Slot counts: a chunk is as wide as its widest row's L (or U) part. */
 	int64_t lower = 0, upper = 0;
