@@ -121,9 +121,9 @@ void BM_PBDColored( benchmark::State& state )
 
 // The sweeps of a drying frame: XPBD (kernels/drying/leaf.c: compliance 4e-6 at dt 0.002, so
 // alpha~ = 1), multipliers from zero at each call. Per constraint it also loads the compliance
-// weight and the multiplier and stores the multiplier (12 bytes more than PBD's 12), and
-// divides three times (strain, Δλ, factor) where PBD divides twice; its floor is still
-// BM_PBDFloor's record traffic.
+// weight and the multiplier and stores the multiplier, and divides three times (strain, Δλ,
+// factor) where PBD divides twice; its floor is BM_XPBDFloor (the records' traffic and those
+// 12 bytes).
 void BM_XPBDColored( benchmark::State& state )
 {
 	project_loop( state, []( sere_pbd* pbd, float* x, float* y, float* z, const float* inv_m,
@@ -147,6 +147,22 @@ void BM_PBDFloor( benchmark::State& state )
 	for ( auto _ : state )
 	{
 		sere_pbd_touch_sweeps( s.pbd, s.x.data(), s.y.data(), s.z.data(), s.inv_m.data(), count );
+		benchmark::ClobberMemory();
+	}
+	rate( state, s.model->s.count, state.range( 1 ) );
+}
+
+// The floor of BM_XPBDColored: BM_PBDFloor's call plus each constraint's weight load and
+// multiplier load and store (sere_pbd_touch_sweeps_xpbd), the multipliers zeroed at the start as
+// an XPBD call zeroes them.
+void BM_XPBDFloor( benchmark::State& state )
+{
+	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
+	scene& s = maple();
+	const int32_t count = static_cast<int32_t>( state.range( 1 ) );
+	for ( auto _ : state )
+	{
+		sere_pbd_touch_sweeps_xpbd( s.pbd, s.x.data(), s.y.data(), s.z.data(), s.inv_m.data(), count );
 		benchmark::ClobberMemory();
 	}
 	rate( state, s.model->s.count, state.range( 1 ) );
@@ -247,6 +263,7 @@ void BM_GatherScatterSoA( benchmark::State& state )
 BENCHMARK( BM_PBDColored )->Apply( per_call )->UseRealTime()->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_XPBDColored )->Apply( per_call )->UseRealTime()->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_PBDFloor )->Apply( per_call )->UseRealTime()->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_XPBDFloor )->Apply( per_call )->UseRealTime()->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_PBDColoredConverged )
 	->ArgName( "threads" )
 	->Arg( 1 )

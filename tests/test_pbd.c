@@ -678,8 +678,15 @@ Test( pbd, touch_leaves_positions_unchanged )
 		cr_expect_eq( memcmp( before, m.x, bytes ), 0, "%d threads", threads );
 		cr_expect_eq( memcmp( before + m.n, m.y, bytes ), 0, "%d threads", threads );
 		cr_expect_eq( memcmp( before + 2 * m.n, m.z, bytes ), 0, "%d threads", threads );
+		/* and XPBD's, which also reads the weights and multipliers */
+		cr_assert_eq( sere_pbd_touch_sweeps_xpbd( pbd, m.x, m.y, m.z, m.inv_m, 7 ), SERE_OK );
+		cr_expect_eq( memcmp( before, m.x, bytes ), 0, "XPBD, %d threads", threads );
+		cr_expect_eq( memcmp( before + m.n, m.y, bytes ), 0, "XPBD, %d threads", threads );
+		cr_expect_eq( memcmp( before + 2 * m.n, m.z, bytes ), 0, "XPBD, %d threads", threads );
 	}
 	cr_expect_eq( sere_pbd_touch_sweeps( pbd, m.x, m.y, m.z, m.inv_m, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_pbd_touch_sweeps_xpbd( pbd, m.x, m.y, m.z, m.inv_m, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_pbd_touch_sweeps_xpbd( NULL, m.x, m.y, m.z, m.inv_m, 1 ), SERE_ERR_ARGUMENT );
 	sere_pbd_info info = sere_pbd_get_info( pbd );
 	cr_expect_eq( info.lanes % 16, 0 );
 	cr_expect_geq( info.lanes, m.count );

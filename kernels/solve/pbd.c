@@ -269,13 +269,22 @@ FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_sta
 							  h->bw );
 }
 
-/* Loads and stores both ends unchanged: times one, opaque to the compiler, so the stores stay. */
-FORCE_INLINE void touch_part( const block_context* ctx, int32_t q )
+/* Loads and stores both ends unchanged: times one, opaque to the compiler, so the stores stay.
+ * XPBD's floor also loads each constraint's compliance weight and multiplier and stores the
+ * multiplier back (λ·1 + w·(1 − 1): the weight's load stays too), the 12 bytes a constraint an
+ * XPBD sweep moves beyond PBD's. */
+FORCE_INLINE void touch_part( const block_context* ctx, int32_t q, int xpbd )
 {
 	sere_vf ax, ay, az, aw, bx, by, bz, bw;
 	sere_vf_load_records_at( ctx->packed, ctx->ia + q, &ax, &ay, &az, &aw );
 	sere_vf_load_records_at( ctx->packed, ctx->ib + q, &bx, &by, &bz, &bw );
 	const sere_vf one = sere_vf_splat( ctx->one );
+	if ( xpbd )
+	{
+		sere_vf lambda = sere_vf_load( ctx->lambda + q ), weight = sere_vf_load( ctx->weight + q );
+		sere_vf_store( ctx->lambda + q,
+					   sere_vf_add( sere_vf_mul( lambda, one ), sere_vf_mul( weight, sere_vf_sub( one, one ) ) ) );
+	}
 	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_mul( ax, one ), sere_vf_mul( ay, one ),
 							  sere_vf_mul( az, one ), aw );
 	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_mul( bx, one ), sere_vf_mul( by, one ),
@@ -302,7 +311,7 @@ FORCE_INLINE void project_segment( const block_context* ctx, int32_t first, int3
 		{
 			if ( mode == MODE_TOUCH )
 			{
-				touch_part( ctx, q );
+				touch_part( ctx, q, xpbd );
 			}
 			else
 			{
@@ -455,7 +464,8 @@ static void project_item( const block_context* ctx, const int32_t* segment, int3
 				 : project_colors( ctx, segment, colors, MODE_MEASURE, 0, acc );
 			break;
 		case MODE_TOUCH:
-			project_colors( ctx, segment, colors, MODE_TOUCH, 0, acc );
+			xpbd ? project_colors( ctx, segment, colors, MODE_TOUCH, 1, acc )
+				 : project_colors( ctx, segment, colors, MODE_TOUCH, 0, acc );
 			break;
 	}
 }
@@ -925,17 +935,33 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 	return solve( pbd, px, py, pz, inv_m, &setup, report );
 }
 
-sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps )
+static sere_status touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps,
+								 int xpbd )
 {
 	if ( pbd == NULL || px == NULL || py == NULL || pz == NULL || inv_m == NULL || sweeps < 1 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	solve_setup setup = {
-		.kind = SOLVER_TOUCH, .k = 1.0f, .omega = 1.0f, .tolerance = 1.0f, .max_iterations = sweeps, .ground = -INFINITY
-	};
+	solve_setup setup = { .kind = SOLVER_TOUCH,
+						  .k = 1.0f,
+						  .omega = 1.0f,
+						  .tolerance = 1.0f,
+						  .max_iterations = sweeps,
+						  .ground = -INFINITY,
+						  .xpbd = xpbd };
 	sere_pbd_report report;
 	return solve( pbd, px, py, pz, inv_m, &setup, &report );
+}
+
+sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps )
+{
+	return touch_sweeps( pbd, px, py, pz, inv_m, sweeps, 0 );
+}
+
+sere_status sere_pbd_touch_sweeps_xpbd( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
+										int32_t sweeps )
+{
+	return touch_sweeps( pbd, px, py, pz, inv_m, sweeps, 1 );
 }
 
 sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m )

@@ -160,19 +160,25 @@ sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, floa
 sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 									 const sere_pbd_params* params, sere_pbd_report* report );
 
-/* One sweep of sere_pbd_project's schedule, with the same loads and stores of both constraint
- * ends, but the arithmetic replaced by a copy: the memory floor of a sweep, for benchmarks.
- * Leaves the positions bitwise unchanged. */
 /* Adds to push[i] how far the ground (sere_pbd_params.ground) pushed particle i up during the
  * last projection, summed over its sweeps. */
 sere_status sere_pbd_ground_push( const sere_pbd* pbd, float* push );
 
+/* One sweep of sere_pbd_project's schedule, with the same loads and stores of both constraint
+ * ends, but the arithmetic replaced by a copy: the memory floor of a sweep, for benchmarks.
+ * Leaves the positions bitwise unchanged. */
 sere_status sere_pbd_touch( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m );
 
 /* sere_pbd_touch with `sweeps` sweeps in one call: the floor of a sere_pbd_project call that
  * runs that many sweeps (the same entry check, packing, parallel region, barriers and per-sweep
  * exchange, unpacking). SERE_ERR_ARGUMENT for sweeps < 1. */
 sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps );
+
+/* The floor of an XPBD call (compliance > 0): sere_pbd_touch_sweeps plus what an XPBD sweep moves
+ * beyond a PBD one, each constraint's compliance weight loaded and its multiplier loaded and
+ * stored (the multipliers are zeroed at the call's start, as an XPBD call without `warm` does). */
+sere_status sere_pbd_touch_sweeps_xpbd( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
+										int32_t sweeps );
 
 /* v = (p − x)/dt and x = p for particles [0, count) (Sec. 5.2: Δv = Δx/Δt), on `threads`
  * threads as sere_pbd_predict. */
