@@ -220,8 +220,10 @@ sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
 
 /* Per spring at the current positions: its length |l_ij| and its conductance
  * K_ij = λ_ij M_i M_j / (|l_ij| (M_i + M_j)) (Jeong Eq. 6–8 in c, λ_ij by τ̄ as Sec. 4 says), once
- * for both rows it enters (they then hold the same value, bit for bit); then E_i = Σ_j |l_ij|
- * (Jeong Eq. 3). SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
+ * for both rows it enters (they then hold the same value, bit for bit); then, in the conservative
+ * mode, whose rows read their neighbours' E_j, every E_i = Σ_j |l_ij| (Jeong Eq. 3; the paper's
+ * mode sums a row's own in the assembly, in the same order). SERE_ERR_GEOMETRY for a spring of
+ * zero or non-finite length. */
 static sere_status spring_terms( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
 								 const double* M, const sere_osmosis_params* params )
 {
@@ -242,6 +244,10 @@ static sere_status spring_terms( sere_osmosis* o, const float* x, const float* y
 	if ( nonfinite )
 	{
 		return SERE_ERR_GEOMETRY;
+	}
+	if ( params->mode != SERE_OSMOSIS_CONSERVATIVE )
+	{
+		return SERE_OK; /* the paper's rows need only their own E_i: the assembly sums it */
 	}
 #pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static )
 	for ( int32_t i = 0; i < n; ++i )
@@ -274,7 +280,8 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 	{
 		const int32_t gi = first + i;
 		const double mi = M[gi];
-		const double ei = o->edge_sum[i];
+		const bool conservative = params->mode == SERE_OSMOSIS_CONSERVATIVE;
+		double ei = conservative ? o->edge_sum[i] : 0.0; /* else summed below, as spring_terms would */
 		double off_sum = 0.0;
 		for ( int32_t k = o->a.row_ptr[i]; k < o->a.row_ptr[i + 1]; ++k )
 		{
@@ -284,9 +291,13 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 				continue;
 			}
 			double kij = o->conductance[s];
-			if ( params->mode == SERE_OSMOSIS_CONSERVATIVE )
+			if ( conservative )
 			{
 				kij *= 4.0 / ( ei + o->edge_sum[o->a.col[k]] ); /* symmetric in i and j */
+			}
+			else
+			{
+				ei += o->length[s];
 			}
 			double value = -dt * kij;
 			o->a.val[k] = value;
@@ -300,7 +311,8 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 			}
 			off_sum += value;
 		}
-		double scale = params->mode == SERE_OSMOSIS_CONSERVATIVE ? 1.0 : 0.5 * ei;
+		o->edge_sum[i] = ei;
+		double scale = conservative ? 1.0 : 0.5 * ei;
 		o->a.val[o->diagonal[i]] = scale * mi - off_sum;
 		if ( fill_sell )
 		{
