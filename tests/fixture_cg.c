@@ -59,3 +59,31 @@ double sere_test_relative_residual( const sere_csr* a, const double* b, const do
 	free( ax );
 	return sqrt( rr / bb );
 }
+
+double sere_test_worst_difference( const double* x, const double* reference, int32_t n, double* largest )
+{
+	double worst = 0.0;
+	*largest = 0.0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		worst = fmax( worst, fabs( x[i] - reference[i] ) );
+		*largest = fmax( *largest, fabs( reference[i] ) );
+	}
+	return worst;
+}
+
+double sere_test_symmetry( const double* x, const double* y, const double* bx, const double* by, int32_t n, double* gap,
+						   double* norm )
+{
+	double xby = 0.0, ybx = 0.0, xbx = 0.0;
+	*norm = 0.0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		xby += x[i] * by[i];
+		ybx += y[i] * bx[i];
+		xbx += x[i] * bx[i];
+		*norm += fabs( x[i] * by[i] ) + fabs( y[i] * bx[i] );
+	}
+	*gap = xby - ybx;
+	return xbx;
+}

@@ -29,3 +29,12 @@ void sere_test_cg_system_free( sere_test_cg_system* s );
 
 /* ||b − A x||₂ / ||b||₂ with the CSR product. */
 double sere_test_relative_residual( const sere_csr* a, const double* b, const double* x );
+
+/* max_i |x_i − reference_i|, and max_i |reference_i| into *largest. */
+double sere_test_worst_difference( const double* x, const double* reference, int32_t n, double* largest );
+
+/* HPCG's symmetry test of an operator B from Bx and By: xᵀBy − yᵀBx into *gap and
+ * Σ_i |x_i (By)_i| + |y_i (Bx)_i| (the size rounding is measured against) into *norm; returns
+ * xᵀBx. */
+double sere_test_symmetry( const double* x, const double* y, const double* bx, const double* by, int32_t n, double* gap,
+						   double* norm );

@@ -55,21 +55,15 @@ Test( amg, preconditioner_is_symmetric_positive )
 	}
 	cr_assert_eq( sere_amg_apply( m, x, bx ), SERE_OK );
 	cr_assert_eq( sere_amg_apply( m, y, by ), SERE_OK );
-	double xby = 0.0, ybx = 0.0, xbx = 0.0, yby = 0.0, norm = 0.0;
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		xby += x[i] * by[i];
-		ybx += y[i] * bx[i];
-		xbx += x[i] * bx[i];
-		yby += y[i] * by[i];
-		norm += fabs( x[i] * by[i] ) + fabs( y[i] * bx[i] );
-	}
+	double gap, norm, unused;
+	const double xbx = sere_test_symmetry( x, y, bx, by, s.n, &gap, &norm );
+	const double yby = sere_test_symmetry( y, x, by, bx, s.n, &unused, &unused );
 	/* The sweeps are adjoint and the coarse matrices bitwise symmetric, so the two sums differ by
 	 * rounding only: each level's sweeps and sums add a few ulps per term, which the coarse
 	 * solves of this nearly singular system (κ ≈ 10³) carry into the result; 1e-10 of the sum's
 	 * size leaves room for that, while a V-cycle without its backward sweep (not symmetric)
 	 * differs by O(1) of it. */
-	cr_expect_leq( fabs( xby - ybx ), 1e-10 * norm, "xᵀBy = %.17g, yᵀBx = %.17g", xby, ybx );
+	cr_expect_leq( fabs( gap ), 1e-10 * norm, "xᵀBy − yᵀBx = %.17g of %.17g", gap, norm );
 	cr_expect_gt( xbx, 0.0 );
 	cr_expect_gt( yby, 0.0 );
 	free( x ), free( y ), free( bx ), free( by );
@@ -118,12 +112,7 @@ static void converges_against_sgs( double lambda, int32_t nx, int32_t ny, int32_
 				  result[0].iterations, sgs_result.iterations );
 	/* Two solutions of relative residual ≤ 1e-10 differ by at most κ(A) · 2e-10 relative, κ(A) ≲
 	 * 10⁵ here (1 / (1 − q) with q ≤ 0.99999): 1e-4 of the solution's size. */
-	double worst = 0.0, largest = 0.0;
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		worst = fmax( worst, fabs( x[0][i] - sgs[i] ) );
-		largest = fmax( largest, fabs( sgs[i] ) );
-	}
+	double largest, worst = sere_test_worst_difference( x[0], sgs, s.n, &largest );
 	cr_expect_leq( worst, 1e-4 * largest, "multigrid and SGS solutions differ by %g of %g", worst, largest );
 	free( x[0] ), free( x[1] ), free( x[2] ), free( sgs );
 	sere_cg_destroy( w );
@@ -281,12 +270,7 @@ Test( amg, small_and_diagonal_matrices )
 	}
 	/* Unpreconditioned CG needs about √κ · ln(2 / 1e-12) / 2 ≈ 125 iterations on this path. */
 	cr_expect_lt( iterations, 40, "%d iterations", iterations );
-	double worst = 0.0, largest = 0.0;
-	for ( int32_t i = 0; i < N; ++i )
-	{
-		worst = fmax( worst, fabs( x[0][i] - exact[i] ) );
-		largest = fmax( largest, fabs( exact[i] ) );
-	}
+	double largest, worst = sere_test_worst_difference( x[0], exact, N, &largest );
 	cr_expect_leq( worst, 80.0 * 1e-12 * sqrt( (double) N ) * largest, "off by %g of %g", worst, largest );
 	omp_set_num_threads( 2 );
 	sere_amg_destroy( m ), sere_sgs_destroy( g );

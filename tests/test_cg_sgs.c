@@ -125,19 +125,13 @@ Test( sgs, apply_matches_dense_reference )
 	}
 	double *r = malloc( sizeof( double ) * s.n ), *z = malloc( sizeof( double ) * s.n ),
 		   *ref = malloc( sizeof( double ) * s.n );
-	double largest = 0.0;
 	for ( int32_t i = 0; i < s.n; ++i )
 	{
 		r[i] = sin( 0.7 * i ) + 0.2;
 	}
 	cr_assert_eq( sere_sgs_apply( s.g, r, z ), SERE_OK );
 	cr_assert_eq( sere_dense_ref_solve( m, r, ref, s.n ), SERE_OK );
-	double worst = 0.0;
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		worst = fmax( worst, fabs( z[i] - ref[i] ) );
-		largest = fmax( largest, fabs( ref[i] ) );
-	}
+	double largest, worst = sere_test_worst_difference( z, ref, s.n, &largest );
 	/* Two triangular sweeps against a pivoted dense solve of the product: both backward stable,
 	 * M's condition number here is about 10² (diagonally dominant rows), so they agree to
 	 * ~1e-14 of the solution; 1e-11 leaves room and is far below a wrong sweep (O(1)). */
@@ -160,18 +154,12 @@ Test( sgs, preconditioner_is_symmetric_positive )
 	}
 	cr_assert_eq( sere_sgs_apply( s.g, x, mx ), SERE_OK );
 	cr_assert_eq( sere_sgs_apply( s.g, y, my ), SERE_OK );
-	double xmy = 0.0, ymx = 0.0, xmx = 0.0, norm = 0.0;
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		xmy += x[i] * my[i];
-		ymx += y[i] * mx[i];
-		xmx += x[i] * mx[i];
-		norm += fabs( x[i] * my[i] ) + fabs( y[i] * mx[i] );
-	}
+	double gap, norm;
+	const double xmx = sere_test_symmetry( x, y, mx, my, s.n, &gap, &norm );
 	/* As HPCG's symmetry test: the two sums agree to the rounding of the sweeps and the sums,
 	 * a few ulps per term, far below 1e-12 of their size (an unsymmetric M, e.g. one sweep
 	 * only, differs by O(1) of it). */
-	cr_expect_leq( fabs( xmy - ymx ), 1e-12 * norm, "xᵀM⁻¹y = %.17g, yᵀM⁻¹x = %.17g", xmy, ymx );
+	cr_expect_leq( fabs( gap ), 1e-12 * norm, "xᵀM⁻¹y − yᵀM⁻¹x = %.17g of %.17g", gap, norm );
 	cr_expect_gt( xmx, 0.0 );
 	free( x ), free( y ), free( mx ), free( my );
 	sere_test_cg_system_free( &s );
@@ -245,12 +233,7 @@ Test( sgs, cg_converges_deterministically, .timeout = 60 )
 				  result[0].iterations, jacobi_result.iterations );
 	/* Both solutions have relative residual ≤ 1e-10; their difference is bounded by
 	 * κ(A) · 2e-10 relative, with κ(A) ≲ 10⁴ on this system: 1e-5 of the solution's size. */
-	double worst = 0.0, largest = 0.0;
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		worst = fmax( worst, fabs( x[0][i] - jacobi[i] ) );
-		largest = fmax( largest, fabs( jacobi[i] ) );
-	}
+	double largest, worst = sere_test_worst_difference( x[0], jacobi, s.n, &largest );
 	cr_expect_leq( worst, 1e-5 * largest, "SGS and Jacobi solutions differ by %g of %g", worst, largest );
 	free( x[0] ), free( x[1] ), free( x[2] ), free( jacobi );
 	sere_cg_destroy( w );
@@ -341,12 +324,7 @@ Test( sgs, one_and_two_colors_solve )
 			cr_expect_leq( result[0].iterations, 36, "two colors took %d iterations", result[0].iterations );
 		}
 		cr_expect_leq( sere_test_relative_residual( &a, b, x[0] ), tolerance );
-		double worst = 0.0, largest = 0.0;
-		for ( int32_t i = 0; i < N; ++i )
-		{
-			worst = fmax( worst, fabs( x[0][i] - exact[i] ) );
-			largest = fmax( largest, fabs( exact[i] ) );
-		}
+		double largest, worst = sere_test_worst_difference( x[0], exact, N, &largest );
 		/* relative error ≤ κ · relative residual in the 2-norm; in the max norm a factor √N more */
 		cr_expect_leq( worst, 9.0 * tolerance * sqrt( (double) N ) * largest, "%d colors: off by %g of %g", colors,
 					   worst, largest );
