@@ -387,6 +387,8 @@ sere_status sere_amg_create( const sere_csr* a, const sere_sgs* fine, sere_amg**
 	m->levels = 1;
 	sere_csr cur = *a, next = { 0 };
 	sere_status status = SERE_OK;
+	/* Each level's matrix lives until the next one is built from it (the caller's a is level 0's);
+	 * the last call builds none, so nothing is left to free after the loop. */
 	for ( int32_t l = 0; status == SERE_OK && l < m->levels; ++l )
 	{
 		status = coarsen( m, l, &cur, &next );
@@ -396,10 +398,6 @@ sere_status sere_amg_create( const sere_csr* a, const sere_sgs* fine, sere_amg**
 		}
 		cur = next;
 		next = ( sere_csr ){ 0 };
-	}
-	if ( m->levels > 1 )
-	{
-		free_csr( &cur );
 	}
 	if ( status != SERE_OK )
 	{
