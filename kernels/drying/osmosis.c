@@ -27,7 +27,9 @@ struct sere_osmosis
 							   * written by the assembly beside a, through sell->slot */
 	sere_sgs* sgs;			  /* a's multicolor SGS layout, built and written the same way */
 	sere_amg* amg;			  /* multigrid levels over sgs, built at the first step that needs them */
-	int32_t amg_steps;		  /* steps solved with them, for SERE_OSMOSIS_AMG_REFRESH */
+	int32_t amg_steps;		  /* steps in a row solved with them (SERE_OSMOSIS_AMG_REFRESH): another
+							   * preconditioner's step starts the count again, so the multigrid
+							   * never resumes with levels older than its own last steps */
 	int filled;				  /* the layouts the assembly writes: FILL_SELL, FILL_SGS (the last step's) */
 	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
@@ -406,6 +408,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	{
 		status = sere_amg_create( &o->a, o->sgs, &o->amg );
 	}
+	o->amg_steps = report->preconditioner == SERE_OSMOSIS_AMG ? o->amg_steps : 0;
 	/* Jeong Eq. 9 solved: SPD after the change of unknown, so preconditioned CG applies. */
 	if ( status == SERE_OK )
 	{
