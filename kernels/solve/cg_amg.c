@@ -683,39 +683,6 @@ sere_status sere_amg_set_threads( sere_amg* m, int32_t threads )
 	return m == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &m->threads, threads );
 }
 
-/* Σ u_i v_i over [begin, end) (whole chunks) in 8 lanes, then the lanes in a fixed order: a
- * single chain of 10⁴ dependent adds would take longer than the V-cycle's sweeps, and the lanes
- * keep the sum the same on every SIMD width. */
-static inline double dot_lanes( const double* u, const double* v, int32_t begin, int32_t end )
-{
-	half_t lo = { 0.0 }, hi = { 0.0 };
-	for ( int32_t i = begin; i < end; i += LANES )
-	{
-		lo += *(const half_t*) ( u + i ) * *(const half_t*) ( v + i );
-		hi += *(const half_t*) ( u + i + 4 ) * *(const half_t*) ( v + i + 4 );
-	}
-	return ( ( lo[0] + lo[1] ) + ( lo[2] + lo[3] ) ) + ( ( hi[0] + hi[1] ) + ( hi[2] + hi[3] ) );
-}
-
-/* r = b − A x over the blocks [first, last) and their sums of rᵀr (slot 0). */
-static void amg_residual( const sere_sgs* g, int32_t first, int32_t last, int32_t np, const double* b, const double* x,
-						  double* r, double* partial )
-{
-	for ( int32_t blk = first; blk < last; ++blk )
-	{
-		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
-		{
-			sgs_chunk_product( g, ch, x, r );
-		}
-		for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-		{
-			r[i] = b[i] - r[i];
-		}
-		partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
-	}
-}
-
 /* At most `chunk` PCG steps in one parallel region, until ||r|| ≤ target. Per step: z = B r
  * (the V-cycle), γ = rᵀz, p = z + β p, q = A p, α = γ / pᵀq, x += α p, r −= α q; each sum over
  * fixed blocks in block order, so every thread takes the same decisions. */
@@ -779,19 +746,9 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 				partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			const double rr = block_sum( partial, blocks, 0 );
-			my.it += 1;
 			my.gamma_prev = gamma;
-			if ( !isfinite( rr ) )
+			if ( cg_step_done( &my, block_sum( partial, blocks, 0 ), target, max_iterations ) )
 			{
-				my.status = SERE_ERR_NONFINITE;
-				my.done = 1;
-				break;
-			}
-			if ( sqrt( rr ) <= target || my.it == max_iterations )
-			{
-				my.met = sqrt( rr ) <= target;
-				my.done = 1;
 				break;
 			}
 		}
@@ -847,7 +804,7 @@ sere_status sere_cg_solve_amg( sere_cg_workspace* ws, sere_amg* m, const double*
 		{
 			int32_t first, last;
 			sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
-			amg_residual( g, first, last, np, b, x, r, partial );
+			sgs_residual_blocks( g, first, last, np, b, x, r, partial );
 		}
 		result->residual = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( pass == 1 || !( result->residual > tolerance ) || max_iterations == 0 )

@@ -484,29 +484,6 @@ static double sgs_product_sums( const sere_sgs* g, int32_t from_color, const dou
 	return delta;
 }
 
-/* r = b − A x and its block sums of rᵀr (slot 0). Called by every thread of a region. */
-static void sgs_residual( const sere_sgs* g, int32_t blocks, int32_t np, const double* b, const double* x, double* r,
-						  double* partial )
-{
-#pragma omp for schedule( static )
-	for ( int32_t blk = 0; blk < blocks; ++blk )
-	{
-		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
-		{
-			sgs_chunk_product( g, ch, x, r );
-		}
-		double rr = 0.0;
-#pragma omp simd reduction( + : rr )
-		for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-		{
-			r[i] = b[i] - r[i];
-			rr += r[i] * r[i];
-		}
-		partial[4 * blk] = rr;
-	}
-}
-
 /* The solve's start: b and x into positions, D⁻¹ and the blocks' sums of b²; flags a diagonal
  * that is not positive and a non-finite input. */
 static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, const double* x_in )
@@ -639,18 +616,8 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, team );
-			double my_rr = block_sum( partial, blocks, 0 );
-			my.it += 1;
-			if ( !isfinite( my_rr ) )
+			if ( cg_step_done( &my, block_sum( partial, blocks, 0 ), target, max_iterations ) )
 			{
-				my.status = SERE_ERR_NONFINITE;
-				my.done = 1;
-				break;
-			}
-			if ( sqrt( my_rr ) <= target || my.it == max_iterations )
-			{
-				my.met = sqrt( my_rr ) <= target;
-				my.done = 1;
 				break;
 			}
 			my.delta = sgs_product_sums( g, from_color, inv_diag, u, t, z, w, chunk_delta, ws->barrier );
@@ -698,7 +665,9 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 		/* The true residual of x: the answer, or where (re)starting from x begins. */
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 		{
-			sgs_residual( g, blocks, np, b, x, r, partial );
+			int32_t first, last;
+			sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
+			sgs_residual_blocks( g, first, last, np, b, x, r, partial );
 		}
 		rel = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( !isfinite( rel ) )

@@ -195,3 +195,57 @@ static inline void sgs_chunk_product( const sere_sgs* g, int32_t ch, const doubl
 	lo.hi = ( lo.hi + up.hi ) + d.hi * x.hi;
 	store_lanes( y + ch * LANES, &lo );
 }
+
+/* Σ u_i v_i over [begin, end) (whole chunks) in 8 lanes, then the lanes in a fixed order: a
+ * single chain of 10⁴ dependent adds would take longer than a multigrid V-cycle's sweeps, and the
+ * lanes keep the sum the same on every SIMD width. */
+static inline double dot_lanes( const double* u, const double* v, int32_t begin, int32_t end )
+{
+	half_t lo = { 0.0 }, hi = { 0.0 };
+	for ( int32_t i = begin; i < end; i += LANES )
+	{
+		lo += *(const half_t*) ( u + i ) * *(const half_t*) ( v + i );
+		hi += *(const half_t*) ( u + i + 4 ) * *(const half_t*) ( v + i + 4 );
+	}
+	return ( ( lo[0] + lo[1] ) + ( lo[2] + lo[3] ) ) + ( ( hi[0] + hi[1] ) + ( hi[2] + hi[3] ) );
+}
+
+/* r = b − A x over the blocks [first, last) of an SGS layout and their sums of rᵀr (slot 0). */
+static inline void sgs_residual_blocks( const sere_sgs* g, int32_t first, int32_t last, int32_t np, const double* b,
+										const double* x, double* r, double* partial )
+{
+	for ( int32_t blk = first; blk < last; ++blk )
+	{
+		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+		{
+			sgs_chunk_product( g, ch, x, r );
+		}
+		for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+		{
+			r[i] = b[i] - r[i];
+		}
+		partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+	}
+}
+
+/* The end of a step of the preconditioned solves (cg_sgs.c, cg_amg.c): counts it and, from the
+ * recursive residual's rᵀr, stops the solve when that is not finite, meets target (‖r‖ ≤ target)
+ * or the step is the cap's. Every thread decides the same from the same block sums. */
+static inline bool cg_step_done( cg_state* my, double rr, double target, int32_t max_iterations )
+{
+	my->it += 1;
+	if ( !isfinite( rr ) )
+	{
+		my->status = SERE_ERR_NONFINITE;
+		my->done = 1;
+		return true;
+	}
+	if ( sqrt( rr ) <= target || my->it == max_iterations )
+	{
+		my->met = sqrt( rr ) <= target;
+		my->done = 1;
+		return true;
+	}
+	return false;
+}
