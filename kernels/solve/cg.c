@@ -38,22 +38,6 @@ void sere_sell_destroy( sere_sell* s )
 	free( s );
 }
 
-typedef struct row_length
-{
-	int32_t row, length;
-} row_length;
-
-/* Longest first; ties keep row order, so the order is total and rows stay near their neighbours. */
-static int by_length( const void* left, const void* right )
-{
-	const row_length *l = left, *r = right;
-	if ( l->length != r->length )
-	{
-		return l->length > r->length ? -1 : 1;
-	}
-	return l->row < r->row ? -1 : l->row > r->row;
-}
-
 /* The chunks' columns, values and slots from the CSR rows (position: row → its lane), and
  * each lane's diagonal slot; false when a row holds its diagonal twice. */
 static bool fill_chunks( sere_sell* s, const sere_csr* a, const int32_t* position )

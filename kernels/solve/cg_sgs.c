@@ -82,22 +82,6 @@ static bool color_rows( sere_sgs* g, const sere_csr* a, int32_t* count )
 	return true;
 }
 
-/* A row's U and L lengths as one sort key, longer first. */
-typedef struct row_key
-{
-	int32_t key, row;
-} row_key;
-
-static int by_key( const void* left, const void* right )
-{
-	const row_key *l = left, *r = right;
-	if ( l->key != r->key )
-	{
-		return l->key > r->key ? -1 : 1;
-	}
-	return l->row < r->row ? -1 : l->row > r->row;
-}
-
 /* Within windows of SERE_SGS_SIGMA positions of one color, rows sorted by their U then L length
  * (longest first), so that a chunk's eight rows are about as long on both sides and its slots
  * carry little padding (a chunk is as wide as its longest row). Rows of one color share no
@@ -105,7 +89,7 @@ static int by_key( const void* left, const void* right )
  * numbering near in memory. */
 static bool sort_windows( sere_sgs* g, const sere_csr* a, int32_t* position )
 {
-	row_key* keys = malloc( sizeof( row_key ) * SERE_SGS_SIGMA );
+	row_length* keys = malloc( sizeof( row_length ) * SERE_SGS_SIGMA );
 	if ( keys == NULL )
 	{
 		return false;
@@ -124,9 +108,11 @@ static bool sort_windows( sere_sgs* g, const sere_csr* a, int32_t* position )
 					nl += g->color[a->col[k]] < c;
 					nu += g->color[a->col[k]] > c;
 				}
-				keys[count++] = ( row_key ){ nu * ( SERE_SGS_MAX_COLORS * 64 ) + nl, i };
+				/* U length first, then L, as one key (exact for rows under 2048 entries; longer ones
+				 * only sort less well) */
+				keys[count++] = ( row_length ){ i, nu * ( SERE_SGS_MAX_COLORS * 64 ) + nl };
 			}
-			qsort( keys, (size_t) count, sizeof( row_key ), by_key );
+			qsort( keys, (size_t) count, sizeof( row_length ), by_length );
 			for ( int32_t k = 0; k < count; ++k )
 			{
 				g->row[w + k] = keys[k].row;

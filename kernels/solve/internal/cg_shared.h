@@ -34,6 +34,24 @@ static inline sere_status cg_step_length( double pap, double gamma, double* alph
 	return SERE_OK;
 }
 
+/* A row and its length (entries, or a key standing for them) for the layouts' sorting windows
+ * (SELL-C-σ in cg.c, the SGS colors in cg_sgs.c), ordered by by_length. */
+typedef struct row_length
+{
+	int32_t row, length;
+} row_length;
+
+/* Longest first; ties keep row order, so the order is total and rows stay near their neighbours. */
+static inline int by_length( const void* left, const void* right )
+{
+	const row_length *l = left, *r = right;
+	if ( l->length != r->length )
+	{
+		return l->length > r->length ? -1 : 1;
+	}
+	return l->row < r->row ? -1 : l->row > r->row;
+}
+
 /* Row pointers that never decrease and column indices inside the matrix (the caller has checked
  * row_ptr[0] = 0 and row_ptr[rows] = nnz). */
 static inline int csr_indices_valid( const sere_csr* a )
