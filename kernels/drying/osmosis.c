@@ -276,13 +276,13 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 	 * atomics, the same result for any thread count). */
 	const double rate_dt = params->water_rate * dt;
 	const bool fill_sell = o->filled & FILL_SELL, fill_sgs = o->filled & FILL_SGS;
+	const bool conservative = params->mode == SERE_OSMOSIS_CONSERVATIVE;
 	double offdiag = 0.0;
 #pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( max : offdiag )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		const int32_t gi = first + i;
 		const double mi = M[gi];
-		const bool conservative = params->mode == SERE_OSMOSIS_CONSERVATIVE;
 		double ei = conservative ? o->edge_sum[i] : 0.0; /* else summed below, as spring_terms would */
 		double off_sum = 0.0;
 		for ( int32_t k = o->a.row_ptr[i]; k < o->a.row_ptr[i + 1]; ++k )
