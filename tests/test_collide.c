@@ -770,6 +770,63 @@ Test( collide, bad_arguments_are_refused )
 /* A flat sheet and a thickness of 3/4 of a cell: every vertex is closer than that to triangles
  * it is not a corner of (across the far edge of its own triangles), but all of them have a
  * corner joined to it by an edge, so no contact may be reported. */
+/* A strip of two triangles (0, 1, 2) and (1, 3, 2) narrower than the thickness: its long edges
+ * (0, 1) and (2, 3) share no vertex, but their ends are joined by the edges (0, 2) and (1, 3).
+ * Flat, with a slight twist so that they are not parallel, they are closest in their middles,
+ * side by side in the sheet: no contact (sere_edges_face), and the response moves nothing, where
+ * it used to push one up and the other down (the Table 1 maple's petiole buzzed so). Folded
+ * shut along the diagonal (1, 2), the second triangle lying over the first 0.3h up, edge (2, 3)
+ * crosses over (0, 1) facing it: a contact again. The brute-force twin agrees each time. */
+Test( collide, one_ring_edges_count_only_across_a_fold )
+{
+	const float h = 0.05f, w = 0.5f * h, twist = 0.05f * h;
+	int32_t tri[6] = { 0, 1, 2, 1, 3, 2 };
+	float inv_m[4] = { 1.0f, 1.0f, 1.0f, 1.0f };
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.dt = 0.01f;
+	for ( int folded = 0; folded < 2; ++folded )
+	{
+		/* folded: vertex 3 is (1, w) mirrored across the line from 1 to 2, then lifted */
+		float mirror[2] = { 1.0f - 2.0f * w * w / ( 1.0f + w * w ), 2.0f * w * w * w / ( 1.0f + w * w ) - w };
+		float x[4] = { 0.0f, 1.0f, 0.0f, folded ? mirror[0] : 1.0f };
+		float y[4] = { 0.0f, 0.0f, w, folded ? mirror[1] : w };
+		float z[4] = { 0.0f, 0.0f, folded ? 0.0f : -twist, folded ? 0.3f * h : twist };
+		float x0[4], y0[4], z0[4];
+		memcpy( x0, x, sizeof( x ) ), memcpy( y0, y, sizeof( y ) ), memcpy( z0, z, sizeof( z ) );
+		float vx[4] = { 0 }, vy[4] = { 0 }, vz[4] = { 0 };
+		float p0[3] = { x[0], y[0], z[0] }, p1[3] = { x[1], y[1], z[1] };
+		float q0[3] = { x[2], y[2], z[2] }, q1[3] = { x[3], y[3], z[3] }, weights[2];
+		float d2 = sere_closest_points_segments( p0, p1, q0, q1, weights );
+		cr_assert( d2 < h * h && weights[0] > 0.0f && weights[0] < 1.0f && weights[1] > 0.0f && weights[1] < 1.0f,
+				   "folded %d: the long edges must be closest inside both, within the thickness (%g, s %g, t %g)",
+				   folded, sqrtf( d2 ), weights[0], weights[1] );
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( tri, 2, 4, x, y, z, &bvh ), SERE_OK );
+		sere_collide* c;
+		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+		int32_t count = -1;
+		cr_assert_eq( sere_collide_detect( c, bvh, x, y, z, h, &count ), SERE_OK );
+		const sere_edge_contact* e = sere_collide_edge_contacts( c, &count );
+		cr_assert_eq( count, folded, "folded %d: %d edge contacts", folded, count );
+		if ( folded )
+		{
+			cr_assert( e->a0 == 0 && e->a1 == 1 && e->b0 == 2 && e->b1 == 3, "(%d %d)-(%d %d)", e->a0, e->a1, e->b0,
+					   e->b1 );
+		}
+		int32_t ends[4];
+		cr_assert_eq( sere_collide_ref_edge_pairs( x, y, z, tri, 2, h, ends, NULL, 1 ), folded );
+		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
+		sere_collide_stats stats;
+		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
+		bool moved = memcmp( x, x0, sizeof( x ) ) || memcmp( y, y0, sizeof( y ) ) || memcmp( z, z0, sizeof( z ) );
+		cr_assert_eq( moved, folded != 0, "folded %d: the response %s", folded,
+					  moved ? "moved the strip" : "did nothing" );
+		sere_collide_destroy( c );
+		sere_bvh_destroy( bvh );
+	}
+}
+
 Test( collide, neighbours_in_the_sheet_are_not_contacts )
 {
 	collide_sheet s;

@@ -74,6 +74,41 @@ static double segment_distance2( const double p[3], const double a[3], const dou
 	return dot3( d, d );
 }
 
+/* Whether vertices a and b are joined by one of the sorted, distinct edges. */
+static int joined_ref( const int32_t* edge, int64_t edges, int32_t a, int32_t b )
+{
+	for ( int64_t k = 0; k < edges; ++k )
+	{
+		if ( edge[2 * k] == ( a < b ? a : b ) && edge[2 * k + 1] == ( a < b ? b : a ) )
+		{
+			return 1;
+		}
+	}
+	return 0;
+}
+
+/* The corners of the first triangle with side (i, j) between consecutive corners, either way. */
+static void first_triangle( const float* x, const float* y, const float* z, const int32_t* tri, int32_t triangle_count,
+							int32_t i, int32_t j, float corner[3][3] )
+{
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* v = tri + 3 * (size_t) t;
+		for ( int r = 0; r < 3; ++r )
+		{
+			int32_t a = v[r], b = v[( r + 1 ) % 3];
+			if ( ( a == i && b == j ) || ( a == j && b == i ) )
+			{
+				for ( int k = 0; k < 3; ++k )
+				{
+					corner[k][0] = x[v[k]], corner[k][1] = y[v[k]], corner[k][2] = z[v[k]];
+				}
+				return;
+			}
+		}
+	}
+}
+
 static int compare_edge( const void* a, const void* b )
 {
 	const int32_t *u = a, *v = b;
@@ -129,18 +164,30 @@ int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float
 			float q0[3] = { x[b0], y[b0], z[b0] }, q1[3] = { x[b1], y[b1], z[b1] };
 			float w[2];
 			float d2 = sere_closest_points_segments( p0, p1, q0, q1, w );
-			if ( d2 < h2 && w[0] > 0.0f && w[0] < 1.0f && w[1] > 0.0f && w[1] < 1.0f )
+			if ( !( d2 < h2 && w[0] > 0.0f && w[0] < 1.0f && w[1] > 0.0f && w[1] < 1.0f ) )
 			{
-				if ( count < capacity )
-				{
-					ends[4 * count] = a0, ends[4 * count + 1] = a1, ends[4 * count + 2] = b0, ends[4 * count + 3] = b1;
-					if ( weights != NULL )
-					{
-						weights[2 * count] = w[0], weights[2 * count + 1] = w[1];
-					}
-				}
-				count += 1;
+				continue;
 			}
+			if ( joined_ref( edge, edges, a0, b0 ) || joined_ref( edge, edges, a0, b1 ) ||
+				 joined_ref( edge, edges, a1, b0 ) || joined_ref( edge, edges, a1, b1 ) )
+			{
+				float e_tri[3][3], f_tri[3][3];
+				first_triangle( x, y, z, tri, triangle_count, a0, a1, e_tri );
+				first_triangle( x, y, z, tri, triangle_count, b0, b1, f_tri );
+				if ( !sere_edges_face( p0, p1, q0, q1, (const float( * )[3]) e_tri, (const float( * )[3]) f_tri ) )
+				{
+					continue;
+				}
+			}
+			if ( count < capacity )
+			{
+				ends[4 * count] = a0, ends[4 * count + 1] = a1, ends[4 * count + 2] = b0, ends[4 * count + 3] = b1;
+				if ( weights != NULL )
+				{
+					weights[2 * count] = w[0], weights[2 * count + 1] = w[1];
+				}
+			}
+			count += 1;
 		}
 	}
 	free( edge );

@@ -21,7 +21,9 @@ int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, 
 
 /* Brute force over all pairs of the triangles' distinct edges: every two edges sharing no vertex
  * whose closest points (sere_closest_points_segments, the same float test the BVH search applies)
- * lie strictly inside both and are closer than thickness. Edges are taken with their lower vertex
+ * lie strictly inside both and are closer than thickness, where two edges with ends joined by an
+ * edge count only when they face each other (sere_edges_face, each with the first triangle that
+ * has it as a side). Edges are taken with their lower vertex
  * first and ordered by it, then by the higher; pair (e, f) has e before f. For each pair ends gets
  * e's and f's ends (4 entries) and weights (may be NULL) the closest points' parameters s, t (2
  * entries), for the first min(count, capacity) pairs, in order of e, then f; returns the count. */

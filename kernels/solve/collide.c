@@ -37,6 +37,33 @@ float sere_closest_points_segments( const float p0[3], const float p1[3], const 
 	return closest_segments( p0, p1, q0, q1, weights, d );
 }
 
+/* (b − a) × (c − a) of the corners t[0..2]. */
+static void corner_normal( const float t[3][3], float n[3] )
+{
+	float ab[3] = { t[1][0] - t[0][0], t[1][1] - t[0][1], t[1][2] - t[0][2] };
+	float ac[3] = { t[2][0] - t[0][0], t[2][1] - t[0][1], t[2][2] - t[0][2] };
+	n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+	n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+	n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+}
+
+bool sere_edges_face( const float p0[3], const float p1[3], const float q0[3], const float q1[3],
+					  const float e_tri[3][3], const float f_tri[3][3] )
+{
+	float w[2], d[3], n[2][3];
+	float dd = closest_segments( p0, p1, q0, q1, w, d );
+	corner_normal( e_tri, n[0] );
+	corner_normal( f_tri, n[1] );
+	bool face = true;
+	for ( int k = 0; k < 2; ++k )
+	{
+		float dn = d[0] * n[k][0] + d[1] * n[k][1] + d[2] * n[k][2];
+		float nn = n[k][0] * n[k][0] + n[k][1] * n[k][1] + n[k][2] * n[k][2];
+		face = face && 2.0f * dn * dn >= dd * nn;
+	}
+	return face;
+}
+
 /* The arrays sized by the contact capacity, in one table for allocation and release: each holds
  * size[i] bytes per unit of capacity (the per-contact arrays of the response hold both kinds). */
 #define CONTACT_ARRAYS 16

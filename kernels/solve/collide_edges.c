@@ -130,6 +130,48 @@ static void detect_edge_emit( detect_context* c, int32_t e, int32_t f, const flo
 	}
 }
 
+/* Whether vertices a and b are joined by a mesh edge: the upper ends of the edges below one are
+ * sorted, a dozen at most. */
+static bool joined( const detect_context* c, int32_t a, int32_t b )
+{
+	int32_t lower = a < b ? a : b, upper = a < b ? b : a;
+	for ( int32_t e = c->lower_edge[lower]; e < c->lower_edge[lower + 1]; ++e )
+	{
+		if ( c->edge_end[2 * e + 1] == upper )
+		{
+			return true;
+		}
+	}
+	return false;
+}
+
+/* The corners of the triangle edge e is visited through. */
+static void edge_corners( const detect_context* c, int32_t e, float corner[3][3] )
+{
+	const int32_t* v = c->tri + 3 * (size_t) c->edge_triangle[e];
+	for ( int r = 0; r < 3; ++r )
+	{
+		load3( c->x, c->y, c->z, v[r], corner[r] );
+	}
+}
+
+/* Whether a pair of edges within the thickness, closest inside both, is a contact: always when
+ * no end of one is joined by a mesh edge to an end of the other; one ring apart, only where the
+ * sheet between them folds so that they face each other (sere_edges_face). */
+static bool edge_pair_counts( const detect_context* c, int32_t e, int32_t f, const float a0[3], const float a1[3],
+							  const float b0[3], const float b1[3] )
+{
+	const int32_t *u = c->edge_end + 2 * (size_t) e, *v = c->edge_end + 2 * (size_t) f;
+	if ( !joined( c, u[0], v[0] ) && !joined( c, u[0], v[1] ) && !joined( c, u[1], v[0] ) && !joined( c, u[1], v[1] ) )
+	{
+		return true;
+	}
+	float e_tri[3][3], f_tri[3][3];
+	edge_corners( c, e, e_tri );
+	edge_corners( c, f, f_tri );
+	return sere_edges_face( a0, a1, b0, b1, (const float( * )[3]) e_tri, (const float( * )[3]) f_tri );
+}
+
 /* Gathers the ends of buffered edge pairs start .. start + CLOSEST_LANES − 1 (lanes past the end
  * repeat the last pair). */
 static void gather_edge_pairs( const detect_context* c, int32_t start, int32_t count, float a0[3][CLOSEST_LANES],
@@ -199,7 +241,11 @@ void sere_coll_detect_edge_flush( detect_context* c )
 			hits &= hits - 1;
 			float p0[3] = { a0[0][l], a0[1][l], a0[2][l] }, p1[3] = { a1[0][l], a1[1][l], a1[2][l] };
 			float q0[3] = { b0[0][l], b0[1][l], b0[2][l] }, q1[3] = { b1[0][l], b1[1][l], b1[2][l] };
-			detect_edge_emit( c, c->pair_item[start + l], c->pair_target[start + l], p0, p1, q0, q1 );
+			int32_t e = c->pair_item[start + l], f = c->pair_target[start + l];
+			if ( edge_pair_counts( c, e, f, p0, p1, q0, q1 ) )
+			{
+				detect_edge_emit( c, e, f, p0, p1, q0, q1 );
+			}
 		}
 	}
 	c->pair_count = 0;
@@ -275,12 +321,13 @@ static void detect_edge_candidates( detect_context* c )
 /* Buffers the edges f triangle t owns that may pair with an edge of the group (their lower end is
  * above the group's lowest lane vertex), with the group's lanes whose box overlaps t's, for
  * detect_edge_candidates. A pair is any two edges sharing no end: unlike a vertex and the
- * triangles beside it (detect_visit), edges a ring or two apart are not excluded. Two edges of a
- * smooth sheet have their closest points at an end, and only where the sheet folds back on
- * itself do both fall inside, closer than the thickness; there the fold must be held open. On
- * the maple at 1500 points a folding tip let two edges joined through one mesh edge pass through
- * each other, and no rule excluding neighbours' edges kept the six drying runs of the tests free
- * of crossings. */
+ * triangles beside it (detect_visit), edges a ring or two apart are not excluded from the search.
+ * Two edges of a smooth sheet have their closest points at an end, and only where the sheet folds
+ * back on itself do both fall inside, closer than the thickness; there the fold must be held
+ * open. On the maple at 1500 points a folding tip let two edges joined through one mesh edge pass
+ * through each other, and no rule excluding neighbours' edges by topology alone kept the six
+ * drying runs of the tests free of crossings; the exact test's rule is geometric instead
+ * (edge_pair_counts): one ring apart, the two must face each other. */
 static void detect_edge_visit( void* context, int32_t t, uint32_t lanes )
 {
 	detect_context* c = context;
