@@ -429,13 +429,15 @@ typedef struct detect_context
 	lane_bits* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
 	int32_t first;	 /* the vertex of lane 0 */
 	/* An edge group's table: its lanes' edges, side by side for vector tests: their boxes grown
-	 * by the lane's cull radius, their lower end's position and a unit vector across them (in the
-	 * plane of their first triangle; zero when that is degenerate), the lane's cull radius, their
-	 * ends and index. Lane k's rows start at table_lane[k]. */
+	 * by the lane's cull radius, their lower end's position, a unit vector across them (in the
+	 * plane of their first triangle; zero when that is degenerate), their unit direction and
+	 * their length along it (zero for a zero-length edge), the lane's cull radius, their ends and
+	 * index. Lane k's rows start at table_lane[k]. */
 	int32_t table_count;
 	int32_t table_lane[SERE_BVH_WIDTH + 1];
 	float table_lo[3][GROUP_EDGES], table_hi[3][GROUP_EDGES];
 	float table_at[3][GROUP_EDGES], table_across[3][GROUP_EDGES], table_margin[GROUP_EDGES];
+	float table_along[3][GROUP_EDGES], table_length[GROUP_EDGES];
 	int32_t table_lower[GROUP_EDGES], table_upper[GROUP_EDGES], table_edge[GROUP_EDGES];
 	/* edges the group's walk reached, with the lanes whose box overlaps their triangle's */
 	int32_t candidate_edge[CANDIDATES];
