@@ -223,6 +223,66 @@ Test( collide, listed_detection_equals_search_while_the_sheet_moves )
 	collide_sheet_free( &s );
 }
 
+/* sere_collide_resolve refits the tree only for a detection that searches it: over a sheet
+ * crumpling step by step, a step the candidate list serves leaves the tree's nodes as they were,
+ * a step that searches refits them, and every step's contacts are the brute-force sets. The
+ * vertices are pinned (inverse mass 0), so the response moves nothing and the next step's
+ * positions are the crumple's alone. */
+Test( collide, resolve_refits_the_tree_only_when_it_searches )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h = 0.3f * s.cell;
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.inv_m[i] = 0.0f;
+	}
+	/* the tree is made on the flat sheet: the first step searches and refits (or rebuilds) it */
+	collide_sheet_tree( &s, 1 << 16 );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.dt = 0.01f;
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
+	int32_t node_count;
+	sere_bvh_nodes( s.bvh, &node_count );
+	size_t bytes = sizeof( sere_bvh_node ) * (size_t) node_count;
+	sere_bvh_node* before = malloc( bytes );
+	int64_t capacity = 1 << 16;
+	int32_t *rv = malloc( sizeof( int32_t ) * capacity ), *rt = malloc( sizeof( int32_t ) * capacity );
+	int32_t* found = malloc( 2 * sizeof( int32_t ) * capacity );
+	int32_t served = 0, searched = 0;
+	for ( int step = 0; step < 30; ++step )
+	{
+		collide_sheet_crumple( &s, 0.3 + 0.0005 * step, 0.3 * h, 5 );
+		memcpy( before, sere_bvh_nodes( s.bvh, &node_count ), bytes );
+		sere_collide_stats stats;
+		cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_OK );
+		bool kept = memcmp( before, sere_bvh_nodes( s.bvh, &node_count ), bytes ) == 0;
+		bool listed = sere_collide_list_uses( s.c ) > 0;
+		served += listed, searched += !listed;
+		cr_assert_eq( kept, listed, "step %d: the list %s and the tree was %s", step,
+					  listed ? "served" : "did not serve", kept ? "left as it was" : "refit" );
+		int32_t count;
+		const sere_contact* contacts = sere_collide_contacts( s.c, &count );
+		int64_t brute = sere_collide_ref_pairs( s.x, s.y, s.z, s.n, s.tri, s.triangles, h, rv, rt, capacity );
+		cr_assert_eq( count, brute, "step %d: %d contacts, brute force %lld", step, count, (long long) brute );
+		for ( int32_t k = 0; k < count; ++k )
+		{
+			found[2 * k] = contacts[k].vertex, found[2 * k + 1] = contacts[k].triangle;
+		}
+		qsort( found, (size_t) count, 2 * sizeof( int32_t ), collide_cmp_pair );
+		for ( int32_t k = 0; k < count; ++k )
+		{
+			cr_assert( found[2 * k] == rv[k] && found[2 * k + 1] == rt[k], "step %d, pair %d", step, k );
+		}
+		collide_check_edge_pairs( s.x, s.y, s.z, s.tri, s.triangles, s.c, h, "resolve" );
+	}
+	cr_assert_gt( served, 10, "the list must serve most steps (served %d)", served );
+	cr_assert_gt( searched, 1, "the crumple must outgrow the list (searched %d)", searched );
+	free( before ), free( rv ), free( rt ), free( found );
+	collide_sheet_release( &s );
+}
+
 /* The list's radius at its bound: a U-fold whose halves face each other at 1.47 thicknesses (a
  * fresh workspace's first list has a skin of 0.25 thickness, so it lists pairs up to 1.5
  * thicknesses apart) closes to 0.99 thickness by moving every vertex 0.24 thickness at most

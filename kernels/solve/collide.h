@@ -174,6 +174,9 @@ sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, co
 
 /* One self-collision pass of Algorithm 1 (line 23): refit the BVH (rebuilding it past
  * params->rebuild_ratio), then params->rounds times detect and respond, refitting between rounds.
+ * When the candidate list serves the first detection (sere_collide_list_uses), that detection
+ * does not read the tree and the first refit is skipped: the tree then still bounds the positions
+ * of the last search; refit it before querying it yourself.
  * stats may be NULL. An error in the first round leaves the state untouched; one in a later
  * round (SERE_ERR_CAPACITY) keeps the pushes of the rounds before it. */
 sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const sere_collide_state* state,

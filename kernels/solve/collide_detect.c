@@ -261,13 +261,26 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 	return !far;
 }
 
-/* Whether this detection replays the list (see SKIN) or searches the tree, listing anew: then
- * the skin adapts to how long the last list lasted and the edges' across vectors are taken at
- * these positions. */
-static bool choose_list( sere_collide* collide, const sere_bvh* bvh, const int32_t* tri, const float* x, const float* y,
-						 const float* z, float thickness, int threads )
+/* The threads a detection runs with: the team's, at most the workspace's slots. */
+static int detect_threads( const sere_collide* collide )
 {
-	bool replay = list_serves( collide, bvh, x, y, z, thickness, threads );
+	int threads = sere_team_for( collide->threads );
+	return threads < collide->slots ? threads : collide->slots;
+}
+
+bool sere_coll_list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+							const float* z, float thickness )
+{
+	return list_serves( collide, bvh, x, y, z, thickness, detect_threads( collide ) );
+}
+
+/* Whether this detection replays the list (see SKIN; served as for sere_coll_detect) or searches
+ * the tree, listing anew: then the skin adapts to how long the last list lasted and the edges'
+ * across vectors are taken at these positions. */
+static bool choose_list( sere_collide* collide, const sere_bvh* bvh, const int32_t* tri, const float* x, const float* y,
+						 const float* z, float thickness, int threads, int served )
+{
+	bool replay = served < 0 ? list_serves( collide, bvh, x, y, z, thickness, threads ) : served > 0;
 	if ( replay )
 	{
 		collide->cache_uses += 1;
@@ -360,6 +373,12 @@ static void keep_list( sere_collide* collide, const sere_bvh* bvh, const float* 
 sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 								 const float* z, float thickness, int32_t* contact_count )
 {
+	return sere_coll_detect( collide, bvh, x, y, z, thickness, -1, contact_count );
+}
+
+sere_status sere_coll_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+							  const float* z, float thickness, int served, int32_t* contact_count )
+{
 	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
 		 !( thickness > 0.0f ) || !isfinite( thickness ) )
 	{
@@ -377,14 +396,13 @@ sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, con
 	collide->edge_found = 0;
 	collide->touched_count = 0;
 	int32_t n = collide->vertex_count;
-	int32_t threads = sere_team_for( collide->threads );
-	threads = threads < collide->slots ? threads : collide->slots;
+	int32_t threads = detect_threads( collide );
 	collide->work_prefix[0] = 0;
 	for ( int32_t block = 0; block < collide->block_count; ++block )
 	{
 		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
 	}
-	bool replay = choose_list( collide, bvh, tri, x, y, z, thickness, threads );
+	bool replay = choose_list( collide, bvh, tri, x, y, z, thickness, threads, served );
 	bool listing = !replay;
 	for ( int t = 0; t < threads; ++t )
 	{

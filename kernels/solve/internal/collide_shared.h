@@ -552,3 +552,15 @@ void sere_coll_detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_
 /* The unit vector across edge e in the plane of its first triangle, for the edge table. */
 void sere_coll_edge_across_at( sere_collide* collide, const int32_t* tri, const float* x, const float* y,
 							   const float* z, int32_t e );
+
+/* collide_detect.c: the candidate list. */
+
+/* Whether the candidate list (see SKIN) serves a detection at these positions and thickness:
+ * sere_collide_resolve asks before refitting the tree, which a served detection does not read. */
+bool sere_coll_list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+							const float* z, float thickness );
+
+/* sere_collide_detect, told whether the list serves (served 1 or 0, from sere_coll_list_serves at
+ * the same positions, tree and thickness) or to find out (−1). */
+sere_status sere_coll_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+							  const float* z, float thickness, int served, int32_t* contact_count );
