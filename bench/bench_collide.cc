@@ -483,8 +483,8 @@ void BM_collide_ref_edge_pairs( benchmark::State& state, Shape shape )
 	int64_t pairs = 0;
 	for ( auto _ : state )
 	{
-		pairs = sere_collide_ref_edge_pairs( s.x.data, s.y.data, s.z.data, s.tri.data(), s.f, s.thickness, ends.data(),
-											 nullptr, (int64_t) ends.size() / 4 );
+		pairs = sere_collide_ref_edge_pairs( s.x.data, s.y.data, s.z.data, nullptr, nullptr, nullptr, s.tri.data(), s.f,
+											 s.thickness, ends.data(), nullptr, (int64_t) ends.size() / 4 );
 		benchmark::DoNotOptimize( pairs );
 	}
 	state.counters["edge_contacts"] = (double) pairs;

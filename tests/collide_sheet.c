@@ -139,7 +139,8 @@ int32_t collide_check_edge_pairs( const float* x, const float* y, const float* z
 	int64_t capacity = 1 << 20;
 	int32_t* ends = malloc( sizeof( int32_t ) * 4 * (size_t) capacity );
 	float* weights = malloc( sizeof( float ) * 2 * (size_t) capacity );
-	int64_t expected = sere_collide_ref_edge_pairs( x, y, z, tri, triangles, h, ends, weights, capacity );
+	int64_t expected =
+		sere_collide_ref_edge_pairs( x, y, z, NULL, NULL, NULL, tri, triangles, h, ends, weights, capacity );
 	cr_assert_leq( expected, capacity );
 	int32_t count;
 	const sere_edge_contact* contacts = sere_collide_edge_contacts( c, &count );
@@ -226,7 +227,8 @@ int64_t collide_violations_of( const collide_sheet* s, float h, float tolerance,
 {
 	int32_t dummy;
 	float below = h * ( 1.0f - tolerance );
-	return edges ? sere_collide_ref_edge_pairs( s->x, s->y, s->z, s->tri, s->triangles, below, &dummy, NULL, 0 )
+	return edges ? sere_collide_ref_edge_pairs( s->x, s->y, s->z, NULL, NULL, NULL, s->tri, s->triangles, below, &dummy,
+												NULL, 0 )
 				 : sere_collide_ref_pairs( s->x, s->y, s->z, s->n, s->tri, s->triangles, below, &dummy, &dummy, 0 );
 }
 

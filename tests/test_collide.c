@@ -611,7 +611,7 @@ Test( collide, edges_sharing_a_vertex_are_not_contacts )
 			cr_assert( sere_closest_points_segments( p0, p1, p0, q1, w ) < h * h && w[0] == 0.0f && w[1] == 0.0f );
 		}
 	}
-	int64_t brute = sere_collide_ref_edge_pairs( x, y, z, tri, 2, h, &count, NULL, 0 );
+	int64_t brute = sere_collide_ref_edge_pairs( x, y, z, NULL, NULL, NULL, tri, 2, h, &count, NULL, 0 );
 	cr_assert_eq( brute, 1 );
 	sere_collide_destroy( c );
 	sere_bvh_destroy( bvh );
@@ -830,28 +830,27 @@ Test( collide, bad_arguments_are_refused )
 /* A flat sheet and a thickness of 3/4 of a cell: every vertex is closer than that to triangles
  * it is not a corner of (across the far edge of its own triangles), but all of them have a
  * corner joined to it by an edge, so no contact may be reported. */
-/* A strip of two triangles (0, 1, 2) and (1, 3, 2) narrower than the thickness: its long edges
- * (0, 1) and (2, 3) share no vertex, but their ends are joined by the edges (0, 2) and (1, 3).
- * Flat, with a slight twist so that they are not parallel, they are closest in their middles,
- * side by side in the sheet: no contact (sere_edges_face), and the response moves nothing, where
- * it used to push one up and the other down (the Table 1 maple's petiole buzzed so). Folded
- * shut along the diagonal (1, 2), the second triangle lying over the first 0.3h up, edge (2, 3)
- * crosses over (0, 1) facing it: a contact again. The brute-force twin agrees each time. */
-Test( collide, one_ring_edges_count_only_across_a_fold )
+/* A strip of two triangles (0, 1, 2) and (1, 3, 2): its long edges (0, 1) and (2, 3) share no
+ * vertex. Here it is 0.5h wide with a slight twist, so that the two are closest in their middles,
+ * within the thickness: an edge–edge contact, pushed apart (one up, one down). With rest positions
+ * where the strip is as narrow (sere_collide_set_rest), the two are neighbours in the sheet: no
+ * contact and no push (the Table 1 maple's petiole buzzed so). With rest positions where it is
+ * 2h wide, the strip has been squeezed: a contact again. The brute-force twin agrees each time. */
+Test( collide, edges_closer_than_the_thickness_at_rest_are_not_contacts )
 {
-	const float h = 0.05f, w = 0.5f * h, twist = 0.05f * h;
+	const float h = 0.05f, twist = 0.05f * h;
 	int32_t tri[6] = { 0, 1, 2, 1, 3, 2 };
 	float inv_m[4] = { 1.0f, 1.0f, 1.0f, 1.0f };
 	sere_collide_params params = sere_collide_params_default();
 	params.thickness = h;
 	params.dt = 0.01f;
-	for ( int folded = 0; folded < 2; ++folded )
+	const float narrow[4] = { 0.0f, 0.0f, 0.5f * h, 0.5f * h }, wide[4] = { 0.0f, 0.0f, 2.0f * h, 2.0f * h };
+	const float rest_x[4] = { 0.0f, 1.0f, 0.0f, 1.0f }, rest_z[4] = { 0.0f, 0.0f, 0.0f, 0.0f };
+	for ( int rest = 0; rest < 3; ++rest )
 	{
-		/* folded: vertex 3 is (1, w) mirrored across the line from 1 to 2, then lifted */
-		float mirror[2] = { 1.0f - 2.0f * w * w / ( 1.0f + w * w ), 2.0f * w * w * w / ( 1.0f + w * w ) - w };
-		float x[4] = { 0.0f, 1.0f, 0.0f, folded ? mirror[0] : 1.0f };
-		float y[4] = { 0.0f, 0.0f, w, folded ? mirror[1] : w };
-		float z[4] = { 0.0f, 0.0f, folded ? 0.0f : -twist, folded ? 0.3f * h : twist };
+		/* rest 0: no rest positions; 1: rest as narrow as now; 2: rest twice the thickness wide */
+		float x[4] = { 0.0f, 1.0f, 0.0f, 1.0f }, y[4] = { 0.0f, 0.0f, 0.5f * h, 0.5f * h };
+		float z[4] = { 0.0f, 0.0f, -twist, twist };
 		float x0[4], y0[4], z0[4];
 		memcpy( x0, x, sizeof( x ) ), memcpy( y0, y, sizeof( y ) ), memcpy( z0, z, sizeof( z ) );
 		float vx[4] = { 0 }, vy[4] = { 0 }, vz[4] = { 0 };
@@ -859,32 +858,69 @@ Test( collide, one_ring_edges_count_only_across_a_fold )
 		float q0[3] = { x[2], y[2], z[2] }, q1[3] = { x[3], y[3], z[3] }, weights[2];
 		float d2 = sere_closest_points_segments( p0, p1, q0, q1, weights );
 		cr_assert( d2 < h * h && weights[0] > 0.0f && weights[0] < 1.0f && weights[1] > 0.0f && weights[1] < 1.0f,
-				   "folded %d: the long edges must be closest inside both, within the thickness (%g, s %g, t %g)",
-				   folded, sqrtf( d2 ), weights[0], weights[1] );
+				   "the long edges must be closest inside both, within the thickness (%g, s %g, t %g)", sqrtf( d2 ),
+				   weights[0], weights[1] );
 		sere_bvh* bvh;
 		cr_assert_eq( sere_bvh_create( tri, 2, 4, x, y, z, &bvh ), SERE_OK );
 		sere_collide* c;
 		cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+		const float* rest_y = rest == 2 ? wide : narrow;
+		if ( rest > 0 )
+		{
+			cr_assert_eq( sere_collide_set_rest( c, rest_x, rest_y, rest_z ), SERE_OK );
+		}
 		int32_t count = -1;
 		cr_assert_eq( sere_collide_detect( c, bvh, x, y, z, h, &count ), SERE_OK );
 		const sere_edge_contact* e = sere_collide_edge_contacts( c, &count );
-		cr_assert_eq( count, folded, "folded %d: %d edge contacts", folded, count );
-		if ( folded )
+		int32_t expected = rest == 1 ? 0 : 1;
+		cr_assert_eq( count, expected, "rest %d: %d edge contacts", rest, count );
+		if ( expected )
 		{
 			cr_assert( e->a0 == 0 && e->a1 == 1 && e->b0 == 2 && e->b1 == 3, "(%d %d)-(%d %d)", e->a0, e->a1, e->b0,
 					   e->b1 );
 		}
 		int32_t ends[4];
-		cr_assert_eq( sere_collide_ref_edge_pairs( x, y, z, tri, 2, h, ends, NULL, 1 ), folded );
+		cr_assert_eq( sere_collide_ref_edge_pairs( x, y, z, rest ? rest_x : NULL, rest ? rest_y : NULL,
+												   rest ? rest_z : NULL, tri, 2, h, ends, NULL, 1 ),
+					  expected );
 		sere_collide_state state = { x, y, z, vx, vy, vz, inv_m, NULL, NULL, NULL };
 		sere_collide_stats stats;
 		cr_assert_eq( sere_collide_resolve( c, bvh, &state, &params, &stats ), SERE_OK );
 		bool moved = memcmp( x, x0, sizeof( x ) ) || memcmp( y, y0, sizeof( y ) ) || memcmp( z, z0, sizeof( z ) );
-		cr_assert_eq( moved, folded != 0, "folded %d: the response %s", folded,
+		cr_assert_eq( moved, expected != 0, "rest %d: the response %s", rest,
 					  moved ? "moved the strip" : "did nothing" );
 		sere_collide_destroy( c );
 		sere_bvh_destroy( bvh );
 	}
+}
+
+/* sere_collide_set_rest refuses a partial set of arrays and non-finite positions (keeping what it
+ * had), and forgets the rest positions when given none. */
+Test( collide, set_rest_checks_its_input )
+{
+	const float h = 0.05f;
+	int32_t tri[6] = { 0, 1, 2, 1, 3, 2 };
+	float x[4] = { 0.0f, 1.0f, 0.0f, 1.0f }, y[4] = { 0.0f, 0.0f, 0.5f * h, 0.5f * h };
+	float z[4] = { 0.0f, 0.0f, -0.05f * h, 0.05f * h };
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( tri, 2, 4, x, y, z, &bvh ), SERE_OK );
+	sere_collide* c;
+	cr_assert_eq( sere_collide_create( bvh, 0, &c ), SERE_OK );
+	cr_assert_eq( sere_collide_set_rest( NULL, x, y, z ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_set_rest( c, x, NULL, z ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_collide_set_rest( c, x, y, z ), SERE_OK );
+	float bad[4] = { 0.0f, NAN, 0.0f, 0.0f };
+	cr_assert_eq( sere_collide_set_rest( c, x, bad, z ), SERE_ERR_NONFINITE );
+	int32_t count = -1;
+	cr_assert_eq( sere_collide_detect( c, bvh, x, y, z, h, &count ), SERE_OK );
+	sere_collide_edge_contacts( c, &count );
+	cr_assert_eq( count, 0, "the refused call must keep the rest positions" );
+	cr_assert_eq( sere_collide_set_rest( c, NULL, NULL, NULL ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( c, bvh, x, y, z, h, &count ), SERE_OK );
+	sere_collide_edge_contacts( c, &count );
+	cr_assert_eq( count, 1, "without rest positions every pair counts" );
+	sere_collide_destroy( c );
+	sere_bvh_destroy( bvh );
 }
 
 Test( collide, neighbours_in_the_sheet_are_not_contacts )

@@ -141,6 +141,11 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	{
 		status = sere_collide_create( sim->bvh, sim->contact_capacity, &sim->collide );
 	}
+	if ( status == SERE_OK )
+	{
+		/* the flat leaf as built: edges this close at rest are the sheet's own neighbours */
+		status = sere_collide_set_rest( sim->collide, model->p.x, model->p.y, model->p.z );
+	}
 	sim->h_hat = sere_alloc( sizeof( float ) * (size_t) sere_pad( f ) );
 	sim->w0 = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
 	sim->w_frame = sere_alloc( sizeof( double ) * (size_t) model->p.capacity );
@@ -732,6 +737,10 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
 	if ( status == SERE_OK )
 	{
 		status = sere_bvh_build( sim->bvh, p->x, p->y, p->z );
+	}
+	if ( status == SERE_OK )
+	{
+		status = sere_collide_set_rest( sim->collide, p->x, p->y, p->z );
 	}
 	return status;
 }

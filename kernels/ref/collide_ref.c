@@ -74,50 +74,15 @@ static double segment_distance2( const double p[3], const double a[3], const dou
 	return dot3( d, d );
 }
 
-/* Whether vertices a and b are joined by one of the sorted, distinct edges. */
-static int joined_ref( const int32_t* edge, int64_t edges, int32_t a, int32_t b )
-{
-	for ( int64_t k = 0; k < edges; ++k )
-	{
-		if ( edge[2 * k] == ( a < b ? a : b ) && edge[2 * k + 1] == ( a < b ? b : a ) )
-		{
-			return 1;
-		}
-	}
-	return 0;
-}
-
-/* The corners of the first triangle with side (i, j) between consecutive corners, either way. */
-static void first_triangle( const float* x, const float* y, const float* z, const int32_t* tri, int32_t triangle_count,
-							int32_t i, int32_t j, float corner[3][3] )
-{
-	for ( int32_t t = 0; t < triangle_count; ++t )
-	{
-		const int32_t* v = tri + 3 * (size_t) t;
-		for ( int r = 0; r < 3; ++r )
-		{
-			int32_t a = v[r], b = v[( r + 1 ) % 3];
-			if ( ( a == i && b == j ) || ( a == j && b == i ) )
-			{
-				for ( int k = 0; k < 3; ++k )
-				{
-					corner[k][0] = x[v[k]], corner[k][1] = y[v[k]], corner[k][2] = z[v[k]];
-				}
-				return;
-			}
-		}
-	}
-}
-
 static int compare_edge( const void* a, const void* b )
 {
 	const int32_t *u = a, *v = b;
 	return u[0] != v[0] ? ( u[0] > v[0] ) - ( u[0] < v[0] ) : ( u[1] > v[1] ) - ( u[1] < v[1] );
 }
 
-int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float* z, const int32_t* tri,
-									 int32_t triangle_count, float thickness, int32_t* ends, float* weights,
-									 int64_t capacity )
+int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float* z, const float* rx, const float* ry,
+									 const float* rz, const int32_t* tri, int32_t triangle_count, float thickness,
+									 int32_t* ends, float* weights, int64_t capacity )
 {
 	/* every triangle side, lower vertex first, sorted, repeats and zero-length sides dropped */
 	int32_t* edge = malloc( sizeof( int32_t ) * 6 * ( (size_t) triangle_count + 1 ) );
@@ -168,13 +133,11 @@ int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float
 			{
 				continue;
 			}
-			if ( joined_ref( edge, edges, a0, b0 ) || joined_ref( edge, edges, a0, b1 ) ||
-				 joined_ref( edge, edges, a1, b0 ) || joined_ref( edge, edges, a1, b1 ) )
+			if ( rx != NULL )
 			{
-				float e_tri[3][3], f_tri[3][3];
-				first_triangle( x, y, z, tri, triangle_count, a0, a1, e_tri );
-				first_triangle( x, y, z, tri, triangle_count, b0, b1, f_tri );
-				if ( !sere_edges_face( p0, p1, q0, q1, (const float( * )[3]) e_tri, (const float( * )[3]) f_tri ) )
+				float r0[3] = { rx[a0], ry[a0], rz[a0] }, r1[3] = { rx[a1], ry[a1], rz[a1] };
+				float s0[3] = { rx[b0], ry[b0], rz[b0] }, s1[3] = { rx[b1], ry[b1], rz[b1] }, rest[2];
+				if ( sere_closest_points_segments( r0, r1, s0, s1, rest ) < h2 )
 				{
 					continue;
 				}

@@ -21,15 +21,15 @@ int64_t sere_collide_ref_pairs( const float* x, const float* y, const float* z, 
 
 /* Brute force over all pairs of the triangles' distinct edges: every two edges sharing no vertex
  * whose closest points (sere_closest_points_segments, the same float test the BVH search applies)
- * lie strictly inside both and are closer than thickness, where two edges with ends joined by an
- * edge count only when they face each other (sere_edges_face, each with the first triangle that
- * has it as a side). Edges are taken with their lower vertex
- * first and ordered by it, then by the higher; pair (e, f) has e before f. For each pair ends gets
- * e's and f's ends (4 entries) and weights (may be NULL) the closest points' parameters s, t (2
- * entries), for the first min(count, capacity) pairs, in order of e, then f; returns the count. */
-int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float* z, const int32_t* tri,
-									 int32_t triangle_count, float thickness, int32_t* ends, float* weights,
-									 int64_t capacity );
+ * lie strictly inside both and are closer than thickness, but for pairs closer than thickness at
+ * the rest positions rx, ry, rz when given (NULL: none; sere_collide_set_rest). Edges are taken
+ * with their lower vertex first and ordered by it, then by the higher; pair (e, f) has e before f.
+ * For each pair ends gets e's and f's ends (4 entries) and weights (may be NULL) the closest
+ * points' parameters s, t (2 entries), for the first min(count, capacity) pairs, in order of e,
+ * then f; returns the count. */
+int64_t sere_collide_ref_edge_pairs( const float* x, const float* y, const float* z, const float* rx, const float* ry,
+									 const float* rz, const int32_t* tri, int32_t triangle_count, float thickness,
+									 int32_t* ends, float* weights, int64_t capacity );
 
 /* Squared distance between the segments p0 p1 and q0 q1 in double by a different route than the
  * kernel's: the closest points of the two lines when both fall inside the segments, else the

@@ -37,33 +37,6 @@ float sere_closest_points_segments( const float p0[3], const float p1[3], const 
 	return closest_segments( p0, p1, q0, q1, weights, d );
 }
 
-/* (b − a) × (c − a) of the corners t[0..2]. */
-static void corner_normal( const float t[3][3], float n[3] )
-{
-	float ab[3] = { t[1][0] - t[0][0], t[1][1] - t[0][1], t[1][2] - t[0][2] };
-	float ac[3] = { t[2][0] - t[0][0], t[2][1] - t[0][1], t[2][2] - t[0][2] };
-	n[0] = ab[1] * ac[2] - ab[2] * ac[1];
-	n[1] = ab[2] * ac[0] - ab[0] * ac[2];
-	n[2] = ab[0] * ac[1] - ab[1] * ac[0];
-}
-
-bool sere_edges_face( const float p0[3], const float p1[3], const float q0[3], const float q1[3],
-					  const float e_tri[3][3], const float f_tri[3][3] )
-{
-	float w[2], d[3], n[2][3];
-	float dd = closest_segments( p0, p1, q0, q1, w, d );
-	corner_normal( e_tri, n[0] );
-	corner_normal( f_tri, n[1] );
-	bool face = true;
-	for ( int k = 0; k < 2; ++k )
-	{
-		float dn = d[0] * n[k][0] + d[1] * n[k][1] + d[2] * n[k][2];
-		float nn = n[k][0] * n[k][0] + n[k][1] * n[k][1] + n[k][2] * n[k][2];
-		face = face && 2.0f * dn * dn >= dd * nn;
-	}
-	return face;
-}
-
 /* The arrays sized by the contact capacity, in one table for allocation and release: each holds
  * size[i] bytes per unit of capacity (the per-contact arrays of the response hold both kinds). */
 #define CONTACT_ARRAYS 16
@@ -103,14 +76,41 @@ static void collide_free( sere_collide* c )
 	{
 		sere_free( *slot[i] );
 	}
-	void* arrays[] = { c->block_thread,		 c->block_start,	   c->block_found,	c->block_work,
-					   c->work_prefix,		 c->entry_offset,	   c->entry_cursor, c->run_total,
-					   c->touched,			 c->position,		   c->acc,			c->far_count,
-					   c->lane_mark,		 c->mark_offset,	   c->mark_vertex,	c->mark_bits,
-					   c->edge_end,			 c->lower_edge,		   c->owned,		c->edge_triangle,
-					   c->push_count,		 c->cache_x,		   c->cache_y,		c->cache_z,
-					   c->cache_item,		 c->cache_target,	   c->cache_near,	c->cache_block_thread,
-					   c->cache_block_start, c->cache_block_count, c->cache_used,	c->edge_across };
+	void* arrays[] = { c->block_thread,
+					   c->block_start,
+					   c->block_found,
+					   c->block_work,
+					   c->work_prefix,
+					   c->entry_offset,
+					   c->entry_cursor,
+					   c->run_total,
+					   c->touched,
+					   c->position,
+					   c->acc,
+					   c->far_count,
+					   c->lane_mark,
+					   c->mark_offset,
+					   c->mark_vertex,
+					   c->mark_bits,
+					   c->edge_end,
+					   c->lower_edge,
+					   c->owned,
+					   c->edge_triangle,
+					   c->push_count,
+					   c->cache_x,
+					   c->cache_y,
+					   c->cache_z,
+					   c->cache_item,
+					   c->cache_target,
+					   c->cache_near,
+					   c->cache_block_thread,
+					   c->cache_block_start,
+					   c->cache_block_count,
+					   c->cache_used,
+					   c->edge_across,
+					   c->rest_x,
+					   c->rest_y,
+					   c->rest_z };
 	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 }
 
@@ -483,6 +483,45 @@ sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacit
 		return SERE_OK;
 	}
 	return alloc_contacts( collide, contact_capacity );
+}
+
+sere_status sere_collide_set_rest( sere_collide* collide, const float* x, const float* y, const float* z )
+{
+	if ( collide == NULL || ( x == NULL ) != ( y == NULL ) || ( x == NULL ) != ( z == NULL ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t n = collide->vertex_count;
+	if ( x == NULL )
+	{
+		sere_free( collide->rest_x ), sere_free( collide->rest_y ), sere_free( collide->rest_z );
+		collide->rest_x = collide->rest_y = collide->rest_z = NULL;
+		return SERE_OK;
+	}
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		if ( !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] ) )
+		{
+			return SERE_ERR_NONFINITE;
+		}
+	}
+	size_t bytes = sizeof( float ) * (size_t) sere_pad( n > 0 ? n : 1 );
+	float* rest[3] = { collide->rest_x, collide->rest_y, collide->rest_z };
+	for ( int a = 0; a < 3; ++a )
+	{
+		rest[a] = rest[a] != NULL ? rest[a] : sere_alloc( bytes );
+	}
+	collide->rest_x = rest[0], collide->rest_y = rest[1], collide->rest_z = rest[2];
+	if ( rest[0] == NULL || rest[1] == NULL || rest[2] == NULL )
+	{
+		sere_free( rest[0] ), sere_free( rest[1] ), sere_free( rest[2] );
+		collide->rest_x = collide->rest_y = collide->rest_z = NULL;
+		return SERE_ERR_MEMORY;
+	}
+	memcpy( rest[0], x, sizeof( float ) * (size_t) n );
+	memcpy( rest[1], y, sizeof( float ) * (size_t) n );
+	memcpy( rest[2], z, sizeof( float ) * (size_t) n );
+	return SERE_OK;
 }
 
 int32_t sere_collide_list_uses( const sere_collide* collide )

@@ -30,8 +30,8 @@ typedef struct sere_contact
 } sere_contact;
 
 /* An edge–edge contact: two mesh edges sharing no vertex, closer than the thickness, whose
- * closest points lie strictly inside both (two whose ends are joined by a mesh edge only where
- * they face each other across a fold, sere_edges_face). Two edges can pass through each other with every
+ * closest points lie strictly inside both (and not closer than the thickness at rest, when the
+ * workspace has rest positions: sere_collide_set_rest). Two edges can pass through each other with every
  * vertex far from every triangle; only this pair sees it coming. (Where a closest point is an
  * end, that vertex is within the thickness of the other edge's triangles, which the
  * vertex–triangle contacts see.) The edges are (a0, a1) and (b0, b1), each with its lower index first and a0 below
@@ -119,8 +119,8 @@ sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacit
  * (sere_closest_point_triangle) below thickness, where a vertex joined by a mesh edge to a corner
  * counts only with its closest point inside the face (see sere_contact); and every pair of mesh
  * edges sharing no vertex whose closest points (sere_closest_points_segments) lie strictly inside
- * both and are closer than thickness, where edges with ends joined by a mesh edge count only
- * facing each other (sere_edges_face). The BVH must be refit to these positions. Eight
+ * both and are closer than thickness, but for pairs closer than thickness at rest when
+ * sere_collide_set_rest gave rest positions. The BVH must be refit to these positions. Eight
  * consecutive vertices query it together (sere_bvh_query_group), once for their contacts with
  * triangles and once for the edges they are the lower end of, so number the vertices in a
  * spatially coherent order (sere_model uses Morton order); blocks of vertices run in parallel and
@@ -132,6 +132,19 @@ sere_status sere_collide_reserve( sere_collide* collide, int32_t contact_capacit
  * positions. */
 sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 								 const float* z, float thickness, int32_t* contact_count );
+
+/* The sheet's rest positions (the first vertex_count entries of each array, copied; all three
+ * NULL forgets them). With them, two edges whose segments lie closer than the detection's
+ * thickness at rest are neighbours in the sheet and never an edge–edge contact: a strip narrower
+ * than the thickness (a petiole at fine sampling) has its two sides that close at rest, and
+ * pushing them apart along e × f shoved one side up and the other down every frame while the
+ * springs pulled them back (the Table 1 maple's petiole tip buzzed by up to 0.0018 a frame, 40
+ * times the blade's motion, and the candidate list broke in one frame of five). Folded shut, such
+ * a strip is held by the vertex–triangle contacts (a neighbour over the face). Without rest
+ * positions every pair of edges sharing no vertex counts. SERE_ERR_ARGUMENT for a NULL collide
+ * or some but not all of x, y, z NULL; SERE_ERR_NONFINITE (nothing changed) for NaN or infinity;
+ * SERE_ERR_MEMORY (the rest positions forgotten). */
+sere_status sere_collide_set_rest( sere_collide* collide, const float* x, const float* y, const float* z );
 
 /* Detections served by the current candidate list without searching the tree, since the
  * detection that searched and made it (0 right after that one; see SKIN in collide.c). A
@@ -232,19 +245,6 @@ float sere_closest_point_triangle( const float p[3], const float a[3], const flo
  * inside both. */
 float sere_closest_points_segments( const float p0[3], const float p1[3], const float q0[3], const float q1[3],
 									float weights[2] );
-
-/* The fold test of an edge pair whose ends are joined by a mesh edge (one ring apart): true when
- * the vector d between their closest points (sere_closest_points_segments) lies within 45° of the
- * normal (b − a) × (c − a) of each edge's triangle, corners e_tri[0..2] for edge p0 p1 and f_tri
- * for q0 q1 (2 (d · n)² ≥ |d|² |n|²; a zero d or a degenerate normal passes). Such a pair is a
- * contact only when this holds, as a vertex joined to a corner counts only over the face: in a
- * strip of the sheet narrower than the thickness (a petiole, a lobe's tip) the two sides lie
- * side by side, d in the sheet's plane, and pushing them apart along e × f shoved one side up and
- * the other down every frame while the springs pulled them back (the Table 1 maple's petiole
- * buzzed by 0.0018 a frame, 30 times the blade's motion); folded over so that the two parts face
- * each other, d turns to the normals and the pair counts again. */
-bool sere_edges_face( const float p0[3], const float p1[3], const float q0[3], const float q1[3],
-					  const float e_tri[3][3], const float f_tri[3][3] );
 
 #ifdef __cplusplus
 }

@@ -130,46 +130,22 @@ static void detect_edge_emit( detect_context* c, int32_t e, int32_t f, const flo
 	}
 }
 
-/* Whether vertices a and b are joined by a mesh edge: the upper ends of the edges below one are
- * sorted, a dozen at most. */
-static bool joined( const detect_context* c, int32_t a, int32_t b )
+/* Whether a pair of edges within the thickness, closest inside both, is a contact: unless the
+ * workspace has rest positions and the two segments lie closer than the thickness there too
+ * (sere_collide_set_rest: neighbours in the sheet). */
+static bool edge_pair_counts( const detect_context* c, int32_t e, int32_t f )
 {
-	int32_t lower = a < b ? a : b, upper = a < b ? b : a;
-	for ( int32_t e = c->lower_edge[lower]; e < c->lower_edge[lower + 1]; ++e )
-	{
-		if ( c->edge_end[2 * e + 1] == upper )
-		{
-			return true;
-		}
-	}
-	return false;
-}
-
-/* The corners of the triangle edge e is visited through. */
-static void edge_corners( const detect_context* c, int32_t e, float corner[3][3] )
-{
-	const int32_t* v = c->tri + 3 * (size_t) c->edge_triangle[e];
-	for ( int r = 0; r < 3; ++r )
-	{
-		load3( c->x, c->y, c->z, v[r], corner[r] );
-	}
-}
-
-/* Whether a pair of edges within the thickness, closest inside both, is a contact: always when
- * no end of one is joined by a mesh edge to an end of the other; one ring apart, only where the
- * sheet between them folds so that they face each other (sere_edges_face). */
-static bool edge_pair_counts( const detect_context* c, int32_t e, int32_t f, const float a0[3], const float a1[3],
-							  const float b0[3], const float b1[3] )
-{
-	const int32_t *u = c->edge_end + 2 * (size_t) e, *v = c->edge_end + 2 * (size_t) f;
-	if ( !joined( c, u[0], v[0] ) && !joined( c, u[0], v[1] ) && !joined( c, u[1], v[0] ) && !joined( c, u[1], v[1] ) )
+	if ( c->rest_x == NULL )
 	{
 		return true;
 	}
-	float e_tri[3][3], f_tri[3][3];
-	edge_corners( c, e, e_tri );
-	edge_corners( c, f, f_tri );
-	return sere_edges_face( a0, a1, b0, b1, (const float( * )[3]) e_tri, (const float( * )[3]) f_tri );
+	const int32_t *u = c->edge_end + 2 * (size_t) e, *v = c->edge_end + 2 * (size_t) f;
+	float p0[3], p1[3], q0[3], q1[3], w[2], d[3];
+	load3( c->rest_x, c->rest_y, c->rest_z, u[0], p0 );
+	load3( c->rest_x, c->rest_y, c->rest_z, u[1], p1 );
+	load3( c->rest_x, c->rest_y, c->rest_z, v[0], q0 );
+	load3( c->rest_x, c->rest_y, c->rest_z, v[1], q1 );
+	return !( closest_segments( p0, p1, q0, q1, w, d ) < c->h2 );
 }
 
 /* Gathers the ends of buffered edge pairs start .. start + CLOSEST_LANES − 1 (lanes past the end
@@ -242,7 +218,7 @@ void sere_coll_detect_edge_flush( detect_context* c )
 			float p0[3] = { a0[0][l], a0[1][l], a0[2][l] }, p1[3] = { a1[0][l], a1[1][l], a1[2][l] };
 			float q0[3] = { b0[0][l], b0[1][l], b0[2][l] }, q1[3] = { b1[0][l], b1[1][l], b1[2][l] };
 			int32_t e = c->pair_item[start + l], f = c->pair_target[start + l];
-			if ( edge_pair_counts( c, e, f, p0, p1, q0, q1 ) )
+			if ( edge_pair_counts( c, e, f ) )
 			{
 				detect_edge_emit( c, e, f, p0, p1, q0, q1 );
 			}
@@ -337,9 +313,9 @@ static void detect_edge_candidates( detect_context* c )
  * Two edges of a smooth sheet have their closest points at an end, and only where the sheet folds
  * back on itself do both fall inside, closer than the thickness; there the fold must be held
  * open. On the maple at 1500 points a folding tip let two edges joined through one mesh edge pass
- * through each other, and no rule excluding neighbours' edges by topology alone kept the six
- * drying runs of the tests free of crossings; the exact test's rule is geometric instead
- * (edge_pair_counts): one ring apart, the two must face each other. */
+ * through each other, and no rule excluding neighbours' edges by topology kept the six drying
+ * runs of the tests free of crossings; the exact test excludes only the pairs that are that close
+ * at rest (edge_pair_counts). */
 static void detect_edge_visit( void* context, int32_t t, uint32_t lanes )
 {
 	detect_context* c = context;

@@ -122,6 +122,9 @@ struct sere_collide
 	int32_t* owned;
 	int32_t* edge_triangle;
 
+	/* The rest positions of sere_collide_set_rest, NULL until given. */
+	float *rest_x, *rest_y, *rest_z;
+
 	/* Gather lists: for each vertex, the contacts it takes part in (as vertex, corner or edge end),
 	 * in contact order: entry e = entry_offset[i] .. names contact entries[e], whose correction
 	 * λ n̂ moves the vertex by entry_coef[e] λ n̂ / m (−u, −v, −w for corners a, b, c, +1 for
@@ -424,6 +427,7 @@ typedef struct detect_context
 	const float *x, *y, *z;
 	const int32_t* tri;
 	const int32_t *edge_end, *lower_edge, *owned, *edge_triangle; /* sere_collide's edges */
+	const float *rest_x, *rest_y, *rest_z;						  /* its rest positions, or NULL */
 	const int32_t *mark_offset, *mark_vertex;					  /* sere_collide's group mark lists */
 	const lane_bits* mark_bits;
 	lane_bits* mark; /* the calling thread's lane marks (sere_collide.lane_mark) */
