@@ -238,6 +238,38 @@ void BM_AMG( benchmark::State& state )
 	sere_sgs_destroy( sgs );
 }
 
+// The multigrid PCG's floor (sere_cg_touch_amg): the same passes over every level's arrays with
+// adds only, as many iterations as BM_AMG's solve of the same system takes. Args: system, threads.
+void BM_AMGFloor( benchmark::State& state )
+{
+	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sgs* sgs = nullptr;
+	sere_amg* amg = nullptr;
+	sere_cg_workspace* w = nullptr;
+	if ( sere_sgs_create( a, &sgs ) != SERE_OK || sere_amg_create( a, sgs, &amg ) != SERE_OK ||
+		 sere_cg_create( a->rows, &w ) != SERE_OK )
+	{
+		state.SkipWithError( "levels failed" );
+		sere_sgs_destroy( sgs );
+		return;
+	}
+	std::vector<double> x( a->rows, 0.0 );
+	sere_cg_result result{};
+	sere_amg_update( amg );
+	sere_cg_solve_amg( w, amg, s.b.data(), x.data(), 1e-8, 10000, &result );
+	for ( auto _ : state )
+	{
+		sere_cg_touch_amg( w, amg, result.iterations );
+		benchmark::ClobberMemory();
+	}
+	state.counters["iterations"] = result.iterations;
+	sere_cg_destroy( w );
+	sere_amg_destroy( amg );
+	sere_sgs_destroy( sgs );
+}
+
 // The barrier the solve's passes meet at (kernels/core/internal/team.h, sere_spin_barrier): a
 // count and a generation, spun on. Written again here in C++ atomics because that header's C11
 // _Atomic types do not compile as C++17; the floor must not pay libgomp's barrier, a system call
@@ -503,6 +535,11 @@ BENCHMARK( BM_PCG )
 BENCHMARK( BM_AMG )
 	->ArgNames( { "system", "threads", "refresh" } )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_AMGFloor )
+	->ArgNames( { "system", "threads" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_PCGFloor )

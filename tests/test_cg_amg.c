@@ -277,6 +277,38 @@ Test( amg, small_and_diagonal_matrices )
 	sere_cg_destroy( w );
 }
 
+/* The floor (sere_cg_touch_amg) writes only scratch: a solve after it, at 1 and 2 threads, gives
+ * the bits of a solve before it; it refuses bad input as the solve does. */
+Test( amg, touch_leaves_the_solve_unchanged, .timeout = 60 )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 40, 30 );
+	sere_amg* m = amg_on( &s );
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( s.n, &w ), SERE_OK );
+	sere_cg_result before_result, after_result;
+	double* before = calloc( (size_t) s.n, sizeof( double ) );
+	double* after = calloc( (size_t) s.n, sizeof( double ) );
+	cr_assert_eq( sere_cg_solve_amg( w, m, s.b, before, 1e-10, 1000, &before_result ), SERE_OK );
+	for ( int t = 1; t <= 2; ++t )
+	{
+		omp_set_num_threads( t );
+		cr_assert_eq( sere_cg_touch_amg( w, m, before_result.iterations ), SERE_OK );
+		memset( after, 0, sizeof( double ) * (size_t) s.n );
+		omp_set_num_threads( 1 );
+		cr_assert_eq( sere_cg_solve_amg( w, m, s.b, after, 1e-10, 1000, &after_result ), SERE_OK );
+		cr_expect_eq( after_result.iterations, before_result.iterations );
+		cr_expect_eq( memcmp( after, before, sizeof( double ) * (size_t) s.n ), 0, "touching at %d threads", t );
+	}
+	cr_expect_eq( sere_cg_touch_amg( NULL, m, 1 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_touch_amg( w, NULL, 1 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_touch_amg( w, m, -1 ), SERE_ERR_ARGUMENT );
+	free( before ), free( after );
+	sere_cg_destroy( w );
+	sere_amg_destroy( m );
+	sere_test_cg_system_free( &s );
+}
+
 Test( amg, rejects_bad_input )
 {
 	/* [−2 1; 1 2]: a valid pattern, a negative diagonal */

@@ -257,6 +257,13 @@ int32_t sere_amg_rows( const sere_amg* amg, int32_t level );
  * SERE_MAX_THREADS). sere_cg_solve_amg runs with its workspace's count instead. */
 sere_status sere_amg_set_threads( sere_amg* amg, int32_t threads );
 
+/* The floor of `iterations` steps of sere_cg_solve_amg (benchmarks): the same passes over the
+ * same arrays of every level, at the same barriers, with an add where the solve multiplies,
+ * divides or multiplies and adds (the dense coarsest solve reads its factor twice). Writes only
+ * the workspace's and the levels' scratch vectors, from zero: a solve after it gives the same
+ * bits. SERE_ERR_ARGUMENT as sere_cg_solve_amg, or before the first sere_amg_update. */
+sere_status sere_cg_touch_amg( sere_cg_workspace* workspace, sere_amg* amg, int32_t iterations );
+
 /* sere_cg_solve preconditioned with one V-cycle of amg (as updated last) per iteration: the same
  * arguments, statuses and result (the reported residual is the true one, computed at the end). */
 sere_status sere_cg_solve_amg( sere_cg_workspace* workspace, sere_amg* amg, const double* b, double* x,

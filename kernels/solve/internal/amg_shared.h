@@ -1,0 +1,49 @@
+/* sere — private to cg_amg.c and cg_amg_touch.c, not installed: the multigrid's levels and the
+ * team a V-cycle runs with. */
+#pragma once
+
+#include "solve/internal/cg_shared.h"
+
+/* Levels with fewer positions than this run on the team's first thread while the others wait:
+ * their sweeps take a few µs, less than the barriers a shared level would cross (one per color
+ * and sweep). */
+#define AMG_SHARED_POSITIONS 4096
+
+typedef struct amg_level
+{
+	const sere_sgs* g; /* the layout: the caller's at level 0, `own` above */
+	sere_sgs* own;
+	int32_t np; /* positions */
+	/* Toward the next level (the dense one past the last sgs level): */
+	int32_t* coarse_at;	 /* per position, its aggregate's position there; −1 for padding */
+	int32_t* member_ptr; /* per position there, its members member[member_ptr[P] .. member_ptr[P + 1]) */
+	int32_t* member;	 /* positions here, ascending within an aggregate */
+	int32_t targets;	 /* Galerkin sums: the value at sum_to[t] there is the sum of val[sum_from[q]] */
+	int32_t *sum_to, *sum_ptr, *sum_from; /* here over q in [sum_ptr[t], sum_ptr[t + 1]) */
+	double *x, *b, *r, *inv_diag;		  /* per position */
+} amg_level;
+
+struct sere_amg
+{
+	int32_t levels; /* sgs levels */
+	amg_level level[SERE_AMG_MAX_LEVELS];
+	int32_t dense_rows; /* the dense level past the last sgs level; 0 when there is none */
+	double *dense, *factor, *dense_b, *dense_x;
+	int32_t threads;
+	/* sere_amg_update only marks the coarse levels stale; the next V-cycle refreshes them (a
+	 * solve that starts converged never pays for it: the plane tree's triangle layer, most
+	 * frames). coarse_bad: the last refresh found a coarse level that is not SPD. */
+	int updated, stale, coarse_bad;
+	sere_spin_barrier* barrier;
+};
+
+typedef struct amg_team
+{
+	int tid, team;
+	sere_spin_barrier* barrier;
+} amg_team;
+
+/* What a V-cycle needs: the finest level's D⁻¹ from the sgs's current values (every call: the
+ * caller refills them every step), and when an update asked for it the coarse values (Galerkin
+ * sums level by level), their D⁻¹ and the dense level's factor. */
+sere_status sere_amg_refresh( sere_amg* m, int32_t threads );
