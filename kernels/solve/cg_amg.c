@@ -548,19 +548,7 @@ static void cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg
 		const bool dense = l + 1 == m->levels;
 		double* bc = dense ? m->dense_b : m->level[l + 1].b;
 		double* xc = dense ? m->dense_x : m->level[l + 1].x;
-		const int32_t next_np = dense ? m->dense_rows : m->level[l + 1].np;
-		/* Restriction Pᵀ r: each aggregate's sum over its members, in position order. */
-		sere_team_share( 0, next_np, t.tid, t.team, &first, &last );
-		for ( int32_t at = first; at < last; ++at )
-		{
-			double sum = 0.0;
-			for ( int32_t q = L->member_ptr[at]; q < L->member_ptr[at + 1]; ++q )
-			{
-				sum += L->r[L->member[q]];
-			}
-			bc[at] = sum;
-		}
-		sere_spin_barrier_wait( t.barrier, t.team );
+		amg_restrict( m, l, bc, t );
 		if ( dense )
 		{
 			if ( t.tid == 0 )

@@ -47,3 +47,23 @@ typedef struct amg_team
  * caller refills them every step), and when an update asked for it the coarse values (Galerkin
  * sums level by level), their D⁻¹ and the dense level's factor. */
 sere_status sere_amg_refresh( sere_amg* m, int32_t threads );
+
+/* Restriction Pᵀ r of level l into bc (the next level's b, or the dense level's), by every thread
+ * of t: each aggregate's sum over its members, in position order; ends at a barrier. */
+static inline void amg_restrict( const sere_amg* m, int32_t l, double* bc, amg_team t )
+{
+	const amg_level* L = &m->level[l];
+	const int32_t next_np = l + 1 == m->levels ? m->dense_rows : m->level[l + 1].np;
+	int32_t first, last;
+	sere_team_share( 0, next_np, t.tid, t.team, &first, &last );
+	for ( int32_t at = first; at < last; ++at )
+	{
+		double sum = 0.0;
+		for ( int32_t q = L->member_ptr[at]; q < L->member_ptr[at + 1]; ++q )
+		{
+			sum += L->r[L->member[q]];
+		}
+		bc[at] = sum;
+	}
+	sere_spin_barrier_wait( t.barrier, t.team );
+}
