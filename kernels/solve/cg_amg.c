@@ -486,8 +486,6 @@ sere_status sere_amg_refresh( sere_amg* m, int32_t threads )
 	return bad || m->coarse_bad ? SERE_ERR_NOT_SPD : SERE_OK;
 }
 
-/* The threads of a V-cycle: tid of team, meeting at barrier. */
-
 /* Chunk ch of the backward sweep: out_i = (in_i − Σ_{j≠i} a_ij out_j) / d_i, the full row (a
  * Gauss–Seidel step from the current out, not from zero). */
 static inline void full_sweep_chunk( const sere_sgs* g, int32_t ch, const double* inv_diag, const double* in,
@@ -511,15 +509,32 @@ static inline void upper_residual_chunk( const sere_sgs* g, int32_t ch, const do
 	store_lanes( r + ch * LANES, &up );
 }
 
-/* x = B_l b on level l (both by position), by every thread of t; ends at a barrier. */
-static void cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg_team t )
+/* The dense level's floor: the two triangular solves read the factor twice; adds in place of theirs. */
+static void dense_touch( const sere_amg* m, const double* b, double* x )
+{
+	const int32_t n = m->dense_rows;
+	for ( int32_t pass = 0; pass < 2; ++pass )
+	{
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			double sum = b[i];
+			for ( int32_t k = 0; k < n; ++k )
+			{
+				sum += m->factor[i * n + k];
+			}
+			x[i] = sum;
+		}
+	}
+}
+
+void sere_amg_cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg_team t, bool touch )
 {
 	const amg_level* L = &m->level[l];
 	if ( t.team > 1 && L->np < AMG_SHARED_POSITIONS )
 	{
 		if ( t.tid == 0 )
 		{
-			cycle( m, l, b, x, ( amg_team ){ 0, 1, t.barrier } );
+			sere_amg_cycle( m, l, b, x, ( amg_team ){ 0, 1, t.barrier }, touch );
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
 		return;
@@ -533,7 +548,8 @@ static void cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg
 		sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], t.tid, t.team, &first, &last );
 		for ( int32_t ch = first; ch < last; ++ch )
 		{
-			sweep_chunk( g, g->lower_ptr, ch, L->inv_diag, b, x, NULL );
+			touch ? sweep_touch( g, false, ch, L->inv_diag, b, x )
+				  : sweep_chunk( g, g->lower_ptr, ch, L->inv_diag, b, x, NULL );
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
 	}
@@ -542,7 +558,16 @@ static void cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg
 		sere_team_share( 0, g->chunks, t.tid, t.team, &first, &last );
 		for ( int32_t ch = first; ch < last; ++ch )
 		{
-			upper_residual_chunk( g, ch, x, L->r );
+			if ( touch )
+			{
+				lanes_t up;
+				chunk_touch( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], x, &up );
+				store_lanes( L->r + ch * LANES, &up );
+			}
+			else
+			{
+				upper_residual_chunk( g, ch, x, L->r );
+			}
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
 		const bool dense = l + 1 == m->levels;
@@ -553,21 +578,22 @@ static void cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg
 		{
 			if ( t.tid == 0 )
 			{
-				solve_dense( m, bc, xc );
+				touch ? dense_touch( m, bc, xc ) : solve_dense( m, bc, xc );
 			}
 			sere_spin_barrier_wait( t.barrier, t.team );
 		}
 		else
 		{
-			cycle( m, l + 1, bc, xc, t );
+			sere_amg_cycle( m, l + 1, bc, xc, t, touch );
 		}
-		/* Prolongation, scaled: x += ω P x_c. */
+		/* Prolongation, scaled: x += ω P x_c (the floor multiplies by one). */
+		const double omega = touch ? 1.0 : SERE_AMG_OVERCORRECT;
 		sere_team_share( 0, L->np, t.tid, t.team, &first, &last );
 		for ( int32_t at = first; at < last; ++at )
 		{
 			if ( L->coarse_at[at] >= 0 )
 			{
-				x[at] += SERE_AMG_OVERCORRECT * xc[L->coarse_at[at]];
+				x[at] += omega * xc[L->coarse_at[at]];
 			}
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
@@ -578,7 +604,7 @@ static void cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg
 		sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], t.tid, t.team, &first, &last );
 		for ( int32_t ch = first; ch < last; ++ch )
 		{
-			full_sweep_chunk( g, ch, L->inv_diag, b, x );
+			touch ? sweep_touch( g, true, ch, L->inv_diag, b, x ) : full_sweep_chunk( g, ch, L->inv_diag, b, x );
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
 	}
@@ -602,7 +628,8 @@ sere_status sere_amg_apply( sere_amg* m, const double* r, double* z )
 	}
 #pragma omp parallel num_threads( sere_team_for( m->threads ) )
 	{
-		cycle( m, 0, L->b, L->x, ( amg_team ){ omp_get_thread_num(), omp_get_num_threads(), m->barrier } );
+		sere_amg_cycle( m, 0, L->b, L->x, ( amg_team ){ omp_get_thread_num(), omp_get_num_threads(), m->barrier },
+						false );
 	}
 	positions_to_rows( L->g->row, L->np, L->x, z, m->threads );
 	return SERE_OK;
@@ -650,7 +677,7 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
 		while ( my.it < round_end )
 		{
-			cycle( m, 0, r, z, t );
+			sere_amg_cycle( m, 0, r, z, t, false );
 			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
 			{
 				partial[4 * blk + 2] = dot_lanes( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );

@@ -37,6 +37,7 @@ struct sere_amg
 	sere_spin_barrier* barrier;
 };
 
+/* The threads of a V-cycle: tid of team, meeting at barrier. */
 typedef struct amg_team
 {
 	int tid, team;
@@ -67,3 +68,40 @@ static inline void amg_restrict( const sere_amg* m, int32_t l, double* bc, amg_t
 	}
 	sere_spin_barrier_wait( t.barrier, t.team );
 }
+
+/* The floor's chunk_sum: the same value loads and gathers, an add where it multiplies and adds. */
+static inline void chunk_touch( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
+								lanes_t* out )
+{
+	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
+	for ( int32_t s = begin; s < end; s += LANES )
+	{
+		gather( &xlo, x, col + s );
+		gather( &xhi, x, col + s + 4 );
+		lo += *(const half_t*) ( val + s ) + xlo;
+		hi += *(const half_t*) ( val + s + 4 ) + xhi;
+	}
+	out->lo = lo;
+	out->hi = hi;
+}
+
+/* The floor of chunk ch of a sweep over the lower rows or (full) the whole rows: in, D⁻¹ and the
+ * rows' entries read, out stored, adds only. */
+static inline void sweep_touch( const sere_sgs* g, bool full, int32_t ch, const double* inv_diag, const double* in,
+								double* out )
+{
+	lanes_t lo, up = { { 0.0 }, { 0.0 } }, v = load_lanes( in + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+	chunk_touch( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], out, &lo );
+	if ( full )
+	{
+		chunk_touch( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], out, &up );
+	}
+	v.lo = v.lo + lo.lo + up.lo + inv.lo;
+	v.hi = v.hi + lo.hi + up.hi + inv.hi;
+	store_lanes( out + ch * LANES, &v );
+}
+
+/* x = B_l b on level l (both by position), by every thread of t; ends at a barrier. touch: the
+ * floor instead (sere_cg_touch_amg): the same passes over the same arrays at the same barriers,
+ * an add where the cycle multiplies, divides or multiplies and adds. */
+void sere_amg_cycle( const sere_amg* m, int32_t l, const double* b, double* x, amg_team t, bool touch );
