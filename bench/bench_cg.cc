@@ -194,6 +194,27 @@ void BM_PCG( benchmark::State& state )
 	sere_sgs_destroy( sgs );
 }
 
+// The multigrid over a system's matrix, its levels refreshed once, and a workspace, for BM_AMG and
+// BM_AMGFloor; ok is false when a part could not be made.
+struct amg_solver
+{
+	sere_sgs* sgs = nullptr;
+	sere_amg* amg = nullptr;
+	sere_cg_workspace* w = nullptr;
+	bool ok;
+	explicit amg_solver( const sere_csr* a )
+		: ok( sere_sgs_create( a, &sgs ) == SERE_OK && sere_amg_create( a, sgs, &amg ) == SERE_OK &&
+			  sere_cg_create( a->rows, &w ) == SERE_OK && sere_amg_update( amg ) == SERE_OK )
+	{
+	}
+	~amg_solver()
+	{
+		sere_cg_destroy( w );
+		sere_amg_destroy( amg );
+		sere_sgs_destroy( sgs );
+	}
+};
+
 // Our aggregation multigrid PCG (sere_cg_solve_amg) on the same systems, from x = 0 to relative
 // residual 1e-8, beside hypre's BoomerAMG PCG below. Args: system, threads, refresh (0: the coarse
 // levels refreshed once, outside the timing: the solve alone; 1: refreshed for every solve, as the
@@ -205,37 +226,29 @@ void BM_AMG( benchmark::State& state )
 	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
 	const bool refresh = state.range( 2 ) == 1;
 	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
-	sere_sgs* sgs = nullptr;
-	sere_amg* amg = nullptr;
-	sere_cg_workspace* w = nullptr;
-	if ( sere_sgs_create( a, &sgs ) != SERE_OK || sere_amg_create( a, sgs, &amg ) != SERE_OK ||
-		 sere_cg_create( a->rows, &w ) != SERE_OK )
+	amg_solver m( a );
+	if ( !m.ok )
 	{
 		state.SkipWithError( "levels failed" );
-		sere_sgs_destroy( sgs );
 		return;
 	}
 	std::vector<double> x( a->rows );
 	sere_cg_result result{};
-	sere_amg_update( amg );
 	for ( auto _ : state )
 	{
 		std::fill( x.begin(), x.end(), 0.0 );
 		if ( refresh )
 		{
-			sere_amg_update( amg );
+			sere_amg_update( m.amg );
 		}
-		sere_cg_solve_amg( w, amg, s.b.data(), x.data(), 1e-8, 10000, &result );
+		sere_cg_solve_amg( m.w, m.amg, s.b.data(), x.data(), 1e-8, 10000, &result );
 		benchmark::DoNotOptimize( x.data() );
 	}
 	state.counters["iterations"] = result.iterations;
 	state.counters["residual"] = result.residual;
 	state.counters["rows"] = a->rows;
-	state.counters["levels"] = sere_amg_levels( amg );
-	state.counters["coarse_rows"] = sere_amg_rows( amg, 1 );
-	sere_cg_destroy( w );
-	sere_amg_destroy( amg );
-	sere_sgs_destroy( sgs );
+	state.counters["levels"] = sere_amg_levels( m.amg );
+	state.counters["coarse_rows"] = sere_amg_rows( m.amg, 1 );
 }
 
 // The multigrid PCG's floor (sere_cg_touch_amg): the same passes over every level's arrays with
@@ -245,29 +258,21 @@ void BM_AMGFloor( benchmark::State& state )
 	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
 	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
 	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
-	sere_sgs* sgs = nullptr;
-	sere_amg* amg = nullptr;
-	sere_cg_workspace* w = nullptr;
-	if ( sere_sgs_create( a, &sgs ) != SERE_OK || sere_amg_create( a, sgs, &amg ) != SERE_OK ||
-		 sere_cg_create( a->rows, &w ) != SERE_OK )
+	amg_solver m( a );
+	if ( !m.ok )
 	{
 		state.SkipWithError( "levels failed" );
-		sere_sgs_destroy( sgs );
 		return;
 	}
 	std::vector<double> x( a->rows, 0.0 );
 	sere_cg_result result{};
-	sere_amg_update( amg );
-	sere_cg_solve_amg( w, amg, s.b.data(), x.data(), 1e-8, 10000, &result );
+	sere_cg_solve_amg( m.w, m.amg, s.b.data(), x.data(), 1e-8, 10000, &result );
 	for ( auto _ : state )
 	{
-		sere_cg_touch_amg( w, amg, result.iterations );
+		sere_cg_touch_amg( m.w, m.amg, result.iterations );
 		benchmark::ClobberMemory();
 	}
 	state.counters["iterations"] = result.iterations;
-	sere_cg_destroy( w );
-	sere_amg_destroy( amg );
-	sere_sgs_destroy( sgs );
 }
 
 // The barrier the solve's passes meet at (kernels/core/internal/team.h, sere_spin_barrier): a
