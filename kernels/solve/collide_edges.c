@@ -236,8 +236,9 @@ void sere_coll_detect_edge_flush( detect_context* c )
  * thousand to 10); the planes at the ends take the edges of the ring around the row's ends, whose
  * boxes overlap its grown box and which straddle the plane across (on the Table 1 maple's first
  * listing search, the pairs left for edge_bound_lanes went from 20186 to 15230, and a listing
- * search took 2 to 5% less time on every shape of BM_collide_detect). Both are separating directions (interval_gap):
- * f's ends p and q project relative to the row's lower end, the row's edge spans [0, length]. */
+ * search took 2 to 5% less time on every shape of BM_collide_detect). Both are separating
+ * directions (interval_gap): f's ends p and q project relative to the row's lower end, the row's
+ * edge spans [0, length]. */
 static inline uint32_t table_hits( const detect_context* c, int32_t from, const float lo[3], const float hi[3],
 								   const float p[3], const float q[3], int32_t f0, int32_t f1 )
 {
