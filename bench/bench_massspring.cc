@@ -63,6 +63,7 @@ struct scene
 	std::vector<float> inv_m;
 	sere_massspring_params params{};
 	std::vector<state_t> snapshots; // the states the iterations step from, in turn
+	std::vector<int32_t> sweeps;	// the sweeps a step from each snapshot takes
 	state_t work;
 };
 
@@ -176,6 +177,13 @@ scene& maple()
 			sc.snapshots.push_back( s );
 		}
 	}
+	for ( size_t k = 0; k < sc.snapshots.size(); ++k )
+	{
+		restore( sc, k );
+		sere_massspring_report report{};
+		sere_massspring_step( sc.ms, &p, &sc.params, &report );
+		sc.sweeps.push_back( report.sweeps );
+	}
 	return sc;
 }
 
@@ -236,6 +244,24 @@ void BM_MassSpringStep( benchmark::State& state )
 	omp_set_num_threads( saved );
 }
 
+// The step's floor (sere_massspring_touch): from each snapshot in turn, the memory traffic of a step
+// with the sweeps the step took from it, with sums for arithmetic; so it times the same mix of steps.
+void BM_MassSpringFloor( benchmark::State& state )
+{
+	const int saved = omp_get_max_threads();
+	omp_set_num_threads( static_cast<int>( state.range( 0 ) ) );
+	scene& sc = maple();
+	sere_massspring_particles p = particles( sc.work, sc );
+	sere_massspring_report report{};
+	size_t next = 0;
+	step_loop( state, sc, report, [&] {
+		report.sweeps = sc.sweeps[next];
+		next = ( next + 1 ) % sc.sweeps.size();
+		return sere_massspring_touch( sc.ms, &p, report.sweeps );
+	} );
+	omp_set_num_threads( saved );
+}
+
 // The scalar twin on the same springs (the kernel's topology, structural springs in color order,
 // so both sweep them in the same order) from the same state.
 void BM_MassSpringReference( benchmark::State& state )
@@ -251,6 +277,12 @@ void BM_MassSpringReference( benchmark::State& state )
 } // namespace
 
 BENCHMARK( BM_MassSpringStep )
+	->ArgName( "threads" )
+	->Arg( 1 )
+	->Arg( 2 )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_MassSpringFloor )
 	->ArgName( "threads" )
 	->Arg( 1 )
 	->Arg( 2 )

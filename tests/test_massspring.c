@@ -535,6 +535,61 @@ Test( massspring, bad_steps_change_nothing )
 	sheet_free( &s );
 }
 
+/* The floor (sere_massspring_touch) moves a step's memory but must not move the leaf: after real
+ * steps of a blade pinned at one corner (velocities nonzero, the pinned one's zero), the touch at 1
+ * and 2 threads leaves every position and velocity equal to what it was (compared with ==: Δt = 0
+ * adds exact zeros), and bad input is refused with nothing changed. */
+Test( massspring, touch_leaves_the_particles_as_they_were )
+{
+	sheet s = sheet_make( 8, 0.02f );
+	s.inv_m[0] = 0.0f;
+	sere_massspring* ms = sheet_springs( &s );
+	sere_massspring_particles p = sheet_particles( &s );
+	sere_massspring_params params = sere_massspring_params_default();
+	params.shrink = 0.05f;
+	params.curl = 0.2f;
+	for ( int step = 0; step < 20; ++step )
+	{
+		sere_status status = sere_massspring_step( ms, &p, &params, NULL );
+		cr_assert( status == SERE_OK || status == SERE_ERR_NO_CONVERGE );
+	}
+	const int32_t n = s.vertex_count;
+	float* arrays[6] = { s.x, s.y, s.z, s.vx, s.vy, s.vz };
+	float* before = malloc( 6 * (size_t) n * sizeof( float ) );
+	cr_assert_not_null( before );
+	for ( int k = 0; k < 6; ++k )
+	{
+		memcpy( before + (size_t) k * n, arrays[k], (size_t) n * sizeof( float ) );
+	}
+	cr_assert_neq( s.vz[n - 1], 0.0f, "the free corner moves, so a touch that zeroed velocities would show" );
+	for ( int32_t threads = 1; threads <= 2; ++threads )
+	{
+		cr_assert_eq( sere_massspring_set_threads( ms, threads ), SERE_OK );
+		cr_assert_eq( sere_massspring_touch( ms, &p, 7 ), SERE_OK );
+		for ( int k = 0; k < 6; ++k )
+		{
+			for ( int32_t i = 0; i < n; ++i )
+			{
+				cr_assert_eq( arrays[k][i], before[(size_t) k * n + i], "array %d particle %d at %d threads", k, i,
+							  threads );
+			}
+		}
+	}
+	cr_expect_eq( sere_massspring_touch( ms, &p, 0 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_massspring_touch( NULL, &p, 1 ), SERE_ERR_ARGUMENT );
+	p.count -= 1;
+	cr_expect_eq( sere_massspring_touch( ms, &p, 1 ), SERE_ERR_ARGUMENT );
+	p.count += 1;
+	s.y[4] = NAN;
+	cr_expect_eq( sere_massspring_touch( ms, &p, 1 ), SERE_ERR_NONFINITE );
+	s.y[4] = before[(size_t) n + 4];
+	cr_expect_eq( memcmp( before, s.x, (size_t) n * sizeof( float ) ), 0 );
+
+	free( before );
+	sere_massspring_destroy( ms );
+	sheet_free( &s );
+}
+
 static uint64_t fnv1a( uint64_t h, const void* data, size_t bytes )
 {
 	const unsigned char* p = data;

@@ -1,51 +1,16 @@
 /* _GNU_SOURCE: sched_getaffinity for core/internal/team.h. */
 #define _GNU_SOURCE
 
-#include "season/massspring.h"
+#include "season/internal/massspring_shared.h"
 
 #include "core/array.h"
-#include "solve/color.h"
 
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "core/internal/simd.h"
 #include "core/internal/team.h"
-
-struct sere_massspring
-{
-	int32_t threads; /* sere_massspring_set_threads */
-	int32_t vertex_count;
-	int32_t structural_count;
-	int32_t flexion_count;
-	int32_t* a; /* structural springs in sweep order (below), then flexion springs */
-	int32_t* b;
-	float* rest0;
-	int32_t color_count;
-	/* The sweep (Tang Eq. 2) works on bands: the particles cut by breadth-first level into
-	 * band_count ranges, so that a structural spring lies inside one band or joins two
-	 * neighbouring ones. A sweep limits the springs inside the bands (bands in parallel: they
-	 * share no particle, and each band's thread takes its colors in turn with no barrier), then
-	 * the springs joining bands c and c + 1 for even c, then for odd c. The structural springs
-	 * are stored in that order, item by item (bands, even cuts, odd cuts), each item by color:
-	 * run k = item k / color_count, color k % color_count is [run_offsets[k], run_offsets[k+1]). */
-	int32_t band_count;
-	int32_t* run_offsets;
-	/* Particle → springs incidence (CSR), each list in ascending spring order, with the sign
-	 * the spring's force takes at that particle: the fixed gather order makes the sum the same
-	 * for any thread count. */
-	int32_t* incidence_offsets;
-	int32_t* incidence;
-	float* incidence_sign;
-	/* Per-spring force of the current step. */
-	float *fx, *fy, *fz;
-	/* The step works on particle records, (x, y, z, 1/m) and (vx, vy, vz, 0): a SIMD lane
-	 * fetches one spring end with a single 16-byte load instead of one gather per component. */
-	float* xrec;
-	float* vrec;
-};
 
 sere_massspring_params sere_massspring_params_default( void )
 {
@@ -116,418 +81,6 @@ void sere_massspring_destroy( sere_massspring* ms )
 	free( ms );
 }
 
-static float distance( const float* x, const float* y, const float* z, int32_t i, int32_t j )
-{
-	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
-	return sqrtf( ( dx * dx + dy * dy ) + dz * dz );
-}
-
-/* Bands hold at least this many particles, so that the springs joining two bands stay a
- * small share; at most MAX_BANDS of them. The count depends on the mesh only, never on the
- * thread count, so every thread count limits the springs in the same order. */
-#define BAND_PARTICLES 512
-#define MAX_BANDS	   16
-
-/* Breadth-first levels over the structural springs (each connected piece continues the level
- * count of the previous one), then bands of whole levels holding about equal shares of the
- * particles. Fills band_of (per particle) and returns the band count. */
-static int32_t cut_bands( const int32_t* sa, const int32_t* sb, int32_t edges, int32_t n, int32_t* band_of,
-						  int32_t* scratch )
-{
-	int32_t* start = scratch;		   /* n + 1: adjacency offsets */
-	int32_t* adjacent = start + n + 1; /* 2 edges */
-	int32_t* level = adjacent + 2 * (size_t) edges;
-	int32_t* queue = level + n;
-	memset( start, 0, sizeof( int32_t ) * ( (size_t) n + 1 ) );
-	for ( int32_t e = 0; e < edges; ++e )
-	{
-		++start[sa[e] + 1], ++start[sb[e] + 1];
-	}
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		start[i + 1] += start[i];
-	}
-	int32_t* fill = queue; /* the queue is not in use yet */
-	memcpy( fill, start, sizeof( int32_t ) * (size_t) n );
-	for ( int32_t e = 0; e < edges; ++e )
-	{
-		adjacent[fill[sa[e]]++] = sb[e];
-		adjacent[fill[sb[e]]++] = sa[e];
-	}
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		level[i] = -1;
-	}
-	int32_t head = 0, tail = 0, top = 0;
-	for ( int32_t root = 0; root < n; ++root )
-	{
-		if ( level[root] >= 0 )
-		{
-			continue;
-		}
-		level[root] = top;
-		queue[tail++] = root;
-		while ( head < tail )
-		{
-			int32_t i = queue[head++];
-			top = level[i] > top ? level[i] : top;
-			for ( int32_t k = start[i]; k < start[i + 1]; ++k )
-			{
-				if ( level[adjacent[k]] < 0 )
-				{
-					level[adjacent[k]] = level[i] + 1;
-					queue[tail++] = adjacent[k];
-				}
-			}
-		}
-		top += 1;
-	}
-	/* particles per level, then bands of whole levels */
-	int32_t* per_level = start; /* reuse: top ≤ n levels */
-	memset( per_level, 0, sizeof( int32_t ) * ( (size_t) top + 1 ) );
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		++per_level[level[i]];
-	}
-	int32_t bands = n / BAND_PARTICLES;
-	bands = bands < 1 ? 1 : bands > MAX_BANDS ? MAX_BANDS : bands;
-	for ( ;; )
-	{
-		/* level l goes to the band its first particle's rank falls in */
-		int32_t before = 0, used = 0, previous = -1;
-		for ( int32_t l = 0; l < top; ++l )
-		{
-			int32_t band = (int32_t) ( (int64_t) before * bands / n );
-			used += band != previous;
-			previous = band;
-			queue[l] = band;
-			before += per_level[l];
-		}
-		if ( used == bands || bands == 1 )
-		{
-			break;
-		}
-		bands -= 1; /* a level wider than a band's share: fewer, wider bands */
-	}
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		band_of[i] = queue[level[i]];
-	}
-	return bands;
-}
-
-/* Stores the structural springs in sweep order (see the struct) and their runs. */
-static sere_status sweep_order( sere_massspring* ms, const int32_t* sa, const int32_t* sb, const float* srest,
-								int32_t edges, int32_t n, const sere_coloring* coloring )
-{
-	int32_t* band_of = malloc( sizeof( int32_t ) * (size_t) n );
-	int32_t* scratch = malloc( sizeof( int32_t ) * ( 3 * (size_t) n + 1 + 2 * (size_t) edges ) );
-	if ( band_of == NULL || scratch == NULL )
-	{
-		free( band_of ), free( scratch );
-		return SERE_ERR_MEMORY;
-	}
-	const int32_t bands = cut_bands( sa, sb, edges, n, band_of, scratch );
-	const int32_t colors = coloring->color_count, cuts = bands - 1, items = bands + cuts;
-	/* item rank: bands 0..R−1, then even cuts, then odd cuts */
-	int32_t rank_of_cut[MAX_BANDS];
-	int32_t next = bands;
-	for ( int32_t c = 0; c < cuts; c += 2 )
-	{
-		rank_of_cut[c] = next++;
-	}
-	for ( int32_t c = 1; c < cuts; c += 2 )
-	{
-		rank_of_cut[c] = next++;
-	}
-	ms->band_count = bands;
-	ms->run_offsets = sere_alloc( sizeof( int32_t ) * ( (size_t) items * colors + 1 ) );
-	if ( ms->run_offsets == NULL )
-	{
-		free( band_of ), free( scratch );
-		return SERE_ERR_MEMORY;
-	}
-	/* counting sort by run (item rank, color), stable in the coloring's order */
-	int32_t* offsets = ms->run_offsets;
-	memset( offsets, 0, sizeof( int32_t ) * ( (size_t) items * colors + 1 ) );
-	int32_t* run_of = scratch; /* per position in the coloring's order */
-	for ( int32_t k = 0; k < edges; ++k )
-	{
-		int32_t s = coloring->order[k];
-		int32_t ra = band_of[sa[s]], rb = band_of[sb[s]];
-		int32_t item = ra == rb ? ra : rank_of_cut[ra < rb ? ra : rb];
-		run_of[k] = item * colors + coloring->color[s];
-		++offsets[run_of[k] + 1];
-	}
-	for ( int32_t r = 0; r < items * colors; ++r )
-	{
-		offsets[r + 1] += offsets[r];
-	}
-	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) items * colors );
-	if ( fill == NULL )
-	{
-		free( band_of ), free( scratch );
-		return SERE_ERR_MEMORY;
-	}
-	memcpy( fill, offsets, sizeof( int32_t ) * (size_t) items * colors );
-	for ( int32_t k = 0; k < edges; ++k )
-	{
-		int32_t s = coloring->order[k], at = fill[run_of[k]]++;
-		ms->a[at] = sa[s];
-		ms->b[at] = sb[s];
-		ms->rest0[at] = srest[s];
-	}
-	ms->color_count = colors;
-	free( band_of ), free( scratch ), free( fill );
-	return SERE_OK;
-}
-
-static sere_status validate_input( const float* x, const float* y, const float* z, int32_t vertex_count,
-								   const int32_t* tri, int32_t triangle_count )
-{
-	if ( x == NULL || y == NULL || z == NULL || tri == NULL || vertex_count < 3 || triangle_count < 1 )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	for ( int32_t i = 0; i < vertex_count; ++i )
-	{
-		if ( !isfinite( x[i] ) || !isfinite( y[i] ) || !isfinite( z[i] ) )
-		{
-			return SERE_ERR_NONFINITE;
-		}
-	}
-	for ( int32_t t = 0; t < triangle_count; ++t )
-	{
-		const int32_t* v = tri + 3 * t;
-		for ( int k = 0; k < 3; ++k )
-		{
-			if ( v[k] < 0 || v[k] >= vertex_count )
-			{
-				return SERE_ERR_ARGUMENT;
-			}
-		}
-		if ( v[0] == v[1] || v[1] == v[2] || v[2] == v[0] )
-		{
-			return SERE_ERR_ARGUMENT;
-		}
-	}
-	return SERE_OK;
-}
-
-/* Tang Sec. 4.2, steps 1–3: every pair of adjacent particles joined once. The triangle sides,
- * keyed by their undirected edge (lo << 32 | hi) with the triangle as index and the opposite
- * vertex as value, sorted so each edge's one (boundary) or two (interior) sides stand together.
- * A manifold mesh has no edge in three triangles and no two triangles on the same three points. */
-static sere_status sorted_sides( const int32_t* tri, int32_t triangle_count, sere_sort_item* sides, int32_t* edges,
-								 int32_t* hinges )
-{
-	for ( int32_t t = 0; t < triangle_count; ++t )
-	{
-		for ( int k = 0; k < 3; ++k )
-		{
-			uint32_t p = (uint32_t) tri[3 * t + ( k + 1 ) % 3], q = (uint32_t) tri[3 * t + ( k + 2 ) % 3];
-			uint64_t key = p < q ? ( (uint64_t) p << 32 ) | q : ( (uint64_t) q << 32 ) | p;
-			sides[3 * t + k] = ( sere_sort_item ){ key, t, tri[3 * t + k] };
-		}
-	}
-	int32_t side_count = 3 * triangle_count;
-	sere_sort_items( sides, side_count );
-	*edges = 0;
-	*hinges = 0;
-	sere_status status = SERE_OK;
-	for ( int32_t k = 0; k < side_count; )
-	{
-		int32_t run = 1;
-		while ( k + run < side_count && sides[k + run].key == sides[k].key )
-		{
-			++run;
-		}
-		if ( run > 2 || ( run == 2 && sides[k].value == sides[k + 1].value ) )
-		{
-			status = SERE_ERR_GEOMETRY;
-		}
-		*edges += 1;
-		*hinges += run == 2;
-		k += run;
-	}
-	return status;
-}
-
-static bool alloc_springs( sere_massspring* ms, int32_t edges, int32_t hinges, int32_t vertex_count )
-{
-	int32_t total = sere_pad( edges + hinges );
-	ms->vertex_count = vertex_count;
-	ms->structural_count = edges;
-	ms->flexion_count = hinges;
-	ms->a = sere_alloc( (size_t) total * sizeof( int32_t ) );
-	ms->b = sere_alloc( (size_t) total * sizeof( int32_t ) );
-	ms->rest0 = sere_alloc( (size_t) total * sizeof( float ) );
-	ms->fx = sere_alloc( (size_t) total * sizeof( float ) );
-	ms->fy = sere_alloc( (size_t) total * sizeof( float ) );
-	ms->fz = sere_alloc( (size_t) total * sizeof( float ) );
-	ms->incidence_offsets = sere_alloc( (size_t) sere_pad( vertex_count + 1 ) * sizeof( int32_t ) );
-	ms->incidence = sere_alloc( 2 * (size_t) total * sizeof( int32_t ) );
-	ms->incidence_sign = sere_alloc( 2 * (size_t) total * sizeof( float ) );
-	ms->xrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
-	ms->vrec = sere_alloc( 4 * (size_t) sere_pad( vertex_count ) * sizeof( float ) );
-	return ms->a != NULL && ms->b != NULL && ms->rest0 != NULL && ms->fx != NULL && ms->fy != NULL && ms->fz != NULL &&
-		   ms->incidence_offsets != NULL && ms->incidence != NULL && ms->incidence_sign != NULL && ms->xrec != NULL &&
-		   ms->vrec != NULL;
-}
-
-/* One structural spring per edge (into sa, sb, srest, colored and ordered later) and one flexion
- * spring per interior edge, across the hinge between the two opposite vertices (into ms). */
-static sere_status fill_springs( sere_massspring* ms, const sere_sort_item* sides, int32_t side_count, const float* x,
-								 const float* y, const float* z, int32_t* sa, int32_t* sb, float* srest )
-{
-	sere_status status = SERE_OK;
-	int32_t e = 0, h = ms->structural_count;
-	for ( int32_t k = 0; k < side_count; )
-	{
-		int32_t run = k + 1 < side_count && sides[k + 1].key == sides[k].key ? 2 : 1;
-		sa[e] = (int32_t) ( sides[k].key >> 32 );
-		sb[e] = (int32_t) ( sides[k].key & 0xffffffffu );
-		srest[e] = distance( x, y, z, sa[e], sb[e] );
-		if ( !( srest[e] > 0.0f ) )
-		{
-			status = SERE_ERR_GEOMETRY;
-		}
-		++e;
-		if ( run == 2 )
-		{
-			int32_t c = sides[k].value, d = sides[k + 1].value;
-			ms->a[h] = c < d ? c : d;
-			ms->b[h] = c < d ? d : c;
-			ms->rest0[h] = distance( x, y, z, c, d );
-			if ( !( ms->rest0[h] > 0.0f ) )
-			{
-				status = SERE_ERR_GEOMETRY;
-			}
-			++h;
-		}
-		k += run;
-	}
-	return status;
-}
-
-/* Each vertex's springs (CSR), with the sign of the spring's force there: the force f of spring
- * s pulls a toward b, +f at a and −f at b. */
-static sere_status build_incidence( sere_massspring* ms )
-{
-	int32_t total = ms->structural_count + ms->flexion_count;
-	int32_t vertex_count = ms->vertex_count;
-	int32_t* offsets = ms->incidence_offsets;
-	for ( int32_t s = 0; s < total; ++s )
-	{
-		++offsets[ms->a[s] + 1];
-		++offsets[ms->b[s] + 1];
-	}
-	for ( int32_t i = 0; i < vertex_count; ++i )
-	{
-		offsets[i + 1] += offsets[i];
-	}
-	int32_t* fill = malloc( (size_t) vertex_count * sizeof( int32_t ) );
-	if ( fill == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
-	memcpy( fill, offsets, (size_t) vertex_count * sizeof( int32_t ) );
-	for ( int32_t s = 0; s < total; ++s )
-	{
-		ms->incidence[fill[ms->a[s]]] = s;
-		ms->incidence_sign[fill[ms->a[s]]++] = 1.0f;
-		ms->incidence[fill[ms->b[s]]] = s;
-		ms->incidence_sign[fill[ms->b[s]]++] = -1.0f;
-	}
-	free( fill );
-	return SERE_OK;
-}
-
-sere_status sere_massspring_create( const float* x, const float* y, const float* z, int32_t vertex_count,
-									const int32_t* tri, int32_t triangle_count, sere_massspring** out )
-{
-	if ( out == NULL )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	*out = NULL;
-	sere_status status = validate_input( x, y, z, vertex_count, tri, triangle_count );
-	if ( status != SERE_OK )
-	{
-		return status;
-	}
-	sere_sort_item* sides = malloc( 3 * (size_t) triangle_count * sizeof( sere_sort_item ) );
-	if ( sides == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
-	int32_t edges, hinges;
-	status = sorted_sides( tri, triangle_count, sides, &edges, &hinges );
-	sere_massspring* ms = status == SERE_OK ? calloc( 1, sizeof( sere_massspring ) ) : NULL;
-	int32_t* sa = NULL;
-	int32_t* sb = NULL;
-	float* srest = NULL;
-	sere_coloring coloring = { 0 };
-	if ( status == SERE_OK )
-	{
-		sa = malloc( (size_t) edges * sizeof( int32_t ) );
-		sb = malloc( (size_t) edges * sizeof( int32_t ) );
-		srest = malloc( (size_t) edges * sizeof( float ) );
-		if ( ms == NULL || !alloc_springs( ms, edges, hinges, vertex_count ) || sa == NULL || sb == NULL ||
-			 srest == NULL )
-		{
-			status = SERE_ERR_MEMORY;
-		}
-	}
-	if ( status == SERE_OK )
-	{
-		status = fill_springs( ms, sides, 3 * triangle_count, x, y, z, sa, sb, srest );
-	}
-	free( sides );
-	if ( status == SERE_OK )
-	{
-		status = sere_coloring_create( sa, sb, edges, vertex_count, &coloring );
-	}
-	if ( status == SERE_OK )
-	{
-		status = sweep_order( ms, sa, sb, srest, edges, vertex_count, &coloring );
-	}
-	if ( status == SERE_OK )
-	{
-		status = build_incidence( ms );
-	}
-	sere_coloring_destroy( &coloring );
-	free( sa );
-	free( sb );
-	free( srest );
-	if ( status != SERE_OK )
-	{
-		sere_massspring_destroy( ms );
-		return status;
-	}
-	*out = ms;
-	return SERE_OK;
-}
-
-sere_massspring_topology sere_massspring_get_topology( const sere_massspring* ms )
-{
-	sere_massspring_topology t = { 0 };
-	if ( ms != NULL )
-	{
-		t.vertex_count = ms->vertex_count;
-		t.structural_count = ms->structural_count;
-		t.flexion_count = ms->flexion_count;
-		t.a = ms->a;
-		t.b = ms->b;
-		t.rest0 = ms->rest0;
-		t.color_count = ms->color_count;
-		t.band_count = ms->band_count;
-		t.run_count = ( 2 * ms->band_count - 1 ) * ms->color_count;
-		t.run_offsets = ms->run_offsets;
-	}
-	return t;
-}
-
 static int params_valid( const sere_massspring_params* p )
 {
 	return isfinite( p->dt ) && p->dt > 0.0f && isfinite( p->gravity[0] ) && isfinite( p->gravity[1] ) &&
@@ -580,8 +133,16 @@ static void pack( sere_massspring* ms, const sere_massspring_particles* p )
 	}
 }
 
-/* The per-spring forces of springs [first, first + count) (see the header for the law). */
-static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, spring_law law )
+/* a + b + c + d: what the floor's passes (touch) do with the records they load, in place of the
+ * step's arithmetic, so that no load can be left out. */
+static inline sere_vf sum4( sere_vf a, sere_vf b, sere_vf c, sere_vf d )
+{
+	return sere_vf_add( sere_vf_add( a, b ), sere_vf_add( c, d ) );
+}
+
+/* The per-spring forces of springs [first, first + count) (see the header for the law); with
+ * touch, the same loads and stores with sums of the loaded values for forces (the floor). */
+static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, spring_law law, bool touch )
 {
 	const int32_t* restrict sa = ms->a;
 	const int32_t* restrict sb = ms->b;
@@ -605,6 +166,14 @@ static void spring_forces( sere_massspring* ms, int32_t first, int32_t count, sp
 		sere_vf_load_records( xr, ib, &bx, &by, &bz, &bw );
 		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &unused );
 		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &unused );
+		if ( touch )
+		{
+			sere_vf r = sere_vf_add( sere_vf_load_first( rest0 + s, lanes, 1.0f ), sere_vf_add( aw, bw ) );
+			sere_vf_store_first( fx + s, lanes, sere_vf_add( sum4( ax, bx, avx, bvx ), r ) );
+			sere_vf_store_first( fy + s, lanes, sum4( ay, by, avy, bvy ) );
+			sere_vf_store_first( fz + s, lanes, sum4( az, bz, avz, bvz ) );
+			continue;
+		}
 		sere_vf dx = sere_vf_sub( bx, ax ), dy = sere_vf_sub( by, ay ), dz = sere_vf_sub( bz, az );
 		sere_vf len = sere_vf_norm3( dx, dy, dz );
 		sere_vf inv = sere_vf_keep( sere_vf_gt( len, zero ), sere_vf_div( one, len ) );
@@ -667,9 +236,10 @@ static void integrate_velocities( sere_massspring* ms, int32_t count, const sere
  * of them share a particle, so they are limited at the same time (SERE_LANES to a step of the lane layer). Each spring
  * off [lo_factor L, hi_factor L] gets its relative velocity changed along p = x_ab + v_ab Δt so that |p| lands on the
  * nearer bound. Raises *worst_io to the largest distance off the band (relative to L) this thread found before
- * correcting and adds the number of its springs that were off to *off_band. */
+ * correcting and adds the number of its springs that were off to *off_band. With touch, the same loads summed
+ * into *worst_io and nothing stored (the floor). */
 static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float keep, float lo_factor, float hi_factor,
-					   float dt, float* worst_io, int32_t* off_band )
+					   float dt, bool touch, float* worst_io, int32_t* off_band )
 {
 	const int32_t* restrict sa = ms->a;
 	const int32_t* restrict sb = ms->b;
@@ -681,6 +251,7 @@ static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float 
 	const int32_t chunks = ( count + SERE_LANES - 1 ) / SERE_LANES;
 	const sere_vf vkeep = sere_vf_splat( keep ), vlo = sere_vf_splat( lo_factor ), vhi = sere_vf_splat( hi_factor );
 	const sere_vf vdt = sere_vf_splat( dt ), zero = sere_vf_splat( 0.0f );
+	sere_vf touched = zero;
 	for ( int32_t chunk = 0; chunk < chunks; ++chunk )
 	{
 		const int32_t s = first + SERE_LANES * chunk;
@@ -691,6 +262,13 @@ static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float 
 		sere_vf_load_records( xr, ib, &bx, &by, &bz, &wb );
 		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &avw );
 		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &bvw );
+		if ( touch )
+		{
+			sere_vf r = sere_vf_add( sere_vf_load_first( rest0 + s, lanes, 1.0f ), sum4( wa, wb, avw, bvw ) );
+			touched = sere_vf_add( touched, sere_vf_add( sum4( ax, bx, avx, bvx ), r ) );
+			touched = sere_vf_add( touched, sere_vf_add( sum4( ay, by, avy, bvy ), sum4( az, bz, avz, bvz ) ) );
+			continue;
+		}
 		sere_vf px = sere_vf_add( sere_vf_sub( bx, ax ), sere_vf_mul( vdt, sere_vf_sub( bvx, avx ) ) );
 		sere_vf py = sere_vf_add( sere_vf_sub( by, ay ), sere_vf_mul( vdt, sere_vf_sub( bvy, avy ) ) );
 		sere_vf pz = sere_vf_add( sere_vf_sub( bz, az ), sere_vf_mul( vdt, sere_vf_sub( bvz, avz ) ) );
@@ -717,14 +295,19 @@ static void limit_run( sere_massspring* ms, int32_t first, int32_t count, float 
 							   sere_vf_sub( bvy, sere_vf_mul( sb_, py ) ), sere_vf_sub( bvz, sere_vf_mul( sb_, pz ) ),
 							   bvw );
 	}
+	if ( touch )
+	{
+		worst = fmaxf( worst, sere_vf_max_where( sere_vmask_first( SERE_LANES ), touched ) );
+	}
 	*worst_io = worst;
 	*off_band += n;
 }
 
 /* This thread's share of the structural springs' extremes after the step, with p = x_ab + v_ab Δt
  * computed exactly as the position update will compute it: the largest excess of |p|/L beyond
- * [1 − τ, 1 + τ] (≤ 0 when all are inside) and the largest | |p|/L − 1 |. */
-static void band_measure( const sere_massspring* ms, float keep, float tau, float dt, float* excess_out,
+ * [1 − τ, 1 + τ] (≤ 0 when all are inside) and the largest | |p|/L − 1 |. With touch, the largest
+ * sum of the loaded values instead (the floor). */
+static void band_measure( const sere_massspring* ms, float keep, float tau, float dt, bool touch, float* excess_out,
 						  float* strain_out )
 {
 	const int32_t* restrict sa = ms->a;
@@ -749,6 +332,14 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 		sere_vf_load_records( xr, ib, &bx, &by, &bz, &bw );
 		sere_vf_load_records( vr, ia, &avx, &avy, &avz, &unused );
 		sere_vf_load_records( vr, ib, &bvx, &bvy, &bvz, &unused );
+		if ( touch )
+		{
+			sere_vf r = sere_vf_add( sere_vf_load_first( rest0 + s, lanes, 1.0f ), sere_vf_add( aw, bw ) );
+			sere_vf sum = sere_vf_add( sere_vf_add( sum4( ax, bx, avx, bvx ), r ),
+									   sere_vf_add( sum4( ay, by, avy, bvy ), sum4( az, bz, avz, bvz ) ) );
+			excess = fmaxf( excess, sere_vf_max_where( m, sum ) );
+			continue;
+		}
 		sere_vf px =
 			sere_vf_sub( sere_vf_add( bx, sere_vf_mul( bvx, vdt ) ), sere_vf_add( ax, sere_vf_mul( avx, vdt ) ) );
 		sere_vf py =
@@ -763,6 +354,28 @@ static void band_measure( const sere_massspring* ms, float keep, float tau, floa
 	}
 	*excess_out = excess;
 	*strain_out = strain;
+}
+
+/* One strain-limiting sweep, this thread's share: the bands, then the even cuts, then the odd ones
+ * (items [0, R), [R, R + E), [R + E, 2R − 1)); within a phase the items share no particle, and
+ * each phase ends at the barrier of its omp for. */
+static void limit_sweep( sere_massspring* ms, float keep, float lo_factor, float hi_factor, float dt, bool touch,
+						 float* worst_io, int32_t* off_band )
+{
+	const int32_t bands = ms->band_count, colors = ms->color_count, even = bands / 2;
+	const int32_t phase_start[4] = { 0, bands, bands + even, 2 * bands - 1 };
+	for ( int phase = 0; phase < 3; ++phase )
+	{
+#pragma omp for schedule( static )
+		for ( int32_t item = phase_start[phase]; item < phase_start[phase + 1]; ++item )
+		{
+			for ( int32_t c = 0; c < colors; ++c )
+			{
+				const int32_t* run = ms->run_offsets + item * colors + c;
+				limit_run( ms, run[0], run[1] - run[0], keep, lo_factor, hi_factor, dt, touch, worst_io, off_band );
+			}
+		}
+	}
 }
 
 /* Every particle finite and no inverse mass negative. */
@@ -830,8 +443,8 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 #pragma omp parallel num_threads( sere_team_for( ms->threads ) )
 	{
 		pack( ms, p );
-		spring_forces( ms, 0, ms->structural_count, structural );
-		spring_forces( ms, ms->structural_count, ms->flexion_count, flexion );
+		spring_forces( ms, 0, ms->structural_count, structural, false );
+		spring_forces( ms, ms->structural_count, ms->flexion_count, flexion, false );
 		integrate_velocities( ms, p->count, params );
 
 		for ( int32_t sweep = 0; sweep < params->max_sweeps; ++sweep )
@@ -845,22 +458,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 			}
 			float mine = 0.0f;
 			int32_t mine_limited = 0;
-			/* The bands, then the even cuts, then the odd ones (items [0, R), [R, R + E),
-			 * [R + E, 2R − 1)): within a phase the items share no particle. */
-			const int32_t bands = ms->band_count, colors = ms->color_count, even = bands / 2;
-			const int32_t phase_start[4] = { 0, bands, bands + even, 2 * bands - 1 };
-			for ( int phase = 0; phase < 3; ++phase )
-			{
-#pragma omp for schedule( static )
-				for ( int32_t item = phase_start[phase]; item < phase_start[phase + 1]; ++item )
-				{
-					for ( int32_t c = 0; c < colors; ++c )
-					{
-						const int32_t* run = ms->run_offsets + item * colors + c;
-						limit_run( ms, run[0], run[1] - run[0], keep, inner_lo, inner_hi, dt, &mine, &mine_limited );
-					}
-				}
-			}
+			limit_sweep( ms, keep, inner_lo, inner_hi, dt, false, &mine, &mine_limited );
 			/* A maximum and an integer sum: the same in any order of the threads. */
 #pragma omp critical( sere_massspring_worst )
 			{
@@ -875,7 +473,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 			if ( done )
 			{
 				float own_excess, own_strain;
-				band_measure( ms, keep, tau, dt, &own_excess, &own_strain );
+				band_measure( ms, keep, tau, dt, false, &own_excess, &own_strain );
 #pragma omp critical( sere_massspring_worst )
 				{
 					excess = fmaxf( excess, own_excess );
@@ -901,7 +499,7 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 		if ( !converged )
 		{
 			float own_excess, own_strain;
-			band_measure( ms, keep, tau, dt, &own_excess, &own_strain );
+			band_measure( ms, keep, tau, dt, false, &own_excess, &own_strain );
 #pragma omp critical( sere_massspring_worst )
 			final_strain = fmaxf( final_strain, own_strain );
 		}
@@ -917,4 +515,50 @@ sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles
 		report->hit_cap = !converged;
 	}
 	return converged ? SERE_OK : SERE_ERR_NO_CONVERGE;
+}
+
+sere_status sere_massspring_touch( sere_massspring* ms, sere_massspring_particles* p, int32_t sweeps )
+{
+	if ( ms == NULL || p == NULL || p->count != ms->vertex_count || p->x == NULL || p->y == NULL || p->z == NULL ||
+		 p->vx == NULL || p->vy == NULL || p->vz == NULL || p->inv_m == NULL || sweeps < 1 )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sere_status status = check_particles( p, ms->threads );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	/* Δt = 0, no drag and no gravity: the integration and the position update run as in a step and
+	 * leave every particle where it was. */
+	sere_massspring_params still = sere_massspring_params_default();
+	still.dt = 0.0f;
+	still.drag = 0.0f;
+	still.gravity[2] = 0.0f;
+	const spring_law none = { 1.0f, 0.0f, 0.0f };
+	float sink = 0.0f;
+#pragma omp parallel num_threads( sere_team_for( ms->threads ) )
+	{
+		pack( ms, p );
+		spring_forces( ms, 0, ms->structural_count, none, true );
+		spring_forces( ms, ms->structural_count, ms->flexion_count, none, true );
+		integrate_velocities( ms, p->count, &still );
+		float mine = 0.0f;
+		int32_t unused = 0;
+		for ( int32_t sweep = 0; sweep < sweeps; ++sweep )
+		{
+			limit_sweep( ms, 1.0f, 0.0f, 0.0f, 0.0f, true, &mine, &unused );
+			/* the step's reduction and barrier after each sweep */
+#pragma omp critical( sere_massspring_worst )
+			sink = fmaxf( sink, mine );
+#pragma omp barrier
+		}
+		float own_excess, own_strain;
+		band_measure( ms, 1.0f, 0.0f, 0.0f, true, &own_excess, &own_strain );
+#pragma omp critical( sere_massspring_worst )
+		sink = fmaxf( sink, own_excess );
+		advance_positions( ms, p, 0.0f );
+	}
+	ms->touch_sink = sink;
+	return SERE_OK;
 }

@@ -141,6 +141,19 @@ typedef struct sere_massspring_report
 sere_status sere_massspring_step( sere_massspring* ms, sere_massspring_particles* particles,
 								  const sere_massspring_params* params, sere_massspring_report* report );
 
+/* The floor of sere_massspring_step: the memory a step with `sweeps` strain-limiting sweeps moves,
+ * with sums in place of its arithmetic. It packs the records, loads every spring's two ends and
+ * natural length and stores a force per spring, gathers each particle's forces and writes its
+ * velocity record, runs `sweeps` sweeps that load every structural spring's ends and length
+ * (meeting at the same barriers as a step's), one confirming pass of the same loads, and writes
+ * the particles back. It leaves out the stores of the springs a sweep corrects (a step stores
+ * only the SIMD chunks with a spring off the band, a few percent after the first sweep) and
+ * every square root and division; the integration runs as a step's with Δt = 0, a few
+ * multiply-adds a particle. Positions are left as they were, and so are velocities except those of
+ * pinned particles, which become 0 as in a step. SERE_ERR_ARGUMENT for a particle count other
+ * than the mesh's, a NULL array or sweeps < 1; SERE_ERR_NONFINITE as sere_massspring_step. */
+sere_status sere_massspring_touch( sere_massspring* ms, sere_massspring_particles* particles, int32_t sweeps );
+
 #ifdef __cplusplus
 }
 #endif
