@@ -319,7 +319,8 @@ Test( drying, folding_maple_has_no_edge_crossings, .disabled = SERE_LONG_TEST_DI
  * at 800 points the plane tree ends 0.076 spacings from the converged solve in 43.3 against 64.6
  * sweeps a frame and the red maple 0.048 in 71.2 against 114.4; the plane tree at the Table 1 size
  * 0.017, in 59.1 against 85.4. The green maple, the wisteria and the grass keep the plain sweeps:
- * there the two iterations converge to different buckled shapes (README, "Fewer sweeps"). */
+ * there the two iterations converge to different buckled shapes (docs/DESIGN.md, "Accelerated sweeps
+ * only where they keep the shape"). */
 Test( drying, chebyshev_presets_land_on_the_converged_plain_shape, .disabled = SERE_LONG_TEST_DISABLED )
 {
 	static const char* const presets[2][2] = { { "plane-tree", "plane" }, { "maple-red", "maple" } };
