@@ -157,6 +157,43 @@ int32_t sere_collide_list_uses( const sere_collide* collide );
  * search. */
 void sere_collide_drop_list( sere_collide* collide );
 
+/* What a searching detection moved, as sere_collide_record_search recorded it and
+ * sere_collide_touch_search replayed it. */
+typedef struct sere_collide_traffic
+{
+	int64_t nodes;		 /* tree nodes opened, by both kinds of query */
+	int64_t leaves;		 /* triangles the walks visited */
+	int64_t bound_pairs; /* pairs gathered for the separating-plane bounds, both kinds */
+	int64_t exact_pairs; /* pairs gathered for the exact tests: the candidate list's */
+	int64_t contacts;	 /* contacts listed, both kinds */
+} sere_collide_traffic;
+
+/* A searching detection (sere_collide_detect after sere_collide_drop_list: the same contacts, bits
+ * and candidate list) that also records, for sere_collide_touch_search, which nodes its walks
+ * opened, which triangles they visited with which lanes, and what each bound and exact test
+ * decided. traffic (may be NULL) gets what it moved. Errors as sere_collide_detect's, plus
+ * SERE_ERR_MEMORY when the record cannot be kept (no record then). */
+sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+										const float* z, float thickness, sere_collide_traffic* traffic );
+
+/* The memory floor of the recorded search (benchmarks): its passes on the same threads, moving the
+ * same memory in the same order with adds in place of its arithmetic. It loads the edges'
+ * triangles and ends (the across vectors), each lane's vertex, every box and child of each node
+ * the walks opened (and the subtree corner bounds the edge walks read), each visited triangle's
+ * corners and their lane marks, the records of every pair the bounds and the exact tests gathered
+ * (positions, edge ends, across vectors, rest positions), and stores the candidate list, the
+ * lane marks, the contacts, the positions the list keeps and the response's lists, each with the
+ * value already there (a float times a 1 the compiler cannot see). The tests' outcomes come from
+ * the record, and reading it (a byte per node, triangle and batch of eight pairs) is traffic the
+ * search does not have; the search's per-thread scratch (query boxes, the edge table, the pair
+ * buffer's tests) and its timing of the blocks are left out. Leaves the positions, contacts and
+ * candidate list bitwise as the recorded search left them. traffic (may be NULL) gets what it
+ * moved, the record's counts when the replay is faithful. SERE_ERR_ARGUMENT for a NULL argument
+ * or when the workspace has no record, or has detected (or changed threads, capacity or rest
+ * positions) since, or the tree was rebuilt. */
+sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									   const float* z, sere_collide_traffic* traffic );
+
 const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
 const sere_edge_contact* sere_collide_edge_contacts( const sere_collide* collide, int32_t* count );
 
