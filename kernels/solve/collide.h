@@ -176,24 +176,24 @@ typedef struct sere_collide_traffic
 sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 										const float* z, float thickness, sere_collide_traffic* traffic );
 
-/* The memory floor of the recorded search (benchmarks): the search's passes on its threads and
- * runs of blocks, with its loops and their branches, but each test's outcome read from the record
- * in place of its arithmetic, and adds in place of the rest, so that it moves the same memory in
- * the same order: the across vectors' inputs (each edge's first triangle and ends, and their
- * positions); per query group its lanes' vertices, and the lane marks set and cleared; every box
- * and child of each node the walks open (and the subtree corner bounds the edge walks read); per
- * visited triangle its corners' indices and marks, or the edges it owns and their ends; the
- * positions, edge ends, across vectors and rest positions every bound and exact test gathers; and
- * it stores the candidate list, the contacts, the positions the list keeps and the response's
- * gather lists (built as the search builds them), each with the value already there (a float
- * times a 1 the compiler cannot see). Reading the record (a byte per walk, node, visited
- * triangle, 8 table rows and batch of 8 pairs) is traffic the search does not have; the search's
- * per-thread scratch work (query boxes, the edge table's rows, the tests' own arithmetic) and its
- * timing of the blocks are left out. Leaves the positions, contacts and candidate list bitwise as
- * the recorded search left them. traffic (may be NULL) gets what it moved: the record's counts
- * when the replay is faithful. SERE_ERR_ARGUMENT for a NULL argument, or when the workspace has
- * no record, or has detected (or changed threads, capacity or rest positions) since, or the tree
- * was rebuilt. */
+/* The memory floor of the recorded search (benchmarks): the search's passes on its runs of blocks
+ * (on the threads a detection would run with now, at most the recorded ones), with its loops and
+ * their branches, but each test's outcome read from the record in place of its arithmetic, and
+ * adds in place of the rest, so that it moves the same memory in the same order: the across
+ * vectors' inputs (each edge's first triangle and ends, and their positions); per query group its
+ * lanes' vertices, and the lane marks set and cleared; every box and child of each node the walks
+ * open (and the subtree corner bounds the edge walks read); per visited triangle its corners'
+ * indices and marks, or the edges it owns and their ends; the positions, edge ends, across vectors
+ * and rest positions every bound and exact test gathers; and it stores the candidate list, the
+ * contacts, the positions the list keeps and the response's gather lists (built as the search
+ * builds them), each with the value already there (a float times a 1 the compiler cannot see).
+ * Reading the record (a byte per walk, node, visited triangle, 8 table rows and batch of 8 pairs)
+ * is traffic the search does not have; the search's per-thread scratch work (query boxes, the edge
+ * table's rows, the tests' own arithmetic) and its timing of the blocks are left out. Leaves the
+ * positions, contacts and candidate list bitwise as the recorded search left them. traffic (may be
+ * NULL) gets what it moved: the record's counts when the replay is faithful. SERE_ERR_ARGUMENT for
+ * a NULL argument, or when the workspace has no record, or has detected (or changed threads,
+ * capacity or rest positions) since, or the tree was rebuilt. */
 sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 									   const float* z, sere_collide_traffic* traffic );
 

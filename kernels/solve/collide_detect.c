@@ -605,15 +605,17 @@ sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bv
 		return SERE_ERR_ARGUMENT;
 	}
 	int32_t runs = record->runs, n = collide->vertex_count, edges = collide->edge_count;
+	/* the threads a detection would run with now, as many as the recorded runs at most */
+	int threads = detect_threads( collide ) < runs ? detect_threads( collide ) : runs;
 	float one = record->one, sum = 0.0f;
 	reset_runs( record, runs, true );
 	/* choose_list's across vectors */
-#pragma omp parallel for num_threads( runs ) schedule( static ) reduction( + : sum )
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( + : sum )
 	for ( int32_t e = 0; e < edges; ++e )
 	{
 		sum += sere_coll_edge_across_touch( collide, tri, x, y, z, e, one );
 	}
-#pragma omp parallel num_threads( runs )
+#pragma omp parallel num_threads( threads )
 	{
 		/* each run as the recorded search's thread of that number ran it, whichever thread runs it */
 		for ( int32_t r = omp_get_thread_num(); r < runs; r += omp_get_num_threads() )
@@ -640,7 +642,7 @@ sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bv
 	}
 	record->sink += sum;
 	int32_t contacts;
-	sere_status status = list_found( collide, tri, runs, &contacts );
+	sere_status status = list_found( collide, tri, threads, &contacts );
 	if ( traffic != NULL )
 	{
 		*traffic = record_traffic( collide, record );
