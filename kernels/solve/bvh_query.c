@@ -114,10 +114,64 @@ static inline uint32_t above_mask( const sere_bvh* bvh, int32_t n, int32_t floor
 	return mask;
 }
 
-/* sere_bvh_query_group, or sere_bvh_query_group_above when above (inlined with a constant, so
- * the plain query carries no index test). */
+/* The floor's walk (sere_bvh_trace replaying): the nodes and visits recorded in trace, in their order, each
+ * opened node's boxes (and, above, its child_top entries) loaded and added up. */
+static inline void replay_group( const sere_bvh* bvh, bool above, sere_bvh_trace* trace, sere_bvh_visit_group_fn* visit,
+								 void* context )
+{
+	if ( sere_bvh_trace_take( trace ) == 0 )
+	{
+		return;
+	}
+	sere_v8 sum = sere_v8_zero();
+	int32_t top_sum = 0;
+	int32_t stack[STACK_SIZE];
+	int32_t size = 0;
+	stack[size++] = 0;
+	while ( size > 0 )
+	{
+		int32_t index = stack[--size];
+		const sere_bvh_node* node = bvh->nodes + index;
+		sum = sere_v8_add( sum, sere_v8_add( sere_v8_add( sere_v8_load( node->min_x ), sere_v8_load( node->min_y ) ),
+											 sere_v8_load( node->min_z ) ) );
+		sum = sere_v8_add( sum, sere_v8_add( sere_v8_add( sere_v8_load( node->max_x ), sere_v8_load( node->max_y ) ),
+											 sere_v8_load( node->max_z ) ) );
+		if ( above )
+		{
+			const int32_t* top = bvh->child_top + (size_t) index * SERE_BVH_WIDTH;
+			for ( int k = 0; k < SERE_BVH_WIDTH; ++k )
+			{
+				top_sum += top[k];
+			}
+		}
+		trace->nodes += 1;
+		uint32_t live = sere_bvh_trace_take( trace );
+		uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
+		while ( inner != 0 )
+		{
+			stack[size++] = node->child[__builtin_ctz( inner )];
+			inner &= inner - 1;
+		}
+		while ( leaves != 0 )
+		{
+			int k = __builtin_ctz( leaves );
+			leaves &= leaves - 1;
+			trace->leaves += 1;
+			uint32_t hits = sere_bvh_trace_take( trace );
+			visit( context, ~node->child[k], hits );
+		}
+	}
+	float lanes[4];
+	sere_v4_store( lanes, sere_v4_add( sere_v8_low( sum ), sere_v8_high( sum ) ) );
+	trace->sink += ( lanes[0] + lanes[1] ) + ( lanes[2] + lanes[3] );
+	trace->isink += top_sum;
+}
+
+/* sere_bvh_query_group, or sere_bvh_query_group_above when above, recording the walk into trace
+ * unless it is NULL (inlined with constants, so the plain query carries neither an index test nor
+ * a record). */
 static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group, bool above, int32_t floor,
-								sere_bvh_visit_group_fn* visit, void* context )
+								sere_bvh_trace* trace, sere_bvh_visit_group_fn* visit, void* context )
 {
 	/* the lanes as given, ignored ones emptied, and their union for the walk down */
 	float lo[3][SERE_BVH_WIDTH], hi[3][SERE_BVH_WIDTH];
@@ -139,7 +193,12 @@ static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group
 			uhi[a] = max2( uhi[a], hi[a][k] );
 		}
 	}
-	if ( !( ulo[0] <= uhi[0] && ulo[1] <= uhi[1] && ulo[2] <= uhi[2] ) )
+	bool walk = ulo[0] <= uhi[0] && ulo[1] <= uhi[1] && ulo[2] <= uhi[2];
+	if ( trace != NULL )
+	{
+		sere_bvh_trace_put( trace, walk );
+	}
+	if ( !walk )
 	{
 		return;
 	}
@@ -176,6 +235,11 @@ static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group
 			live |= (uint32_t) ( hits[k] != 0 ) << k;
 		}
 		uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
+		if ( trace != NULL )
+		{
+			trace->nodes += 1;
+			sere_bvh_trace_put( trace, live );
+		}
 		while ( inner != 0 )
 		{
 			stack[size++] = node->child[__builtin_ctz( inner )];
@@ -185,6 +249,11 @@ static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group
 		{
 			int k = __builtin_ctz( leaves );
 			leaves &= leaves - 1;
+			if ( trace != NULL )
+			{
+				trace->leaves += 1;
+				sere_bvh_trace_put( trace, hits[k] );
+			}
 			visit( context, ~node->child[k], hits[k] );
 		}
 	}
@@ -193,13 +262,48 @@ static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group
 void sere_bvh_query_group( const sere_bvh* bvh, const sere_bvh_group* group, sere_bvh_visit_group_fn* visit,
 						   void* context )
 {
-	query_group( bvh, group, false, 0, visit, context );
+	query_group( bvh, group, false, 0, NULL, visit, context );
 }
 
 void sere_bvh_query_group_above( const sere_bvh* bvh, const sere_bvh_group* group, int32_t floor,
 								 sere_bvh_visit_group_fn* visit, void* context )
 {
-	query_group( bvh, group, true, floor, visit, context );
+	query_group( bvh, group, true, floor, NULL, visit, context );
+}
+
+void sere_bvh_query_group_traced( const sere_bvh* bvh, const sere_bvh_group* group, bool above, int32_t floor,
+								  sere_bvh_trace* trace, sere_bvh_visit_group_fn* visit, void* context )
+{
+	if ( trace->replay )
+	{
+		above ? replay_group( bvh, true, trace, visit, context ) : replay_group( bvh, false, trace, visit, context );
+	}
+	else if ( above )
+	{
+		query_group( bvh, group, true, floor, trace, visit, context );
+	}
+	else
+	{
+		query_group( bvh, group, false, 0, trace, visit, context );
+	}
+}
+
+bool sere_bvh_trace_grow( sere_bvh_trace* trace )
+{
+	int64_t capacity = trace->capacity > 0 ? 2 * trace->capacity : 1 << 16;
+	uint8_t* data = sere_alloc( (size_t) capacity );
+	if ( data == NULL )
+	{
+		return false;
+	}
+	if ( trace->size > 0 )
+	{
+		memcpy( data, trace->data, (size_t) trace->size );
+	}
+	sere_free( trace->data );
+	trace->data = data;
+	trace->capacity = capacity;
+	return true;
 }
 
 typedef struct collect_context

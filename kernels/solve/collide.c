@@ -69,6 +69,14 @@ static void contact_arrays( sere_collide* c, void*** slot, size_t* size )
 
 static void collide_free( sere_collide* c )
 {
+	if ( c->record != NULL )
+	{
+		for ( int t = 0; t < SERE_MAX_THREADS; ++t )
+		{
+			sere_free( c->record->run[t].trace.data );
+		}
+		sere_free( c->record );
+	}
 	void** slot[CONTACT_ARRAYS];
 	size_t size[CONTACT_ARRAYS];
 	contact_arrays( c, slot, size );
@@ -137,6 +145,7 @@ static sere_status alloc_contacts( sere_collide* c, int32_t capacity )
 		return SERE_ERR_MEMORY;
 	}
 	c->capacity = capacity;
+	c->state += 1;
 	c->contact_count = 0;
 	c->edge_contact_count = 0;
 	c->touched_count = 0;
@@ -362,6 +371,7 @@ static sere_status alloc_slots( sere_collide* c, int32_t slots )
 		*field[i] = ok ? fresh[i] : *field[i];
 	}
 	c->cache_valid = false;
+	c->state += 1;
 	return ok ? SERE_OK : SERE_ERR_MEMORY;
 }
 
@@ -492,6 +502,7 @@ sere_status sere_collide_set_rest( sere_collide* collide, const float* x, const 
 		return SERE_ERR_ARGUMENT;
 	}
 	int32_t n = collide->vertex_count;
+	collide->state += 1;
 	if ( x == NULL )
 	{
 		sere_free( collide->rest_x ), sere_free( collide->rest_y ), sere_free( collide->rest_z );

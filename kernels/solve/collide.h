@@ -157,6 +157,46 @@ int32_t sere_collide_list_uses( const sere_collide* collide );
  * search. */
 void sere_collide_drop_list( sere_collide* collide );
 
+/* What a searching detection moved, as sere_collide_record_search recorded it and
+ * sere_collide_touch_search replayed it. */
+typedef struct sere_collide_traffic
+{
+	int64_t nodes;		 /* tree nodes opened, by both kinds of query */
+	int64_t leaves;		 /* triangles the walks visited */
+	int64_t bound_pairs; /* pairs gathered for the separating-plane bounds, both kinds */
+	int64_t exact_pairs; /* pairs gathered for the exact tests: the candidate list's */
+	int64_t contacts;	 /* contacts listed, both kinds */
+} sere_collide_traffic;
+
+/* A searching detection (sere_collide_detect after sere_collide_drop_list: the same contacts, bits
+ * and candidate list) that also records, for sere_collide_touch_search, which nodes its walks
+ * opened, which triangles they visited with which lanes, and what each bound and exact test
+ * decided. traffic (may be NULL) gets what it moved. Errors as sere_collide_detect's, plus
+ * SERE_ERR_MEMORY when the record cannot be kept (no record then). */
+sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+										const float* z, float thickness, sere_collide_traffic* traffic );
+
+/* The memory floor of the recorded search (benchmarks): the search's passes on its runs of blocks
+ * (on the threads a detection would run with now, at most the recorded ones), with its loops and
+ * their branches, but each test's outcome read from the record in place of its arithmetic, and
+ * adds in place of the rest, so that it moves the same memory in the same order: the across
+ * vectors' inputs (each edge's first triangle and ends, and their positions); per query group its
+ * lanes' vertices, and the lane marks set and cleared; every box and child of each node the walks
+ * open (and the subtree corner bounds the edge walks read); per visited triangle its corners'
+ * indices and marks, or the edges it owns and their ends; the positions, edge ends, across vectors
+ * and rest positions every bound and exact test gathers; and it stores the candidate list, the
+ * contacts, the positions the list keeps and the response's gather lists (built as the search
+ * builds them), each with the value already there (a float times a 1 the compiler cannot see).
+ * Reading the record (a byte per walk, node, visited triangle, 8 table rows and batch of 8 pairs)
+ * is traffic the search does not have; the search's per-thread scratch work (query boxes, the edge
+ * table's rows, the tests' own arithmetic) and its timing of the blocks are left out. Leaves the
+ * positions, contacts and candidate list bitwise as the recorded search left them. traffic (may be
+ * NULL) gets what it moved: the record's counts when the replay is faithful. SERE_ERR_ARGUMENT for
+ * a NULL argument, or when the workspace has no record, or has detected (or changed threads,
+ * capacity or rest positions) since, or the tree was rebuilt. */
+sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									   const float* z, sere_collide_traffic* traffic );
+
 const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
 const sere_edge_contact* sere_collide_edge_contacts( const sere_collide* collide, int32_t* count );
 

@@ -373,92 +373,45 @@ static void keep_list( sere_collide* collide, const sere_bvh* bvh, const float* 
 	}
 }
 
-sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-								 const float* z, float thickness, int32_t* contact_count )
+/* Runs block `block` with thread `run`'s context c: replays its listed pairs (replay), or searches
+ * the tree, listing the pairs when listing; notes where its contacts and listed pairs went. Returns
+ * nonzero when a vertex is not finite. */
+static int run_block( sere_collide* collide, detect_context* c, const sere_bvh* bvh, int32_t block, float thickness,
+					  bool replay, bool listing, int run )
 {
-	return sere_coll_detect( collide, bvh, x, y, z, thickness, -1, contact_count );
-}
-
-sere_status sere_coll_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-							  const float* z, float thickness, int served, int32_t* contact_count )
-{
-	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
-		 !( thickness > 0.0f ) || !isfinite( thickness ) )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	int32_t triangles;
-	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
-	if ( sere_bvh_vertex_count( bvh ) != collide->vertex_count || triangles != collide->triangle_count )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
-	*contact_count = 0;
-	collide->contact_count = 0;
-	collide->edge_contact_count = 0;
-	collide->edge_found = 0;
-	collide->touched_count = 0;
-	int32_t n = collide->vertex_count;
-	int32_t threads = detect_threads( collide );
-	collide->work_prefix[0] = 0;
-	for ( int32_t block = 0; block < collide->block_count; ++block )
-	{
-		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
-	}
-	bool replay = choose_list( collide, bvh, tri, x, y, z, thickness, threads, served );
-	bool listing = !replay;
-	for ( int t = 0; t < threads; ++t )
-	{
-		/* a thread the team turns out not to have lists nothing */
-		collide->cache_used[FAR_STRIDE * t] = 0;
-	}
+	bool vertices = block < collide->vertex_blocks;
+	int32_t start = vertices ? c->used : c->edge_used;
+	int64_t found = vertices ? c->found : c->edge_found;
+	int32_t listed = c->list_used;
 	int bad = 0;
-#pragma omp parallel num_threads( threads ) reduction( | : bad )
+	if ( replay )
 	{
-		int tid = omp_get_thread_num(), team = omp_get_num_threads();
-		detect_context c;
-		context_init( &c, collide, tri, x, y, z, thickness, listing, tid );
-		int32_t run_end = run_begin( collide, tid + 1, team );
-		for ( int32_t block = run_begin( collide, tid, team ); block < run_end; ++block )
-		{
-			bool vertices = block < collide->vertex_blocks;
-			int32_t start = vertices ? c.used : c.edge_used;
-			int64_t found = vertices ? c.found : c.edge_found;
-			double clock = omp_get_wtime();
-			int32_t listed = c.list_used;
-			if ( replay )
-			{
-				replay_block( &c, collide, block, vertices );
-			}
-			else if ( vertices )
-			{
-				bad |= sere_coll_detect_vertex_block( &c, bvh, block, n, thickness );
-			}
-			else
-			{
-				sere_coll_detect_edge_block( &c, bvh, block - collide->vertex_blocks, n, thickness );
-			}
-			if ( listing )
-			{
-				collide->cache_block_thread[block] = tid;
-				collide->cache_block_start[block] = listed;
-				collide->cache_block_count[block] = c.list_used - listed;
-			}
-			collide->block_thread[block] = tid;
-			collide->block_start[block] = start;
-			collide->block_found[block] = ( vertices ? c.found : c.edge_found ) - found;
-			collide->block_work[block] = (int64_t) ( ( omp_get_wtime() - clock ) * 1e9 );
-		}
-		collide->cache_used[FAR_STRIDE * tid] = c.list_used;
+		replay_block( c, collide, block, vertices );
+	}
+	else if ( vertices )
+	{
+		bad = sere_coll_detect_vertex_block( c, bvh, block, collide->vertex_count, thickness );
+	}
+	else
+	{
+		sere_coll_detect_edge_block( c, bvh, block - collide->vertex_blocks, collide->vertex_count, thickness );
 	}
 	if ( listing )
 	{
-		keep_list( collide, bvh, x, y, z, thickness, threads, bad );
+		collide->cache_block_thread[block] = run;
+		collide->cache_block_start[block] = listed;
+		collide->cache_block_count[block] = c->list_used - listed;
 	}
-	if ( bad )
-	{
-		return SERE_ERR_NONFINITE;
-	}
+	collide->block_thread[block] = run;
+	collide->block_start[block] = start;
+	collide->block_found[block] = ( vertices ? c->found : c->edge_found ) - found;
+	return bad;
+}
+
+/* After the blocks ran on `threads` threads: the contact counts (SERE_ERR_CAPACITY past the
+ * capacity), each block's offset in the per-contact arrays and the lists (list_contacts). */
+static sere_status list_found( sere_collide* collide, const int32_t* tri, int threads, int32_t* contact_count )
+{
 	int64_t total = 0, edge_total = 0;
 	for ( int32_t block = 0; block < collide->block_count; ++block )
 	{
@@ -483,4 +436,216 @@ sere_status sere_coll_detect( sere_collide* collide, const sere_bvh* bvh, const 
 	collide->contact_count = (int32_t) total;
 	collide->edge_contact_count = (int32_t) edge_total;
 	return SERE_OK;
+}
+
+/* sere_coll_detect, recording the search into record when it is not NULL (served must then be 0). */
+static sere_status detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
+						   float thickness, int served, collide_record* record, int32_t* contact_count )
+{
+	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL || contact_count == NULL ||
+		 !( thickness > 0.0f ) || !isfinite( thickness ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t triangles;
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
+	if ( sere_bvh_vertex_count( bvh ) != collide->vertex_count || triangles != collide->triangle_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	collide->state += 1;
+	*contact_count = 0;
+	collide->contact_count = 0;
+	collide->edge_contact_count = 0;
+	collide->edge_found = 0;
+	collide->touched_count = 0;
+	int32_t threads = detect_threads( collide );
+	collide->work_prefix[0] = 0;
+	for ( int32_t block = 0; block < collide->block_count; ++block )
+	{
+		collide->work_prefix[block + 1] = collide->work_prefix[block] + collide->block_work[block];
+	}
+	bool replay = choose_list( collide, bvh, tri, x, y, z, thickness, threads, served );
+	bool listing = !replay;
+	for ( int t = 0; t < threads; ++t )
+	{
+		/* a thread the team turns out not to have lists nothing */
+		collide->cache_used[FAR_STRIDE * t] = 0;
+	}
+	int bad = 0;
+#pragma omp parallel num_threads( threads ) reduction( | : bad )
+	{
+		int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		detect_context c;
+		context_init( &c, collide, tri, x, y, z, thickness, listing, tid );
+		int32_t run_first = run_begin( collide, tid, team ), run_end = run_begin( collide, tid + 1, team );
+		if ( record != NULL )
+		{
+			c.run = record->run + tid;
+			record->run_first[tid] = run_first;
+			if ( tid == 0 )
+			{
+				record->runs = team;
+				record->run_first[team] = collide->block_count;
+			}
+		}
+		for ( int32_t block = run_first; block < run_end; ++block )
+		{
+			double clock = omp_get_wtime();
+			bad |= run_block( collide, &c, bvh, block, thickness, replay, listing, tid );
+			collide->block_work[block] = (int64_t) ( ( omp_get_wtime() - clock ) * 1e9 );
+		}
+		collide->cache_used[FAR_STRIDE * tid] = c.list_used;
+	}
+	if ( listing )
+	{
+		keep_list( collide, bvh, x, y, z, thickness, threads, bad );
+	}
+	if ( bad )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	return list_found( collide, tri, threads, contact_count );
+}
+
+sere_status sere_collide_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+								 const float* z, float thickness, int32_t* contact_count )
+{
+	return detect( collide, bvh, x, y, z, thickness, -1, NULL, contact_count );
+}
+
+sere_status sere_coll_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+							  const float* z, float thickness, int served, int32_t* contact_count )
+{
+	return detect( collide, bvh, x, y, z, thickness, served, NULL, contact_count );
+}
+
+/* What the record's runs counted, and the contacts listed. */
+static sere_collide_traffic record_traffic( const sere_collide* collide, const collide_record* record )
+{
+	sere_collide_traffic traffic = { 0 };
+	for ( int32_t r = 0; r < record->runs; ++r )
+	{
+		const collide_run* run = record->run + r;
+		traffic.nodes += run->trace.nodes;
+		traffic.leaves += run->trace.leaves;
+		traffic.bound_pairs += run->bound_pairs;
+		traffic.exact_pairs += run->exact_pairs;
+	}
+	traffic.contacts = (int64_t) collide->contact_count + collide->edge_contact_count;
+	return traffic;
+}
+
+/* Readies each run's record for recording (replay false) or for a replay. */
+static void reset_runs( collide_record* record, int32_t runs, bool replay )
+{
+	for ( int32_t r = 0; r < runs; ++r )
+	{
+		collide_run* run = record->run + r;
+		run->trace.size = replay ? run->trace.size : 0;
+		run->trace.at = 0;
+		run->trace.nodes = run->trace.leaves = 0;
+		run->trace.replay = replay;
+		run->trace.failed = false;
+		run->bound_pairs = run->exact_pairs = 0;
+	}
+}
+
+sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+										const float* z, float thickness, sere_collide_traffic* traffic )
+{
+	if ( collide == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	if ( collide->record == NULL && ( collide->record = sere_alloc( sizeof( collide_record ) ) ) == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	collide_record* record = collide->record;
+	record->valid = false;
+	reset_runs( record, SERE_MAX_THREADS, false );
+	int32_t contacts;
+	sere_status status = detect( collide, bvh, x, y, z, thickness, 0, record, &contacts );
+	for ( int32_t r = 0; status == SERE_OK && r < record->runs; ++r )
+	{
+		status = record->run[r].trace.failed ? SERE_ERR_MEMORY : SERE_OK;
+	}
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	record->valid = true;
+	record->generation = sere_bvh_generation( bvh );
+	record->state = collide->state;
+	record->thickness = thickness;
+	record->listed = collide->cache_valid;
+	record->one = 1.0f;
+	if ( traffic != NULL )
+	{
+		*traffic = record_traffic( collide, record );
+	}
+	return SERE_OK;
+}
+
+sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									   const float* z, sere_collide_traffic* traffic )
+{
+	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	collide_record* record = collide->record;
+	int32_t triangles;
+	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
+	if ( record == NULL || !record->valid || record->state != collide->state ||
+		 record->generation != sere_bvh_generation( bvh ) || sere_bvh_vertex_count( bvh ) != collide->vertex_count ||
+		 triangles != collide->triangle_count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int32_t runs = record->runs, n = collide->vertex_count, edges = collide->edge_count;
+	/* the threads a detection would run with now, as many as the recorded runs at most */
+	int threads = detect_threads( collide ) < runs ? detect_threads( collide ) : runs;
+	float one = record->one, sum = 0.0f;
+	reset_runs( record, runs, true );
+	/* choose_list's across vectors */
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( + : sum )
+	for ( int32_t e = 0; e < edges; ++e )
+	{
+		sum += sere_coll_edge_across_touch( collide, tri, x, y, z, e, one );
+	}
+#pragma omp parallel num_threads( threads )
+	{
+		/* each run as the recorded search's thread of that number ran it, whichever thread runs it */
+		for ( int32_t r = omp_get_thread_num(); r < runs; r += omp_get_num_threads() )
+		{
+			detect_context c;
+			context_init( &c, collide, tri, x, y, z, record->thickness, true, r );
+			c.run = record->run + r;
+			c.one = one;
+			for ( int32_t block = record->run_first[r]; block < record->run_first[r + 1]; ++block )
+			{
+				run_block( collide, &c, bvh, block, record->thickness, false, true, r );
+			}
+			collide->cache_used[FAR_STRIDE * r] = c.list_used;
+		}
+	}
+	/* keep_list's copy of the positions */
+	if ( record->listed )
+	{
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			sum += ( x[i] + y[i] ) + z[i];
+			collide->cache_x[i] *= one, collide->cache_y[i] *= one, collide->cache_z[i] *= one;
+		}
+	}
+	record->sink += sum;
+	int32_t contacts;
+	sere_status status = list_found( collide, tri, threads, &contacts );
+	if ( traffic != NULL )
+	{
+		*traffic = record_traffic( collide, record );
+	}
+	return status;
 }

@@ -130,6 +130,39 @@ static void detect_edge_emit( detect_context* c, int32_t e, int32_t f, const flo
 	}
 }
 
+/* The floor's detect_edge_emit: the ends' indices loaded as the search loads them, the contact
+ * written where the search writes it with the values already there (times one). */
+static void touch_edge_emit( detect_context* c, int32_t e, int32_t f )
+{
+	c->edge_found += 1;
+	if ( c->edge_used < c->capacity )
+	{
+		sere_edge_contact* k = c->edge_buffer + c->edge_used++;
+		float one = c->one;
+		*k = ( sere_edge_contact ){
+			c->edge_end[2 * e], c->edge_end[2 * e + 1], c->edge_end[2 * f], c->edge_end[2 * f + 1], k->s * one,
+			k->t * one,			k->distance * one,		k->side * one,
+		};
+	}
+}
+
+/* The floor's edge_pair_counts: the rest positions it loads, added up (0 without them). */
+static float touch_rest( const detect_context* c, int32_t e, int32_t f )
+{
+	if ( c->rest_x == NULL )
+	{
+		return 0.0f;
+	}
+	const int32_t *u = c->edge_end + 2 * (size_t) e, *v = c->edge_end + 2 * (size_t) f;
+	int32_t ends[4] = { u[0], u[1], v[0], v[1] };
+	float sum = 0.0f;
+	for ( int k = 0; k < 4; ++k )
+	{
+		sum += ( c->rest_x[ends[k]] + c->rest_y[ends[k]] ) + c->rest_z[ends[k]];
+	}
+	return sum;
+}
+
 /* Whether a pair of edges within the thickness, closest inside both, is a contact: unless the
  * workspace has rest positions and the two segments lie closer than the thickness there too
  * (sere_collide_set_rest: neighbours in the sheet). */
@@ -181,7 +214,29 @@ static void list_edge_pairs( detect_context* c )
 			int32_t k = start + ( l < count ? l : count - 1 );
 			item[l] = c->pair_item[k], target[l] = c->pair_target[k];
 		}
-		uint32_t keep = edge_bound_lanes( c, item, target, a0, a1, b0, b1 ) & ( ( 1u << count ) - 1u );
+		uint32_t keep;
+		if ( replaying( c ) )
+		{
+			/* edge_bound_lanes' loads: the ends, and the across vectors of both edges */
+			keep = recorded_mask( c );
+			float sum = ( sum_rows( a0, 3 ) + sum_rows( a1, 3 ) ) + ( sum_rows( b0, 3 ) + sum_rows( b1, 3 ) );
+			for ( int l = 0; l < CLOSEST_LANES; ++l )
+			{
+				for ( int r = 0; r < 3; ++r )
+				{
+					sum += c->across[r][item[l]] + c->across[r][target[l]];
+				}
+			}
+			c->run->sink += sum;
+		}
+		else
+		{
+			keep = traced_mask( c, edge_bound_lanes( c, item, target, a0, a1, b0, b1 ) & ( ( 1u << count ) - 1u ) );
+		}
+		if ( c->run != NULL )
+		{
+			c->run->bound_pairs += count;
+		}
 		kept = keep_pairs( c, start, keep, kept, false );
 	}
 	c->pair_count = kept;
@@ -204,6 +259,27 @@ void sere_coll_detect_edge_flush( detect_context* c )
 		float w[2][CLOSEST_LANES], d2[CLOSEST_LANES];
 		/* lanes past the end repeat the last pair and are ignored */
 		gather_edge_pairs( c, start, count, a0, a1, b0, b1 );
+		if ( c->run != NULL )
+		{
+			c->run->exact_pairs += count;
+		}
+		if ( replaying( c ) )
+		{
+			uint32_t tested = recorded_mask( c ), emitted = recorded_mask( c );
+			float sum = ( sum_rows( a0, 3 ) + sum_rows( a1, 3 ) ) + ( sum_rows( b0, 3 ) + sum_rows( b1, 3 ) );
+			for ( ; tested != 0; tested &= tested - 1 )
+			{
+				int32_t l = __builtin_ctz( tested );
+				int32_t e = c->pair_item[start + l], f = c->pair_target[start + l];
+				sum += touch_rest( c, e, f );
+				if ( emitted >> l & 1u )
+				{
+					touch_edge_emit( c, e, f );
+				}
+			}
+			c->run->sink += sum;
+			continue;
+		}
 		closest_segments_lanes( a0, a1, b0, b1, w, d2 );
 		uint32_t hits = 0;
 		for ( int32_t l = 0; l < count; ++l )
@@ -211,6 +287,8 @@ void sere_coll_detect_edge_flush( detect_context* c )
 			int inside = ( w[0][l] > 0.0f ) & ( w[0][l] < 1.0f ) & ( w[1][l] > 0.0f ) & ( w[1][l] < 1.0f );
 			hits |= (uint32_t) ( inside & ( d2[l] < c->h2 ) ) << l;
 		}
+		traced_mask( c, hits );
+		uint32_t emitted = 0;
 		while ( hits != 0 )
 		{
 			int32_t l = __builtin_ctz( hits );
@@ -221,8 +299,10 @@ void sere_coll_detect_edge_flush( detect_context* c )
 			if ( edge_pair_counts( c, e, f ) )
 			{
 				detect_edge_emit( c, e, f, p0, p1, q0, q1 );
+				emitted |= 1u << l;
 			}
 		}
+		traced_mask( c, emitted );
 	}
 	c->pair_count = 0;
 }
@@ -272,6 +352,8 @@ static inline uint32_t table_hits( const detect_context* c, int32_t from, const 
  * triangle's (table_hits) and buffers the pairs that pass for the exact test. */
 static void detect_edge_candidates( detect_context* c )
 {
+	bool replay = replaying( c );
+	float sum = 0.0f;
 	for ( int32_t k = 0; k < c->candidate_count; ++k )
 	{
 		int32_t f = c->candidate_edge[k];
@@ -280,7 +362,12 @@ static void detect_edge_candidates( detect_context* c )
 		float p[3], q[3], lo[3], hi[3];
 		load3( c->x, c->y, c->z, f0, p );
 		load3( c->x, c->y, c->z, f1, q );
-		for ( int a = 0; a < 3; ++a )
+		if ( replay )
+		{
+			/* table_hits' outcomes are recorded: its box of f is not needed */
+			sum += ( ( p[0] + p[1] ) + p[2] ) + ( ( q[0] + q[1] ) + q[2] );
+		}
+		for ( int a = 0; !replay && a < 3; ++a )
 		{
 			lo[a] = p[a] < q[a] ? p[a] : q[a];
 			hi[a] = p[a] < q[a] ? q[a] : p[a];
@@ -288,8 +375,9 @@ static void detect_edge_candidates( detect_context* c )
 		int32_t rows = c->table_lane[32 - __builtin_clz( lanes )];
 		for ( int32_t from = c->table_lane[__builtin_ctz( lanes )]; from < rows; from += 8 )
 		{
-			uint32_t hits = table_hits( c, from, lo, hi, p, q, f0, f1 );
-			hits &= rows - from >= 8 ? 0xffu : ( 1u << ( rows - from ) ) - 1;
+			uint32_t hits = replay ? recorded_mask( c )
+								   : traced_mask( c, table_hits( c, from, lo, hi, p, q, f0, f1 ) &
+														 ( rows - from >= 8 ? 0xffu : ( 1u << ( rows - from ) ) - 1 ) );
 			while ( hits != 0 )
 			{
 				int32_t j = from + __builtin_ctz( hits );
@@ -303,6 +391,10 @@ static void detect_edge_candidates( detect_context* c )
 				c->pair_count += 1;
 			}
 		}
+	}
+	if ( replay )
+	{
+		c->run->sink += sum;
 	}
 	c->candidate_count = 0;
 }
@@ -345,6 +437,20 @@ static void table_lane( detect_context* c, sere_bvh_group* group, int32_t k, int
 	float pa[3];
 	load3( c->x, c->y, c->z, a, pa );
 	int32_t from = c->table_lane[k] = c->table_count;
+	if ( replaying( c ) )
+	{
+		/* the walk and the table's tests are replayed: only the loads and the rows' edges */
+		float sum = ( pa[0] + pa[1] ) + pa[2];
+		for ( int32_t i = e; i < end; ++i )
+		{
+			int32_t b = c->edge_end[2 * i + 1];
+			sum += ( c->x[b] + c->y[b] ) + c->z[b];
+			sum += ( c->across[0][i] + c->across[1][i] ) + c->across[2][i];
+			c->table_edge[c->table_count++] = i;
+		}
+		c->run->sink += sum;
+		return;
+	}
 	for ( int32_t i = e; i < end; ++i )
 	{
 		int32_t j = c->table_count++, b = c->edge_end[2 * i + 1];
@@ -425,7 +531,14 @@ void sere_coll_detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_
 		c->table_lane[group.count] = c->table_count;
 		/* detect_edge_visit keeps only edges whose lower end is above c->first, so whose upper
 		 * end is above c->first + 1: a triangle with no corner above that owns none of them */
-		sere_bvh_query_group_above( bvh, &group, c->first + 1, detect_edge_visit, c );
+		if ( c->run != NULL )
+		{
+			sere_bvh_query_group_traced( bvh, &group, true, c->first + 1, &c->run->trace, detect_edge_visit, c );
+		}
+		else
+		{
+			sere_bvh_query_group_above( bvh, &group, c->first + 1, detect_edge_visit, c );
+		}
 		detect_edge_candidates( c );
 	}
 	sere_coll_detect_edge_flush( c );
@@ -449,4 +562,23 @@ void sere_coll_edge_across_at( sere_collide* collide, const int32_t* tri, const 
 	{
 		collide->edge_across[(size_t) d * stride + (size_t) e] = m[d] * inverse;
 	}
+}
+
+float sere_coll_edge_across_touch( sere_collide* collide, const int32_t* tri, const float* x, const float* y,
+								   const float* z, int32_t e, float one )
+{
+	const int32_t* v = tri + 3 * (size_t) collide->edge_triangle[e];
+	int32_t points[5] = { v[0], v[1], v[2], collide->edge_end[2 * e], collide->edge_end[2 * e + 1] };
+	float sum = 0.0f;
+	for ( int k = 0; k < 5; ++k )
+	{
+		sum += ( x[points[k]] + y[points[k]] ) + z[points[k]];
+	}
+	size_t stride = (size_t) sere_pad( collide->edge_count );
+	for ( int d = 0; d < 3; ++d )
+	{
+		float* across = collide->edge_across + (size_t) d * stride + (size_t) e;
+		*across = *across * one;
+	}
+	return sum;
 }

@@ -110,6 +110,26 @@ static void detect_emit( detect_context* c, int32_t vertex, int32_t t, const flo
 	}
 }
 
+/* The floor's detect_emit: the contact of the recorded pair written where the search writes it,
+ * with the values already there (times one). */
+static void touch_emit( detect_context* c, int32_t vertex, int32_t t )
+{
+	c->found += 1;
+	if ( c->used < c->capacity )
+	{
+		sere_contact* k = c->buffer + c->used++;
+		float one = c->one;
+		*k = ( sere_contact ){ vertex, t, k->u * one, k->v * one, k->w * one, k->distance * one, k->side * one };
+	}
+}
+
+/* The sum of a batch's gathered points (the floor's use of its loads). */
+static float sum_points( float p[3][CLOSEST_LANES], float a[3][CLOSEST_LANES], float b[3][CLOSEST_LANES],
+						 float cc[3][CLOSEST_LANES] )
+{
+	return ( sum_rows( p, 3 ) + sum_rows( a, 3 ) ) + ( sum_rows( b, 3 ) + sum_rows( cc, 3 ) );
+}
+
 /* For CLOSEST_LANES point–triangle pairs: bit l set unless separating directions put the point
  * farther than list_radius from the triangle. With n̂ the unit normal, |p − x|² = ((p − x) · n̂)²
  * + |p' − x|² for x in the triangle and p' the projection of p onto its plane; the first term is
@@ -210,7 +230,20 @@ static void list_vertex_pairs( detect_context* c )
 		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
 		float p[3][CLOSEST_LANES], a[3][CLOSEST_LANES], b[3][CLOSEST_LANES], cc[3][CLOSEST_LANES];
 		gather_pairs( c, start, count, p, a, b, cc );
-		uint32_t keep = bound_lanes( c, p, a, b, cc ) & ( ( 1u << count ) - 1u );
+		uint32_t keep;
+		if ( replaying( c ) )
+		{
+			keep = recorded_mask( c );
+			c->run->sink += sum_points( p, a, b, cc );
+		}
+		else
+		{
+			keep = traced_mask( c, bound_lanes( c, p, a, b, cc ) & ( ( 1u << count ) - 1u ) );
+		}
+		if ( c->run != NULL )
+		{
+			c->run->bound_pairs += count;
+		}
 		kept = keep_pairs( c, start, keep, kept, true );
 	}
 	c->pair_count = kept;
@@ -232,8 +265,22 @@ void sere_coll_detect_flush( detect_context* c )
 		int32_t slow[CLOSEST_LANES];
 		/* lanes past the end repeat the last pair and are ignored */
 		gather_pairs( c, start, count, p, a, b, cc );
+		if ( c->run != NULL )
+		{
+			c->run->exact_pairs += count;
+		}
+		if ( replaying( c ) )
+		{
+			c->run->sink += sum_points( p, a, b, cc );
+			for ( uint32_t emitted = recorded_mask( c ); emitted != 0; emitted &= emitted - 1 )
+			{
+				int32_t l = __builtin_ctz( emitted );
+				touch_emit( c, c->pair_item[start + l], c->pair_target[start + l] );
+			}
+			continue;
+		}
 		closest_lanes( p, a, b, cc, w, q, d2, slow );
-		uint32_t candidates = 0;
+		uint32_t candidates = 0, emitted = 0;
 		for ( int32_t l = 0; l < count; ++l )
 		{
 			candidates |= (uint32_t) ( slow[l] | ( d2[l] < c->h2 ) ) << l;
@@ -250,8 +297,10 @@ void sere_coll_detect_flush( detect_context* c )
 			if ( dl < c->h2 && ( face || !c->pair_near[start + l] ) )
 			{
 				detect_emit( c, c->pair_item[start + l], c->pair_target[start + l], pl, al, bl, cl, wl, ql, dl );
+				emitted |= 1u << l;
 			}
 		}
+		traced_mask( c, emitted );
 	}
 	c->pair_count = 0;
 }
@@ -292,6 +341,7 @@ static void detect_visit( void* context, int32_t t, uint32_t lanes )
 int sere_coll_detect_vertex_block( detect_context* c, const sere_bvh* bvh, int32_t block, int32_t n, float thickness )
 {
 	int bad = 0;
+	bool replay = replaying( c );
 	int32_t end = ( block + 1 ) * DETECT_BLOCK < n ? ( block + 1 ) * DETECT_BLOCK : n;
 	for ( int32_t first = block * DETECT_BLOCK; first < end; first += SERE_BVH_WIDTH )
 	{
@@ -302,6 +352,12 @@ int sere_coll_detect_vertex_block( detect_context* c, const sere_bvh* bvh, int32
 		{
 			float p[3];
 			load3( c->x, c->y, c->z, first + k, p );
+			if ( replay )
+			{
+				/* the walk is replayed: the lanes' boxes are not needed */
+				c->run->sink += ( p[0] + p[1] ) + p[2];
+				continue;
+			}
 			/* a NaN or infinite vertex leaves its lane non-finite: the query ignores it */
 			bad |= !( isfinite( p[0] ) && isfinite( p[1] ) && isfinite( p[2] ) );
 			float r = cull_radius( thickness, p ) + c->grow;
@@ -309,7 +365,14 @@ int sere_coll_detect_vertex_block( detect_context* c, const sere_bvh* bvh, int32
 			group.hi_x[k] = p[0] + r, group.hi_y[k] = p[1] + r, group.hi_z[k] = p[2] + r;
 		}
 		mark_lanes( c, true );
-		sere_bvh_query_group( bvh, &group, detect_visit, c );
+		if ( c->run != NULL )
+		{
+			sere_bvh_query_group_traced( bvh, &group, false, 0, &c->run->trace, detect_visit, c );
+		}
+		else
+		{
+			sere_bvh_query_group( bvh, &group, detect_visit, c );
+		}
 		mark_lanes( c, false );
 	}
 	sere_coll_detect_flush( c );

@@ -1,6 +1,6 @@
 /* sere — private to bvh.c and bvh_query.c, not installed and not part of the API: the tree's
  * state (nodes of SERE_BVH_WIDTH lanes, per-triangle boxes, the levels and cut of the parallel
- * refit) and the build's limits. */
+ * refit), the build's limits, and the recorded walks the collision search's floor replays. */
 #pragma once
 
 #include "core/internal/simd.h"
@@ -84,3 +84,50 @@ static inline float max2( float a, float b )
 {
 	return a > b ? a : b;
 }
+
+/* A recorded sequence of group walks (sere_bvh_query_group and _above), for the floor of the
+ * collision search (collide.h, sere_collide_touch_search): one byte per decision, appended while
+ * recording and read back in the same order while replaying. Per walk: 1 when it descends (some
+ * lane usable), else 0; then per node it opens, the children any lane hit, and per triangle among
+ * them the lanes it hit, before its visit. The visit callbacks append their own decisions to the
+ * same stream in between. A replayed walk opens the same nodes in the same order and visits the
+ * same triangles with the same lanes, loading every box and child of each node it opens (what the
+ * box tests load) and adding them up in place of the tests. */
+typedef struct sere_bvh_trace
+{
+	_Alignas( 64 ) uint8_t* data; /* a cache line per trace: each thread has its own */
+	int64_t size, capacity;
+	int64_t at;		/* replaying: the next byte */
+	int64_t nodes;	/* nodes opened, recording or replaying */
+	int64_t leaves; /* triangles visited */
+	float sink;		/* replaying: the sum of the boxes loaded (keeps the loads) */
+	int32_t isink;	/* replaying: the sum of the child_top entries loaded (_above walks) */
+	bool replay;
+	bool failed; /* recording: an allocation failed, the record is incomplete */
+} sere_bvh_trace;
+
+/* Doubles the trace's room; false (nothing changed) when that cannot be allocated. */
+bool sere_bvh_trace_grow( sere_bvh_trace* trace );
+
+static inline void sere_bvh_trace_put( sere_bvh_trace* trace, uint32_t byte )
+{
+	if ( trace->failed || ( trace->size == trace->capacity && !sere_bvh_trace_grow( trace ) ) )
+	{
+		trace->failed = true;
+		return;
+	}
+	trace->data[trace->size++] = (uint8_t) byte;
+}
+
+/* The next recorded byte (0 past the end: a replay never reads beyond what was recorded unless the
+ * stream and the replay disagree, which the tests' counts would show). */
+static inline uint32_t sere_bvh_trace_take( sere_bvh_trace* trace )
+{
+	return trace->at < trace->size ? trace->data[trace->at++] : 0u;
+}
+
+/* sere_bvh_query_group (above false) or sere_bvh_query_group_above (above true), recording its
+ * walk into trace, or, when trace->replay, replaying the walk recorded there instead of testing
+ * boxes: the same visits in the same order. */
+void sere_bvh_query_group_traced( const sere_bvh* bvh, const sere_bvh_group* group, bool above, int32_t floor,
+								  sere_bvh_trace* trace, sere_bvh_visit_group_fn* visit, void* context );

@@ -6,6 +6,7 @@
 #include "core/internal/simd.h"
 #include "core/internal/team.h"
 #include "solve/collide.h"
+#include "solve/internal/bvh_shared.h"
 
 #include <math.h>
 #include <omp.h>
@@ -76,6 +77,32 @@ static inline uint32_t self_lanes( lane_bits m )
 {
 	return (uint32_t) m >> 8;
 }
+
+/* One thread's run of blocks in a recorded search (sere_collide_record_search): its walks and
+ * decisions, and what it counted, a cache line apart from the next run's. */
+typedef struct collide_run
+{
+	sere_bvh_trace trace;
+	int64_t bound_pairs; /* pairs handed to bound_lanes and edge_bound_lanes */
+	int64_t exact_pairs; /* pairs handed to the exact tests */
+	float sink;			 /* replaying: the sum of the records gathered (keeps the loads) */
+} collide_run;
+
+/* The recorded search the floor replays: its runs of blocks (run r is thread r's, blocks
+ * run_first[r] .. run_first[r + 1]), the tree build and workspace state it was made in. */
+typedef struct collide_record
+{
+	collide_run run[SERE_MAX_THREADS];
+	int32_t run_first[SERE_MAX_THREADS + 1];
+	int32_t runs;
+	bool valid;
+	uint64_t generation; /* sere_bvh_generation at the recording */
+	uint64_t state;		 /* sere_collide.state at the recording */
+	float thickness;	 /* the recorded search's */
+	bool listed;		 /* its candidate list was whole: it kept the positions (keep_list) */
+	float one;			 /* 1.0f, opaque to the compiler so the floor keeps its stores */
+	float sink;			 /* the edge-across and list-position passes' sums */
+} collide_record;
 
 struct sere_collide
 {
@@ -198,6 +225,12 @@ struct sere_collide
 	uint8_t* cache_near;
 	int32_t *cache_block_thread, *cache_block_start, *cache_block_count;
 	int32_t* cache_used; /* per thread, FAR_STRIDE apart: pairs listed, or −1 after an overflow */
+
+	/* The last recorded search (sere_collide_record_search), NULL before the first. state changes
+	 * with every detection and every change of what a detection lists (threads, capacity, rest
+	 * positions): a record replays only the state it was made in. */
+	collide_record* record;
+	uint64_t state;
 };
 
 /* Closest point q on the segment ab to p; t is its parameter (q = a + t (b − a)). */
@@ -469,7 +502,54 @@ typedef struct detect_context
 	uint8_t* list_near;
 	int32_t list_used, list_capacity;
 	const float* across[3]; /* sere_collide.edge_across's rows */
+	/* Recording or replaying a search (see sere_collide_touch_search): this run's record, NULL
+	 * for a plain detection, and 1.0f opaque to the compiler for the replay's stores. */
+	collide_run* run;
+	float one;
 } detect_context;
+
+/* The floor (sere_collide_touch_search) replays the run's walks and decisions: each test's
+ * outcome is taken from the record in place of its arithmetic. */
+static inline bool replaying( const detect_context* c )
+{
+	return c->run != NULL && c->run->trace.replay;
+}
+
+/* A test's outcome: the mask the test gave (appended to the record when recording), or the
+ * recorded one when replaying. */
+static inline uint32_t traced_mask( detect_context* c, uint32_t mask )
+{
+	if ( c->run != NULL )
+	{
+		sere_bvh_trace_put( &c->run->trace, mask );
+	}
+	return mask;
+}
+
+static inline uint32_t recorded_mask( detect_context* c )
+{
+	return sere_bvh_trace_take( &c->run->trace );
+}
+
+/* The sum of `count` rows of CLOSEST_LANES gathered values, the floor's use of its loads: one
+ * vector add a row, then the lanes. */
+static inline float sum_rows( float rows[][CLOSEST_LANES], int count )
+{
+	float lanes[CLOSEST_LANES] = { 0.0f };
+	for ( int r = 0; r < count; ++r )
+	{
+		for ( int l = 0; l < CLOSEST_LANES; ++l )
+		{
+			lanes[l] += rows[r][l];
+		}
+	}
+	float sum = 0.0f;
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		sum += lanes[l];
+	}
+	return sum;
+}
 
 /* Half-width of the query cube around a vertex: the thickness plus what rounding can add. The
  * float distance test may accept a pair up to a few ulps of the thickness too far, and the
@@ -556,6 +636,11 @@ void sere_coll_detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_
 /* The unit vector across edge e in the plane of its first triangle, for the edge table. */
 void sere_coll_edge_across_at( sere_collide* collide, const int32_t* tri, const float* x, const float* y,
 							   const float* z, int32_t e );
+
+/* The floor of sere_coll_edge_across_at: the same loads, their sum returned, and the same stores
+ * of the values already there (times one). */
+float sere_coll_edge_across_touch( sere_collide* collide, const int32_t* tri, const float* x, const float* y,
+								   const float* z, int32_t e, float one );
 
 /* collide_detect.c: the candidate list. */
 
