@@ -114,6 +114,46 @@ static inline uint32_t above_mask( const sere_bvh* bvh, int32_t n, int32_t floor
 	return mask;
 }
 
+/* The end of a node's visit, the same for every walk: node's live children (bits of live) are taken,
+ * the inner ones pushed on the stack and the leaves visited in child order with their lanes (hits,
+ * or the trace's next byte when replaying); with a trace the node and its leaves are counted, and
+ * recorded unless replaying. Returns the new stack size. */
+static inline int32_t descend( const sere_bvh_node* node, uint32_t live, const uint32_t* hits, sere_bvh_trace* trace,
+							   bool replay, int32_t* stack, int32_t size, sere_bvh_visit_group_fn* visit,
+							   void* context )
+{
+	uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
+	if ( trace != NULL )
+	{
+		trace->nodes += 1;
+		if ( !replay )
+		{
+			sere_bvh_trace_put( trace, live );
+		}
+	}
+	while ( inner != 0 )
+	{
+		stack[size++] = node->child[__builtin_ctz( inner )];
+		inner &= inner - 1;
+	}
+	while ( leaves != 0 )
+	{
+		int k = __builtin_ctz( leaves );
+		leaves &= leaves - 1;
+		uint32_t lanes = replay ? sere_bvh_trace_take( trace ) : hits[k];
+		if ( trace != NULL )
+		{
+			trace->leaves += 1;
+			if ( !replay )
+			{
+				sere_bvh_trace_put( trace, lanes );
+			}
+		}
+		visit( context, ~node->child[k], lanes );
+	}
+	return size;
+}
+
 /* The floor's walk (sere_bvh_trace replaying): the nodes and visits recorded in trace, in their order, each
  * opened node's boxes (and, above, its child_top entries) loaded and added up. */
 static inline void replay_group( const sere_bvh* bvh, bool above, sere_bvh_trace* trace, sere_bvh_visit_group_fn* visit,
@@ -144,22 +184,8 @@ static inline void replay_group( const sere_bvh* bvh, bool above, sere_bvh_trace
 				top_sum += top[k];
 			}
 		}
-		trace->nodes += 1;
 		uint32_t live = sere_bvh_trace_take( trace );
-		uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
-		while ( inner != 0 )
-		{
-			stack[size++] = node->child[__builtin_ctz( inner )];
-			inner &= inner - 1;
-		}
-		while ( leaves != 0 )
-		{
-			int k = __builtin_ctz( leaves );
-			leaves &= leaves - 1;
-			trace->leaves += 1;
-			uint32_t hits = sere_bvh_trace_take( trace );
-			visit( context, ~node->child[k], hits );
-		}
+		size = descend( node, live, NULL, trace, true, stack, size, visit, context );
 	}
 	float lanes[4];
 	sere_v4_store( lanes, sere_v4_add( sere_v8_low( sum ), sere_v8_high( sum ) ) );
@@ -234,28 +260,7 @@ static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group
 								  node->max_y[k], node->max_z[k] );
 			live |= (uint32_t) ( hits[k] != 0 ) << k;
 		}
-		uint32_t leaves = live & leaf_mask( node ), inner = live & ~leaves;
-		if ( trace != NULL )
-		{
-			trace->nodes += 1;
-			sere_bvh_trace_put( trace, live );
-		}
-		while ( inner != 0 )
-		{
-			stack[size++] = node->child[__builtin_ctz( inner )];
-			inner &= inner - 1;
-		}
-		while ( leaves != 0 )
-		{
-			int k = __builtin_ctz( leaves );
-			leaves &= leaves - 1;
-			if ( trace != NULL )
-			{
-				trace->leaves += 1;
-				sere_bvh_trace_put( trace, hits[k] );
-			}
-			visit( context, ~node->child[k], hits[k] );
-		}
+		size = descend( node, live, hits, trace, false, stack, size, visit, context );
 	}
 }
 
