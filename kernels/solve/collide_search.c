@@ -158,32 +158,11 @@ static uint32_t bound_lanes( const detect_context* c, float p[3][CLOSEST_LANES],
 		float inv = 1.0f / sqrtf( degenerate ? 1.0f : nn );
 		float u[3] = { n[0] * inv, n[1] * inv, n[2] * inv };
 		float plane = ap[0] * u[0] + ap[1] * u[1] + ap[2] * u[2];
-		/* in-plane directions: edges ab, bc, ca, and their outward normals edge × n̂; corners
-		 * relative to a */
-		float d[6][3];
-		const float* edge[3] = { ab, bc, ac };
-		for ( int k = 0; k < 3; ++k )
-		{
-			const float* e = edge[k];
-			float m[3] = { e[1] * u[2] - e[2] * u[1], e[2] * u[0] - e[0] * u[2], e[0] * u[1] - e[1] * u[0] };
-			float ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], mm = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
-			float ie = 1.0f / sqrtf( ee > 0.0f ? ee : 1.0f ), im = 1.0f / sqrtf( mm > 0.0f ? mm : 1.0f );
-			for ( int r = 0; r < 3; ++r )
-			{
-				d[k][r] = e[r] * ie, d[3 + k][r] = m[r] * im;
-			}
-		}
-		float inplane = 0.0f;
-		for ( int k = 0; k < 6; ++k )
-		{
-			float pb = ab[0] * d[k][0] + ab[1] * d[k][1] + ab[2] * d[k][2];
-			float pc = ac[0] * d[k][0] + ac[1] * d[k][1] + ac[2] * d[k][2];
-			float pp = ap[0] * d[k][0] + ap[1] * d[k][1] + ap[2] * d[k][2];
-			float lo = pb < pc ? pb : pc, hi = pb < pc ? pc : pb;
-			lo = lo < 0.0f ? lo : 0.0f, hi = hi > 0.0f ? hi : 0.0f;
-			float gap = interval_gap( pp, pp, lo, hi );
-			inplane = gap > inplane ? gap : inplane;
-		}
+		/* in-plane directions: edges ab, bc, ca, and their outward normals edge × n̂, left at
+		 * the edge's length (|e × n̂| = |e|, e lying in the plane), corners relative to a. A gap
+		 * G along a direction of length² ee is G / √ee, so plane² + (G / √ee)² ≥ r² is tested
+		 * as plane² ee + G² ≥ r² ee: no square root or division per direction (they were a
+		 * third of the bound's time). A zero-length edge tells nothing. */
 		float far[3] = { fabsf( p[0][l] ), fabsf( p[1][l] ), fabsf( p[2][l] ) };
 		for ( int r = 0; r < 3; ++r )
 		{
@@ -192,7 +171,28 @@ static uint32_t bound_lanes( const detect_context* c, float p[3][CLOSEST_LANES],
 			far[r] = far[r] > m ? far[r] : m;
 		}
 		float radius = list_radius( c, far );
-		keep[l] = degenerate | !( plane * plane + inplane * inplane >= radius * radius );
+		float r2 = radius * radius, plane2 = plane * plane;
+		int beyond = plane2 >= r2;
+		const float* edge[3] = { ab, bc, ac };
+		for ( int k = 0; k < 3; ++k )
+		{
+			const float* e = edge[k];
+			float m[3] = { e[1] * u[2] - e[2] * u[1], e[2] * u[0] - e[0] * u[2], e[0] * u[1] - e[1] * u[0] };
+			float ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+			const float* dir[2] = { e, m };
+			for ( int j = 0; j < 2; ++j )
+			{
+				const float* d = dir[j];
+				float pb = ab[0] * d[0] + ab[1] * d[1] + ab[2] * d[2];
+				float pc = ac[0] * d[0] + ac[1] * d[1] + ac[2] * d[2];
+				float pp = ap[0] * d[0] + ap[1] * d[1] + ap[2] * d[2];
+				float lo = pb < pc ? pb : pc, hi = pb < pc ? pc : pb;
+				lo = lo < 0.0f ? lo : 0.0f, hi = hi > 0.0f ? hi : 0.0f;
+				float gap = interval_gap( pp, pp, lo, hi );
+				beyond |= ( ee > 0.0f ) & ( gap > 0.0f ) & ( plane2 * ee + gap * gap >= r2 * ee );
+			}
+		}
+		keep[l] = degenerate | !beyond;
 	}
 	uint32_t mask = 0;
 	for ( int l = 0; l < CLOSEST_LANES; ++l )
