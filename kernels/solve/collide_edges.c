@@ -5,9 +5,9 @@
 #include "solve/internal/collide_shared.h"
 
 /* For CLOSEST_LANES segment pairs: bit l set unless separating directions put the segments
- * farther apart than list_radius: their common normal (e × f normalized, where they are not
- * parallel to within sin² 2⁻²⁰), each one's direction and the unit vector across each one in the
- * plane of its first triangle (the table's across for e, recomputed for f). */
+ * farther apart than list_radius: their common normal e × f (where they are not parallel to
+ * within sin² 2⁻²⁰), each one's direction and the unit vector across each one in the plane of its
+ * first triangle (the table's across for e, recomputed for f). */
 static uint32_t edge_bound_lanes( const detect_context* c, const int32_t* item, const int32_t* target,
 								  float a0[3][CLOSEST_LANES], float a1[3][CLOSEST_LANES], float b0[3][CLOSEST_LANES],
 								  float b1[3][CLOSEST_LANES] )
@@ -34,15 +34,25 @@ static uint32_t edge_bound_lanes( const detect_context* c, const int32_t* item, 
 		float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
 		float uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
 		int skew = nn > 0x1p-20f * uu * vv;
-		float in = skew ? 1.0f / sqrtf( nn ) : 0.0f;
-		float iu = uu > 0.0f ? 1.0f / sqrtf( uu ) : 0.0f, iv = vv > 0.0f ? 1.0f / sqrtf( vv ) : 0.0f;
-		float d[5][3];
+		float far[3];
 		for ( int r = 0; r < 3; ++r )
 		{
-			d[0][r] = n[r] * in, d[1][r] = u[r] * iu, d[2][r] = v[r] * iv;
+			float m0 = fabsf( a0[r][l] ) > fabsf( a1[r][l] ) ? fabsf( a0[r][l] ) : fabsf( a1[r][l] );
+			float m1 = fabsf( b0[r][l] ) > fabsf( b1[r][l] ) ? fabsf( b0[r][l] ) : fabsf( b1[r][l] );
+			far[r] = m0 > m1 ? m0 : m1;
+		}
+		float radius = list_radius( c, far ), r2 = radius * radius;
+		/* The directions at their own lengths (the across vectors are unit): a gap G along a
+		 * direction of length² dd is G / √dd, and G / √dd ≥ r is tested as G ≥ 0 and G² ≥ r² dd,
+		 * without a square root or division. A direction of length 0 (parallel or zero-length
+		 * segments) tells nothing. */
+		float d[5][3], dd[5] = { skew ? nn : 0.0f, uu, vv, 1.0f, 1.0f };
+		for ( int r = 0; r < 3; ++r )
+		{
+			d[0][r] = n[r], d[1][r] = u[r], d[2][r] = v[r];
 			d[3][r] = across[0][r][l], d[4][r] = across[1][r][l];
 		}
-		float bound = 0.0f;
+		int beyond = 0;
 		for ( int k = 0; k < 5; ++k )
 		{
 			/* e's ends a0, a1 and f's b0, b1, relative to a0 */
@@ -51,16 +61,9 @@ static uint32_t edge_bound_lanes( const detect_context* c, const int32_t* item, 
 			float q1 = w1[0] * d[k][0] + w1[1] * d[k][1] + w1[2] * d[k][2];
 			float gap =
 				interval_gap( pa < 0.0f ? pa : 0.0f, pa > 0.0f ? pa : 0.0f, q0 < q1 ? q0 : q1, q0 < q1 ? q1 : q0 );
-			bound = gap > bound ? gap : bound;
+			beyond |= ( dd[k] > 0.0f ) & ( gap >= 0.0f ) & ( gap * gap >= r2 * dd[k] );
 		}
-		float far[3];
-		for ( int r = 0; r < 3; ++r )
-		{
-			float m0 = fabsf( a0[r][l] ) > fabsf( a1[r][l] ) ? fabsf( a0[r][l] ) : fabsf( a1[r][l] );
-			float m1 = fabsf( b0[r][l] ) > fabsf( b1[r][l] ) ? fabsf( b0[r][l] ) : fabsf( b1[r][l] );
-			far[r] = m0 > m1 ? m0 : m1;
-		}
-		keep[l] = !( bound >= list_radius( c, far ) );
+		keep[l] = !beyond;
 	}
 	uint32_t mask = 0;
 	for ( int l = 0; l < CLOSEST_LANES; ++l )
