@@ -69,20 +69,12 @@ static inline void amg_restrict( const sere_amg* m, int32_t l, double* bc, amg_t
 	sere_spin_barrier_wait( t.barrier, t.team );
 }
 
-/* The floor's chunk_sum: the same value loads and gathers, an add where it multiplies and adds. */
+/* The floor's chunk_sum (cg_shared.h, chunk_pass): the same value loads and gathers, an add where
+ * it multiplies. */
 static inline void chunk_touch( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
 								lanes_t* out )
 {
-	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
-	for ( int32_t s = begin; s < end; s += LANES )
-	{
-		gather( &xlo, x, col + s );
-		gather( &xhi, x, col + s + 4 );
-		lo += *(const half_t*) ( val + s ) + xlo;
-		hi += *(const half_t*) ( val + s + 4 ) + xhi;
-	}
-	out->lo = lo;
-	out->hi = hi;
+	chunk_pass( col, val, begin, end, x, true, out );
 }
 
 /* The floor of chunk ch of a sweep over the lower rows or (full) the whole rows: in, D⁻¹ and the

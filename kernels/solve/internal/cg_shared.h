@@ -169,20 +169,29 @@ typedef struct cg_state
 /* The SGS layout's chunk kernels (sere_sgs, cg.h), for its CG (cg_sgs.c) and the multigrid
  * levels that smooth with it (cg_amg.c). */
 
-/* Sum over a chunk's slots [begin, end) of val · x[col], lane by lane in slot order. */
-static inline void chunk_sum( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
-							  lanes_t* out )
+/* Sum over a chunk's slots [begin, end) of val · x[col], lane by lane in slot order; with touch
+ * (the multigrid's floor, amg_shared.h), val + x[col]: the same loads and gathers, an add where it
+ * multiplies. Inlined with a constant flag, so neither pays for the other. */
+static inline void chunk_pass( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
+							   bool touch, lanes_t* out )
 {
 	half_t lo = { 0.0 }, hi = { 0.0 }, xlo, xhi;
 	for ( int32_t s = begin; s < end; s += LANES )
 	{
 		gather( &xlo, x, col + s );
 		gather( &xhi, x, col + s + 4 );
-		lo += *(const half_t*) ( val + s ) * xlo;
-		hi += *(const half_t*) ( val + s + 4 ) * xhi;
+		half_t vlo = *(const half_t*) ( val + s ), vhi = *(const half_t*) ( val + s + 4 );
+		lo += touch ? vlo + xlo : vlo * xlo;
+		hi += touch ? vhi + xhi : vhi * xhi;
 	}
 	out->lo = lo;
 	out->hi = hi;
+}
+
+static inline void chunk_sum( const int32_t* col, const double* val, int32_t begin, int32_t end, const double* x,
+							  lanes_t* out )
+{
+	chunk_pass( col, val, begin, end, x, false, out );
 }
 
 /* Chunk ch of a sweep: out = (in − Σ a_ij out_j) / d over the chunk's slots [ptr[ch],
