@@ -109,6 +109,7 @@ Test( params, rows_cover_the_builder_and_harness_members )
 		"max_iterations",
 		"compliance",
 		"chebyshev_rho",
+		"chebyshev_delay",
 		"pbd_stall",
 		"vein_compliance",
 		"voronoi_compliance",

@@ -80,8 +80,10 @@ static const sere_param table[] = {
 	ROW( "compliance", "", FLOAT, leaf.pbd.compliance, 0.0, 1.0,
 		 "XPBD compliance of the blade's springs (each frame an XPBD step); 0 = the paper's PBD (Table 1 rule)" ),
 	ROW( "chebyshev_rho", "ρ", FLOAT, leaf.pbd.chebyshev_rho, 0.0, 0.99,
-		 "Chebyshev semi-iteration of the XPBD sweeps (Wang 2015) with this spectral radius after 5 plain sweeps; 0 = "
-		 "off (0.9: a third to a half fewer sweeps, shapes not bitwise those of the plain sweeps)" ),
+		 "Chebyshev semi-iteration of the XPBD sweeps (Wang 2015) with this spectral radius after chebyshev_delay "
+		 "plain sweeps; 0 = off (0.9: a third to a half fewer sweeps, shapes not bitwise those of the plain sweeps)" ),
+	ROW( "chebyshev_delay", "", INT32, leaf.pbd.chebyshev_delay, 2.0, 1e5,
+		 "plain sweeps a frame before Chebyshev's first extrapolation (Wang 2015's S)" ),
 	ROW( "pbd_stall", "", FLOAT, leaf.pbd.stall, 0.0, 0.999,
 		 "0 = the paper's PBD stop; s > 0: also stop when 10 sweeps lower max |C/l| by less than the fraction s" ),
 	ROW( "vein_compliance", "", FLOAT, leaf.vein_compliance, 0.0, 1e3,
