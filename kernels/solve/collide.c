@@ -75,6 +75,7 @@ static void collide_free( sere_collide* c )
 		{
 			sere_free( c->record->run[t].trace.data );
 		}
+		sere_free( c->record->pushes );
 		sere_free( c->record );
 	}
 	void** slot[CONTACT_ARRAYS];

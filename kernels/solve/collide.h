@@ -157,15 +157,18 @@ int32_t sere_collide_list_uses( const sere_collide* collide );
  * search. */
 void sere_collide_drop_list( sere_collide* collide );
 
-/* What a searching detection moved, as sere_collide_record_search recorded it and
- * sere_collide_touch_search replayed it. */
+/* What a searching detection or a served pass moved, as sere_collide_record_search or
+ * sere_collide_record_served recorded it and sere_collide_touch_search or sere_collide_touch_served
+ * replayed it. */
 typedef struct sere_collide_traffic
 {
-	int64_t nodes;		 /* tree nodes opened, by both kinds of query */
+	int64_t nodes;		 /* tree nodes opened, by both kinds of query (none when served) */
 	int64_t leaves;		 /* triangles the walks visited */
 	int64_t bound_pairs; /* pairs gathered for the separating-plane bounds, both kinds */
 	int64_t exact_pairs; /* pairs gathered for the exact tests: the candidate list's */
 	int64_t contacts;	 /* contacts listed, both kinds */
+	int64_t evaluated;	 /* a served pass: contacts its response evaluated, summed over its iterations */
+	int64_t gathered;	 /* a served pass: gather-list entries its response's iterations read */
 } sere_collide_traffic;
 
 /* A searching detection (sere_collide_detect after sere_collide_drop_list: the same contacts, bits
@@ -192,10 +195,46 @@ sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* b
  * table's rows, the tests' own arithmetic) and its timing of the blocks are left out. Leaves the
  * positions, contacts and candidate list bitwise as the recorded search left them. traffic (may be
  * NULL) gets what it moved: the record's counts when the replay is faithful. SERE_ERR_ARGUMENT for
- * a NULL argument, or when the workspace has no record, or has detected (or changed threads,
- * capacity or rest positions) since, or the tree was rebuilt. */
+ * a NULL argument, or when the workspace has no record of a search (none, or a served pass's), or
+ * has detected (or changed threads, capacity or rest positions) since, or the tree was rebuilt. */
 sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 									   const float* z, sere_collide_traffic* traffic );
+
+/* One pass of sere_collide_resolve whose detection the candidate list serves (params->rounds 1:
+ * the same contacts, pushes and state as that pass), that also records, for
+ * sere_collide_touch_served, what each exact test decided and which contacts each iteration of
+ * the response pushed. A pair of its own beside the search's rather than a mode of it: a served
+ * pass is a resolve, which takes the caller's state and parameters and responds, and what it
+ * replays has no walks. traffic (may be NULL) gets what it moved. SERE_ERR_ARGUMENT (nothing
+ * changed) for what sere_collide_resolve refuses, params->rounds other than 1, or a list that does
+ * not serve these positions (the pass would search); other errors as sere_collide_resolve's, plus
+ * SERE_ERR_MEMORY when the record cannot be kept (no record then). The record replaces the
+ * search's, if any. */
+sere_status sere_collide_record_served( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+										const sere_collide_params* params, sere_collide_traffic* traffic );
+
+/* The memory floor of the recorded served pass (benchmarks), as sere_collide_touch_search is the
+ * search's and with its record and emitters: the pass's loops, branches and barriers on the threads
+ * a pass would run with now (the detection's runs as recorded), each test's outcome read from the
+ * record and adds in place of the arithmetic, so that it moves the same memory in the same order.
+ * That is the check that the list serves (its passes over the positions and the list's); the
+ * replay of every listed pair (its batches copied from the list, their points gathered, each
+ * contact written where the pass writes it); the contact listing and gather lists (the pass's own
+ * code); then, for the evaluations the recorded response ran, the inputs it checks loaded, the
+ * members' points gathered, the corrections stored with the recorded push flags, the pushes
+ * shared and gathered, the sides, positions and velocities loaded and stored. The response's
+ * scratch (weights, corrections, push counts, moves) takes the sums; the contacts and velocities
+ * are stored with the values already there (times one) and the positions copied through the
+ * response's records unmoved, so that it leaves them and the candidate list bitwise as the
+ * recorded pass left them. Reading the record (a byte per batch of 8 pairs, per 8 contacts an
+ * evaluation) is traffic the pass does not have; the detection's timing of its blocks is left
+ * out. state: the recorded pass's (the values may differ; with start-of-step positions if it had
+ * them). traffic (may be NULL) gets what it moved: the record's counts when the replay is
+ * faithful. SERE_ERR_ARGUMENT for a NULL argument or an invalid state, when the last record is
+ * not a served pass's, or when the workspace has detected (or changed threads, capacity or rest
+ * positions) since, or the tree was rebuilt. */
+sere_status sere_collide_touch_served( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+									   sere_collide_traffic* traffic );
 
 const sere_contact* sere_collide_contacts( const sere_collide* collide, int32_t* count );
 const sere_edge_contact* sere_collide_edge_contacts( const sere_collide* collide, int32_t* count );

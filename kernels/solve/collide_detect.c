@@ -261,6 +261,35 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 	return !far;
 }
 
+/* The floor of list_serves (sere_collide_touch_served): its passes over the vertices, the same
+ * loads with an add in place of the bounds of the displacements and of their distances from the
+ * middle. The adds run in vectors (omp simd: a floor's sum may take any order), where
+ * list_serves's bounds pass one vertex at a time (gcc keeps its min and max reductions scalar). */
+static float list_serves_touch( const sere_collide* collide, const float* x, const float* y, const float* z,
+								int threads )
+{
+	int32_t n = collide->vertex_count;
+	const float* now[3] = { x, y, z };
+	const float* then[3] = { collide->cache_x, collide->cache_y, collide->cache_z };
+	float sum = 0.0f;
+	for ( int a = 0; a < 3; ++a )
+	{
+		const float *p = now[a], *q = then[a];
+#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( + : sum )
+		for ( int32_t i = 0; i < n; ++i )
+		{
+			sum += p[i] - q[i];
+		}
+	}
+	const float *cx = then[0], *cy = then[1], *cz = then[2];
+#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( + : sum )
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		sum += ( ( x[i] - cx[i] ) + ( y[i] - cy[i] ) ) + ( z[i] - cz[i] );
+	}
+	return sum;
+}
+
 /* The threads a detection runs with: the team's, at most the workspace's slots. */
 static int detect_threads( const sere_collide* collide )
 {
@@ -438,7 +467,8 @@ static sere_status list_found( sere_collide* collide, const int32_t* tri, int th
 	return SERE_OK;
 }
 
-/* sere_coll_detect, recording the search into record when it is not NULL (served must then be 0). */
+/* sere_coll_detect, recording it into record when that is not NULL: the search's walks and tests,
+ * or a served detection's exact tests. */
 static sere_status detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
 						   float thickness, int served, collide_record* record, int32_t* contact_count )
 {
@@ -551,8 +581,8 @@ static void reset_runs( collide_record* record, int32_t runs, bool replay )
 	}
 }
 
-sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-										const float* z, float thickness, sere_collide_traffic* traffic )
+sere_status sere_coll_record_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									 const float* z, float thickness, int served, sere_collide_traffic* traffic )
 {
 	if ( collide == NULL )
 	{
@@ -566,7 +596,7 @@ sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* b
 	record->valid = false;
 	reset_runs( record, SERE_MAX_THREADS, false );
 	int32_t contacts;
-	sere_status status = detect( collide, bvh, x, y, z, thickness, 0, record, &contacts );
+	sere_status status = detect( collide, bvh, x, y, z, thickness, served, record, &contacts );
 	for ( int32_t r = 0; status == SERE_OK && r < record->runs; ++r )
 	{
 		status = record->run[r].trace.failed ? SERE_ERR_MEMORY : SERE_OK;
@@ -576,11 +606,13 @@ sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* b
 		return status;
 	}
 	record->valid = true;
+	record->served = served > 0;
 	record->generation = sere_bvh_generation( bvh );
 	record->state = collide->state;
 	record->thickness = thickness;
-	record->listed = collide->cache_valid;
+	record->listed = !record->served && collide->cache_valid;
 	record->one = 1.0f;
+	record->evaluations = 0;
 	if ( traffic != NULL )
 	{
 		*traffic = record_traffic( collide, record );
@@ -588,8 +620,14 @@ sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* b
 	return SERE_OK;
 }
 
-sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-									   const float* z, sere_collide_traffic* traffic )
+sere_status sere_collide_record_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+										const float* z, float thickness, sere_collide_traffic* traffic )
+{
+	return sere_coll_record_detect( collide, bvh, x, y, z, thickness, 0, traffic );
+}
+
+sere_status sere_coll_touch_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									const float* z, bool served, sere_collide_traffic* traffic )
 {
 	if ( collide == NULL || bvh == NULL || x == NULL || y == NULL || z == NULL )
 	{
@@ -598,7 +636,7 @@ sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bv
 	collide_record* record = collide->record;
 	int32_t triangles;
 	const int32_t* tri = sere_bvh_triangles( bvh, &triangles );
-	if ( record == NULL || !record->valid || record->state != collide->state ||
+	if ( record == NULL || !record->valid || record->served != served || record->state != collide->state ||
 		 record->generation != sere_bvh_generation( bvh ) || sere_bvh_vertex_count( bvh ) != collide->vertex_count ||
 		 triangles != collide->triangle_count )
 	{
@@ -609,24 +647,33 @@ sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bv
 	int threads = detect_threads( collide ) < runs ? detect_threads( collide ) : runs;
 	float one = record->one, sum = 0.0f;
 	reset_runs( record, runs, true );
-	/* choose_list's across vectors */
-#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( + : sum )
-	for ( int32_t e = 0; e < edges; ++e )
+	if ( served )
 	{
-		sum += sere_coll_edge_across_touch( collide, tri, x, y, z, e, one );
+		/* sere_collide_resolve's check that the list serves */
+		sum += list_serves_touch( collide, x, y, z, detect_threads( collide ) );
+	}
+	else
+	{
+		/* choose_list's across vectors */
+#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( + : sum )
+		for ( int32_t e = 0; e < edges; ++e )
+		{
+			sum += sere_coll_edge_across_touch( collide, tri, x, y, z, e, one );
+		}
 	}
 #pragma omp parallel num_threads( threads )
 	{
-		/* each run as the recorded search's thread of that number ran it, whichever thread runs it */
+		/* each run as the recorded thread of that number ran it, whichever thread runs it: the
+		 * search's blocks listing their pairs, or the served detection's replaying the list */
 		for ( int32_t r = omp_get_thread_num(); r < runs; r += omp_get_num_threads() )
 		{
 			detect_context c;
-			context_init( &c, collide, tri, x, y, z, record->thickness, true, r );
+			context_init( &c, collide, tri, x, y, z, record->thickness, !served, r );
 			c.run = record->run + r;
 			c.one = one;
 			for ( int32_t block = record->run_first[r]; block < record->run_first[r + 1]; ++block )
 			{
-				run_block( collide, &c, bvh, block, record->thickness, false, true, r );
+				run_block( collide, &c, bvh, block, record->thickness, served, !served, r );
 			}
 			collide->cache_used[FAR_STRIDE * r] = c.list_used;
 		}
@@ -648,4 +695,10 @@ sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bv
 		*traffic = record_traffic( collide, record );
 	}
 	return status;
+}
+
+sere_status sere_collide_touch_search( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									   const float* z, sere_collide_traffic* traffic )
+{
+	return sere_coll_touch_detect( collide, bvh, x, y, z, false, traffic );
 }

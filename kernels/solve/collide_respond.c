@@ -145,10 +145,45 @@ static int32_t evaluate_edges( sere_collide* c, int32_t begin, int32_t end, floa
 	return far;
 }
 
-/* The coefficient of entry e as a group (coefficient, coefficient, coefficient, 1). */
-static inline sere_v4 entry_coefficient( const sere_collide* c, int32_t e )
+/* The floor's evaluate_contacts or evaluate_edges (vertex false): their gathers and loads (three
+ * weights of a vertex–triangle contact, two of an edge–edge one), with their sums stored for the
+ * corrections and, for the push, the flag the recorded evaluation stored (flags: a bit a contact). */
+static void touch_evaluate( sere_collide* c, int32_t begin, int32_t end, bool vertex, const uint8_t* flags )
 {
-	return sere_v4_xyz( c->entry_coef[e], 1.0f );
+	float point[12][EVALUATE_BLOCK];
+	int32_t count = end - begin;
+	gather_members( c, begin, count, point );
+	float row[4][EVALUATE_BLOCK];
+	for ( int32_t k = 0; k < count; ++k )
+	{
+		int32_t at = begin + k;
+		float loads = ( ( c->weight[0][at] + c->weight[1][at] ) + ( vertex ? c->weight[2][at] : 0.0f ) ) +
+					  ( c->contact_side[at] + c->inv_weight[at] );
+		for ( int r = 0; r < 3; ++r )
+		{
+			row[r][k] = ( ( point[r][k] + point[3 + r][k] ) + ( point[6 + r][k] + point[9 + r][k] ) ) + loads;
+		}
+		row[3][k] = (float) ( flags[k / 8] >> ( k % 8 ) & 1u );
+	}
+	store_corrections( c, begin, count, row );
+}
+
+/* Recording a served pass: the push flags contacts [begin, end) were stored with. */
+static void record_pushes( const sere_collide* c, int32_t begin, int32_t end, uint8_t* flags )
+{
+	memset( flags, 0, PUSH_BYTES );
+	for ( int32_t k = begin; k < end; ++k )
+	{
+		flags[( k - begin ) / 8] |= (uint8_t) ( ( c->corr[4 * (size_t) k + 3] != 0.0f ) << ( ( k - begin ) % 8 ) );
+	}
+}
+
+/* The coefficient of entry e as a group (coefficient, coefficient, coefficient, 1), or for the
+ * floor (touch) with 0 in lane 3: it adds the group to the correction, whose lane 3 then still
+ * sums to the count of pushing contacts gather_move tests. */
+static inline sere_v4 entry_coefficient( const sere_collide* c, int32_t e, bool touch )
+{
+	return sere_v4_xyz( c->entry_coef[e], touch ? 0.0f : 1.0f );
 }
 
 /* The correction record of entry e. */
@@ -157,30 +192,35 @@ static inline sere_v4 entry_correction( const sere_collide* c, int32_t e )
 	return sere_v4_load( c->corr + 4 * (size_t) c->entries[e] );
 }
 
-/* Adds the entries [e, end) to sum in order. */
-static inline sere_v4 gather_sum( const sere_collide* c, int32_t e, int32_t end, sere_v4 sum )
+/* Adds the entries [e, end) to sum in order (their products, or for the floor their sums). */
+static inline sere_v4 gather_sum( const sere_collide* c, int32_t e, int32_t end, sere_v4 sum, bool touch )
 {
 	for ( ; e < end; ++e )
 	{
-		sum = sere_v4_add( sum, sere_v4_mul( entry_coefficient( c, e ), entry_correction( c, e ) ) );
+		sere_v4 coefficient = entry_coefficient( c, e, touch ), corr = entry_correction( c, e );
+		sum = sere_v4_add( sum, touch ? sere_v4_add( coefficient, corr ) : sere_v4_mul( coefficient, corr ) );
 	}
 	return sum;
 }
 
-/* Moves touched vertex slot j (vertex i) by ω / count times the summed correction. */
-static inline void gather_move( sere_collide* c, int32_t j, sere_v4 sum, const float* inv_m, float relaxation )
+/* Moves touched vertex slot j (vertex i) by ω / count times the summed correction. The floor
+ * (touch) adds where this multiplies and stores the position as it is (times one). */
+static inline void gather_move( sere_collide* c, int32_t j, sere_v4 sum, const float* inv_m, float relaxation,
+								bool touch, float one )
 {
 	int32_t i = c->touched[j];
 	if ( sere_v4_w( sum ) == 0.0f )
 	{
 		return;
 	}
-	float scale = relaxation * inv_m[i];
-	/* lane 3 scaled by 0: the padding stays 0 */
-	sere_v4 d = sere_v4_mul( sum, sere_v4_xyz( scale, 0.0f ) );
+	float scale = touch ? relaxation + inv_m[i] : relaxation * inv_m[i];
+	/* lane 3 scaled by 0: the padding stays 0 (the floor's moves keep the count there; their
+	 * padding is never read) */
+	sere_v4 d = touch ? sere_v4_add( sum, sere_v4_xyz( scale, 0.0f ) ) : sere_v4_mul( sum, sere_v4_xyz( scale, 0.0f ) );
 	float* position = c->position + 4 * (size_t) i;
 	float* acc = c->acc + 4 * (size_t) j;
-	sere_v4_store( position, sere_v4_add( sere_v4_load( position ), d ) );
+	sere_v4 at = sere_v4_load( position );
+	sere_v4_store( position, touch ? sere_v4_mul( at, sere_v4_xyz( one, one ) ) : sere_v4_add( at, d ) );
 	sere_v4_store( acc, sere_v4_add( sere_v4_load( acc ), d ) );
 }
 
@@ -189,7 +229,8 @@ static inline void gather_move( sere_collide* c, int32_t j, sere_v4 sum, const f
  * products and sums of the one-vertex form in the same order. A vertex averages 21 entries on
  * the dried maple, and two independent chains of adds keep the adder busy where one waits on
  * the last add. */
-static void gather_apply_pair( sere_collide* c, int32_t j, const float* inv_m, float relaxation )
+static inline void gather_apply_pair( sere_collide* c, int32_t j, const float* inv_m, float relaxation, bool touch,
+									  float one )
 {
 	int32_t i0 = c->touched[j], i1 = c->touched[j + 1];
 	int32_t e0 = c->entry_offset[i0], end0 = c->entry_offset[i0 + 1];
@@ -198,25 +239,44 @@ static void gather_apply_pair( sere_collide* c, int32_t j, const float* inv_m, f
 	sere_v8 sum = sere_v8_zero();
 	for ( int32_t k = 0; k < common; ++k )
 	{
-		sere_v8 coefficient = sere_v8_pair( entry_coefficient( c, e0 + k ), entry_coefficient( c, e1 + k ) );
+		sere_v8 coefficient =
+			sere_v8_pair( entry_coefficient( c, e0 + k, touch ), entry_coefficient( c, e1 + k, touch ) );
 		sere_v8 corr = sere_v8_pair( entry_correction( c, e0 + k ), entry_correction( c, e1 + k ) );
-		sum = sere_v8_add( sum, sere_v8_mul( coefficient, corr ) );
+		sum = sere_v8_add( sum, touch ? sere_v8_add( coefficient, corr ) : sere_v8_mul( coefficient, corr ) );
 	}
-	sere_v4 sum0 = gather_sum( c, e0 + common, end0, sere_v8_low( sum ) );
-	sere_v4 sum1 = gather_sum( c, e1 + common, end1, sere_v8_high( sum ) );
-	gather_move( c, j, sum0, inv_m, relaxation );
-	gather_move( c, j + 1, sum1, inv_m, relaxation );
+	sere_v4 sum0 = gather_sum( c, e0 + common, end0, sere_v8_low( sum ), touch );
+	sere_v4 sum1 = gather_sum( c, e1 + common, end1, sere_v8_high( sum ), touch );
+	gather_move( c, j, sum0, inv_m, relaxation, touch, one );
+	gather_move( c, j + 1, sum1, inv_m, relaxation, touch, one );
 }
 
 /* Moves touched vertex slot j by ω times the mean of its pushing contacts' corrections, summed
  * in contact order (a contact that does not push has a zero correction and counts 0). The sums
  * run in the four lanes of one group, (coefficient, coefficient, coefficient, 1) times the
  * contact's (λ n̂, 1). */
-static void gather_apply( sere_collide* c, int32_t j, const float* inv_m, float relaxation )
+static inline void gather_apply( sere_collide* c, int32_t j, const float* inv_m, float relaxation, bool touch,
+								 float one )
 {
 	int32_t i = c->touched[j];
-	sere_v4 sum = gather_sum( c, c->entry_offset[i], c->entry_offset[i + 1], sere_v4_zero() );
-	gather_move( c, j, sum, inv_m, relaxation );
+	sere_v4 sum = gather_sum( c, c->entry_offset[i], c->entry_offset[i + 1], sere_v4_zero(), touch );
+	gather_move( c, j, sum, inv_m, relaxation, touch, one );
+}
+
+/* Moves the touched slots [begin, end), two at a time (gather_apply_pair), then the last; inlined
+ * with a constant touch, so the response and its floor each get their own loop. */
+static inline __attribute__( ( always_inline ) ) void gather_run( sere_collide* c, int32_t begin, int32_t end,
+																  const float* inv_m, float relaxation, bool touch,
+																  float one )
+{
+	int32_t j = begin;
+	for ( ; j + 1 < end; j += 2 )
+	{
+		gather_apply_pair( c, j, inv_m, relaxation, touch, one );
+	}
+	if ( j < end )
+	{
+		gather_apply( c, j, inv_m, relaxation, touch, one );
+	}
 }
 
 /* The first touched slot of part `part` of `parts` when the touched vertices are cut into runs
@@ -232,7 +292,7 @@ static void gather_apply( sere_collide* c, int32_t j, const float* inv_m, float 
  * (the coefficients 1, −u, −v, −w or 1 − s, s, −(1 − t), −t sum to 0). Called by every thread of
  * the response between the evaluation and the gather: counts for its touched vertices, a
  * barrier, then the shares for its contacts (the loop's own barrier ends it). */
-static void share_pushes( sere_collide* c, int32_t mine_begin, int32_t mine_end, int32_t contacts )
+static void share_pushes( sere_collide* c, int32_t mine_begin, int32_t mine_end, int32_t contacts, bool touch )
 {
 	for ( int32_t j = mine_begin; j < mine_end; ++j )
 	{
@@ -253,13 +313,19 @@ static void share_pushes( sere_collide* c, int32_t mine_begin, int32_t mine_end,
 		{
 			continue;
 		}
+		/* the floor (touch) adds the counts and the share in place of the maximum, division and
+		 * products */
 		float n = 1.0f;
 		for ( int r = 0; r < 4; ++r )
 		{
-			n = fmaxf( n, c->push_count[c->member[r][k]] );
+			float count = c->push_count[c->member[r][k]];
+			n = touch ? n + count : fmaxf( n, count );
 		}
-		float share = 1.0f / n;
-		corr[0] *= share, corr[1] *= share, corr[2] *= share;
+		float share = touch ? n : 1.0f / n;
+		for ( int r = 0; r < 3; ++r )
+		{
+			corr[r] = touch ? corr[r] + share : corr[r] * share;
+		}
 	}
 }
 
@@ -324,6 +390,18 @@ static inline float history_side( const sere_collide* c, const sere_collide_stat
 	return height > 0.0f ? 1.0f : ( height < 0.0f ? -1.0f : c->contact_side[k] );
 }
 
+/* The floor's history_side: its loads, added up (the side it finds is the one already there). */
+static inline float history_loads( const sere_collide* c, const sere_collide_state* s, int32_t k )
+{
+	float sum = ( c->weight[0][k] + c->weight[1][k] ) + c->weight[2][k];
+	for ( int r = 0; r < 4; ++r )
+	{
+		int32_t m = c->member[r][k];
+		sum += ( s->x0[m] + s->y0[m] ) + s->z0[m];
+	}
+	return sum;
+}
+
 static bool params_valid( const sere_collide_params* p )
 {
 	return p != NULL && p->thickness > 0.0f && isfinite( p->thickness ) && p->dt > 0.0f && isfinite( p->dt ) &&
@@ -334,23 +412,33 @@ static bool params_valid( const sere_collide_params* p )
 /* Loads the touched vertices' positions into records (checking the inputs the response reads)
  * and zeroes their accumulated moves; W = w_p + Σ w_k b_k² (or Σ over the edge ends of w times the
  * squared weight on the edge) with the weights of detection, fixed for the response. Nonzero when
- * an input is not finite. */
+ * an input is not finite. The floor (touch) adds up what the checks load, into *sink, and the
+ * loads of W into its place. */
 static int load_response( sere_collide* collide, const sere_collide_state* state, int32_t vertex_contacts,
-						  int32_t contacts, bool parallel )
+						  int32_t contacts, bool parallel, bool touch, float* sink )
 {
 	int32_t touched = collide->touched_count;
 	const float* inv_m = state->inv_m;
 	int bad = 0;
+	float sum = 0.0f;
 #pragma omp parallel num_threads( sere_team_for( collide->threads ) ) if ( parallel )
 	{
-#pragma omp for reduction( | : bad ) schedule( static ) nowait
+#pragma omp for reduction( | : bad ) reduction( + : sum ) schedule( static ) nowait
 		for ( int32_t j = 0; j < touched; ++j )
 		{
 			int32_t i = collide->touched[j];
-			bad |= !( isfinite( state->vx[i] ) && isfinite( state->vy[i] ) && isfinite( state->vz[i] ) &&
-					  isfinite( inv_m[i] ) && inv_m[i] >= 0.0f );
-			bad |= state->x0 != NULL &&
-				   !( isfinite( state->x0[i] ) && isfinite( state->y0[i] ) && isfinite( state->z0[i] ) );
+			if ( touch )
+			{
+				sum += ( ( state->vx[i] + state->vy[i] ) + ( state->vz[i] + inv_m[i] ) ) +
+					   ( state->x0 != NULL ? ( state->x0[i] + state->y0[i] ) + state->z0[i] : 0.0f );
+			}
+			else
+			{
+				bad |= !( isfinite( state->vx[i] ) && isfinite( state->vy[i] ) && isfinite( state->vz[i] ) &&
+						  isfinite( inv_m[i] ) && inv_m[i] >= 0.0f );
+				bad |= state->x0 != NULL &&
+					   !( isfinite( state->x0[i] ) && isfinite( state->y0[i] ) && isfinite( state->z0[i] ) );
+			}
 			float* position = collide->position + 4 * (size_t) i;
 			position[0] = state->x[i], position[1] = state->y[i], position[2] = state->z[i], position[3] = 0.0f;
 			float* acc = collide->acc + 4 * (size_t) j;
@@ -361,6 +449,12 @@ static int load_response( sere_collide* collide, const sere_collide_state* state
 		{
 			int32_t* const* m = collide->member;
 			float u = collide->weight[0][k], v = collide->weight[1][k], w = collide->weight[2][k];
+			if ( touch )
+			{
+				collide->inv_weight[k] =
+					( ( inv_m[m[0][k]] + inv_m[m[1][k]] ) + ( inv_m[m[2][k]] + inv_m[m[3][k]] ) ) + ( ( u + v ) + w );
+				continue;
+			}
 			float weight =
 				k < vertex_contacts
 					? inv_m[m[0][k]] + inv_m[m[1][k]] * u * u + inv_m[m[2][k]] * v * v + inv_m[m[3][k]] * w * w
@@ -369,14 +463,16 @@ static int load_response( sere_collide* collide, const sere_collide_state* state
 			collide->inv_weight[k] = weight > 0.0f ? 1.0f / weight : 0.0f;
 		}
 	}
+	*sink += sum;
 	return bad;
 }
 
 /* Evaluates the calling thread's share of the evaluation blocks (a static share: a worksharing
  * loop inside the caller's parallel region) and returns how many of its contacts push by more
- * than the tolerance. */
+ * than the tolerance. With pushes (a served pass's record, this evaluation's flags), records each
+ * block's push flags, or the floor (touch) evaluates by them (touch_evaluate) and returns 0. */
 static int32_t evaluate_share( sere_collide* collide, int32_t blocks, int32_t vertex_blocks, int32_t contacts, float h2,
-							   float tolerance )
+							   float tolerance, uint8_t* pushes, bool touch )
 {
 	int32_t vertex_contacts = collide->contact_count;
 	int32_t mine = 0;
@@ -387,31 +483,54 @@ static int32_t evaluate_share( sere_collide* collide, int32_t blocks, int32_t ve
 		int32_t begin = vertex ? block * EVALUATE_BLOCK : vertex_contacts + ( block - vertex_blocks ) * EVALUATE_BLOCK;
 		int32_t last = vertex ? vertex_contacts : contacts;
 		int32_t end = begin + EVALUATE_BLOCK < last ? begin + EVALUATE_BLOCK : last;
+		uint8_t* flags = pushes != NULL ? pushes + (size_t) block * PUSH_BYTES : NULL;
+		if ( touch )
+		{
+			touch_evaluate( collide, begin, end, vertex, flags );
+			continue;
+		}
 		mine += vertex ? evaluate_contacts( collide, begin, end, h2, tolerance )
 					   : evaluate_edges( collide, begin, end, h2, tolerance );
+		if ( flags != NULL )
+		{
+			record_pushes( collide, begin, end, flags );
+		}
 	}
 	return mine;
 }
 
 /* Writes the touched slots [begin, end) back: the moved positions, and velocities changed by the
- * accumulated move over dt. */
-static void write_back( const sere_collide* collide, const sere_collide_state* state, int32_t begin, int32_t end,
-						float inv_dt )
+ * accumulated move over dt. The floor (touch) stores the velocities as they are (times one) and
+ * returns the sum of the moves it loads (0 otherwise). */
+static float write_back( const sere_collide* collide, const sere_collide_state* state, int32_t begin, int32_t end,
+						 float inv_dt, bool touch, float one )
 {
+	float sum = 0.0f;
 	for ( int32_t j = begin; j < end; ++j )
 	{
 		int32_t i = collide->touched[j];
 		const float* position = collide->position + 4 * (size_t) i;
 		const float* acc = collide->acc + 4 * (size_t) j;
 		state->x[i] = position[0], state->y[i] = position[1], state->z[i] = position[2];
+		if ( touch )
+		{
+			sum += ( acc[0] + acc[1] ) + acc[2];
+			state->vx[i] *= one, state->vy[i] *= one, state->vz[i] *= one;
+			continue;
+		}
 		state->vx[i] += acc[0] * inv_dt;
 		state->vy[i] += acc[1] * inv_dt;
 		state->vz[i] += acc[2] * inv_dt;
 	}
+	return sum;
 }
 
+/* The response; with a record (sere_collide_record_served), also recording what each evaluation
+ * pushed, or, touch, the floor of the recorded response (sere_collide_touch_served): its passes
+ * for the evaluations it ran, with the pushes read from the record. */
 static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
-							const sere_collide_params* params, int32_t* unresolved, int32_t* iterations )
+							const sere_collide_params* params, collide_record* record, bool touch, int32_t* unresolved,
+							int32_t* iterations )
 {
 	if ( collide == NULL || bvh == NULL || !state_valid( state ) || !params_valid( params ) )
 	{
@@ -430,7 +549,8 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	 * is the same either way. */
 	bool parallel = contacts >= RESPOND_PARALLEL;
 	const float* inv_m = state->inv_m;
-	int bad = load_response( collide, state, vertex_contacts, contacts, parallel );
+	float loads = 0.0f, one = record != NULL ? record->one : 1.0f;
+	int bad = load_response( collide, state, vertex_contacts, contacts, parallel, touch, &loads );
 	if ( bad )
 	{
 		return SERE_ERR_NONFINITE;
@@ -441,6 +561,8 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 	/* evaluation blocks of each kind, the edge–edge ones after the others */
 	int32_t vertex_blocks = ( vertex_contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
 	int32_t blocks = vertex_blocks + ( contacts - vertex_contacts + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK;
+	/* the floor's last evaluation is the recorded one's */
+	int32_t last = touch ? record->evaluations - 1 : params->iterations;
 	int32_t remaining = 0, applied = 0;
 	int32_t* far = collide->far_count;
 	int threads = sere_team_for( collide->threads );
@@ -450,6 +572,7 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 #pragma omp parallel num_threads( threads ) if ( parallel )
 	{
 		int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		float sink = 0.0f; /* the floor's sums of what it loads */
 		int32_t mine_begin = touched_split( collide, tid, team ), mine_end = touched_split( collide, tid + 1, team );
 		/* the sides, only now that every input is known to be finite (an error leaves them) */
 		if ( state->x0 != NULL )
@@ -458,14 +581,17 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			for ( int32_t k = 0; k < contacts; ++k )
 			{
 				bool vertex = k < vertex_contacts;
-				float side = history_side( collide, state, k, vertex );
+				float side = touch ? collide->contact_side[k] * one : history_side( collide, state, k, vertex );
+				sink += touch ? history_loads( collide, state, k ) : 0.0f;
 				collide->contact_side[k] = side;
 				*( vertex ? &collide->contacts[k].side : &collide->edge_contacts[k - vertex_contacts].side ) = side;
 			}
 		}
-		for ( int32_t it = 0; it <= params->iterations; ++it )
+		for ( int32_t it = 0; it <= last; ++it )
 		{
-			int32_t mine = evaluate_share( collide, blocks, vertex_blocks, contacts, h2, tolerance );
+			uint8_t* pushes =
+				record != NULL ? record->pushes + (size_t) it * (size_t) blocks * (size_t) PUSH_BYTES : NULL;
+			int32_t mine = evaluate_share( collide, blocks, vertex_blocks, contacts, h2, tolerance, pushes, touch );
 			far[tid * FAR_STRIDE] = mine;
 #pragma omp barrier
 			int32_t total = 0;
@@ -475,21 +601,20 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			}
 			/* every contact within the tolerance, or the iterations spent (the last evaluation
 			 * only counts what is left): the same decision on every thread */
-			if ( total == 0 || it == params->iterations )
+			if ( ( total == 0 && !touch ) || it == last )
 			{
 #pragma omp single nowait
 				remaining = total;
 				break;
 			}
-			share_pushes( collide, mine_begin, mine_end, contacts );
-			int32_t j = mine_begin;
-			for ( ; j + 1 < mine_end; j += 2 )
+			share_pushes( collide, mine_begin, mine_end, contacts, touch );
+			if ( touch )
 			{
-				gather_apply_pair( collide, j, inv_m, params->relaxation );
+				gather_run( collide, mine_begin, mine_end, inv_m, params->relaxation, true, one );
 			}
-			if ( j < mine_end )
+			else
 			{
-				gather_apply( collide, j, inv_m, params->relaxation );
+				gather_run( collide, mine_begin, mine_end, inv_m, params->relaxation, false, one );
 			}
 			/* also keeps far[] from being rewritten before all have read it */
 #pragma omp barrier
@@ -497,7 +622,16 @@ static sere_status respond( sere_collide* collide, const sere_bvh* bvh, const se
 			applied += 1;
 		}
 		/* the gather's share: each thread reads the sums it wrote */
-		write_back( collide, state, mine_begin, mine_end, inv_dt );
+		sink += write_back( collide, state, mine_begin, mine_end, inv_dt, touch, one );
+		if ( touch )
+		{
+#pragma omp atomic
+			record->sink += sink;
+		}
+	}
+	if ( touch )
+	{
+		record->sink += loads;
 	}
 	*unresolved = remaining;
 	*iterations = applied;
@@ -508,7 +642,7 @@ sere_status sere_collide_respond( sere_collide* collide, const sere_bvh* bvh, co
 								  const sere_collide_params* params, int32_t* unresolved )
 {
 	int32_t remaining, iterations;
-	sere_status status = respond( collide, bvh, state, params, &remaining, &iterations );
+	sere_status status = respond( collide, bvh, state, params, NULL, false, &remaining, &iterations );
 	if ( status == SERE_OK && unresolved != NULL )
 	{
 		*unresolved = remaining;
@@ -561,12 +695,92 @@ sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const se
 			break;
 		}
 		int32_t iterations = 0;
-		status = respond( collide, bvh, state, params, &local.unresolved, &iterations );
+		status = respond( collide, bvh, state, params, NULL, false, &local.unresolved, &iterations );
 		local.iterations += iterations;
 	}
 	if ( stats != NULL )
 	{
 		*stats = local;
+	}
+	return status;
+}
+
+/* The response's part of a served pass's traffic over `evaluations` evaluations: every contact at
+ * each, every gather entry at each but the last. */
+static void response_traffic( const sere_collide* collide, int32_t evaluations, sere_collide_traffic* traffic )
+{
+	traffic->evaluated = ( (int64_t) collide->contact_count + collide->edge_contact_count ) * evaluations;
+	traffic->gathered =
+		evaluations > 0 ? (int64_t) collide->entry_offset[collide->vertex_count] * ( evaluations - 1 ) : 0;
+}
+
+sere_status sere_collide_record_served( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+										const sere_collide_params* params, sere_collide_traffic* traffic )
+{
+	if ( collide == NULL || bvh == NULL || !state_valid( state ) || !params_valid( params ) || params->rounds != 1 ||
+		 !sere_coll_list_serves( collide, bvh, state->x, state->y, state->z, params->thickness ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	/* the record, with room for every evaluation's push flags of as many contacts as the capacity
+	 * holds, before the pass changes anything */
+	if ( collide->record == NULL && ( collide->record = sere_alloc( sizeof( collide_record ) ) ) == NULL )
+	{
+		return SERE_ERR_MEMORY;
+	}
+	collide_record* record = collide->record;
+	size_t blocks = 2 * (size_t) ( ( collide->capacity + EVALUATE_BLOCK - 1 ) / EVALUATE_BLOCK );
+	size_t bytes = ( (size_t) params->iterations + 1 ) * blocks * PUSH_BYTES;
+	if ( record->push_capacity < bytes )
+	{
+		record->valid = false;
+		sere_free( record->pushes );
+		record->pushes = sere_alloc( bytes );
+		record->push_capacity = record->pushes != NULL ? bytes : 0;
+		if ( record->pushes == NULL )
+		{
+			return SERE_ERR_MEMORY;
+		}
+	}
+	sere_collide_traffic moved;
+	sere_status status =
+		sere_coll_record_detect( collide, bvh, state->x, state->y, state->z, params->thickness, 1, &moved );
+	if ( status == SERE_OK && collide->contact_count + collide->edge_contact_count > 0 )
+	{
+		int32_t unresolved, applied;
+		status = respond( collide, bvh, state, params, record, false, &unresolved, &applied );
+		record->evaluations = applied + 1;
+	}
+	record->valid = record->valid && status == SERE_OK;
+	record->params = *params;
+	if ( status == SERE_OK && traffic != NULL )
+	{
+		response_traffic( collide, record->evaluations, &moved );
+		*traffic = moved;
+	}
+	return status;
+}
+
+sere_status sere_collide_touch_served( sere_collide* collide, const sere_bvh* bvh, const sere_collide_state* state,
+									   sere_collide_traffic* traffic )
+{
+	if ( !state_valid( state ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sere_collide_traffic moved;
+	sere_status status = sere_coll_touch_detect( collide, bvh, state->x, state->y, state->z, true, &moved );
+	int32_t evaluations = 0;
+	if ( status == SERE_OK && collide->record->evaluations > 0 )
+	{
+		int32_t unresolved, applied;
+		status = respond( collide, bvh, state, &collide->record->params, collide->record, true, &unresolved, &applied );
+		evaluations = applied + 1;
+	}
+	if ( status == SERE_OK && traffic != NULL )
+	{
+		response_traffic( collide, evaluations, &moved );
+		*traffic = moved;
 	}
 	return status;
 }

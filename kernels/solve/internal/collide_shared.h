@@ -61,6 +61,9 @@
 /* Contacts evaluated per work item of the response (a static share of whole blocks per thread). */
 #define EVALUATE_BLOCK 256
 
+/* A recorded evaluation block's push flags (collide_record.pushes): a byte for eight contacts. */
+#define PUSH_BYTES ( EVALUATE_BLOCK / 8 )
+
 /* Per-thread counters one cache line apart, so that two threads' writes never share a line. */
 #define FAR_STRIDE 16
 
@@ -88,20 +91,28 @@ typedef struct collide_run
 	float sink;			 /* replaying: the sum of the records gathered (keeps the loads) */
 } collide_run;
 
-/* The recorded search the floor replays: its runs of blocks (run r is thread r's, blocks
- * run_first[r] .. run_first[r + 1]), the tree build and workspace state it was made in. */
+/* The recorded detection the floor replays: its runs of blocks (run r is thread r's, blocks
+ * run_first[r] .. run_first[r + 1]), the tree build and workspace state it was made in; for a
+ * served pass (sere_collide_record_served), also what its response decided. */
 typedef struct collide_record
 {
 	collide_run run[SERE_MAX_THREADS];
 	int32_t run_first[SERE_MAX_THREADS + 1];
 	int32_t runs;
 	bool valid;
+	bool served;		 /* a detection the candidate list served, then its response; else a search */
 	uint64_t generation; /* sere_bvh_generation at the recording */
 	uint64_t state;		 /* sere_collide.state at the recording */
-	float thickness;	 /* the recorded search's */
-	bool listed;		 /* its candidate list was whole: it kept the positions (keep_list) */
+	float thickness;	 /* the recorded detection's */
+	bool listed;		 /* a search whose candidate list was whole: it kept the positions (keep_list) */
 	float one;			 /* 1.0f, opaque to the compiler so the floor keeps its stores */
-	float sink;			 /* the edge-across and list-position passes' sums */
+	float sink;			 /* the sums of the passes outside the runs */
+	/* The served pass's response: its parameters, the evaluations it ran (0 without a response)
+	 * and each evaluation's push flags, a bit a contact, PUSH_BYTES a block of contacts. */
+	sere_collide_params params;
+	int32_t evaluations;
+	uint8_t* pushes;
+	size_t push_capacity;
 } collide_record;
 
 struct sere_collide
@@ -653,3 +664,15 @@ bool sere_coll_list_serves( const sere_collide* collide, const sere_bvh* bvh, co
  * the same positions, tree and thickness) or to find out (−1). */
 sere_status sere_coll_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 							  const float* z, float thickness, int served, int32_t* contact_count );
+
+/* sere_coll_detect recording into the workspace's record (made here if need be) for the floor: a search
+ * (served 0: sere_collide_record_search) or a detection the list serves (served 1, which the
+ * caller has checked). traffic (may be NULL) gets what it moved. */
+sere_status sere_coll_record_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									 const float* z, float thickness, int served, sere_collide_traffic* traffic );
+
+/* The floor of the recorded detection: the search's (sere_collide_touch_search), or the served
+ * one's with the check that the list serves before it (served). SERE_ERR_ARGUMENT, nothing done,
+ * when the record is of the other kind or does not replay the workspace as it is. */
+sere_status sere_coll_touch_detect( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
+									const float* z, bool served, sere_collide_traffic* traffic );
