@@ -211,23 +211,48 @@ void BM_skeleton_skin_eigen( benchmark::State& state )
 	rate( state, "vertices/s", s->vertex_count );
 }
 
+// Times the banding of n queries against a grid over the joints on state.range( 0 ) threads, or
+// with floor its memory floor: sere_joint_grid_touch_band after an untimed
+// sere_joint_grid_record_band, the same cells and joint records read in the same order with sums
+// for the distances. Both report the recorded traffic a query: the cells the ring searches opened,
+// the joint records read and the share of queries their cell's candidate list answered.
+void band_loop( benchmark::State& state, const float* jx, const float* jy, const float* jz, int32_t joints,
+				const float* x, const float* y, const float* z, int32_t n, bool floor )
+{
+	omp_set_num_threads( (int) state.range( 0 ) );
+	sere_joint_grid* grid;
+	check( sere_joint_grid_create( jx, jy, jz, joints, &grid ), "grid" );
+	std::vector<int32_t> joint( (size_t) n );
+	sere_joint_grid_traffic traffic;
+	check( sere_joint_grid_record_band( grid, x, y, z, n, joint.data(), &traffic ), "record" );
+	for ( auto _ : state )
+	{
+		check( floor ? sere_joint_grid_touch_band( grid, x, y, z, n, joint.data(), nullptr )
+					 : sere_joint_grid_band( grid, nullptr, nullptr, nullptr, x, y, z, n, joint.data(), nullptr,
+											 nullptr, nullptr ),
+			   floor ? "touch" : "band" );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "queries/s", n );
+	state.counters["cells/query"] = (double) traffic.cells / n;
+	state.counters["joints/query"] = (double) traffic.joints / n;
+	state.counters["listed"] = (double) traffic.listed / n;
+	sere_joint_grid_destroy( grid );
+}
+
 // Banding one leaf (Sec. 5.2): its ~5,000 vertices against its 45 joints.
 void BM_skeleton_band_leaf( benchmark::State& state )
 {
-	omp_set_num_threads( (int) state.range( 0 ) );
 	Plant& p = plant();
-	sere_joint_grid* grid;
-	check( sere_joint_grid_create( p.skeleton.x, p.skeleton.y, p.skeleton.z, p.skeleton.joint_count, &grid ), "grid" );
-	std::vector<int32_t> joint( (size_t) p.mesh.vertex_count );
-	for ( auto _ : state )
-	{
-		check( sere_joint_grid_band( grid, nullptr, nullptr, nullptr, p.mesh.x, p.mesh.y, p.mesh.z, p.mesh.vertex_count,
-									 joint.data(), nullptr, nullptr, nullptr ),
-			   "band" );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "queries/s", p.mesh.vertex_count );
-	sere_joint_grid_destroy( grid );
+	band_loop( state, p.skeleton.x, p.skeleton.y, p.skeleton.z, p.skeleton.joint_count, p.mesh.x, p.mesh.y, p.mesh.z,
+			   p.mesh.vertex_count, false );
+}
+
+void BM_skeleton_band_leaf_floor( benchmark::State& state )
+{
+	Plant& p = plant();
+	band_loop( state, p.skeleton.x, p.skeleton.y, p.skeleton.z, p.skeleton.joint_count, p.mesh.x, p.mesh.y, p.mesh.z,
+			   p.mesh.vertex_count, true );
 }
 
 void BM_skeleton_band_leaf_ref( benchmark::State& state )
@@ -244,25 +269,21 @@ void BM_skeleton_band_leaf_ref( benchmark::State& state )
 }
 
 // Banding at plant scale, where the index matters: every plant vertex against all 4,500 joints.
-// The brute-force twin scans a 1-in-25 sample of the queries (its rate is per query).
 void BM_skeleton_band_plant( benchmark::State& state )
 {
-	omp_set_num_threads( (int) state.range( 0 ) );
 	sere_plant* s = plant().plant;
-	sere_joint_grid* grid;
-	check( sere_joint_grid_create( s->joints.x, s->joints.y, s->joints.z, s->joints.joint_count, &grid ), "grid" );
-	std::vector<int32_t> joint( (size_t) s->vertex_count );
-	for ( auto _ : state )
-	{
-		check( sere_joint_grid_band( grid, nullptr, nullptr, nullptr, s->rx, s->ry, s->rz, s->vertex_count,
-									 joint.data(), nullptr, nullptr, nullptr ),
-			   "band" );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "queries/s", s->vertex_count );
-	sere_joint_grid_destroy( grid );
+	band_loop( state, s->joints.x, s->joints.y, s->joints.z, s->joints.joint_count, s->rx, s->ry, s->rz,
+			   s->vertex_count, false );
 }
 
+void BM_skeleton_band_plant_floor( benchmark::State& state )
+{
+	sere_plant* s = plant().plant;
+	band_loop( state, s->joints.x, s->joints.y, s->joints.z, s->joints.joint_count, s->rx, s->ry, s->rz,
+			   s->vertex_count, true );
+}
+
+// The brute-force twin scans a 1-in-25 sample of the queries (its rate is per query).
 void BM_skeleton_band_plant_ref( benchmark::State& state )
 {
 	sere_plant* s = plant().plant;
@@ -419,8 +440,10 @@ BENCHMARK( BM_skeleton_skin_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_skin_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_skin_eigen )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_leaf )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK( BM_skeleton_band_leaf_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_leaf_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK( BM_skeleton_band_plant_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant_embree )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_pose )->Arg( 1 )->Arg( 2 )->UseRealTime();

@@ -6,6 +6,7 @@
 #include "wilt/skeleton.h"
 
 #include <math.h>
+#include <string.h>
 
 #define PI 3.14159265358979323846
 
@@ -52,6 +53,16 @@ static inline void sere_skel_mat_vec( const double m[9], const double v[3], doub
 	{
 		out[r] = m[3 * r] * v[0] + m[3 * r + 1] * v[1] + m[3 * r + 2] * v[2];
 	}
+}
+
+/* A float's bits, for the floor (sere_joint_grid_touch_band): integer sums of what it reads
+ * chain one cycle of latency an add, where float sums would chain four and the floor would time
+ * its own sums. */
+static inline uint32_t sere_skel_float_bits( float f )
+{
+	uint32_t u;
+	memcpy( &u, &f, sizeof( u ) );
+	return u;
 }
 
 /* The spline through p resampled every `spacing` (at least min_pieces pieces); NULL on
