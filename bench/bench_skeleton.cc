@@ -381,8 +381,12 @@ void BM_skeleton_band_plant_embree( benchmark::State& state )
 }
 
 // Forward kinematics of every leaf (Sec. 6, Lu Eq. 1 with the droop and angle limits): sequential
-// per leaf, leaves in parallel.
-void BM_skeleton_pose( benchmark::State& state )
+// per leaf, leaves in parallel; or with floor its memory floor, sere_skeleton_touch_pose after an
+// untimed sere_skeleton_record_pose of each leaf: the same reads and writes of the skeleton, the
+// work and the frames in the same order, with sums for the rotations and the limits. Both report
+// the share of joints whose segment turns and the rest positions the droop limit reads a joint (the
+// turning joint's subtree).
+void pose_loop( benchmark::State& state, bool floor )
 {
 	omp_set_num_threads( (int) state.range( 0 ) );
 	Plant& p = plant();
@@ -390,19 +394,53 @@ void BM_skeleton_pose( benchmark::State& state )
 	sere_wilt_params params = p.params;
 	params.droop_max = 3.0f;
 	sere_joint_frames f;
-	check( sere_joint_frames_create( &f, s->joints.joint_count ), "frames" );
+	const int32_t joints = s->joints.joint_count;
+	check( sere_joint_frames_create( &f, joints ), "frames" );
+	std::vector<uint8_t> turned( (size_t) joints );
+	for ( int32_t k = 0; k < s->leaf_count; ++k )
+	{
+		int32_t first = s->joint_first[k];
+		check( sere_skeleton_record_pose( &s->joints, first, s->joint_first[k + 1] - first, 0.6f, &params, &f,
+										  turned.data(), nullptr ),
+			   "record" );
+	}
+	int64_t turning = 0, subtree = 0;
+	for ( int32_t i = 0; i < joints; ++i )
+	{
+		turning += turned[(size_t) i];
+		subtree += turned[(size_t) i] ? s->joints.end[i] - i : 0;
+	}
 	for ( auto _ : state )
 	{
 #pragma omp parallel for schedule( dynamic, 1 )
 		for ( int32_t k = 0; k < s->leaf_count; ++k )
 		{
-			int32_t first = s->joint_first[k];
-			sere_skeleton_pose( &s->joints, first, s->joint_first[k + 1] - first, 0.6f, &params, &f, nullptr );
+			int32_t first = s->joint_first[k], count = s->joint_first[k + 1] - first;
+			if ( floor )
+			{
+				sere_skeleton_touch_pose( &s->joints, first, count, &params, turned.data(), &f );
+			}
+			else
+			{
+				sere_skeleton_pose( &s->joints, first, count, 0.6f, &params, &f, nullptr );
+			}
 		}
 		benchmark::ClobberMemory();
 	}
-	rate( state, "joints/s", s->joints.joint_count );
+	rate( state, "joints/s", joints );
+	state.counters["turning"] = (double) turning / joints;
+	state.counters["droop_reads/joint"] = (double) subtree / joints;
 	sere_joint_frames_destroy( &f );
+}
+
+void BM_skeleton_pose( benchmark::State& state )
+{
+	pose_loop( state, false );
+}
+
+void BM_skeleton_pose_floor( benchmark::State& state )
+{
+	pose_loop( state, true );
 }
 
 // One frame of the plant at plant time 0.6, most leaves mid-wilt. With the piercing check a
@@ -447,6 +485,7 @@ BENCHMARK( BM_skeleton_band_plant_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant_embree )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_pose )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK( BM_skeleton_pose_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_plant_frame )
 	->ArgsProduct( { { 1, 2 }, { 0, 1 } } )
 	->ArgNames( { "threads", "pierce" } )

@@ -235,6 +235,27 @@ typedef struct sere_pose_stats
 sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
 								const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats );
 
+/* sere_skeleton_pose (the same frames, bits and stats) that also records, for
+ * sere_skeleton_touch_pose, whether each joint's segment turned: turned[i] for i in [first,
+ * first + count) is 1 when it did (and the pose ran its limits), else 0. */
+sere_status sere_skeleton_record_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
+									   const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+									   sere_pose_stats* stats );
+
+/* The memory floor of a recorded pose (benchmarks): the pose's two passes over the joints in the
+ * same order, with sums in place of the rotations, the limits and the trigonometry. Per joint it
+ * reads the parent index, the rest positions of the joint and its parent, the onset rank and bend
+ * and the parent's posed frame (12 doubles of work), and stores the joint's 12 doubles of work;
+ * for a segment turned reads, as the limits do, the grandparent's posed position (when the minimal
+ * angle applies: same vein, min_angle > 0) and the rest positions of the joint's subtree (when
+ * droop_max is finite); then rounds work to the frames as the pose does. Each store keeps the value
+ * already there (times a 1 the compiler cannot see), which reads the joint's work first, a read the
+ * pose does not make. Leaves frames (work included) bitwise as they were. Errors as
+ * sere_skeleton_pose's (but t's, which it does not take), SERE_ERR_ARGUMENT for a NULL turned. */
+sere_status sere_skeleton_touch_pose( const sere_skeleton* skeleton, int32_t first, int32_t count,
+									  const sere_wilt_params* params, const uint8_t* turned,
+									  sere_joint_frames* frames );
+
 /* The mesh follows its joints (Sec. 6): x = p_j + R_j o for every vertex, on `threads` threads
  * (core/base.h). Fastest when vertices of one joint are adjacent (runs share one transform);
  * correct in any order. */

@@ -55,13 +55,20 @@ static inline void sere_skel_mat_vec( const double m[9], const double v[3], doub
 	}
 }
 
-/* A float's bits, for the floor (sere_joint_grid_touch_band): integer sums of what it reads
- * chain one cycle of latency an add, where float sums would chain four and the floor would time
- * its own sums. */
+/* A float's and a double's bits, for the floors (sere_joint_grid_touch_band,
+ * sere_skeleton_touch_pose): integer sums of what they read chain one cycle of latency an add,
+ * where float sums would chain four and the floor would time its own sums. */
 static inline uint32_t sere_skel_float_bits( float f )
 {
 	uint32_t u;
 	memcpy( &u, &f, sizeof( u ) );
+	return u;
+}
+
+static inline uint64_t sere_skel_double_bits( double d )
+{
+	uint64_t u;
+	memcpy( &u, &d, sizeof( u ) );
 	return u;
 }
 
@@ -99,9 +106,11 @@ sere_status sere_skel_create( sere_skeleton* s, int32_t joint_count );
 sere_status sere_skel_check_wilt_params( const sere_wilt_params* p );
 
 /* Sec. 6, Lu Eq. 1: poses joints [first, first + count) for wilting parameter t (see
- * sere_skeleton_pose, which checks the arguments). */
+ * sere_skeleton_pose, which checks the arguments); when turned is not NULL, records there which
+ * segments turn (sere_skeleton_record_pose). */
 void sere_skel_pose_range( const sere_skeleton* s, int32_t first, int32_t count, float t,
-						   const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats );
+						   const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+						   sere_pose_stats* stats );
 
 /* Back at the rest pose: no vertex is left short of its target. */
 void sere_skel_pierce_rest( sere_pierce* pierce );
