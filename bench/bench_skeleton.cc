@@ -211,23 +211,48 @@ void BM_skeleton_skin_eigen( benchmark::State& state )
 	rate( state, "vertices/s", s->vertex_count );
 }
 
+// Times the banding of n queries against a grid over the joints on state.range( 0 ) threads, or
+// with floor its memory floor: sere_joint_grid_touch_band after an untimed
+// sere_joint_grid_record_band, the same cells and joint records read in the same order with sums
+// for the distances. Both report the recorded traffic a query: the cells the ring searches opened,
+// the joint records read and the share of queries their cell's candidate list answered.
+void band_loop( benchmark::State& state, const float* jx, const float* jy, const float* jz, int32_t joints,
+				const float* x, const float* y, const float* z, int32_t n, bool floor )
+{
+	omp_set_num_threads( (int) state.range( 0 ) );
+	sere_joint_grid* grid;
+	check( sere_joint_grid_create( jx, jy, jz, joints, &grid ), "grid" );
+	std::vector<int32_t> joint( (size_t) n );
+	sere_joint_grid_traffic traffic;
+	check( sere_joint_grid_record_band( grid, x, y, z, n, joint.data(), &traffic ), "record" );
+	for ( auto _ : state )
+	{
+		check( floor ? sere_joint_grid_touch_band( grid, x, y, z, n, joint.data(), nullptr )
+					 : sere_joint_grid_band( grid, nullptr, nullptr, nullptr, x, y, z, n, joint.data(), nullptr,
+											 nullptr, nullptr ),
+			   floor ? "touch" : "band" );
+		benchmark::ClobberMemory();
+	}
+	rate( state, "queries/s", n );
+	state.counters["cells/query"] = (double) traffic.cells / n;
+	state.counters["joints/query"] = (double) traffic.joints / n;
+	state.counters["listed"] = (double) traffic.listed / n;
+	sere_joint_grid_destroy( grid );
+}
+
 // Banding one leaf (Sec. 5.2): its ~5,000 vertices against its 45 joints.
 void BM_skeleton_band_leaf( benchmark::State& state )
 {
-	omp_set_num_threads( (int) state.range( 0 ) );
 	Plant& p = plant();
-	sere_joint_grid* grid;
-	check( sere_joint_grid_create( p.skeleton.x, p.skeleton.y, p.skeleton.z, p.skeleton.joint_count, &grid ), "grid" );
-	std::vector<int32_t> joint( (size_t) p.mesh.vertex_count );
-	for ( auto _ : state )
-	{
-		check( sere_joint_grid_band( grid, nullptr, nullptr, nullptr, p.mesh.x, p.mesh.y, p.mesh.z, p.mesh.vertex_count,
-									 joint.data(), nullptr, nullptr, nullptr ),
-			   "band" );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "queries/s", p.mesh.vertex_count );
-	sere_joint_grid_destroy( grid );
+	band_loop( state, p.skeleton.x, p.skeleton.y, p.skeleton.z, p.skeleton.joint_count, p.mesh.x, p.mesh.y, p.mesh.z,
+			   p.mesh.vertex_count, false );
+}
+
+void BM_skeleton_band_leaf_floor( benchmark::State& state )
+{
+	Plant& p = plant();
+	band_loop( state, p.skeleton.x, p.skeleton.y, p.skeleton.z, p.skeleton.joint_count, p.mesh.x, p.mesh.y, p.mesh.z,
+			   p.mesh.vertex_count, true );
 }
 
 void BM_skeleton_band_leaf_ref( benchmark::State& state )
@@ -244,25 +269,21 @@ void BM_skeleton_band_leaf_ref( benchmark::State& state )
 }
 
 // Banding at plant scale, where the index matters: every plant vertex against all 4,500 joints.
-// The brute-force twin scans a 1-in-25 sample of the queries (its rate is per query).
 void BM_skeleton_band_plant( benchmark::State& state )
 {
-	omp_set_num_threads( (int) state.range( 0 ) );
 	sere_plant* s = plant().plant;
-	sere_joint_grid* grid;
-	check( sere_joint_grid_create( s->joints.x, s->joints.y, s->joints.z, s->joints.joint_count, &grid ), "grid" );
-	std::vector<int32_t> joint( (size_t) s->vertex_count );
-	for ( auto _ : state )
-	{
-		check( sere_joint_grid_band( grid, nullptr, nullptr, nullptr, s->rx, s->ry, s->rz, s->vertex_count,
-									 joint.data(), nullptr, nullptr, nullptr ),
-			   "band" );
-		benchmark::ClobberMemory();
-	}
-	rate( state, "queries/s", s->vertex_count );
-	sere_joint_grid_destroy( grid );
+	band_loop( state, s->joints.x, s->joints.y, s->joints.z, s->joints.joint_count, s->rx, s->ry, s->rz,
+			   s->vertex_count, false );
 }
 
+void BM_skeleton_band_plant_floor( benchmark::State& state )
+{
+	sere_plant* s = plant().plant;
+	band_loop( state, s->joints.x, s->joints.y, s->joints.z, s->joints.joint_count, s->rx, s->ry, s->rz,
+			   s->vertex_count, true );
+}
+
+// The brute-force twin scans a 1-in-25 sample of the queries (its rate is per query).
 void BM_skeleton_band_plant_ref( benchmark::State& state )
 {
 	sere_plant* s = plant().plant;
@@ -360,8 +381,12 @@ void BM_skeleton_band_plant_embree( benchmark::State& state )
 }
 
 // Forward kinematics of every leaf (Sec. 6, Lu Eq. 1 with the droop and angle limits): sequential
-// per leaf, leaves in parallel.
-void BM_skeleton_pose( benchmark::State& state )
+// per leaf, leaves in parallel; or with floor its memory floor, sere_skeleton_touch_pose after an
+// untimed sere_skeleton_record_pose of each leaf: the same reads and writes of the skeleton, the
+// work and the frames in the same order, with sums for the rotations and the limits. Both report
+// the share of joints whose segment turns and the rest positions the droop limit reads a joint (the
+// turning joint's subtree).
+void pose_loop( benchmark::State& state, bool floor )
 {
 	omp_set_num_threads( (int) state.range( 0 ) );
 	Plant& p = plant();
@@ -369,19 +394,53 @@ void BM_skeleton_pose( benchmark::State& state )
 	sere_wilt_params params = p.params;
 	params.droop_max = 3.0f;
 	sere_joint_frames f;
-	check( sere_joint_frames_create( &f, s->joints.joint_count ), "frames" );
+	const int32_t joints = s->joints.joint_count;
+	check( sere_joint_frames_create( &f, joints ), "frames" );
+	std::vector<uint8_t> turned( (size_t) joints );
+	for ( int32_t k = 0; k < s->leaf_count; ++k )
+	{
+		int32_t first = s->joint_first[k];
+		check( sere_skeleton_record_pose( &s->joints, first, s->joint_first[k + 1] - first, 0.6f, &params, &f,
+										  turned.data(), nullptr ),
+			   "record" );
+	}
+	int64_t turning = 0, subtree = 0;
+	for ( int32_t i = 0; i < joints; ++i )
+	{
+		turning += turned[(size_t) i];
+		subtree += turned[(size_t) i] ? s->joints.end[i] - i : 0;
+	}
 	for ( auto _ : state )
 	{
 #pragma omp parallel for schedule( dynamic, 1 )
 		for ( int32_t k = 0; k < s->leaf_count; ++k )
 		{
-			int32_t first = s->joint_first[k];
-			sere_skeleton_pose( &s->joints, first, s->joint_first[k + 1] - first, 0.6f, &params, &f, nullptr );
+			int32_t first = s->joint_first[k], count = s->joint_first[k + 1] - first;
+			if ( floor )
+			{
+				sere_skeleton_touch_pose( &s->joints, first, count, &params, turned.data(), &f );
+			}
+			else
+			{
+				sere_skeleton_pose( &s->joints, first, count, 0.6f, &params, &f, nullptr );
+			}
 		}
 		benchmark::ClobberMemory();
 	}
-	rate( state, "joints/s", s->joints.joint_count );
+	rate( state, "joints/s", joints );
+	state.counters["turning"] = (double) turning / joints;
+	state.counters["droop_reads/joint"] = (double) subtree / joints;
 	sere_joint_frames_destroy( &f );
+}
+
+void BM_skeleton_pose( benchmark::State& state )
+{
+	pose_loop( state, false );
+}
+
+void BM_skeleton_pose_floor( benchmark::State& state )
+{
+	pose_loop( state, true );
 }
 
 // One frame of the plant at plant time 0.6, most leaves mid-wilt. With the piercing check a
@@ -419,11 +478,14 @@ BENCHMARK( BM_skeleton_skin_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_skin_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_skin_eigen )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_leaf )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK( BM_skeleton_band_leaf_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_leaf_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK( BM_skeleton_band_plant_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant_ref )->UseRealTime();
 BENCHMARK( BM_skeleton_band_plant_embree )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_skeleton_pose )->Arg( 1 )->Arg( 2 )->UseRealTime();
+BENCHMARK( BM_skeleton_pose_floor )->Arg( 1 )->Arg( 2 )->UseRealTime();
 BENCHMARK( BM_plant_frame )
 	->ArgsProduct( { { 1, 2 }, { 0, 1 } } )
 	->ArgNames( { "threads", "pierce" } )

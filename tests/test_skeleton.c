@@ -561,3 +561,101 @@ Test( skeleton, banding_rejects_bad_input )
 				  SERE_ERR_NONFINITE );
 	sere_joint_grid_destroy( grid );
 }
+
+/* Records the banding of n queries on `threads` threads, then replays it on 1 to 3 (the record
+ * does not depend on the threads) and checks what each pass found, left and counted. */
+static void expect_band_floor( sere_joint_grid* grid, const float* x, const float* y, const float* z, int32_t n,
+							   int32_t threads, sere_joint_grid_traffic* recorded )
+{
+	int32_t* plain = malloc( (size_t) n * sizeof( int32_t ) );
+	int32_t* out = malloc( (size_t) n * sizeof( int32_t ) );
+	cr_assert_eq( sere_joint_grid_set_threads( grid, threads ), SERE_OK );
+	cr_assert_eq( sere_joint_grid_band( grid, NULL, NULL, NULL, x, y, z, n, plain, NULL, NULL, NULL ), SERE_OK );
+	memset( out, 0xff, (size_t) n * sizeof( int32_t ) );
+	cr_assert_eq( sere_joint_grid_record_band( grid, x, y, z, n, out, recorded ), SERE_OK );
+	cr_assert( memcmp( out, plain, (size_t) n * sizeof( int32_t ) ) == 0, "recording changed what the search finds" );
+	for ( int32_t replay = 1; replay <= 3; ++replay )
+	{
+		cr_assert_eq( sere_joint_grid_set_threads( grid, replay ), SERE_OK );
+		sere_joint_grid_traffic replayed;
+		memset( &replayed, 0xff, sizeof( replayed ) );
+		cr_assert_eq( sere_joint_grid_touch_band( grid, x, y, z, n, out, &replayed ), SERE_OK );
+		cr_assert( memcmp( out, plain, (size_t) n * sizeof( int32_t ) ) == 0,
+				   "recorded on %d threads, replayed on %d: the floor changed a joint", threads, replay );
+		cr_assert_eq( replayed.listed, recorded->listed );
+		cr_assert_eq( replayed.cells, recorded->cells, "recorded on %d threads, replayed on %d: %ld cells of %ld",
+					  threads, replay, (long) replayed.cells, (long) recorded->cells );
+		cr_assert_eq( replayed.joints, recorded->joints, "recorded on %d threads, replayed on %d: %ld joints of %ld",
+					  threads, replay, (long) replayed.joints, (long) recorded->joints );
+	}
+	free( plain );
+	free( out );
+}
+
+Test( skeleton, band_floor_replays_the_recorded_search )
+{
+	/* A 3-D cloud of joints, queries inside its box (candidate lists) and far outside (rings). */
+	enum
+	{
+		J = 700,
+		N = 20000
+	};
+	static float jx[J], jy[J], jz[J], x[N], y[N], z[N];
+	uint64_t seed = 23;
+	for ( int i = 0; i < J; ++i )
+	{
+		jx[i] = (float) ( 4.0 * sere_test_unit( &seed ) );
+		jy[i] = (float) ( 2.0 * sere_test_unit( &seed ) );
+		jz[i] = (float) ( sere_test_unit( &seed ) * sere_test_unit( &seed ) );
+	}
+	for ( int i = 0; i < N; ++i )
+	{
+		x[i] = (float) ( 12.0 * sere_test_unit( &seed ) - 4.0 );
+		y[i] = (float) ( 6.0 * sere_test_unit( &seed ) - 2.0 );
+		z[i] = (float) ( 3.0 * sere_test_unit( &seed ) - 1.0 );
+	}
+	sere_joint_grid* grid;
+	cr_assert_eq( sere_joint_grid_create( jx, jy, jz, J, &grid ), SERE_OK );
+	sere_joint_grid_traffic traffic;
+	for ( int32_t threads = 1; threads <= 3; ++threads )
+	{
+		expect_band_floor( grid, x, y, z, N, threads, &traffic );
+		cr_assert( traffic.listed > 0 && traffic.listed < N, "both paths: %ld of %d listed", (long) traffic.listed, N );
+		/* a ring search opens at least its query's cell, and finds at least one joint */
+		cr_assert_geq( traffic.cells, N - traffic.listed );
+		cr_assert_geq( traffic.joints, N );
+	}
+	sere_joint_grid_destroy( grid );
+
+	/* One joint, one cell: a query inside reads its list (the joint), one outside opens the cell
+	 * (the joint) and stops, the grid being covered. */
+	cr_assert_eq( sere_joint_grid_create( jx, jy, jz, 1, &grid ), SERE_OK );
+	expect_band_floor( grid, x, y, z, N, 2, &traffic );
+	cr_assert( traffic.listed > 0 && traffic.listed < N );
+	cr_assert_eq( traffic.cells, N - traffic.listed );
+	cr_assert_eq( traffic.joints, N );
+	sere_joint_grid_destroy( grid );
+}
+
+Test( skeleton, band_floor_rejects_what_it_cannot_replay )
+{
+	float j[4] = { 0, 1, 2, 3 };
+	int32_t out[4];
+	sere_joint_grid* grid;
+	cr_assert_eq( sere_joint_grid_create( j, j, j, 4, &grid ), SERE_OK );
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, j, j, 4, out, NULL ), SERE_ERR_ARGUMENT, "no record yet" );
+	cr_expect_eq( sere_joint_grid_record_band( NULL, j, j, j, 4, out, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_joint_grid_record_band( grid, j, j, j, -1, out, NULL ), SERE_ERR_ARGUMENT );
+	cr_assert_eq( sere_joint_grid_record_band( grid, j, j, j, 4, out, NULL ), SERE_OK );
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, j, j, 3, out, NULL ), SERE_ERR_ARGUMENT, "another count" );
+	cr_expect_eq( sere_joint_grid_touch_band( NULL, j, j, j, 4, out, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, NULL, j, 4, out, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, j, j, 4, NULL, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, j, j, 4, out, NULL ), SERE_OK );
+	j[2] = NAN;
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, j, j, 4, out, NULL ), SERE_ERR_NONFINITE );
+	cr_expect_eq( sere_joint_grid_record_band( grid, j, j, j, 4, out, NULL ), SERE_ERR_NONFINITE );
+	j[2] = 2;
+	cr_expect_eq( sere_joint_grid_touch_band( grid, j, j, j, 4, out, NULL ), SERE_OK, "a failed record keeps the old" );
+	sere_joint_grid_destroy( grid );
+}

@@ -290,6 +290,83 @@ Test( skeleton, pose_rejects_bad_input )
 	skeleton_free( &s, &f );
 }
 
+/* The frames of n joints, work included, as bytes: posed, recorded and touched frames compare
+ * with memcmp. */
+static unsigned char* frames_copy( const sere_joint_frames* f, int32_t n )
+{
+	size_t floats = (size_t) n * sizeof( float ), doubles = 12 * (size_t) n * sizeof( double );
+	unsigned char* copy = malloc( 12 * floats + doubles );
+	const float* arrays[12] = { f->x, f->y, f->z };
+	for ( int k = 0; k < 9; ++k )
+	{
+		arrays[3 + k] = f->m[k];
+	}
+	for ( int k = 0; k < 12; ++k )
+	{
+		memcpy( copy + k * floats, arrays[k], floats );
+	}
+	memcpy( copy + 12 * floats, f->work, doubles );
+	return copy;
+}
+
+static bool frames_same( const sere_joint_frames* f, int32_t n, const unsigned char* copy )
+{
+	unsigned char* now = frames_copy( f, n );
+	bool same = memcmp( now, copy, 12 * (size_t) n * ( sizeof( float ) + sizeof( double ) ) ) == 0;
+	free( now );
+	return same;
+}
+
+Test( skeleton, pose_floor_leaves_the_frames_as_they_were )
+{
+	sere_skeleton s;
+	sere_joint_frames f;
+	skeleton_bent( &s, &f, 150.0, 120.0 );
+	const int32_t n = s.joint_count;
+	uint8_t* turned = malloc( (size_t) n );
+	sere_wilt_params limited = sere_wilt_params_default();
+	limited.droop_max = 2.0f;
+	sere_wilt_params free_params = no_limits();
+	const sere_wilt_params* modes[2] = { &free_params, &limited };
+	float ts[4] = { 0.0f, 0.3f, 0.7f, 1.0f };
+	for ( int mode = 0; mode < 2; ++mode )
+	{
+		for ( int k = 0; k < 4; ++k )
+		{
+			sere_pose_stats posed, recorded;
+			cr_assert_eq( sere_skeleton_pose( &s, 0, n, ts[k], modes[mode], &f, &posed ), SERE_OK );
+			unsigned char* copy = frames_copy( &f, n );
+			cr_assert_eq( sere_skeleton_pose( &s, 0, n, 0.5f * ts[k] + 0.1f, modes[mode], &f, NULL ), SERE_OK );
+			memset( turned, 0xff, (size_t) n );
+			cr_assert_eq( sere_skeleton_record_pose( &s, 0, n, ts[k], modes[mode], &f, turned, &recorded ), SERE_OK );
+			cr_assert( frames_same( &f, n, copy ), "mode %d t %g: recording changed the pose", mode, ts[k] );
+			cr_assert( memcmp( &posed, &recorded, sizeof( posed ) ) == 0 );
+			int32_t turning = 0;
+			for ( int32_t i = 0; i < n; ++i )
+			{
+				cr_assert( turned[i] <= 1, "joint %d not recorded", i );
+				turning += turned[i];
+			}
+			cr_assert_eq( turned[0], 0, "the root has no segment" );
+			cr_assert_eq( turning, recorded.turning, "mode %d t %g: %d turned, %d turning", mode, ts[k], turning,
+						  recorded.turning );
+			cr_assert( ts[k] == 0.0f ? turning == 0 : turning > n / 2, "mode %d t %g: %d of %d turned", mode, ts[k],
+					   turning, n );
+			cr_assert_eq( sere_skeleton_touch_pose( &s, 0, n, modes[mode], turned, &f ), SERE_OK );
+			cr_assert( frames_same( &f, n, copy ), "mode %d t %g: the floor changed the frames", mode, ts[k] );
+			free( copy );
+		}
+	}
+	cr_expect_eq( sere_skeleton_record_pose( &s, 0, n, 0.5f, &limited, &f, NULL, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_skeleton_touch_pose( &s, 0, n, &limited, NULL, &f ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_skeleton_touch_pose( &s, 1, n - 1, &limited, turned, &f ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_skeleton_touch_pose( NULL, 0, n, &limited, turned, &f ), SERE_ERR_ARGUMENT );
+	limited.droop_max = NAN;
+	cr_expect_eq( sere_skeleton_touch_pose( &s, 0, n, &limited, turned, &f ), SERE_ERR_NONFINITE );
+	free( turned );
+	skeleton_free( &s, &f );
+}
+
 /* ------------------------------------------------------------------------------------------- */
 
 Test( skeleton, skinning_equals_reference_bitwise )

@@ -156,6 +156,37 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 								  const float* x, const float* y, const float* z, int32_t vertex_count, int32_t* joint,
 								  float* ox, float* oy, float* oz );
 
+/* What a banding moved, as sere_joint_grid_record_band recorded it and sere_joint_grid_touch_band
+ * replayed it. */
+typedef struct sere_joint_grid_traffic
+{
+	int64_t listed; /* queries their cell's candidate list answered (the others searched rings) */
+	int64_t cells;	/* cells the ring searches opened */
+	int64_t joints; /* joint records read: candidates scanned and the opened cells' joints */
+} sere_joint_grid_traffic;
+
+/* A banding without offsets (sere_joint_grid_band with ox NULL: the same joints, bits and
+ * threads) that also records, for sere_joint_grid_touch_band, how many rings each query's search
+ * opened (a byte a query, kept in the grid). traffic (may be NULL) gets what it read. Errors as
+ * sere_joint_grid_band's, plus SERE_ERR_MEMORY when the record cannot be kept (no record then). */
+sere_status sere_joint_grid_record_band( sere_joint_grid* grid, const float* x, const float* y, const float* z,
+										 int32_t vertex_count, int32_t* joint, sere_joint_grid_traffic* traffic );
+
+/* The memory floor of the recorded banding (benchmarks): the banding's finiteness pass and its
+ * loop on the same threads and schedule, each query addressed as the search addresses it (its cell
+ * from its coordinates), opening the cells of the rings its search opened, with sums of the
+ * records' bits in place of the distances and the recorded ring count in place of the test of
+ * when to stop. It reads the same candidate lists and cells and, from them, the same joint
+ * records (positions, and in the ring search the joint indices), and stores each query's joint
+ * times a 1 the compiler cannot see. Reading the record (a byte a query) is traffic the banding
+ * does not have; the joint index a candidate scan loads on each improvement is left out. Leaves
+ * joint bitwise as it was. x, y, z are the positions the record was made from. traffic (may be
+ * NULL) gets what it read: the record's counts when the replay is faithful. SERE_ERR_ARGUMENT for
+ * a NULL argument or a vertex count other than the record's (or no record); SERE_ERR_NONFINITE as
+ * sere_joint_grid_band. */
+sere_status sere_joint_grid_touch_band( sere_joint_grid* grid, const float* x, const float* y, const float* z,
+										int32_t vertex_count, int32_t* joint, sere_joint_grid_traffic* traffic );
+
 /* Sec. 6 limits and Sec. 7 timing of the wilt. */
 typedef struct sere_wilt_params
 {
@@ -203,6 +234,27 @@ typedef struct sere_pose_stats
  * are kept. The result depends only on the rest skeleton and t. stats may be NULL. */
 sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
 								const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats );
+
+/* sere_skeleton_pose (the same frames, bits and stats) that also records, for
+ * sere_skeleton_touch_pose, whether each joint's segment turned: turned[i] for i in [first,
+ * first + count) is 1 when it did (and the pose ran its limits), else 0. */
+sere_status sere_skeleton_record_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
+									   const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+									   sere_pose_stats* stats );
+
+/* The memory floor of a recorded pose (benchmarks): the pose's two passes over the joints in the
+ * same order, with sums in place of the rotations, the limits and the trigonometry. Per joint it
+ * reads the parent index, the rest positions of the joint and its parent, the onset rank and bend
+ * and the parent's posed frame (12 doubles of work), and stores the joint's 12 doubles of work;
+ * for a segment turned reads, as the limits do, the grandparent's posed position (when the minimal
+ * angle applies: same vein, min_angle > 0) and the rest positions of the joint's subtree (when
+ * droop_max is finite); then rounds work to the frames as the pose does. Each store keeps the value
+ * already there (times a 1 the compiler cannot see), which reads the joint's work first, a read the
+ * pose does not make. Leaves frames (work included) bitwise as they were. Errors as
+ * sere_skeleton_pose's (but t's, which it does not take), SERE_ERR_ARGUMENT for a NULL turned. */
+sere_status sere_skeleton_touch_pose( const sere_skeleton* skeleton, int32_t first, int32_t count,
+									  const sere_wilt_params* params, const uint8_t* turned,
+									  sere_joint_frames* frames );
 
 /* The mesh follows its joints (Sec. 6): x = p_j + R_j o for every vertex, on `threads` threads
  * (core/base.h). Fastest when vertices of one joint are adjacent (runs share one transform);

@@ -32,6 +32,13 @@ struct sere_joint_grid
 	int32_t* candidate_start;
 	int32_t* candidate;
 	float *cx, *cy, *cz;
+	/* The floor's record (sere_joint_grid_record_band): per query, the rings its search opened (0
+	 * when its candidate list answered). */
+	uint8_t* walk_rings;
+	int32_t walk_count;	   /* queries recorded, -1 for none */
+	int32_t walk_capacity; /* entries walk_rings holds */
+	int32_t one;		   /* 1, where the compiler cannot see it: the floor stores joint * one */
+	uint32_t sink;		   /* the floor's sum of what it read, kept so the loads are not dropped */
 };
 
 /* A cell keeps a candidate list only up to this length; cells far from every joint (where the
@@ -68,12 +75,37 @@ void sere_joint_grid_destroy( sere_joint_grid* grid )
 	sere_free( grid->cx );
 	sere_free( grid->cy );
 	sere_free( grid->cz );
+	free( grid->walk_rings );
 	free( grid );
 }
 
+/* How a query's walk over the grid runs (one body, inlined with a constant mode, so the search
+ * pays for neither of the others): GRID_SEARCH finds the nearest joint; GRID_RECORD finds it too
+ * and counts in a grid_walk what it opened; GRID_TOUCH, the floor, replays a recorded walk with
+ * the same loops and loads, sums of the records' bits in place of the distances and the recorded
+ * ring count in place of the test of when to stop. */
+enum
+{
+	GRID_SEARCH,
+	GRID_RECORD,
+	GRID_TOUCH
+};
+
+typedef struct grid_walk
+{
+	int32_t rings;	/* rings the ring search opened, 0 when the cell's candidate list answered
+					 * (GRID_RECORD sets it, GRID_TOUCH replays it) */
+	int32_t listed; /* 1 when the candidate list answered */
+	int32_t cells;	/* cells the ring search opened */
+	int32_t joints; /* joint records read: the candidates scanned, the opened cells' joints */
+	uint32_t bits;	/* GRID_TOUCH: the sum of the records' bits */
+} grid_walk;
+
+#define WALK static inline __attribute__( ( always_inline ) )
+
 /* Exact nearest joint by rings of cells around the query's (clamped) cell, stopping once the
  * nearest face of the visited block is farther than the best joint found. */
-static int32_t ring_nearest( const sere_joint_grid* g, float x, float y, float z )
+WALK int32_t ring_nearest( const sere_joint_grid* g, float x, float y, float z, int mode, grid_walk* w )
 {
 	float q[3] = { x, y, z };
 	int32_t c[3];
@@ -105,8 +137,20 @@ static int32_t ring_nearest( const sere_joint_grid* g, float x, float y, float z
 						continue;
 					}
 					int32_t cell = ( iz * g->dim[1] + iy ) * g->dim[0] + ix;
-					for ( int32_t k = g->start[cell]; k < g->start[cell + 1]; ++k )
+					int32_t begin = g->start[cell], end = g->start[cell + 1];
+					if ( mode != GRID_SEARCH )
 					{
+						++w->cells;
+						w->joints += end - begin;
+					}
+					for ( int32_t k = begin; k < end; ++k )
+					{
+						if ( mode == GRID_TOUCH )
+						{
+							w->bits += sere_skel_float_bits( g->x[k] ) + sere_skel_float_bits( g->y[k] ) +
+									   sere_skel_float_bits( g->z[k] ) + (uint32_t) g->items[k];
+							continue;
+						}
 						float dx = x - g->x[k], dy = y - g->y[k], dz = z - g->z[k];
 						float d2 = dx * dx + dy * dy + dz * dz;
 						int32_t j = g->items[k];
@@ -118,6 +162,18 @@ static int32_t ring_nearest( const sere_joint_grid* g, float x, float y, float z
 					}
 				}
 			}
+		}
+		if ( mode == GRID_TOUCH )
+		{
+			if ( r + 1 >= w->rings )
+			{
+				return best;
+			}
+			continue;
+		}
+		if ( mode == GRID_RECORD )
+		{
+			w->rings = r + 1;
 		}
 		/* Every unvisited cell lies beyond a face of the visited block that is not on the grid
 		 * boundary; the nearest such face bounds the distance to any joint not yet seen. */
@@ -373,6 +429,7 @@ sere_status sere_joint_grid_create( const float* x, const float* y, const float*
 	{
 		return SERE_ERR_MEMORY;
 	}
+	g->walk_count = -1;
 	int64_t cells = grid_layout( g, lo, hi, joint_count );
 	g->start = sere_alloc( (size_t) ( cells + 1 ) * sizeof( int32_t ) );
 	g->items = sere_alloc( (size_t) joint_count * sizeof( int32_t ) );
@@ -402,7 +459,9 @@ sere_status sere_joint_grid_create( const float* x, const float* y, const float*
 	return SERE_OK;
 }
 
-int32_t sere_joint_grid_nearest( const sere_joint_grid* g, float x, float y, float z )
+/* The nearest joint to (x, y, z): its cell's candidate list when it has one, else the ring
+ * search. */
+WALK int32_t grid_nearest( const sere_joint_grid* g, float x, float y, float z, int mode, grid_walk* w )
 {
 	float fx = ( x - g->lo[0] ) * g->inv_h, fy = ( y - g->lo[1] ) * g->inv_h, fz = ( z - g->lo[2] ) * g->inv_h;
 	if ( fx >= 0.0f && fy >= 0.0f && fz >= 0.0f && fx < (float) g->dim[0] && fy < (float) g->dim[1] &&
@@ -410,12 +469,28 @@ int32_t sere_joint_grid_nearest( const sere_joint_grid* g, float x, float y, flo
 	{
 		int32_t c = ( (int32_t) fz * g->dim[1] + (int32_t) fy ) * g->dim[0] + (int32_t) fx;
 		int32_t begin = g->candidate_start[c], end = g->candidate_start[c + 1];
-		if ( begin < end )
+		if ( mode == GRID_TOUCH )
 		{
+			/* the search reads the list's bounds whether it is empty or not */
+			w->bits += (uint32_t) begin + (uint32_t) end;
+		}
+		if ( mode == GRID_TOUCH ? w->rings == 0 : begin < end )
+		{
+			if ( mode != GRID_SEARCH )
+			{
+				w->listed = 1;
+				w->joints += end - begin;
+			}
 			int32_t best = -1;
 			float best_d2 = INFINITY;
 			for ( int32_t k = begin; k < end; ++k )
 			{
+				if ( mode == GRID_TOUCH )
+				{
+					w->bits += sere_skel_float_bits( g->cx[k] ) + sere_skel_float_bits( g->cy[k] ) +
+							   sere_skel_float_bits( g->cz[k] );
+					continue;
+				}
 				float dx = x - g->cx[k], dy = y - g->cy[k], dz = z - g->cz[k];
 				float d2 = dx * dx + dy * dy + dz * dz;
 				/* ascending joints: the first of equal distances is the lower index */
@@ -428,7 +503,12 @@ int32_t sere_joint_grid_nearest( const sere_joint_grid* g, float x, float y, flo
 			return best;
 		}
 	}
-	return ring_nearest( g, x, y, z );
+	return ring_nearest( g, x, y, z, mode, w );
+}
+
+int32_t sere_joint_grid_nearest( const sere_joint_grid* g, float x, float y, float z )
+{
+	return grid_nearest( g, x, y, z, GRID_SEARCH, NULL );
 }
 
 sere_status sere_joint_grid_set_threads( sere_joint_grid* grid, int32_t threads )
@@ -436,12 +516,11 @@ sere_status sere_joint_grid_set_threads( sere_joint_grid* grid, int32_t threads 
 	return grid == NULL ? SERE_ERR_ARGUMENT : sere_threads_store( &grid->threads, threads );
 }
 
-sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, const float* jy, const float* jz,
-								  const float* x, const float* y, const float* z, int32_t vertex_count, int32_t* joint,
-								  float* ox, float* oy, float* oz )
+/* The checks and the finiteness pass of every banding. */
+static sere_status band_inputs( const sere_joint_grid* grid, const float* x, const float* y, const float* z,
+								int32_t vertex_count, const int32_t* joint )
 {
-	if ( grid == NULL || x == NULL || y == NULL || z == NULL || joint == NULL || vertex_count < 0 ||
-		 ( ox != NULL && ( oy == NULL || oz == NULL || jx == NULL || jy == NULL || jz == NULL ) ) )
+	if ( grid == NULL || x == NULL || y == NULL || z == NULL || joint == NULL || vertex_count < 0 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -449,10 +528,26 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 	{
 		return SERE_ERR_NONFINITE;
 	}
+	return SERE_OK;
+}
+
+sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, const float* jy, const float* jz,
+								  const float* x, const float* y, const float* z, int32_t vertex_count, int32_t* joint,
+								  float* ox, float* oy, float* oz )
+{
+	if ( ox != NULL && ( oy == NULL || oz == NULL || jx == NULL || jy == NULL || jz == NULL ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	sere_status status = band_inputs( grid, x, y, z, vertex_count, joint );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
 #pragma omp parallel for num_threads( sere_team_for( grid->threads ) ) schedule( static )
 	for ( int32_t i = 0; i < vertex_count; ++i )
 	{
-		int32_t j = sere_joint_grid_nearest( grid, x[i], y[i], z[i] );
+		int32_t j = grid_nearest( grid, x[i], y[i], z[i], GRID_SEARCH, NULL );
 		joint[i] = j;
 		if ( ox != NULL )
 		{
@@ -460,6 +555,81 @@ sere_status sere_joint_grid_band( const sere_joint_grid* grid, const float* jx, 
 			oy[i] = y[i] - jy[j];
 			oz[i] = z[i] - jz[j];
 		}
+	}
+	return SERE_OK;
+}
+
+sere_status sere_joint_grid_record_band( sere_joint_grid* grid, const float* x, const float* y, const float* z,
+										 int32_t vertex_count, int32_t* joint, sere_joint_grid_traffic* traffic )
+{
+	sere_status status = band_inputs( grid, x, y, z, vertex_count, joint );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	grid->walk_count = -1;
+	if ( vertex_count > grid->walk_capacity )
+	{
+		uint8_t* rings = sere_array_resize( grid->walk_rings, vertex_count, sizeof( uint8_t ) );
+		if ( rings == NULL )
+		{
+			return SERE_ERR_MEMORY;
+		}
+		grid->walk_rings = rings;
+		grid->walk_capacity = vertex_count;
+	}
+	uint8_t* rings = grid->walk_rings;
+	int64_t listed = 0, cells = 0, joints = 0;
+	/* A ring search ends by the time its block covers the grid, so it opens at most 192 rings
+	 * (the largest dimension) and the count fits a byte. */
+#pragma omp parallel for num_threads( sere_team_for( grid->threads ) ) schedule( static ) \
+	reduction( + : listed, cells, joints )
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		grid_walk w = { 0, 0, 0, 0, 0 };
+		joint[i] = grid_nearest( grid, x[i], y[i], z[i], GRID_RECORD, &w );
+		rings[i] = (uint8_t) w.rings;
+		listed += w.listed;
+		cells += w.cells;
+		joints += w.joints;
+	}
+	grid->walk_count = vertex_count;
+	grid->one = 1;
+	if ( traffic != NULL )
+	{
+		*traffic = ( sere_joint_grid_traffic ){ listed, cells, joints };
+	}
+	return SERE_OK;
+}
+
+sere_status sere_joint_grid_touch_band( sere_joint_grid* grid, const float* x, const float* y, const float* z,
+										int32_t vertex_count, int32_t* joint, sere_joint_grid_traffic* traffic )
+{
+	sere_status status = band_inputs( grid, x, y, z, vertex_count, joint );
+	if ( status != SERE_OK || grid->walk_count != vertex_count )
+	{
+		return status != SERE_OK ? status : SERE_ERR_ARGUMENT;
+	}
+	const uint8_t* rings = grid->walk_rings;
+	const int32_t one = grid->one;
+	int64_t listed = 0, cells = 0, joints = 0;
+	uint32_t bits = 0;
+#pragma omp parallel for num_threads( sere_team_for( grid->threads ) ) schedule( static ) \
+	reduction( + : listed, cells, joints, bits )
+	for ( int32_t i = 0; i < vertex_count; ++i )
+	{
+		grid_walk w = { rings[i], 0, 0, 0, 0 };
+		grid_nearest( grid, x[i], y[i], z[i], GRID_TOUCH, &w );
+		joint[i] *= one;
+		listed += w.listed;
+		cells += w.cells;
+		joints += w.joints;
+		bits += w.bits;
+	}
+	grid->sink += bits;
+	if ( traffic != NULL )
+	{
+		*traffic = ( sere_joint_grid_traffic ){ listed, cells, joints };
 	}
 	return SERE_OK;
 }

@@ -390,7 +390,7 @@ sere_status sere_plant_frame( sere_plant* plant, float time, const sere_wilt_par
 		t = t < 0.0f ? 0.0f : ( t > 1.0f ? 1.0f : t );
 		plant->leaf_t[k] = t;
 		int32_t first = plant->joint_first[k];
-		sere_skel_pose_range( &plant->joints, first, plant->joint_first[k + 1] - first, t, params, &plant->frames,
+		sere_skel_pose_range( &plant->joints, first, plant->joint_first[k + 1] - first, t, params, &plant->frames, NULL,
 							  plant->leaf_stats + k );
 	}
 	sere_wilt_stats st;

@@ -170,9 +170,9 @@ static double droop_limited_turn( const sere_skeleton* s, int32_t i, int32_t p, 
 
 /* The rotation r (Rodrigues, about n = u × d / |u × d|) that turns segment p → i, currently u,
  * by its target angle phi toward d = (0, 0, −1), shortened by the limits of Sec. 6; counts the
- * turn and its limit in st. */
-static void segment_rotation( const sere_skeleton* s, const double* work, int32_t i, const double u[3], double phi,
-							  double cos_limit, const sere_wilt_params* params, double r[9], sere_pose_stats* st )
+ * turn and its limit in st. Returns whether the segment turns (r is left alone when not). */
+static int segment_rotation( const sere_skeleton* s, const double* work, int32_t i, const double u[3], double phi,
+							 double cos_limit, const sere_wilt_params* params, double r[9], sere_pose_stats* st )
 {
 	int32_t p = s->parent[i];
 	const double* pp = work + 12 * (size_t) p;
@@ -181,7 +181,7 @@ static void segment_rotation( const sere_skeleton* s, const double* work, int32_
 	/* A vertical segment has no plane with d: pointing down it is done, pointing up it waits. */
 	if ( !( phi > 0.0 && horizontal > 1e-12 * length ) )
 	{
-		return;
+		return 0;
 	}
 	++st->turning;
 	int limit = LIMIT_NONE;
@@ -216,10 +216,29 @@ static void segment_rotation( const sere_skeleton* s, const double* work, int32_
 	st->angle_limited += limit == LIMIT_ANGLE;
 	st->droop_limited += limit == LIMIT_DROOP;
 	axis_rotation( n, phi, r );
+	return 1;
+}
+
+/* The frames of joints [first, first + count) from their posed positions and rotations in work,
+ * rounded to float. */
+static void frames_store( sere_joint_frames* frames, int32_t first, int32_t count )
+{
+	for ( int32_t i = first; i < first + count; ++i )
+	{
+		const double* pi = frames->work + 12 * (size_t) i;
+		frames->x[i] = (float) pi[0];
+		frames->y[i] = (float) pi[1];
+		frames->z[i] = (float) pi[2];
+		for ( int k = 0; k < 9; ++k )
+		{
+			frames->m[k][i] = (float) pi[3 + k];
+		}
+	}
 }
 
 void sere_skel_pose_range( const sere_skeleton* s, int32_t first, int32_t count, float t,
-						   const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats )
+						   const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+						   sere_pose_stats* stats )
 {
 	double* work = frames->work;
 	double spread = params->spread;
@@ -238,6 +257,10 @@ void sere_skel_pose_range( const sere_skeleton* s, int32_t first, int32_t count,
 			pi[2] = s->z[i];
 			memset( qi, 0, 9 * sizeof( double ) );
 			qi[0] = qi[4] = qi[8] = 1.0;
+			if ( turned != NULL )
+			{
+				turned[i] = 0;
+			}
 			continue;
 		}
 		const double* pp = work + 12 * (size_t) p;
@@ -251,7 +274,11 @@ void sere_skel_pose_range( const sere_skeleton* s, int32_t first, int32_t count,
 		progress = progress < 0.0 ? 0.0 : ( progress > 1.0 ? 1.0 : progress );
 		double phi = s->bend[i] * progress;
 		double r[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
-		segment_rotation( s, work, i, u, phi, cos_limit, params, r, &st );
+		int turns = segment_rotation( s, work, i, u, phi, cos_limit, params, r, &st );
+		if ( turned != NULL )
+		{
+			turned[i] = (uint8_t) turns;
+		}
 		/* Lu Eq. 1: P(φ) = P_p + |u| (cos φ û + sin φ ê) with ê = n × û, here as P_p + R u. */
 		double v[3];
 		sere_skel_mat_vec( r, u, v );
@@ -260,17 +287,7 @@ void sere_skel_pose_range( const sere_skeleton* s, int32_t first, int32_t count,
 		pi[2] = pp[2] + v[2];
 		mat_mul( r, qp, qi );
 	}
-	for ( int32_t i = first; i < first + count; ++i )
-	{
-		const double* pi = work + 12 * (size_t) i;
-		frames->x[i] = (float) pi[0];
-		frames->y[i] = (float) pi[1];
-		frames->z[i] = (float) pi[2];
-		for ( int k = 0; k < 9; ++k )
-		{
-			frames->m[k][i] = (float) pi[3 + k];
-		}
-	}
+	frames_store( frames, first, count );
 	if ( stats != NULL )
 	{
 		*stats = st;
@@ -295,10 +312,29 @@ sere_status sere_skel_check_wilt_params( const sere_wilt_params* p )
 	return SERE_OK;
 }
 
-sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
-								const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats )
+/* The checks of a pose's arguments but t. */
+static sere_status pose_inputs( const sere_skeleton* skeleton, int32_t first, int32_t count,
+								const sere_wilt_params* params, const sere_joint_frames* frames )
 {
 	sere_status status = sere_skel_check_wilt_params( params );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	if ( skeleton == NULL || frames == NULL || first < 0 || count < 1 || first > skeleton->joint_count - count ||
+		 frames->capacity < first + count || skeleton->parent[first] != -1 || skeleton->end[first] != first + count )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	return SERE_OK;
+}
+
+/* A pose, recording which segments turn when turned is not NULL. */
+static sere_status pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
+						 const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+						 sere_pose_stats* stats )
+{
+	sere_status status = pose_inputs( skeleton, first, count, params, frames );
 	if ( status != SERE_OK )
 	{
 		return status;
@@ -307,13 +343,86 @@ sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, in
 	{
 		return SERE_ERR_NONFINITE;
 	}
-	if ( skeleton == NULL || frames == NULL || first < 0 || count < 1 || first > skeleton->joint_count - count ||
-		 frames->capacity < first + count || skeleton->parent[first] != -1 || skeleton->end[first] != first + count )
-	{
-		return SERE_ERR_ARGUMENT;
-	}
 	t = t < 0.0f ? 0.0f : ( t > 1.0f ? 1.0f : t );
-	sere_skel_pose_range( skeleton, first, count, t, params, frames, stats );
+	sere_skel_pose_range( skeleton, first, count, t, params, frames, turned, stats );
+	return SERE_OK;
+}
+
+sere_status sere_skeleton_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
+								const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats )
+{
+	return pose( skeleton, first, count, t, params, frames, NULL, stats );
+}
+
+sere_status sere_skeleton_record_pose( const sere_skeleton* skeleton, int32_t first, int32_t count, float t,
+									   const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+									   sere_pose_stats* stats )
+{
+	return turned == NULL ? SERE_ERR_ARGUMENT : pose( skeleton, first, count, t, params, frames, turned, stats );
+}
+
+sere_status sere_skeleton_touch_pose( const sere_skeleton* s, int32_t first, int32_t count,
+									  const sere_wilt_params* params, const uint8_t* turned, sere_joint_frames* frames )
+{
+	sere_status status = pose_inputs( s, first, count, params, frames );
+	if ( status != SERE_OK || turned == NULL )
+	{
+		return status != SERE_OK ? status : SERE_ERR_ARGUMENT;
+	}
+	double* work = frames->work;
+	/* A 1 and a sink the compiler cannot see through: the stores keep the values already there, and
+	 * the sum of what was read (integer sums of the bits, skeleton_shared.h) is not dropped with
+	 * its loads. */
+	volatile double hidden_one = 1.0;
+	const double one = hidden_one;
+	uint64_t sum = 0;
+	for ( int32_t i = first; i < first + count; ++i )
+	{
+		double* pi = work + 12 * (size_t) i;
+		int32_t p = s->parent[i];
+		uint64_t read = (uint64_t) sere_skel_float_bits( s->x[i] ) + sere_skel_float_bits( s->y[i] ) +
+						sere_skel_float_bits( s->z[i] );
+		if ( p >= 0 )
+		{
+			/* the segment's rest ends and the parent's frame, the onset and the bend */
+			const double* pp = work + 12 * (size_t) p;
+			read += (uint64_t) sere_skel_float_bits( s->x[p] ) + sere_skel_float_bits( s->y[p] ) +
+					sere_skel_float_bits( s->z[p] ) + sere_skel_float_bits( s->delay[i] ) +
+					sere_skel_float_bits( s->bend[i] );
+			for ( int k = 0; k < 12; ++k )
+			{
+				read += sere_skel_double_bits( pp[k] );
+			}
+			if ( turned[i] )
+			{
+				/* the limits' reads: the grandparent's position when the segment continues its
+				 * parent's vein, the subtree's rest positions for the droop */
+				int32_t g = s->parent[p];
+				if ( params->min_angle > 0.0f && g >= 0 && s->vein[p] == s->vein[i] )
+				{
+					const double* pg = work + 12 * (size_t) g;
+					read += sere_skel_double_bits( pg[0] ) + sere_skel_double_bits( pg[1] ) +
+							sere_skel_double_bits( pg[2] );
+				}
+				if ( isfinite( params->droop_max ) )
+				{
+					for ( int32_t k = i; k < s->end[i]; ++k )
+					{
+						read += (uint64_t) sere_skel_float_bits( s->x[k] ) + sere_skel_float_bits( s->y[k] ) +
+								sere_skel_float_bits( s->z[k] );
+					}
+				}
+			}
+		}
+		for ( int k = 0; k < 12; ++k )
+		{
+			pi[k] *= one;
+		}
+		sum += read;
+	}
+	frames_store( frames, first, count );
+	volatile uint64_t sink = sum;
+	(void) sink;
 	return SERE_OK;
 }
 

@@ -6,6 +6,7 @@
 #include "wilt/skeleton.h"
 
 #include <math.h>
+#include <string.h>
 
 #define PI 3.14159265358979323846
 
@@ -54,6 +55,23 @@ static inline void sere_skel_mat_vec( const double m[9], const double v[3], doub
 	}
 }
 
+/* A float's and a double's bits, for the floors (sere_joint_grid_touch_band,
+ * sere_skeleton_touch_pose): integer sums of what they read chain one cycle of latency an add,
+ * where float sums would chain four and the floor would time its own sums. */
+static inline uint32_t sere_skel_float_bits( float f )
+{
+	uint32_t u;
+	memcpy( &u, &f, sizeof( u ) );
+	return u;
+}
+
+static inline uint64_t sere_skel_double_bits( double d )
+{
+	uint64_t u;
+	memcpy( &u, &d, sizeof( u ) );
+	return u;
+}
+
 /* The spline through p resampled every `spacing` (at least min_pieces pieces); NULL on
  * allocation failure. */
 double* sere_skel_curve_sample( const double* p, int32_t n, double spacing, int32_t min_pieces, int32_t* count );
@@ -88,9 +106,11 @@ sere_status sere_skel_create( sere_skeleton* s, int32_t joint_count );
 sere_status sere_skel_check_wilt_params( const sere_wilt_params* p );
 
 /* Sec. 6, Lu Eq. 1: poses joints [first, first + count) for wilting parameter t (see
- * sere_skeleton_pose, which checks the arguments). */
+ * sere_skeleton_pose, which checks the arguments); when turned is not NULL, records there which
+ * segments turn (sere_skeleton_record_pose). */
 void sere_skel_pose_range( const sere_skeleton* s, int32_t first, int32_t count, float t,
-						   const sere_wilt_params* params, sere_joint_frames* frames, sere_pose_stats* stats );
+						   const sere_wilt_params* params, sere_joint_frames* frames, uint8_t* turned,
+						   sere_pose_stats* stats );
 
 /* Back at the rest pose: no vertex is left short of its target. */
 void sere_skel_pierce_rest( sere_pierce* pierce );
