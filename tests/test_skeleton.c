@@ -466,6 +466,24 @@ static void expect_grid_matches_brute_force( const float* jx, const float* jy, c
 	free( slow );
 }
 
+/* A 3-D cloud of j joints in [0, 4] × [0, 2] × [0, 1] (denser near z = 0) and n queries in a box
+ * three times as wide around it, from seed. */
+static void joint_cloud( uint64_t seed, float* jx, float* jy, float* jz, int j, float* x, float* y, float* z, int n )
+{
+	for ( int i = 0; i < j; ++i )
+	{
+		jx[i] = (float) ( 4.0 * sere_test_unit( &seed ) );
+		jy[i] = (float) ( 2.0 * sere_test_unit( &seed ) );
+		jz[i] = (float) ( sere_test_unit( &seed ) * sere_test_unit( &seed ) );
+	}
+	for ( int i = 0; i < n; ++i )
+	{
+		x[i] = (float) ( 12.0 * sere_test_unit( &seed ) - 4.0 );
+		y[i] = (float) ( 6.0 * sere_test_unit( &seed ) - 2.0 );
+		z[i] = (float) ( 3.0 * sere_test_unit( &seed ) - 1.0 );
+	}
+}
+
 Test( skeleton, banding_equals_brute_force )
 {
 	/* A generated leaf skeleton (planar) and a grid leaf mesh, as Sec. 5.2 uses them. */
@@ -482,19 +500,7 @@ Test( skeleton, banding_equals_brute_force )
 		N = 20000
 	};
 	static float jx[J], jy[J], jz[J], x[N], y[N], z[N];
-	uint64_t seed = 11;
-	for ( int i = 0; i < J; ++i )
-	{
-		jx[i] = (float) ( 4.0 * sere_test_unit( &seed ) );
-		jy[i] = (float) ( 2.0 * sere_test_unit( &seed ) );
-		jz[i] = (float) ( sere_test_unit( &seed ) * sere_test_unit( &seed ) );
-	}
-	for ( int i = 0; i < N; ++i )
-	{
-		x[i] = (float) ( 12.0 * sere_test_unit( &seed ) - 4.0 );
-		y[i] = (float) ( 6.0 * sere_test_unit( &seed ) - 2.0 );
-		z[i] = (float) ( 3.0 * sere_test_unit( &seed ) - 1.0 );
-	}
+	joint_cloud( 11, jx, jy, jz, J, x, y, z, N );
 	expect_grid_matches_brute_force( jx, jy, jz, J, x, y, z, N );
 
 	/* Exact ties: joints on an integer lattice (listed in a scrambled order) and queries on
@@ -601,19 +607,7 @@ Test( skeleton, band_floor_replays_the_recorded_search )
 		N = 20000
 	};
 	static float jx[J], jy[J], jz[J], x[N], y[N], z[N];
-	uint64_t seed = 23;
-	for ( int i = 0; i < J; ++i )
-	{
-		jx[i] = (float) ( 4.0 * sere_test_unit( &seed ) );
-		jy[i] = (float) ( 2.0 * sere_test_unit( &seed ) );
-		jz[i] = (float) ( sere_test_unit( &seed ) * sere_test_unit( &seed ) );
-	}
-	for ( int i = 0; i < N; ++i )
-	{
-		x[i] = (float) ( 12.0 * sere_test_unit( &seed ) - 4.0 );
-		y[i] = (float) ( 6.0 * sere_test_unit( &seed ) - 2.0 );
-		z[i] = (float) ( 3.0 * sere_test_unit( &seed ) - 1.0 );
-	}
+	joint_cloud( 23, jx, jy, jz, J, x, y, z, N );
 	sere_joint_grid* grid;
 	cr_assert_eq( sere_joint_grid_create( jx, jy, jz, J, &grid ), SERE_OK );
 	sere_joint_grid_traffic traffic;
