@@ -213,7 +213,8 @@ static void replay_block( detect_context* c, const sere_collide* collide, int32_
  * box): distances, the only thing the list's argument uses, do not see T. The float |Δ − T|²
  * is within a few ulps of the true one, and the |T| 2⁻¹⁴ taken off δ covers what T adds to
  * cull_radius's |p| term and to the rounding of Δ − T, both far inside the 2⁻⁸ δ of room the
- * grown radius keeps; a NaN fails the test. */
+ * grown radius keeps; a NaN fails the test (it never wins a bound; the last pass catches it). The
+ * passes run in vectors: a minimum or maximum does not depend on the order it is taken in. */
 static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
 						 const float* z, float thickness, int threads )
 {
@@ -230,7 +231,7 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 	{
 		float l = INFINITY, h = -INFINITY;
 		const float *p = now[a], *q = then[a];
-#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( min : l ) reduction( max : h )
+#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( min : l ) reduction( max : h )
 		for ( int32_t i = 0; i < n; ++i )
 		{
 			float d = p[i] - q[i];
@@ -251,7 +252,7 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 	}
 	float limit = skin * skin;
 	int far = 0;
-#pragma omp parallel for num_threads( threads ) schedule( static ) reduction( | : far )
+#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( | : far )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		float dx = x[i] - collide->cache_x[i] - t[0], dy = y[i] - collide->cache_y[i] - t[1];
@@ -263,8 +264,7 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 
 /* The floor of list_serves (sere_collide_touch_served): its passes over the vertices, the same
  * loads with an add in place of the bounds of the displacements and of their distances from the
- * middle. The adds run in vectors (omp simd: a floor's sum may take any order), where
- * list_serves's bounds pass one vertex at a time (gcc keeps its min and max reductions scalar). */
+ * middle, in vectors as there (omp simd: a floor's sum may take any order). */
 static float list_serves_touch( const sere_collide* collide, const float* x, const float* y, const float* z,
 								int threads )
 {
