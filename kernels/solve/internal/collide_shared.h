@@ -144,9 +144,10 @@ struct sere_collide
 	int32_t* block_thread;
 	int32_t* block_start; /* in the buffer of the block's thread and kind */
 	int64_t* block_found; /* count, then the offset of the block's contacts (edge–edge ones after all others) */
-	/* Per block: the time its last detection took (ns), and the running sum of those
-	 * (block_count + 1) the runs are cut from. Timing decides only which thread runs a block,
-	 * never what the block finds or where its contacts go. */
+	/* Per block: the time its last search took (ns), and the running sum (block_count + 1) the
+	 * runs are cut from: of those times for a search, of the listed pairs for a served detection.
+	 * The cut decides only which thread runs a block, never what the block finds or where its
+	 * contacts go. */
 	int64_t* block_work;
 	int64_t* work_prefix;
 
