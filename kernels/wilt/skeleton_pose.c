@@ -66,10 +66,26 @@ sere_status sere_joint_frames_create( sere_joint_frames* frames, int32_t joint_c
 	return SERE_OK;
 }
 
-/* Rotation by `angle` about the unit axis n (Rodrigues), row-major. */
-static void axis_rotation( const double n[3], double angle, double r[9] )
+/* A turn in [0, π] as its cosine and sine (s ≥ 0). Every limit of Sec. 6 comes as a ratio of
+ * lengths and the rotation needs only the cosine and sine, so turns are compared and applied in
+ * this form, without an arc function: acos, atan2 and the sine and cosine of their difference
+ * were 70% of a pose (posing is the chain of each leaf's joints, which no vector hides). */
+typedef struct turn
 {
-	double c = cos( angle ), s = sin( angle ), k = 1.0 - c;
+	double c, s;
+} turn;
+
+/* Whether turn x is smaller than turn y: sin(y − x) > 0, exact in sign where the cosines of two
+ * small turns would round alike. */
+static int turn_before( turn x, turn y )
+{
+	return x.c * y.s - x.s * y.c > 0.0;
+}
+
+/* Rotation by turn t about the unit axis n (Rodrigues), row-major. */
+static void axis_rotation( const double n[3], turn t, double r[9] )
+{
+	double c = t.c, s = t.s, k = 1.0 - c;
 	r[0] = c + k * n[0] * n[0];
 	r[1] = k * n[0] * n[1] - s * n[2];
 	r[2] = k * n[0] * n[2] + s * n[1];
@@ -92,29 +108,41 @@ static void mat_mul( const double a[9], const double b[9], double out[9] )
 	}
 }
 
-/* The largest φ in [0, limit] such that f(ψ) = a cos ψ + b sin ψ stays ≥ h for ψ ∈ [0, φ].
- * With f = R cos(ψ − β), the feasible phases are |ψ − β| ≤ γ = acos(h / R); ψ leaves them at
- * β + γ. A start just outside (rounding at a limit reached by an earlier joint) that is
- * falling gives 0; one that is rising is let through. */
-static double first_exit( double a, double b, double h, double limit )
+/* Shortens *phi to the largest turn such that f(ψ) = a cos ψ + b sin ψ stays ≥ h for ψ in
+ * [0, *phi], and says whether it did. With f = R cos(ψ − β), β = atan2(b, a), the feasible
+ * phases are |ψ − β| ≤ γ = acos(h / R); ψ leaves them at β + γ, whose cosine and sine are
+ * (a h − b S) / R² and (b h + a S) / R² with S = √(R² − h²). At h ≥ R, or at a start just
+ * outside (rounding at a limit reached by an earlier joint) that is falling (β + γ < 0: β < 0
+ * and a < h), the exit is 0; a start outside that is rising is let through. An exit past π
+ * (a negative sine while rising, β > 0) is beyond any turn. */
+static int exit_before( double a, double b, double h, turn* phi )
 {
-	double r = hypot( a, b );
-	if ( h <= -r )
+	double rr = a * a + b * b;
+	if ( h <= 0.0 && h * h >= rr )
 	{
-		return limit;
+		return 0; /* h ≤ −R: f never falls below h */
 	}
-	if ( h >= r )
+	turn exit = { 1.0, 0.0 };
+	if ( ( h < 0.0 || h * h < rr ) && !( signbit( b ) && a < h ) )
 	{
-		return 0.0;
+		double root = sqrt( rr - h * h );
+		exit = ( turn ){ ( a * h - b * root ) / rr, ( b * h + a * root ) / rr };
+		if ( exit.s < 0.0 )
+		{
+			/* past π when rising, else a rounding of an exit at 0 */
+			if ( !signbit( b ) )
+			{
+				return 0;
+			}
+			exit = ( turn ){ 1.0, 0.0 };
+		}
 	}
-	double delta = -atan2( b, a ); /* phase at ψ = 0 */
-	double gamma = acos( h / r );
-	if ( delta > gamma )
+	if ( !turn_before( exit, *phi ) )
 	{
-		return 0.0;
+		return 0;
 	}
-	double exit = gamma - delta;
-	return exit < limit ? exit : limit;
+	*phi = exit;
+	return 1;
 }
 
 enum
@@ -125,11 +153,12 @@ enum
 	LIMIT_DROOP
 };
 
-/* Minimal angle (Sec. 6): the largest turn up to phi that keeps the included angle between the
- * segment g → p (as posed) and the turning segment p → i at least min_angle, cos_limit being
- * −cos(min_angle). u is the segment p → i before the turn, n the turning axis. */
-static double angle_limited_turn( const double* pg, const double* pp, const double u[3], double length,
-								  const double n[3], double cos_limit, double phi )
+/* Minimal angle (Sec. 6): shortens *phi to the largest turn that keeps the included angle between
+ * the segment g → p (as posed) and the turning segment p → i at least min_angle, cos_limit being
+ * −cos(min_angle), and says whether it did. u is the segment p → i before the turn, n the
+ * turning axis. */
+static int angle_limited_turn( const double* pg, const double* pp, const double u[3], double length, const double n[3],
+							   double cos_limit, turn* phi )
 {
 	double w[3] = { pp[0] - pg[0], pp[1] - pg[1], pp[2] - pg[2] };
 	double wl = sqrt( w[0] * w[0] + w[1] * w[1] + w[2] * w[2] );
@@ -137,35 +166,25 @@ static double angle_limited_turn( const double* pg, const double* pp, const doub
 	double e[3] = { n[1] * uh[2], -n[0] * uh[2], n[0] * uh[1] - n[1] * uh[0] };
 	double a = ( w[0] * uh[0] + w[1] * uh[1] + w[2] * uh[2] ) / wl;
 	double b = ( w[0] * e[0] + w[1] * e[1] + w[2] * e[2] ) / wl;
-	return first_exit( a, b, cos_limit, phi );
+	return exit_before( a, b, cos_limit, phi );
 }
 
 /* Maximal droop (Sec. 6): every joint k of the subtree of i turns rigidly about the horizontal
- * axis n through P_p: z_k(φ) = z_p + a cos φ + b sin φ must stay ≥ z_k^rest − droop_max. The
- * largest turn up to phi that keeps it; *limited is set when that is less than phi. */
-static double droop_limited_turn( const sere_skeleton* s, int32_t i, int32_t p, const double* pp, const double* qp,
-								  const double n[3], double droop_max, double phi, int* limited )
+ * axis n through P_p: z_k(φ) = z_p + a cos φ + b sin φ must stay ≥ z_k^rest − droop_max. Shortens
+ * *phi to the largest turn that keeps it and says whether it did. */
+static int droop_limited_turn( const sere_skeleton* s, int32_t i, int32_t p, const double* pp, const double* qp,
+							   const double n[3], double droop_max, turn* phi )
 {
+	int limited = 0;
 	for ( int32_t k = i; k < s->end[i]; ++k )
 	{
 		double v0[3] = { (double) s->x[k] - s->x[p], (double) s->y[k] - s->y[p], (double) s->z[k] - s->z[p] };
 		double v[3];
 		sere_skel_mat_vec( qp, v0, v );
-		double a = v[2];
 		double b = n[0] * v[1] - n[1] * v[0];
-		double h = (double) s->z[k] - droop_max - pp[2];
-		if ( h < 0.0 && h * h >= a * a + b * b )
-		{
-			continue;
-		}
-		double exit = first_exit( a, b, h, phi );
-		if ( exit < phi )
-		{
-			phi = exit;
-			*limited = 1;
-		}
+		limited |= exit_before( v[2], b, (double) s->z[k] - droop_max - pp[2], phi );
 	}
-	return phi;
+	return limited;
 }
 
 /* The rotation r (Rodrigues, about n = u × d / |u × d|) that turns segment p → i, currently u,
@@ -177,7 +196,7 @@ static int segment_rotation( const sere_skeleton* s, const double* work, int32_t
 	int32_t p = s->parent[i];
 	const double* pp = work + 12 * (size_t) p;
 	double length = sqrt( u[0] * u[0] + u[1] * u[1] + u[2] * u[2] );
-	double horizontal = hypot( u[0], u[1] );
+	double horizontal = sqrt( u[0] * u[0] + u[1] * u[1] );
 	/* A vertical segment has no plane with d: pointing down it is done, pointing up it waits. */
 	if ( !( phi > 0.0 && horizontal > 1e-12 * length ) )
 	{
@@ -190,32 +209,30 @@ static int segment_rotation( const sere_skeleton* s, const double* work, int32_t
 	double n[3] = { -u[1] / horizontal, u[0] / horizontal, 0.0 };
 	/* Lu Eq. 1 runs φ up to the angle Ω between u and d, where the segment points straight
 	 * down. */
-	double omega = atan2( horizontal, -u[2] );
-	if ( omega <= phi )
+	turn omega = { -u[2] / length, horizontal / length }, turn_phi = omega;
+	if ( phi < PI )
 	{
-		phi = omega;
+		turn_phi = ( turn ){ cos( phi ), sin( phi ) };
+	}
+	if ( !turn_before( turn_phi, omega ) )
+	{
+		turn_phi = omega;
 		limit = LIMIT_DOWN;
 	}
 	int32_t g = s->parent[p];
-	if ( params->min_angle > 0.0f && g >= 0 && s->vein[p] == s->vein[i] )
+	if ( params->min_angle > 0.0f && g >= 0 && s->vein[p] == s->vein[i] &&
+		 angle_limited_turn( work + 12 * (size_t) g, pp, u, length, n, cos_limit, &turn_phi ) )
 	{
-		double exit = angle_limited_turn( work + 12 * (size_t) g, pp, u, length, n, cos_limit, phi );
-		if ( exit < phi )
-		{
-			phi = exit;
-			limit = LIMIT_ANGLE;
-		}
+		limit = LIMIT_ANGLE;
 	}
-	if ( isfinite( params->droop_max ) )
+	if ( isfinite( params->droop_max ) && droop_limited_turn( s, i, p, pp, pp + 3, n, params->droop_max, &turn_phi ) )
 	{
-		int limited = 0;
-		phi = droop_limited_turn( s, i, p, pp, pp + 3, n, params->droop_max, phi, &limited );
-		limit = limited ? LIMIT_DROOP : limit;
+		limit = LIMIT_DROOP;
 	}
 	st->down_limited += limit == LIMIT_DOWN;
 	st->angle_limited += limit == LIMIT_ANGLE;
 	st->droop_limited += limit == LIMIT_DROOP;
-	axis_rotation( n, phi, r );
+	axis_rotation( n, turn_phi, r );
 	return 1;
 }
 
