@@ -4,8 +4,9 @@
 
 #include "solve/internal/collide_shared.h"
 
-/* The first block of run `part` of `parts`: runs of about equal work by the previous detection
- * (work_prefix), or of equal block counts before any. */
+/* The first block of run `part` of `parts`: runs of about equal work (work_prefix: the blocks'
+ * listed pairs for a served detection, the last search's times for a search), or of equal block
+ * counts before any. */
 static int32_t run_begin( const sere_collide* c, int part, int parts )
 {
 	if ( part >= parts )

@@ -75,11 +75,13 @@ typedef struct turn
 	double c, s;
 } turn;
 
-/* Whether turn x is smaller than turn y: sin(y − x) > 0, exact in sign where the cosines of two
- * small turns would round alike. */
+/* Whether turn x is smaller than turn y: sin(y − x) > 0, which keeps its sign where the cosines
+ * of two small turns would round alike; at a sine of 0 (0 against π) the larger cosine is the
+ * smaller turn. */
 static int turn_before( turn x, turn y )
 {
-	return x.c * y.s - x.s * y.c > 0.0;
+	double d = x.c * y.s - x.s * y.c;
+	return d > 0.0 || ( d == 0.0 && x.c > y.c );
 }
 
 /* Rotation by turn t about the unit axis n (Rodrigues), row-major. */
@@ -123,7 +125,7 @@ static int exit_before( double a, double b, double h, turn* phi )
 		return 0; /* h ≤ −R: f never falls below h */
 	}
 	turn exit = { 1.0, 0.0 };
-	if ( ( h < 0.0 || h * h < rr ) && !( signbit( b ) && a < h ) )
+	if ( h * h < rr && !( signbit( b ) && a < h ) )
 	{
 		double root = sqrt( rr - h * h );
 		exit = ( turn ){ ( a * h - b * root ) / rr, ( b * h + a * root ) / rr };
@@ -210,6 +212,8 @@ static int segment_rotation( const sere_skeleton* s, const double* work, int32_t
 	/* Lu Eq. 1 runs φ up to the angle Ω between u and d, where the segment points straight
 	 * down. */
 	turn omega = { -u[2] / length, horizontal / length }, turn_phi = omega;
+	/* a target at or past π (where its sine would turn negative) is past Ω: the segment points
+	 * down */
 	if ( phi < PI )
 	{
 		turn_phi = ( turn ){ cos( phi ), sin( phi ) };

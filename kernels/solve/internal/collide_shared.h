@@ -15,11 +15,12 @@
 /* Vertices are queried in fixed blocks, each thread taking one contiguous run of them: it then
  * queries the part of the mesh whose BVH subtrees it refit (sere_bvh orders its parallel refit by
  * vertex index), reading nodes from its own cache; handing blocks out dynamically measured 40%
- * slower on two cores for that traffic. The runs are cut at equal time as the previous detection
+ * slower on two cores for that traffic. A search's runs are cut at equal time as the last search
  * measured it per block (crumpled parts of a leaf cost several times flat ones: on the dried
  * maple an even cut gave one thread 60% of the work, and counts of triangles and pairs missed
- * the traversal's share), which moves the cut only where the leaf changed. A block's contacts land in the list by block
- * index, whichever thread ran it. */
+ * the traversal's share), which moves the cut only where the leaf changed; a served detection
+ * walks no tree, and its runs are cut at equal counts of listed pairs. A block's contacts land
+ * in the list by block index, whichever thread ran it. */
 #define DETECT_BLOCK 64
 
 /* The skin of the candidate list, as a fraction of the thickness. A detection that searches the
