@@ -226,8 +226,7 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 	}
 	int32_t n = collide->vertex_count;
 	const float *cx = collide->cache_x, *cy = collide->cache_y, *cz = collide->cache_z;
-	/* the three axes in one pass, one team started, not three (any schedule: a minimum does not
-	 * depend on its order) */
+	/* the three axes in one pass: one team started, not three */
 	float lx = INFINITY, ly = INFINITY, lz = INFINITY, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
 #pragma omp parallel for simd num_threads( threads ) reduction( min : lx, ly, lz ) reduction( max : hx, hy, hz )
 	for ( int32_t i = 0; i < n; ++i )
