@@ -112,6 +112,7 @@ static void collide_free( sere_collide* c )
 					   c->cache_item,
 					   c->cache_target,
 					   c->cache_near,
+					   c->cache_gap,
 					   c->cache_block_thread,
 					   c->cache_block_start,
 					   c->cache_block_count,
@@ -342,7 +343,7 @@ static sere_status alloc_slots( sere_collide* c, int32_t slots )
 	size_t vn = (size_t) sere_pad( c->vertex_count ), listed = (size_t) c->cache_capacity * (size_t) slots;
 	void** field[] = { (void**) &c->entry_cursor, (void**) &c->run_total,  (void**) &c->far_count,
 					   (void**) &c->lane_mark,	  (void**) &c->cache_item, (void**) &c->cache_target,
-					   (void**) &c->cache_near,	  (void**) &c->cache_used };
+					   (void**) &c->cache_near,	  (void**) &c->cache_gap,  (void**) &c->cache_used };
 	size_t bytes[] = { sizeof( int32_t ) * vn * (size_t) slots,
 					   sizeof( int32_t ) * 2 * FAR_STRIDE * (size_t) slots,
 					   sizeof( int32_t ) * FAR_STRIDE * (size_t) slots,
@@ -350,6 +351,7 @@ static sere_status alloc_slots( sere_collide* c, int32_t slots )
 					   sizeof( int32_t ) * listed,
 					   sizeof( int32_t ) * listed,
 					   listed,
+					   sizeof( float ) * listed,
 					   sizeof( int32_t ) * FAR_STRIDE * (size_t) slots };
 	enum
 	{

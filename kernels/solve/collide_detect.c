@@ -183,29 +183,55 @@ static void list_contacts( sere_collide* c, const int32_t* tri, int64_t total, i
 	}
 }
 
-/* Runs the exact test on block `block`'s listed pairs (see SKIN), in their order, as the search
- * would have buffered them. */
+/* Runs the exact test on block `block`'s listed pairs (see SKIN) that the motion since the listing
+ * may have brought within the thickness (list_reach2), in their order, as the search would have
+ * buffered them. */
 static void replay_block( detect_context* c, const sere_collide* collide, int32_t block, bool vertices )
 {
 	size_t base = (size_t) collide->cache_block_thread[block] * (size_t) collide->cache_capacity +
 				  (size_t) collide->cache_block_start[block];
+	const int32_t *item = collide->cache_item + base, *target = collide->cache_target + base;
+	const uint8_t* near = collide->cache_near + base;
+	const float* gap = collide->cache_gap + base;
 	int32_t count = collide->cache_block_count[block];
-	for ( int32_t done = 0; done < count; done += PAIR_BUFFER )
+	float reach2 = collide->cache_reach2, sum = 0.0f;
+	bool replay = replaying( c );
+	c->pair_count = 0;
+	for ( int32_t start = 0; start < count; start += CLOSEST_LANES )
 	{
-		int32_t batch = count - done < PAIR_BUFFER ? count - done : PAIR_BUFFER;
-		memcpy( c->pair_item, collide->cache_item + base + done, sizeof( int32_t ) * (size_t) batch );
-		memcpy( c->pair_target, collide->cache_target + base + done, sizeof( int32_t ) * (size_t) batch );
-		memcpy( c->pair_near, collide->cache_near + base + done, (size_t) batch );
-		c->pair_count = batch;
-		if ( vertices )
+		int32_t lanes = count - start < CLOSEST_LANES ? count - start : CLOSEST_LANES;
+		uint32_t keep = 0;
+		for ( int32_t l = 0; l < lanes; ++l )
 		{
-			sere_coll_detect_flush( c );
+			/* the floor loads the distances and takes the recorded outcome */
+			if ( replay )
+			{
+				sum += gap[start + l];
+			}
+			else
+			{
+				keep |= (uint32_t) ( gap[start + l] <= reach2 ) << l;
+			}
 		}
-		else
+		keep = replay ? recorded_mask( c ) : traced_mask( c, keep );
+		for ( ; keep != 0; keep &= keep - 1 )
 		{
-			sere_coll_detect_edge_flush( c );
+			if ( c->pair_count == PAIR_BUFFER )
+			{
+				( vertices ? sere_coll_detect_flush : sere_coll_detect_edge_flush )( c );
+			}
+			int32_t k = start + __builtin_ctz( keep );
+			c->pair_item[c->pair_count] = item[k];
+			c->pair_target[c->pair_count] = target[k];
+			c->pair_near[c->pair_count] = near[k];
+			c->pair_count += 1;
 		}
 	}
+	if ( replay )
+	{
+		c->run->sink += sum;
+	}
+	( vertices ? sere_coll_detect_flush : sere_coll_detect_edge_flush )( c );
 }
 
 /* True when the list (see SKIN) serves positions x, y, z and this thickness: it is whole, was made
@@ -215,9 +241,11 @@ static void replay_block( detect_context* c, const sere_collide* collide, int32_
  * is within a few ulps of the true one, and the |T| 2⁻¹⁴ taken off δ covers what T adds to
  * cull_radius's |p| term and to the rounding of Δ − T, both far inside the 2⁻⁸ δ of room the
  * grown radius keeps; a NaN fails the test (it never wins a bound; the last pass catches it). The
- * passes run in vectors: a minimum or maximum does not depend on the order it is taken in. */
-static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-						 const float* z, float thickness, int threads )
+ * passes run in vectors: a minimum or maximum does not depend on the order it is taken in. When the
+ * list serves, the largest displacement less T sets which listed pairs the detection tests
+ * (list_reach2). */
+static bool list_serves( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
+						 float thickness, int threads )
 {
 	if ( !collide->cache_valid || !( thickness <= collide->cache_thickness ) ||
 		 sere_bvh_generation( bvh ) != collide->cache_generation )
@@ -241,20 +269,32 @@ static bool list_serves( const sere_collide* collide, const sere_bvh* bvh, const
 		return false;
 	}
 	float t[3] = { 0.5f * ( lo[0] + hi[0] ), 0.5f * ( lo[1] + hi[1] ), 0.5f * ( lo[2] + hi[2] ) };
-	float skin = collide->cache_delta - ( fabsf( t[0] ) + fabsf( t[1] ) + fabsf( t[2] ) ) * 0x1p-14f;
+	float shift = fabsf( t[0] ) + fabsf( t[1] ) + fabsf( t[2] );
+	float skin = collide->cache_delta - shift * 0x1p-14f;
 	if ( !( skin > 0.0f ) )
 	{
 		return false;
 	}
-	float limit = skin * skin;
-	int far = 0;
-#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( | : far )
+	float limit = skin * skin, moved2 = 0.0f, far = 0.0f;
+	int beyond = 0;
+#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( |                                   \
+																				   : beyond )                          \
+	reduction( max                                                                                                     \
+			   : moved2, far )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		float dx = x[i] - cx[i] - t[0], dy = y[i] - cy[i] - t[1], dz = z[i] - cz[i] - t[2];
-		far |= !( dx * dx + dy * dy + dz * dz <= limit );
+		float d2 = dx * dx + dy * dy + dz * dz, p = fabsf( x[i] ) + fabsf( y[i] ) + fabsf( z[i] );
+		beyond |= !( d2 <= limit );
+		moved2 = d2 > moved2 ? d2 : moved2;
+		far = p > far ? p : far;
 	}
-	return !far;
+	if ( beyond )
+	{
+		return false;
+	}
+	collide->cache_reach2 = list_reach2( thickness, sqrtf( moved2 ), far + shift + 2.0f * collide->cache_delta );
+	return true;
 }
 
 /* The floor of list_serves (sere_collide_touch_served): its passes over the vertices, the same
@@ -284,8 +324,8 @@ static int detect_threads( const sere_collide* collide )
 	return threads < collide->slots ? threads : collide->slots;
 }
 
-bool sere_coll_list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-							const float* z, float thickness )
+bool sere_coll_list_serves( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
+							float thickness )
 {
 	return list_serves( collide, bvh, x, y, z, thickness, detect_threads( collide ) );
 }
@@ -357,6 +397,7 @@ static void context_init( detect_context* c, const sere_collide* collide, const 
 		.list_item = collide->cache_item + (size_t) tid * (size_t) collide->cache_capacity,
 		.list_target = collide->cache_target + (size_t) tid * (size_t) collide->cache_capacity,
 		.list_near = collide->cache_near + (size_t) tid * (size_t) collide->cache_capacity,
+		.list_gap = collide->cache_gap + (size_t) tid * (size_t) collide->cache_capacity,
 		.list_capacity = collide->cache_capacity,
 		.across = { collide->edge_across, collide->edge_across + across_stride,
 					collide->edge_across + 2 * across_stride },
@@ -386,6 +427,8 @@ static void keep_list( sere_collide* collide, const sere_bvh* bvh, const float* 
 		memcpy( collide->cache_z, z, sizeof( float ) * (size_t) collide->vertex_count );
 		collide->cache_thickness = thickness;
 		collide->cache_generation = sere_bvh_generation( bvh );
+		/* until list_serves measures the motion, every listed pair is tested */
+		collide->cache_reach2 = INFINITY;
 	}
 }
 

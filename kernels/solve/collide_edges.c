@@ -266,8 +266,13 @@ void sere_coll_detect_edge_flush( detect_context* c )
 		{
 			c->run->exact_pairs += count;
 		}
+		float* gap = listed_gaps( c, start );
 		if ( replaying( c ) )
 		{
+			for ( int32_t l = 0; gap != NULL && l < count; ++l )
+			{
+				gap[l] *= c->one;
+			}
 			uint32_t tested = recorded_mask( c ), emitted = recorded_mask( c );
 			float sum = ( sum_rows( a0, 3 ) + sum_rows( a1, 3 ) ) + ( sum_rows( b0, 3 ) + sum_rows( b1, 3 ) );
 			for ( ; tested != 0; tested &= tested - 1 )
@@ -284,6 +289,10 @@ void sere_coll_detect_edge_flush( detect_context* c )
 			continue;
 		}
 		closest_segments_lanes( a0, a1, b0, b1, w, d2 );
+		for ( int32_t l = 0; gap != NULL && l < count; ++l )
+		{
+			gap[l] = d2[l];
+		}
 		uint32_t hits = 0;
 		for ( int32_t l = 0; l < count; ++l )
 		{

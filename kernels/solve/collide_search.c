@@ -269,9 +269,14 @@ void sere_coll_detect_flush( detect_context* c )
 		{
 			c->run->exact_pairs += count;
 		}
+		float* gap = listed_gaps( c, start );
 		if ( replaying( c ) )
 		{
 			c->run->sink += sum_points( p, a, b, cc );
+			for ( int32_t l = 0; gap != NULL && l < count; ++l )
+			{
+				gap[l] *= c->one;
+			}
 			for ( uint32_t emitted = recorded_mask( c ); emitted != 0; emitted &= emitted - 1 )
 			{
 				int32_t l = __builtin_ctz( emitted );
@@ -280,6 +285,10 @@ void sere_coll_detect_flush( detect_context* c )
 			continue;
 		}
 		closest_lanes( p, a, b, cc, w, q, d2, slow );
+		for ( int32_t l = 0; gap != NULL && l < count; ++l )
+		{
+			gap[l] = slow[l] ? 0.0f : d2[l];
+		}
 		uint32_t candidates = 0, emitted = 0;
 		for ( int32_t l = 0; l < count; ++l )
 		{

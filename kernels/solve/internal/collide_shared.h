@@ -227,8 +227,9 @@ struct sere_collide
 	/* The candidate list (see SKIN): the positions it was built at, the thickness and tree
 	 * generation it was built for, and per block the pairs the exact test must see while no
 	 * vertex has moved by more than the skin, in the order the search met them: per thread
-	 * cache_capacity pairs (the vertex or edge, the triangle or other edge, and the vertex's
-	 * neighbour flag), and per block the thread, first pair and count. */
+	 * cache_capacity pairs (the vertex or edge, the triangle or other edge, the vertex's
+	 * neighbour flag and their squared distance at the listing, see list_reach2), and per block the
+	 * thread, first pair and count. */
 	bool cache_valid;
 	float skin;			/* the next list's skin, a fraction of the thickness (SKIN) */
 	float cache_delta;	/* the list's skin δ */
@@ -240,6 +241,8 @@ struct sere_collide
 	float *cache_x, *cache_y, *cache_z;
 	int32_t *cache_item, *cache_target;
 	uint8_t* cache_near;
+	float* cache_gap;
+	float cache_reach2; /* list_reach2: the served detection's bound on a contact's squared listed distance */
 	int32_t *cache_block_thread, *cache_block_start, *cache_block_count;
 	int32_t* cache_used; /* per thread, FAR_STRIDE apart: pairs listed, or −1 after an overflow */
 
@@ -517,6 +520,7 @@ typedef struct detect_context
 	float grow;
 	int32_t *list_item, *list_target;
 	uint8_t* list_near;
+	float* list_gap; /* the pairs' squared distances at the listing, see list_reach2 */
 	int32_t list_used, list_capacity;
 	const float* across[3]; /* sere_collide.edge_across's rows */
 	/* Recording or replaying a search (see sere_collide_touch_search): this run's record, NULL
@@ -631,6 +635,33 @@ static inline float list_radius( const detect_context* c, const float far[3] )
 	return r + r * 0x1p-10f + ( fabsf( far[0] ) + fabsf( far[1] ) + fabsf( far[2] ) ) * 0x1p-16f;
 }
 
+/* What a served detection tests of the list (see SKIN). A listing search runs the exact test on
+ * every pair it lists, so it keeps each one's squared distance then (0 where the vector test's
+ * result is not meaningful, a degenerate triangle: that pair is always tested). A point of a
+ * triangle or edge moves by at most D when its corners do, so a distance changes by at most 2D:
+ * with D (moved) the largest displacement since the listing, up to the translation T that
+ * list_serves takes off, a pair farther than the thickness plus 2D then is farther than the
+ * thickness now and cannot be a contact. The served detection skips those, keeping the others in
+ * the list's order: the same contacts in the same order. Float distances are within a few ulps
+ * of the coordinates of the true ones (|p| 2⁻¹⁹ is ample), which `far` 2⁻¹⁴ covers, with far
+ * bounding |p| then and now (the largest |x| + |y| + |z| now, plus |T| and 2δ); 2⁻¹⁰ of the reach
+ * covers its own rounding. A list is tested least just after its search, when D is small and its
+ * pairs are needed least. Returns the bound on a contact's squared distance at the listing. */
+static inline float list_reach2( float thickness, float moved, float far )
+{
+	float reach = thickness + 2.0f * moved;
+	reach += reach * 0x1p-10f + far * 0x1p-14f;
+	return reach * reach;
+}
+
+/* Listing: where the squared distances of buffered pairs start .. start + count − 1 go in the
+ * calling thread's list (list_reach2: the buffer's pairs are the list's last pair_count), NULL
+ * when nothing is being listed or the list is full. */
+static inline float* listed_gaps( const detect_context* c, int32_t start )
+{
+	return c->listing && c->list_used >= 0 ? c->list_gap + ( c->list_used - c->pair_count + start ) : NULL;
+}
+
 /* collide_search.c: vertex–triangle detection. */
 
 /* The exact test (closest_point, Ericson 5.1.5) of the buffered vertex–triangle pairs, in the
@@ -663,8 +694,8 @@ float sere_coll_edge_across_touch( sere_collide* collide, const int32_t* tri, co
 
 /* Whether the candidate list (see SKIN) serves a detection at these positions and thickness:
  * sere_collide_resolve asks before refitting the tree, which a served detection does not read. */
-bool sere_coll_list_serves( const sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y,
-							const float* z, float thickness );
+bool sere_coll_list_serves( sere_collide* collide, const sere_bvh* bvh, const float* x, const float* y, const float* z,
+							float thickness );
 
 /* sere_collide_detect, told whether the list serves (served 1 or 0, from sere_coll_list_serves at
  * the same positions, tree and thickness) or to find out (−1). */

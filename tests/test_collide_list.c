@@ -1,0 +1,252 @@
+/* The candidate list (collide_shared.h, SKIN): a detection it serves finds what a search finds,
+ * bit for bit, it skips the tree, and it tests only the listed pairs the motion since the listing
+ * can have brought within the thickness (list_reach2). */
+#include "collide_sheet.h"
+#include "ref/collide_ref.h"
+#include "solve/bvh.h"
+#include "solve/collide.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A detection served by the candidate list (collide.c, SKIN) must find what a search finds: the
+ * same contacts of both kinds, bit for bit and in the same order. A crumpled sheet folded through
+ * itself moves by a slowly growing amplitude (about 0.1 thickness a step at the folds), drifts by
+ * a common translation of 1.2 thicknesses a step (which the list allows for), thins by 0.1% a
+ * step, and has its tree rebuilt once midway; a workspace kept across the steps (the list
+ * serving most of them) is compared with a fresh one each step (always searching) and with
+ * brute force, at 1, 2 and 3 threads. */
+Test( collide, listed_detection_equals_search_while_the_sheet_moves )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h0 = 0.3f * s.cell;
+	for ( int threads = 1; threads <= 3; ++threads )
+	{
+		omp_set_num_threads( threads );
+		collide_sheet_crumple( &s, 0.3, 0.3 * h0, 5 );
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+		sere_collide* kept;
+		cr_assert_eq( sere_collide_create( bvh, 1 << 16, &kept ), SERE_OK );
+		int32_t served = 0, searched = 0, most = 0, most_edges = 0;
+		for ( int step = 0; step < 40; ++step )
+		{
+			float h = h0 * powf( 0.999f, (float) step );
+			collide_sheet_crumple( &s, 0.3 + 0.0005 * step, 0.3 * h0, 5 );
+			for ( int32_t i = 0; i < s.n; ++i )
+			{
+				s.x[i] += 1.2f * h0 * (float) step, s.y[i] -= 0.7f * h0 * (float) step;
+			}
+			if ( step == 20 )
+			{
+				cr_assert_eq( sere_bvh_build( bvh, s.x, s.y, s.z ), SERE_OK );
+			}
+			cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+			int32_t edges = 0;
+			int32_t count = collide_check_pairs( &s, bvh, kept, h, "listed", &edges );
+			int32_t uses = sere_collide_list_uses( kept );
+			served += uses > 0, searched += uses == 0;
+			most = count > most ? count : most;
+			most_edges = edges > most_edges ? edges : most_edges;
+			sere_collide* fresh;
+			cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+			int32_t fresh_count = -1;
+			cr_assert_eq( sere_collide_detect( fresh, bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+			cr_assert_eq( sere_collide_list_uses( fresh ), 0 );
+			int32_t n_kept, n_fresh, e_kept, e_fresh;
+			const sere_contact* a = sere_collide_contacts( kept, &n_kept );
+			const sere_contact* b = sere_collide_contacts( fresh, &n_fresh );
+			const sere_edge_contact* ea = sere_collide_edge_contacts( kept, &e_kept );
+			const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_fresh );
+			cr_assert( n_kept == n_fresh && e_kept == e_fresh, "%d threads, step %d: %d + %d contacts, search %d + %d",
+					   threads, step, n_kept, e_kept, n_fresh, e_fresh );
+			/* tolerance 0: the same pairs through the same exact test, in the same order */
+			cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_kept ) == 0, "%d threads, step %d", threads,
+					   step );
+			cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_kept ) == 0, "%d threads, step %d",
+					   threads, step );
+			sere_collide_destroy( fresh );
+		}
+		cr_assert_gt( most, 50, "the crumple must fold the sheet onto itself" );
+		cr_assert_gt( most_edges, 20, "the crumple must bring edges across each other" );
+		cr_assert_gt( served, 20, "%d threads: the list must serve most steps (served %d)", threads, served );
+		cr_assert_gt( searched, 2, "%d threads: the motion and the rebuild must outgrow the list (searched %d)",
+					  threads, searched );
+		sere_collide_destroy( kept );
+		sere_bvh_destroy( bvh );
+	}
+	collide_sheet_free( &s );
+}
+
+/* sere_collide_resolve refits the tree only for a detection that searches it: over a sheet
+ * crumpling step by step, a step the candidate list serves leaves the tree's nodes as they were,
+ * a step that searches refits them, and every step's contacts are the brute-force sets. The
+ * vertices are pinned (inverse mass 0), so the response moves nothing and the next step's
+ * positions are the crumple's alone. */
+Test( collide, resolve_refits_the_tree_only_when_it_searches )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h = 0.3f * s.cell;
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.inv_m[i] = 0.0f;
+	}
+	/* the tree is made on the flat sheet: the first step searches and refits (or rebuilds) it */
+	collide_sheet_tree( &s, 1 << 16 );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.dt = 0.01f;
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
+	int32_t node_count;
+	sere_bvh_nodes( s.bvh, &node_count );
+	size_t bytes = sizeof( sere_bvh_node ) * (size_t) node_count;
+	sere_bvh_node* before = malloc( bytes );
+	int64_t capacity = 1 << 16;
+	int32_t *rv = malloc( sizeof( int32_t ) * capacity ), *rt = malloc( sizeof( int32_t ) * capacity );
+	int32_t* found = malloc( 2 * sizeof( int32_t ) * capacity );
+	int32_t served = 0, searched = 0;
+	for ( int step = 0; step < 30; ++step )
+	{
+		collide_sheet_crumple( &s, 0.3 + 0.0005 * step, 0.3 * h, 5 );
+		memcpy( before, sere_bvh_nodes( s.bvh, &node_count ), bytes );
+		sere_collide_stats stats;
+		cr_assert_eq( sere_collide_resolve( s.c, s.bvh, &state, &params, &stats ), SERE_OK );
+		bool kept = memcmp( before, sere_bvh_nodes( s.bvh, &node_count ), bytes ) == 0;
+		bool listed = sere_collide_list_uses( s.c ) > 0;
+		served += listed, searched += !listed;
+		cr_assert_eq( kept, listed, "step %d: the list %s and the tree was %s", step,
+					  listed ? "served" : "did not serve", kept ? "left as it was" : "refit" );
+		int32_t count;
+		const sere_contact* contacts = sere_collide_contacts( s.c, &count );
+		int64_t brute = sere_collide_ref_pairs( s.x, s.y, s.z, s.n, s.tri, s.triangles, h, rv, rt, capacity );
+		cr_assert_eq( count, brute, "step %d: %d contacts, brute force %lld", step, count, (long long) brute );
+		for ( int32_t k = 0; k < count; ++k )
+		{
+			found[2 * k] = contacts[k].vertex, found[2 * k + 1] = contacts[k].triangle;
+		}
+		qsort( found, (size_t) count, 2 * sizeof( int32_t ), collide_cmp_pair );
+		for ( int32_t k = 0; k < count; ++k )
+		{
+			cr_assert( found[2 * k] == rv[k] && found[2 * k + 1] == rt[k], "step %d, pair %d", step, k );
+		}
+		collide_check_edge_pairs( s.x, s.y, s.z, s.tri, s.triangles, s.c, h, "resolve" );
+	}
+	cr_assert_gt( served, 10, "the list must serve most steps (served %d)", served );
+	cr_assert_gt( searched, 1, "the crumple must outgrow the list (searched %d)", searched );
+	free( before ), free( rv ), free( rt ), free( found );
+	collide_sheet_release( &s );
+}
+
+/* The list's radius at its bound: a U-fold whose halves face each other at 1.47 thicknesses (a
+ * fresh workspace's first list has a skin of 0.25 thickness, so it lists pairs up to 1.5
+ * thicknesses apart) closes to 0.99 thickness by moving every vertex 0.24 thickness at most
+ * (z ↦ d + z (gap − 2d) / gap): the list must serve that detection and hold every pair that has
+ * come within the thickness, both kinds, as the fresh search and brute force find them. */
+Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
+{
+	collide_sheet s;
+	float h = 0.3f * collide_sheet_make( &s, 36, 24, 7 ), gap = 1.47f * h, d = 0.24f * h;
+	collide_sheet_fold( &s, gap );
+	collide_sheet_tree( &s, 1 << 16 );
+	int32_t before = -1;
+	cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
+	cr_assert_eq( sere_collide_list_uses( s.c ), 0 );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		s.z[i] = d + s.z[i] * ( gap - 2.0f * d ) / gap;
+	}
+	cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
+	int32_t edges = 0;
+	int32_t count = collide_check_pairs( &s, s.bvh, s.c, h, "closed fold", &edges );
+	cr_assert_eq( sere_collide_list_uses( s.c ), 1, "the list must serve a move within its skin" );
+	cr_assert_gt( count, 10 * ( before + 10 ), "closing the fold must bring the halves within the thickness" );
+	cr_assert_gt( edges, 100 );
+	sere_collide* fresh;
+	cr_assert_eq( sere_collide_create( s.bvh, 1 << 16, &fresh ), SERE_OK );
+	int32_t fresh_count = -1;
+	cr_assert_eq( sere_collide_detect( fresh, s.bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+	int32_t n_a, n_b, e_a, e_b;
+	const sere_contact* a = sere_collide_contacts( s.c, &n_a );
+	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
+	const sere_edge_contact* ea = sere_collide_edge_contacts( s.c, &e_a );
+	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
+	cr_assert( n_a == n_b && e_a == e_b );
+	/* tolerance 0: the same pairs through the same exact test, in the same order */
+	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0 );
+	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0 );
+	sere_collide_destroy( fresh );
+	collide_sheet_release( &s );
+}
+
+/* The pairs a served pass tests of its list (collide_shared.h, list_reach2): only those the motion
+ * since the listing can have brought within the thickness. On the U-fold of the test above, the
+ * halves 1.47 thicknesses apart: served where the list was made, the pass tests what is within
+ * the thickness there (in the bend), not the pairs across the flat halves; after every vertex
+ * moved 0.05 thickness it still does not (1.47 − 0.1 is beyond 1 + 0.1); after the fold
+ * closed to 0.99 thickness by moves of 0.24 it tests the pairs across, and finds the contacts a
+ * search finds. The counts are the recorded pass's exact tests (sere_collide_record_served). */
+Test( collide, served_pass_tests_only_pairs_the_motion_can_bring_within_the_thickness )
+{
+	collide_sheet s;
+	float h = 0.3f * collide_sheet_make( &s, 36, 24, 7 ), gap = 1.47f * h;
+	collide_sheet_fold( &s, gap );
+	collide_sheet_tree( &s, 1 << 16 );
+	size_t n = (size_t) s.n;
+	for ( size_t i = 0; i < n; ++i )
+	{
+		s.inv_m[i] = 0.0f;
+	}
+	sere_collide_traffic search, still, nudged, closed;
+	cr_assert_eq( sere_collide_record_search( s.c, s.bvh, s.x, s.y, s.z, h, &search ), SERE_OK );
+	cr_assert_gt( search.exact_pairs, 1000, "the search lists the pairs across the fold" );
+	sere_collide_params params = sere_collide_params_default();
+	params.thickness = h;
+	params.dt = 0.01f;
+	sere_collide_state state = { s.x, s.y, s.z, s.vx, s.vy, s.vz, s.inv_m, NULL, NULL, NULL };
+	float* z0 = malloc( sizeof( float ) * n );
+	memcpy( z0, s.z, sizeof( float ) * n );
+	float moves[3] = { 0.0f, 0.05f * h, 0.24f * h };
+	sere_collide_traffic* traffic[3] = { &still, &nudged, &closed };
+	for ( int k = 0; k < 3; ++k )
+	{
+		float d = moves[k];
+		for ( size_t i = 0; i < n; ++i )
+		{
+			s.z[i] = d + z0[i] * ( gap - 2.0f * d ) / gap;
+		}
+		cr_assert_eq( sere_collide_record_served( s.c, s.bvh, &state, &params, traffic[k] ), SERE_OK,
+					  "the list serves a move of %g thickness", (double) ( d / h ) );
+		int32_t count, edges, fresh_count, fresh_edges;
+		const sere_contact* a = sere_collide_contacts( s.c, &count );
+		const sere_edge_contact* ea = sere_collide_edge_contacts( s.c, &edges );
+		sere_collide* fresh;
+		cr_assert_eq( sere_collide_create( s.bvh, 1 << 16, &fresh ), SERE_OK );
+		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
+		cr_assert_eq( sere_collide_detect( fresh, s.bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
+		const sere_contact* b = sere_collide_contacts( fresh, &fresh_count );
+		const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &fresh_edges );
+		cr_assert( count == fresh_count && edges == fresh_edges, "move %d: %d + %d contacts, search %d + %d", k, count,
+				   edges, fresh_count, fresh_edges );
+		/* tolerance 0: the same pairs through the same exact test, in the same order */
+		cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) count ) == 0, "move %d", k );
+		cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) edges ) == 0, "move %d", k );
+		sere_collide_destroy( fresh );
+	}
+	cr_assert_eq( sere_collide_list_uses( s.c ), 3 );
+	cr_assert_lt( still.exact_pairs * 4, search.exact_pairs, "unmoved: %ld of %ld listed pairs tested",
+				  (long) still.exact_pairs, (long) search.exact_pairs );
+	/* a wider reach only adds pairs; across the flat halves it adds none */
+	cr_assert_geq( nudged.exact_pairs, still.exact_pairs );
+	cr_assert_lt( nudged.exact_pairs * 4, search.exact_pairs, "moved 0.05: %ld of %ld listed pairs tested",
+				  (long) nudged.exact_pairs, (long) search.exact_pairs );
+	cr_assert_gt( closed.exact_pairs, still.exact_pairs + 1000, "closed: %ld pairs tested", (long) closed.exact_pairs );
+	cr_assert_leq( closed.exact_pairs, search.exact_pairs );
+	cr_assert_gt( closed.contacts, 100, "closing the fold must bring the halves within the thickness" );
+	free( z0 );
+	collide_sheet_release( &s );
+}
