@@ -6,20 +6,11 @@
 
 /* For CLOSEST_LANES segment pairs: bit l set unless separating directions put the segments
  * farther apart than list_radius: their common normal e × f (where they are not parallel to
- * within sin² 2⁻²⁰), each one's direction and the unit vector across each one in the plane of its
- * first triangle (the table's across for e, recomputed for f). */
-static uint32_t edge_bound_lanes( const detect_context* c, const int32_t* item, const int32_t* target,
-								  float a0[3][CLOSEST_LANES], float a1[3][CLOSEST_LANES], float b0[3][CLOSEST_LANES],
-								  float b1[3][CLOSEST_LANES] )
+ * within sin² 2⁻²⁰) and f's direction. The edge table (table_hits) already tested e's direction
+ * and the planes across both edges, with a margin no larger. */
+static uint32_t edge_bound_lanes( const detect_context* c, float a0[3][CLOSEST_LANES], float a1[3][CLOSEST_LANES],
+								  float b0[3][CLOSEST_LANES], float b1[3][CLOSEST_LANES] )
 {
-	float across[2][3][CLOSEST_LANES];
-	for ( int l = 0; l < CLOSEST_LANES; ++l )
-	{
-		for ( int r = 0; r < 3; ++r )
-		{
-			across[0][r][l] = c->across[r][item[l]], across[1][r][l] = c->across[r][target[l]];
-		}
-	}
 	int32_t keep[CLOSEST_LANES];
 #pragma omp simd
 	for ( int l = 0; l < CLOSEST_LANES; ++l )
@@ -42,18 +33,16 @@ static uint32_t edge_bound_lanes( const detect_context* c, const int32_t* item, 
 			far[r] = m0 > m1 ? m0 : m1;
 		}
 		float radius = list_radius( c, far ), r2 = radius * radius;
-		/* The directions at their own lengths (the across vectors are unit): a gap G along a
-		 * direction of length² dd is G / √dd, and G / √dd ≥ r is tested as G ≥ 0 and G² ≥ r² dd,
-		 * without a square root or division. A direction of length 0 (parallel or zero-length
-		 * segments) tells nothing. */
-		float d[5][3], dd[5] = { skew ? nn : 0.0f, uu, vv, 1.0f, 1.0f };
+		/* The directions at their own lengths: a gap G along a direction of length² dd is G / √dd,
+		 * and G / √dd ≥ r is tested as G ≥ 0 and G² ≥ r² dd, without a square root or division. A
+		 * direction of length 0 (parallel or zero-length segments) tells nothing. */
+		float d[2][3], dd[2] = { skew ? nn : 0.0f, vv };
 		for ( int r = 0; r < 3; ++r )
 		{
-			d[0][r] = n[r], d[1][r] = u[r], d[2][r] = v[r];
-			d[3][r] = across[0][r][l], d[4][r] = across[1][r][l];
+			d[0][r] = n[r], d[1][r] = v[r];
 		}
 		int beyond = 0;
-		for ( int k = 0; k < 5; ++k )
+		for ( int k = 0; k < 2; ++k )
 		{
 			/* e's ends a0, a1 and f's b0, b1, relative to a0 */
 			float pa = w2[0] * d[k][0] + w2[1] * d[k][1] + w2[2] * d[k][2];
@@ -211,30 +200,16 @@ static void list_edge_pairs( detect_context* c )
 		int32_t count = c->pair_count - start < CLOSEST_LANES ? c->pair_count - start : CLOSEST_LANES;
 		float a0[3][CLOSEST_LANES], a1[3][CLOSEST_LANES], b0[3][CLOSEST_LANES], b1[3][CLOSEST_LANES];
 		gather_edge_pairs( c, start, count, a0, a1, b0, b1 );
-		int32_t item[CLOSEST_LANES], target[CLOSEST_LANES];
-		for ( int32_t l = 0; l < CLOSEST_LANES; ++l )
-		{
-			int32_t k = start + ( l < count ? l : count - 1 );
-			item[l] = c->pair_item[k], target[l] = c->pair_target[k];
-		}
 		uint32_t keep;
 		if ( replaying( c ) )
 		{
-			/* edge_bound_lanes' loads: the ends, and the across vectors of both edges */
+			/* edge_bound_lanes' loads: the ends */
 			keep = recorded_mask( c );
-			float sum = ( sum_rows( a0, 3 ) + sum_rows( a1, 3 ) ) + ( sum_rows( b0, 3 ) + sum_rows( b1, 3 ) );
-			for ( int l = 0; l < CLOSEST_LANES; ++l )
-			{
-				for ( int r = 0; r < 3; ++r )
-				{
-					sum += c->across[r][item[l]] + c->across[r][target[l]];
-				}
-			}
-			c->run->sink += sum;
+			c->run->sink += ( sum_rows( a0, 3 ) + sum_rows( a1, 3 ) ) + ( sum_rows( b0, 3 ) + sum_rows( b1, 3 ) );
 		}
 		else
 		{
-			keep = traced_mask( c, edge_bound_lanes( c, item, target, a0, a1, b0, b1 ) & ( ( 1u << count ) - 1u ) );
+			keep = traced_mask( c, edge_bound_lanes( c, a0, a1, b0, b1 ) & ( ( 1u << count ) - 1u ) );
 		}
 		if ( c->run != NULL )
 		{
@@ -571,7 +546,7 @@ void sere_coll_detect_edge_block( detect_context* c, const sere_bvh* bvh, int32_
 }
 
 /* The unit vector across edge e = (a, b) in the plane of its first triangle: n × (b − a),
- * normalized (zero when that is degenerate), for table_hits and edge_bound_lanes. */
+ * normalized (zero when that is degenerate), for table_hits. */
 void sere_coll_edge_across_at( sere_collide* collide, const int32_t* tri, const float* x, const float* y,
 							   const float* z, int32_t e )
 {
