@@ -50,7 +50,7 @@
  * dried to the end (4660 points) spends within 10% of the same on collisions a frame with the cap
  * at 0.125, 0.18, 0.25 or 0.35, and 15-30% more at 0.5 (measured again once served detections
  * tested only what the motion can bring close, list_reach2). With 0.35 a searching frame costs
- * 8-10 ms at 1 thread and a served one 0.3 ms, a list lasting about 4 frames while the leaf curls
+ * 7-10 ms at 1 thread and a served one 0.3 ms, a list lasting about 4 frames while the leaf curls
  * and 8 once it is dry: the searches, not the lists, set a frame's collision time. */
 #define SKIN_MIN   0.125f
 #define SKIN_MAX   0.35f
