@@ -250,3 +250,69 @@ Test( collide, served_pass_tests_only_pairs_the_motion_can_bring_within_the_thic
 	free( z0 );
 	collide_sheet_release( &s );
 }
+
+/* A sliver under a served pass (list_reach2): a vertex 1.1997 thicknesses above a triangle 3
+ * thicknesses long and 0.0014 wide (sin² of its corner angle 2⁻¹⁹, just above the degenerate
+ * 2⁻²⁰), which moves 0.1 thickness towards it while the vertex moves 0.1 towards the triangle.
+ * The listing's exact test puts the vertex 1.20197 away (its closest point lands off along the
+ * sliver), beyond the 1.2015 a served pass after a move of 0.1 must test; the true distance is
+ * 1.1997, and the list keeps 0 for a sliver (list_reach2). After the move the pair is a contact
+ * (0.9997): the served pass must find it, as the search does. Coordinates as found by a search
+ * over random slivers (thickness 1); the vertex's triangle reaches away from the sliver. */
+Test( collide, served_pass_keeps_a_sliver_the_motion_brings_within_the_thickness )
+{
+	const float then[4][3] = { { -0x0p+0f, 0x0p+0f, 0x0p+0f },
+							   { -0x1.7250d2p+0f, 0x1.70ce2p-2f, 0x1.4d3cd4p+1f },
+							   { -0x1.6c3df6p+0f, 0x1.69d43cp-2f, 0x1.46ef2ap+1f },
+							   { -0x1.d6f334p-2f, -0x1.12f808p+0f, 0x1.fb23fap-1f } };
+	const float now[4][3] = { { 0x0p+0f, -0x1.95bc6p-4f, 0x1.c10a9ap-7f },
+							  { -0x1.7250d2p+0f, 0x1.0b5f0ap-2f, 0x1.4efddep+1f },
+							  { -0x1.6c3df6p+0f, 0x1.046524p-2f, 0x1.48b036p+1f },
+							  { -0x1.d6f334p-2f, -0x1.f33882p-1f, 0x1.f41fdp-1f } };
+	/* the sliver's normal side the vertex is on: the sliver moved 0.1 along it */
+	float up[3];
+	for ( int r = 0; r < 3; ++r )
+	{
+		up[r] = ( now[0][r] - then[0][r] ) / 0.1f;
+	}
+	float x[2][6], y[2][6], z[2][6];
+	for ( int k = 0; k < 2; ++k )
+	{
+		const float( *at )[3] = k == 0 ? then : now;
+		for ( int i = 0; i < 4; ++i )
+		{
+			x[k][i] = at[i][0], y[k][i] = at[i][1], z[k][i] = at[i][2];
+		}
+		/* the vertex's triangle: two more corners 2 along `up` from it, 1 to either side */
+		for ( int i = 4; i < 6; ++i )
+		{
+			float side = i == 4 ? 1.0f : -1.0f;
+			x[k][i] = at[3][0] + 2.0f * up[0] + side, y[k][i] = at[3][1] + 2.0f * up[1];
+			z[k][i] = at[3][2] + 2.0f * up[2];
+		}
+	}
+	const int32_t tri[6] = { 0, 1, 2, 3, 4, 5 };
+	float h = 1.0f;
+	sere_bvh* bvh;
+	cr_assert_eq( sere_bvh_create( tri, 2, 6, x[0], y[0], z[0], &bvh ), SERE_OK );
+	sere_collide *kept, *fresh;
+	cr_assert_eq( sere_collide_create( bvh, 64, &kept ), SERE_OK );
+	cr_assert_eq( sere_collide_create( bvh, 64, &fresh ), SERE_OK );
+	int32_t count = -1, fresh_count = -1;
+	cr_assert_eq( sere_collide_detect( kept, bvh, x[0], y[0], z[0], h, &count ), SERE_OK );
+	cr_assert_eq( count, 0, "1.2 thicknesses apart at the listing" );
+	cr_assert_eq( sere_bvh_refit( bvh, x[1], y[1], z[1] ), SERE_OK );
+	cr_assert_eq( sere_collide_detect( kept, bvh, x[1], y[1], z[1], h, &count ), SERE_OK );
+	cr_assert_eq( sere_collide_list_uses( kept ), 1, "the list serves a move of 0.1 thickness" );
+	cr_assert_eq( sere_collide_detect( fresh, bvh, x[1], y[1], z[1], h, &fresh_count ), SERE_OK );
+	cr_assert_eq( fresh_count, 1, "the search finds the vertex within the thickness of the sliver" );
+	int32_t n_kept, n_fresh;
+	const sere_contact* a = sere_collide_contacts( kept, &n_kept );
+	const sere_contact* b = sere_collide_contacts( fresh, &n_fresh );
+	cr_assert_eq( n_kept, n_fresh, "the served pass found %d contacts, the search %d", n_kept, n_fresh );
+	/* tolerance 0: the same pair through the same exact test */
+	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_kept ) == 0 );
+	sere_collide_destroy( kept );
+	sere_collide_destroy( fresh );
+	sere_bvh_destroy( bvh );
+}

@@ -210,7 +210,8 @@ static void replay_block( detect_context* c, const sere_collide* collide, int32_
 			}
 			else
 			{
-				keep |= (uint32_t) ( gap[start + l] <= reach2 ) << l;
+				/* a NaN bound is kept */
+				keep |= ( uint32_t ) !( gap[start + l] > reach2 ) << l;
 			}
 		}
 		keep = replay ? recorded_mask( c ) : traced_mask( c, keep );

@@ -264,9 +264,11 @@ void sere_coll_detect_edge_flush( detect_context* c )
 			continue;
 		}
 		closest_segments_lanes( a0, a1, b0, b1, w, d2 );
-		for ( int32_t l = 0; gap != NULL && l < count; ++l )
+		if ( gap != NULL )
 		{
-			gap[l] = d2[l];
+			int32_t sharp[CLOSEST_LANES];
+			sine2_at_least( a0, a1, b0, b1, 0x1p-10f, sharp );
+			keep_gaps( gap, count, d2, sharp );
 		}
 		uint32_t hits = 0;
 		for ( int32_t l = 0; l < count; ++l )

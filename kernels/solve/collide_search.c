@@ -285,9 +285,15 @@ void sere_coll_detect_flush( detect_context* c )
 			continue;
 		}
 		closest_lanes( p, a, b, cc, w, q, d2, slow );
-		for ( int32_t l = 0; gap != NULL && l < count; ++l )
+		if ( gap != NULL )
 		{
-			gap[l] = slow[l] ? 0.0f : d2[l];
+			int32_t sharp[CLOSEST_LANES];
+			sine2_at_least( a, b, a, cc, 0x1p-8f, sharp );
+			for ( int l = 0; l < CLOSEST_LANES; ++l )
+			{
+				sharp[l] &= !slow[l];
+			}
+			keep_gaps( gap, count, d2, sharp );
 		}
 		uint32_t candidates = 0, emitted = 0;
 		for ( int32_t l = 0; l < count; ++l )

@@ -637,17 +637,23 @@ static inline float list_radius( const detect_context* c, const float far[3] )
 }
 
 /* What a served detection tests of the list (see SKIN). A listing search runs the exact test on
- * every pair it lists, so it keeps each one's squared distance then (0 where the vector test's
- * result is not meaningful, a degenerate triangle: that pair is always tested). A point of a
- * triangle or edge moves by at most D when its corners do, so a distance changes by at most 2D:
- * with D (moved) the largest displacement since the listing, up to the translation T that
- * list_serves takes off, a pair farther than the thickness plus 2D then is farther than the
- * thickness now and cannot be a contact. The served detection skips those, keeping the others in
- * the list's order: the same contacts in the same order. Float distances are within a few ulps
- * of the coordinates of the true ones (|p| 2⁻¹⁹ is ample), which `far` 2⁻¹⁴ covers, with far
- * bounding |p| then and now (the largest |x| + |y| + |z| now, plus |T| and 2δ); 2⁻¹⁰ of the reach
- * covers its own rounding. A list is tested least just after its search, when D is small and its
- * pairs are needed least. Returns the bound on a contact's squared distance at the listing. */
+ * every pair it lists, and keeps each one's squared distance then where that test is well
+ * conditioned: a triangle whose sin² of the corner angle is at least 2⁻⁸ (its barycentric
+ * coordinates then carry 2⁻¹⁶ of relative error at most, far inside the rounding allowance below
+ * for edges up to tens of thicknesses), or two edges whose sin² is at least 2⁻¹⁰ (well clear of
+ * closest_segments' parallel case). Elsewhere it keeps 0, and the pair is always tested: on a
+ * sliver the closest point can land off along the face, its distance farther than the true one
+ * by more than any allowance (a review built one whose contact a served pass then missed: now a
+ * test). A point of a triangle or edge moves by at most D when its corners do, so a distance
+ * changes by at most 2D: with D (moved) the largest displacement since the listing, up to the
+ * translation T that list_serves takes off, a pair farther than the thickness plus 2D then is
+ * farther than the thickness now and cannot be a contact. The served detection skips those,
+ * keeping the others in the list's order: the same contacts in the same order. Well-conditioned
+ * float distances are within a few ulps of the coordinates of the true ones (|p| 2⁻¹⁹ is ample),
+ * which `far` 2⁻¹⁴ covers, with far bounding |p| then and now (the largest |x| + |y| + |z| now,
+ * plus |T| and 2δ); 2⁻¹⁰ of the reach covers its own rounding. A list is tested least just after
+ * its search, when D is small and its pairs are needed least. Returns the bound on a contact's
+ * squared distance at the listing. */
 static inline float list_reach2( float thickness, float moved, float far )
 {
 	float reach = thickness + 2.0f * moved;
@@ -661,6 +667,34 @@ static inline float list_reach2( float thickness, float moved, float far )
 static inline float* listed_gaps( const detect_context* c, int32_t start )
 {
 	return c->listing && c->list_used >= 0 ? c->list_gap + ( c->list_used - c->pair_count + start ) : NULL;
+}
+
+/* For CLOSEST_LANES lanes: whether u = u1 − u0 and v = v1 − v0 have sin² of their angle at least
+ * k, as |u × v|² = u² v² − (u · v)² ≥ k u² v² (list_reach2's condition). */
+static inline void sine2_at_least( float u0[3][CLOSEST_LANES], float u1[3][CLOSEST_LANES], float v0[3][CLOSEST_LANES],
+								   float v1[3][CLOSEST_LANES], float k, int32_t sharp[CLOSEST_LANES] )
+{
+	for ( int l = 0; l < CLOSEST_LANES; ++l )
+	{
+		float uu = 0.0f, vv = 0.0f, uv = 0.0f;
+		for ( int r = 0; r < 3; ++r )
+		{
+			float u = u1[r][l] - u0[r][l], v = v1[r][l] - v0[r][l];
+			uu += u * u, vv += v * v, uv += u * v;
+		}
+		sharp[l] = uu * vv - uv * uv >= k * uu * vv;
+	}
+}
+
+/* Listing: keeps the squared distances d2 of `count` buffered pairs in the list where the exact
+ * test is well conditioned (sharp), 0 elsewhere (list_reach2). */
+static inline void keep_gaps( float* gap, int32_t count, const float d2[CLOSEST_LANES],
+							  const int32_t sharp[CLOSEST_LANES] )
+{
+	for ( int32_t l = 0; gap != NULL && l < count; ++l )
+	{
+		gap[l] = sharp[l] ? d2[l] : 0.0f;
+	}
 }
 
 /* collide_search.c: vertex–triangle detection. */
