@@ -196,6 +196,7 @@ static void replay_block( detect_context* c, const sere_collide* collide, int32_
 	int32_t count = collide->cache_block_count[block];
 	float reach2 = collide->cache_reach2, sum = 0.0f;
 	bool replay = replaying( c );
+	void ( *flush )( detect_context* ) = vertices ? sere_coll_detect_flush : sere_coll_detect_edge_flush;
 	c->pair_count = 0;
 	for ( int32_t start = 0; start < count; start += CLOSEST_LANES )
 	{
@@ -219,7 +220,7 @@ static void replay_block( detect_context* c, const sere_collide* collide, int32_
 		{
 			if ( c->pair_count == PAIR_BUFFER )
 			{
-				( vertices ? sere_coll_detect_flush : sere_coll_detect_edge_flush )( c );
+				flush( c );
 			}
 			int32_t k = start + __builtin_ctz( keep );
 			c->pair_item[c->pair_count] = item[k];
@@ -232,7 +233,7 @@ static void replay_block( detect_context* c, const sere_collide* collide, int32_
 	{
 		c->run->sink += sum;
 	}
-	( vertices ? sere_coll_detect_flush : sere_coll_detect_edge_flush )( c );
+	flush( c );
 }
 
 /* True when the list (see SKIN) serves positions x, y, z and this thickness: it is whole, was made
@@ -278,10 +279,7 @@ static bool list_serves( sere_collide* collide, const sere_bvh* bvh, const float
 	}
 	float limit = skin * skin, moved2 = 0.0f, far = 0.0f;
 	int beyond = 0;
-#pragma omp parallel for simd num_threads( threads ) schedule( static ) reduction( |                                   \
-																				   : beyond )                          \
-	reduction( max                                                                                                     \
-			   : moved2, far )
+#pragma omp parallel for simd num_threads( threads ) reduction( | : beyond ) reduction( max : moved2, far )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		float dx = x[i] - cx[i] - t[0], dy = y[i] - cy[i] - t[1], dz = z[i] - cz[i] - t[2];

@@ -691,7 +691,7 @@ static inline void sine2_at_least( float u0[3][CLOSEST_LANES], float u1[3][CLOSE
 static inline void keep_gaps( float* gap, int32_t count, const float d2[CLOSEST_LANES],
 							  const int32_t sharp[CLOSEST_LANES] )
 {
-	for ( int32_t l = 0; gap != NULL && l < count; ++l )
+	for ( int32_t l = 0; l < count; ++l )
 	{
 		gap[l] = sharp[l] ? d2[l] : 0.0f;
 	}
