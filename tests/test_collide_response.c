@@ -464,3 +464,81 @@ Test( collide, restore_moved_is_deterministic )
 	}
 	free( result[0] ), free( result[1] );
 }
+
+/* ĥ measured after the pass for the triangles it moved, from the corners saved before it, is
+ * sere_collide_measure_h of the layer before the pass bit for bit on those triangles (the leaf
+ * relies on it to drop the full measure), and leaves every other entry as it was; the same at
+ * one and two threads. */
+Test( collide, measure_h_moved_is_measure_h_before_the_pass_where_a_corner_moved )
+{
+	collide_sheet s;
+	conserving_sheet( &s, 45 );
+	int32_t n = s.n, f = s.triangles;
+	float* before = malloc( sizeof( float ) * (size_t) f );
+	cr_assert_eq( sere_collide_measure_h( s.x, s.y, s.z, s.tri, f, n, before, 0 ), SERE_OK );
+	float *cx = malloc( sizeof( float ) * (size_t) n ), *cy = malloc( sizeof( float ) * (size_t) n ),
+		  *cz = malloc( sizeof( float ) * (size_t) n );
+	memcpy( cx, s.x, sizeof( float ) * (size_t) n );
+	memcpy( cy, s.y, sizeof( float ) * (size_t) n );
+	memcpy( cz, s.z, sizeof( float ) * (size_t) n );
+	/* the pass moves every fifth corner, and so changes the heights over the current layer */
+	uint8_t* moved = calloc( (size_t) n, 1 );
+	for ( int32_t i = 0; i < n; i += 5 )
+	{
+		moved[i] = 1;
+		s.z[i] += 0.01f;
+	}
+	const float untouched = 123.0f;
+	float* h[2];
+	int saved = omp_get_max_threads();
+	for ( int threads = 1; threads <= 2; ++threads )
+	{
+		omp_set_num_threads( threads );
+		h[threads - 1] = malloc( sizeof( float ) * (size_t) f );
+		for ( int32_t t = 0; t < f; ++t )
+		{
+			h[threads - 1][t] = untouched;
+		}
+		cr_assert_eq( sere_collide_measure_h_moved( cx, cy, cz, s.x, s.y, s.z, s.tri, f, n, moved, h[threads - 1], 0 ),
+					  SERE_OK );
+	}
+	omp_set_num_threads( saved );
+	cr_expect_eq( memcmp( h[0], h[1], sizeof( float ) * (size_t) f ), 0, "1 and 2 threads differ" );
+	int32_t measured = 0;
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		const int32_t* v = s.tri + 3 * t;
+		if ( moved[v[0]] | moved[v[1]] | moved[v[2]] )
+		{
+			measured += 1;
+			cr_assert( h[0][t] == before[t], "triangle %d: %a, before the pass %a", t, h[0][t], before[t] );
+		}
+		else
+		{
+			cr_assert( h[0][t] == untouched, "triangle %d has no moved corner but was written", t );
+		}
+	}
+	cr_assert( measured > 0 && measured < f, "%d of %d triangles measured", measured, f );
+
+	/* a corner outside the triangle layer, a NULL mask, a NaN corner of a moved triangle */
+	int32_t saved_corner = s.tri[0];
+	s.tri[0] = n;
+	cr_expect_eq( sere_collide_measure_h_moved( cx, cy, cz, s.x, s.y, s.z, s.tri, f, n, moved, h[0], 0 ),
+				  SERE_ERR_ARGUMENT );
+	s.tri[0] = saved_corner;
+	cr_expect_eq( sere_collide_measure_h_moved( cx, cy, cz, s.x, s.y, s.z, s.tri, f, n, NULL, h[0], 0 ),
+				  SERE_ERR_ARGUMENT );
+	cz[0] = NAN;
+	moved[0] = 1;
+	cr_expect_eq( sere_collide_measure_h_moved( cx, cy, cz, s.x, s.y, s.z, s.tri, f, n, moved, h[0], 0 ),
+				  SERE_ERR_NONFINITE );
+	for ( int32_t t = 0; t < f; ++t )
+	{
+		cr_assert( isfinite( h[0][t] ), "a non-finite ĥ was written at %d", t );
+	}
+	free( h[0] ), free( h[1] );
+	free( moved );
+	free( cx ), free( cy ), free( cz );
+	free( before );
+	collide_sheet_free( &s );
+}

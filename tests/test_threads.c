@@ -168,6 +168,9 @@ Test( threads, arguments_out_of_range_are_refused )
 		cr_expect_eq( sere_collide_restore_voronoi_moved( p->x, p->y, p->z, p->vx, p->vy, p->vz, model.tri, f, n,
 														  model.h, moved, 0.002f, threads ),
 					  expected, "restore moved at %d", threads );
+		cr_expect_eq( sere_collide_measure_h_moved( p->x, p->y, p->z, p->x, p->y, p->z, model.tri, f, n, moved, model.h,
+													threads ),
+					  expected, "measure_h moved at %d", threads );
 		free( moved );
 	}
 	sere_model_destroy( &model );

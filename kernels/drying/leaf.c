@@ -18,7 +18,7 @@ struct sere_leaf_sim
 	sere_pbd* pbd;
 	sere_bvh* bvh;
 	sere_collide* collide;
-	float* h_hat;
+	float* h_hat;		 /* ĥ where the last pass moved a corner; elsewhere an older value (0 at first) no one reads */
 	float *x0, *y0, *z0; /* triangle layer at the start of the frame: the contacts' sides */
 	float *xc, *yc, *zc; /* triangle layer before the collision pass: which corners it moved */
 	float* push;		 /* per particle: how far the ground pushed it up this frame (friction) */
@@ -506,18 +506,13 @@ static sere_status shrink_rest( sere_leaf_sim* sim, const sere_leaf_params* para
 	return status;
 }
 
-/* Line 23: self-collision of the triangle layer, with ĥ stored just before (Jeong Sec. 5.3) and
- * the layer kept as it was, so the caller sees which corners the response moved. */
+/* Line 23: self-collision of the triangle layer, with the layer kept as it was (Jeong Sec. 5.3
+ * measures ĥ on it), so the caller sees which corners the response moved. */
 static sere_status self_collide( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
 {
 	sere_model* model = sim->model;
 	sere_particles* p = &model->p;
-	const int32_t n = model->triangle_particles, f = model->triangle_count;
-	sere_status status = sere_collide_measure_h( p->x, p->y, p->z, model->tri, f, n, sim->h_hat, sim->threads );
-	if ( status != SERE_OK )
-	{
-		return status;
-	}
+	const int32_t n = model->triangle_particles;
 	memcpy( sim->xc, p->x, sizeof( float ) * (size_t) n );
 	memcpy( sim->yc, p->y, sizeof( float ) * (size_t) n );
 	memcpy( sim->zc, p->z, sizeof( float ) * (size_t) n );
@@ -529,7 +524,7 @@ static sere_status self_collide( sere_leaf_sim* sim, const sere_leaf_params* par
 		collide.thickness *= sim->thickness_scale;
 	}
 	sere_collide_stats collide_stats;
-	status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
+	sere_status status = sere_collide_resolve( sim->collide, sim->bvh, &state, &collide, &collide_stats );
 	/* A crumpled leaf can have more contacts than the workspace holds: grow it (rare, so
 	 * the allocation stays out of the steady state) and run the pass again. */
 	for ( int grow = 0; status == SERE_ERR_CAPACITY && grow < 8; ++grow )
@@ -550,6 +545,34 @@ static sere_status self_collide( sere_leaf_sim* sim, const sere_leaf_params* par
 	stats->unresolved = collide_stats.unresolved;
 	stats->collision_thickness = collide.thickness;
 	return SERE_OK;
+}
+
+/* Lines 24–27: the Voronoi particles of the triangles the pass moved back on their normals (Jeong
+ * Eq. 14), with ĥ as it was before the pass (line 14, Sec. 5.3). Only those triangles read ĥ, so
+ * only theirs is measured, from the corners saved before the pass: the same bits as measuring
+ * every triangle before it. */
+static sere_status restore_moved( sere_leaf_sim* sim, const sere_leaf_params* params )
+{
+	sere_model* model = sim->model;
+	sere_particles* p = &model->p;
+	const int32_t n = model->triangle_particles, f = model->triangle_count;
+#pragma omp parallel for simd num_threads( sere_team_for( sim->threads ) ) schedule( static )
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		sim->moved[i] = ( p->x[i] != sim->xc[i] ) | ( p->y[i] != sim->yc[i] ) | ( p->z[i] != sim->zc[i] );
+	}
+	if ( params->restore_measured )
+	{
+		sere_status status = sere_collide_measure_h_moved( sim->xc, sim->yc, sim->zc, p->x, p->y, p->z, model->tri, f,
+														   n, sim->moved, sim->h_hat, sim->threads );
+		if ( status != SERE_OK )
+		{
+			return status;
+		}
+	}
+	return sere_collide_restore_voronoi_moved( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n,
+											   params->restore_measured ? sim->h_hat : model->h, sim->moved, params->dt,
+											   sim->threads );
 }
 
 /* The step's PBD parameters: the frame's dt, and with soften the stiffness eased as the leaf
@@ -595,7 +618,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 	sere_model* model = sim->model;
 	sere_particles* p = &model->p;
-	const int32_t n = model->triangle_particles, f = model->triangle_count;
+	const int32_t n = model->triangle_particles;
 	sere_status status = SERE_OK;
 	double t0 = omp_get_wtime();
 
@@ -671,7 +694,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	double t2 = omp_get_wtime();
 
 	/* Line 23: self-collision of the triangle layer; lines 24–27: the Voronoi particles of the
-	 * triangles it moved back on their normals (Jeong Eq. 14), with ĥ stored just before (Sec. 5.3). */
+	 * triangles it moved back on their normals. */
 	if ( params->collisions && params->collide.thickness > 0.0f )
 	{
 		status = self_collide( sim, params, stats );
@@ -679,14 +702,7 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		{
 			return status;
 		}
-#pragma omp parallel for simd num_threads( sere_team_for( sim->threads ) ) schedule( static )
-		for ( int32_t i = 0; i < n; ++i )
-		{
-			sim->moved[i] = ( p->x[i] != sim->xc[i] ) | ( p->y[i] != sim->yc[i] ) | ( p->z[i] != sim->zc[i] );
-		}
-		status = sere_collide_restore_voronoi_moved( p->x, p->y, p->z, p->vx, p->vy, p->vz, model->tri, f, n,
-													 params->restore_measured ? sim->h_hat : model->h, sim->moved,
-													 params->dt, sim->threads );
+		status = restore_moved( sim, params );
 		if ( status != SERE_OK )
 		{
 			return status;

@@ -280,6 +280,18 @@ sere_status sere_collide_resolve( sere_collide* collide, sere_bvh* bvh, const se
 sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
 									int32_t triangle_count, int32_t voronoi_first, float* h_hat, int32_t threads );
 
+/* ĥ_t of sere_collide_measure_h, measured after the pass for the triangles it moved: only for a
+ * triangle with a corner flagged in moved (per triangle-layer particle), from its corners as they
+ * were before the pass (cx, cy, cz, voronoi_first entries each) and its Voronoi particle in x, y,
+ * z (which the pass does not move). Every other h_hat[t] is left as it is. This is the ĥ the
+ * Voronoi restore reads, without measuring every triangle before every pass (Algorithm 1 line 14
+ * stores it for all). The same arithmetic as sere_collide_measure_h, so the same bits.
+ * SERE_ERR_ARGUMENT for a corner outside [0, voronoi_first); SERE_ERR_NONFINITE where a measured ĥ
+ * is NaN or infinite (0 written there). On either, h_hat may be partly written. */
+sere_status sere_collide_measure_h_moved( const float* cx, const float* cy, const float* cz, const float* x,
+										  const float* y, const float* z, const int32_t* tri, int32_t triangle_count,
+										  int32_t voronoi_first, const uint8_t* moved, float* h_hat, int32_t threads );
+
 /* Jeong Eq. 14: x_t^V = (x_a + x_b + x_c) / 3 + h_t n_t and v_t^V = (v_a + v_b + v_c) / 3, with h the
  * ĥ of sere_collide_measure_h or the rest thickness (the two modes of Sec. 5.3), for Voronoi
  * particle voronoi_first + t. Every corner must lie below voronoi_first (the triangle layer comes

@@ -4,6 +4,17 @@
 
 #include "solve/internal/collide_shared.h"
 
+/* Algorithm 1 line 14: the height of particle i (in x, y, z) over triangle v (corners in cx, cy,
+ * cz) along its unit normal, from corner a. */
+static inline float voronoi_height( const float* cx, const float* cy, const float* cz, const float* x, const float* y,
+									const float* z, const int32_t* v, int32_t i )
+{
+	float a[3], b[3], c[3], n[3], p[3];
+	triangle_frame( cx, cy, cz, v, a, b, c, n );
+	load3( x, y, z, i, p );
+	return ( p[0] - a[0] ) * n[0] + ( p[1] - a[1] ) * n[1] + ( p[2] - a[2] ) * n[2];
+}
+
 sere_status sere_collide_measure_h( const float* x, const float* y, const float* z, const int32_t* tri,
 									int32_t triangle_count, int32_t voronoi_first, float* h_hat, int32_t threads )
 {
@@ -16,14 +27,46 @@ sere_status sere_collide_measure_h( const float* x, const float* y, const float*
 #pragma omp parallel for num_threads( sere_team_for( threads ) ) reduction( | : bad ) schedule( static )
 	for ( int32_t t = 0; t < triangle_count; ++t )
 	{
-		float a[3], b[3], c[3], n[3], p[3];
-		triangle_frame( x, y, z, tri + 3 * (size_t) t, a, b, c, n );
-		load3( x, y, z, voronoi_first + t, p );
-		/* Algorithm 1 line 14 */
-		float h = ( p[0] - a[0] ) * n[0] + ( p[1] - a[1] ) * n[1] + ( p[2] - a[2] ) * n[2];
+		float h = voronoi_height( x, y, z, x, y, z, tri + 3 * (size_t) t, voronoi_first + t );
 		/* a NaN or infinity in any of the four points reaches h through n or the difference */
 		bad |= !isfinite( h );
 		h_hat[t] = isfinite( h ) ? h : 0.0f;
+	}
+	return bad ? SERE_ERR_NONFINITE : SERE_OK;
+}
+
+sere_status sere_collide_measure_h_moved( const float* cx, const float* cy, const float* cz, const float* x,
+										  const float* y, const float* z, const int32_t* tri, int32_t triangle_count,
+										  int32_t voronoi_first, const uint8_t* moved, float* h_hat, int32_t threads )
+{
+	if ( cx == NULL || cy == NULL || cz == NULL || x == NULL || y == NULL || z == NULL || tri == NULL ||
+		 moved == NULL || h_hat == NULL || triangle_count < 0 || voronoi_first < 0 || !sere_threads_valid( threads ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	int bad = 0, outside = 0;
+#pragma omp parallel for num_threads( sere_team_for( threads ) ) reduction( | : bad, outside ) schedule( static )
+	for ( int32_t t = 0; t < triangle_count; ++t )
+	{
+		const int32_t* v = tri + 3 * (size_t) t;
+		/* the corners index cx and moved, both voronoi_first long */
+		if ( v[0] < 0 || v[0] >= voronoi_first || v[1] < 0 || v[1] >= voronoi_first || v[2] < 0 ||
+			 v[2] >= voronoi_first )
+		{
+			outside = 1;
+			continue;
+		}
+		if ( !( moved[v[0]] | moved[v[1]] | moved[v[2]] ) )
+		{
+			continue;
+		}
+		float h = voronoi_height( cx, cy, cz, x, y, z, v, voronoi_first + t );
+		bad |= !isfinite( h );
+		h_hat[t] = isfinite( h ) ? h : 0.0f;
+	}
+	if ( outside )
+	{
+		return SERE_ERR_ARGUMENT;
 	}
 	return bad ? SERE_ERR_NONFINITE : SERE_OK;
 }
