@@ -783,6 +783,44 @@ Test( measure, shape_same_for_one_and_two_threads )
 	measure_sheet_free( &s );
 }
 
+/* pose_only measures the pose and the rolls with the very arithmetic of the full measure (the
+ * same bits) and marks every other measure unmeasured, on a crumpled sheet where all of them
+ * are nonzero. */
+Test( measure, pose_only_is_the_full_measure_s_pose_and_rolls )
+{
+	measure_sheet s;
+	measure_crumpled( &s, 40, 30, 1.0, 0.75, 1, 13, 0.6, 0.01, 53 );
+	sere_shape_input in = measure_input( &s );
+	in.ground = -0.5;
+	sere_shape full, pose;
+	cr_assert_eq( sere_shape_measure( &in, &full ), SERE_OK );
+	in.pose_only = true;
+	cr_assert_eq( sere_shape_measure( &in, &pose ), SERE_OK );
+	cr_assert_eq( pose.area, full.area );
+	cr_assert_eq( pose.extent, full.extent );
+	for ( int k = 0; k < 3; ++k )
+	{
+		cr_assert_eq( pose.centroid[k], full.centroid[k] );
+		cr_assert_eq( pose.mean_normal[k], full.mean_normal[k] );
+	}
+	cr_assert_eq( pose.flip, full.flip );
+	cr_assert_eq( pose.min_z, full.min_z );
+	cr_assert_eq( pose.max_z, full.max_z );
+	cr_assert_eq( pose.ground_gap, full.ground_gap );
+	cr_assert( isfinite( full.roll_tip ) && isfinite( full.roll_base ), "the sheet must have rolls to compare" );
+	cr_assert_eq( pose.roll_tip, full.roll_tip );
+	cr_assert_eq( pose.roll_base, full.roll_base );
+	cr_assert( full.wrinkle_sign_changes > 0 && full.surf_edges > 0 && isfinite( full.margin_lift ),
+			   "the full measure of a crumpled sheet has wrinkles, creases and a margin" );
+	cr_assert( isnan( pose.crease_vein ) && isnan( pose.crease_surf ) && isnan( pose.margin_lift ) &&
+				   isnan( pose.curl_tip ) && isnan( pose.curl_base ) && isnan( pose.midvein_curvature ) &&
+				   isnan( pose.crease_main ) && isnan( pose.vein_roll_tip ),
+			   "a measure pose_only skips reads as a number" );
+	cr_assert( pose.wrinkle_sign_changes == -1 && pose.vein_edges == -1 && pose.surf_edges == -1,
+			   "a count pose_only skips reads as a count" );
+	measure_sheet_free( &s );
+}
+
 Test( measure, shape_rejects_bad_input )
 {
 	measure_sheet s;

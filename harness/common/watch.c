@@ -97,6 +97,7 @@ sere_status sere_watch_step( sere_watch* watch, const sere_model* model, sere_wa
 	}
 	sere_shape_input in = sere_leaf_shape_input( model, watch->ground );
 	in.skip_extent = true;
+	in.pose_only = true;
 	in.threads = watch->threads;
 	sere_shape shape;
 	status = sere_shape_measure( &in, &shape );

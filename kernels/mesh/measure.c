@@ -495,10 +495,10 @@ static double diameter2( const sere_shape_input* in )
 }
 
 /* Everything after validation and adjacency; the scratch arrays are the caller's. */
-static void shape_measure_all( const sere_shape_input* in, const int32_t* edge_tri, const int32_t* tri_edge,
-							   double* dihedral, int32_t* tris, double* lateral, sere_shape* out )
+/* The measures of sere_shape_input::pose_only: the pose and the two cross-section rolls. */
+static void shape_pose( const sere_shape_input* in, int32_t* tris, double* lateral, sere_shape* out )
 {
-	int32_t ec = in->edge_count, tc = in->triangle_count;
+	int32_t tc = in->triangle_count;
 
 	/* area, centroid and mean normal: sums over triangles of area-weighted quantities */
 	double area = 0.0, moment[3] = { 0.0, 0.0, 0.0 }, normal[3] = { 0.0, 0.0, 0.0 };
@@ -530,6 +530,16 @@ static void shape_measure_all( const sere_shape_input* in, const int32_t* edge_t
 	}
 	out->min_z = min_z, out->max_z = max_z;
 	out->ground_gap = in->ground == -INFINITY ? NAN : min_z - in->ground;
+	out->roll_tip = sere_measure_band_roll( in, 0.85, tris, lateral );
+	out->roll_base = sere_measure_band_roll( in, 0.25, tris, lateral );
+}
+
+/* Every measure but the pose and the rolls: those of the edges and their dihedrals, the margin,
+ * the curls and the midvein. */
+static void shape_form( const sere_shape_input* in, const int32_t* edge_tri, const int32_t* tri_edge, double* dihedral,
+						sere_shape* out )
+{
+	int32_t ec = in->edge_count, tc = in->triangle_count;
 
 	/* creases: mean |dihedral| over interior edges, veins apart */
 	dihedrals( in, edge_tri, dihedral );
@@ -569,11 +579,22 @@ static void shape_measure_all( const sere_shape_input* in, const int32_t* edge_t
 	out->wrinkle_sign_changes = changes;
 
 	out->margin_lift = margin_lift( in, out->mean_normal );
-	out->roll_tip = sere_measure_band_roll( in, 0.85, tris, lateral );
-	out->roll_base = sere_measure_band_roll( in, 0.25, tris, lateral );
 	out->curl_tip = sere_measure_axis_curl( in, 0.55, 0.93 );
 	out->curl_base = sere_measure_axis_curl( in, 0.07, 0.45 );
 	out->midvein_curvature = midvein_curvature( in );
+}
+
+/* What sere_shape_input::pose_only leaves unmeasured. */
+static void shape_form_unmeasured( sere_shape* out )
+{
+	out->crease_vein = out->crease_surf = NAN;
+	out->vein_edges = out->surf_edges = -1;
+	out->wrinkle_sign_changes = -1;
+	out->margin_lift = NAN;
+	out->curl_tip = out->curl_base = NAN;
+	out->crease_main = out->crease_blade = NAN;
+	out->vein_roll_tip = out->vein_roll_base = NAN;
+	out->midvein_curvature = NAN;
 }
 
 sere_status sere_shape_measure( const sere_shape_input* in, sere_shape* out )
@@ -588,25 +609,34 @@ sere_status sere_shape_measure( const sere_shape_input* in, sere_shape* out )
 	{
 		return status;
 	}
-	int32_t* edge_tri = malloc( sizeof( int32_t ) * 2 * (size_t) in->edge_count );
-	int32_t* tri_edge = malloc( sizeof( int32_t ) * 3 * (size_t) in->triangle_count );
-	double* dihedral = malloc( sizeof( double ) * (size_t) in->edge_count );
+	const bool form = !in->pose_only;
 	int32_t* tris = malloc( sizeof( int32_t ) * (size_t) in->triangle_count );
 	double* lateral = malloc( sizeof( double ) * (size_t) in->triangle_count );
-	if ( edge_tri == NULL || tri_edge == NULL || dihedral == NULL || tris == NULL || lateral == NULL )
+	int32_t* edge_tri = form ? malloc( sizeof( int32_t ) * 2 * (size_t) in->edge_count ) : NULL;
+	int32_t* tri_edge = form ? malloc( sizeof( int32_t ) * 3 * (size_t) in->triangle_count ) : NULL;
+	double* dihedral = form ? malloc( sizeof( double ) * (size_t) in->edge_count ) : NULL;
+	if ( tris == NULL || lateral == NULL || ( form && ( edge_tri == NULL || tri_edge == NULL || dihedral == NULL ) ) )
 	{
 		status = SERE_ERR_MEMORY;
 	}
-	else
+	else if ( form )
 	{
 		status = shape_adjacency( in, edge_tri, tri_edge );
 	}
 	if ( status == SERE_OK )
 	{
-		shape_measure_all( in, edge_tri, tri_edge, dihedral, tris, lateral, out );
-		if ( !sere_measure_main_veins( in, edge_tri, dihedral, out ) )
+		shape_pose( in, tris, lateral, out );
+		if ( !form )
 		{
-			status = SERE_ERR_MEMORY;
+			shape_form_unmeasured( out );
+		}
+		else
+		{
+			shape_form( in, edge_tri, tri_edge, dihedral, out );
+			if ( !sere_measure_main_veins( in, edge_tri, dihedral, out ) )
+			{
+				status = SERE_ERR_MEMORY;
+			}
 		}
 	}
 	free( edge_tri );

@@ -100,7 +100,13 @@ typedef struct sere_shape_input
 	const int32_t* midvein; /* optional polyline of vertex indices from base to tip, or NULL */
 	int32_t midvein_count;
 	bool skip_extent; /* true: leave extent NaN (the exact diameter is O(N²); per-frame measures skip it) */
-	int32_t threads;  /* the measure's threads (core/base.h; 0: OpenMP's count at the call) */
+	/* true: measure only the pose (area, centroid, mean_normal, flip, min_z, max_z, ground_gap)
+	 * and roll_tip, roll_base, which need no edge adjacency: every other measure is NaN, its
+	 * counts −1. A per-frame watch reads no more, and this skips the adjacency (a sort of the
+	 * edges, and with it the check for SERE_ERR_GEOMETRY), the dihedrals and the vein measures,
+	 * the same bits for what it measures. */
+	bool pose_only;
+	int32_t threads; /* the measure's threads (core/base.h; 0: OpenMP's count at the call) */
 } sere_shape_input;
 
 /* Everything zero or NULL except ground = -INFINITY, wrinkle_threshold = 0.05 rad (about 3°, so
