@@ -13,8 +13,10 @@
 #include "common/params.h"
 #include "drying/leaf.h"
 #include "fixture.h"
+#include "mesh/measure.h"
 #include "read/build.h"
 #include "ref/collide_ref.h"
+#include "ref/measure_ref.h"
 #include "solve/bvh.h"
 #include "solve/collide.h"
 
@@ -604,6 +606,46 @@ void BM_collide_ref_edge_pairs( benchmark::State& state, Shape shape )
 	state.counters["edge_contacts"] = (double) pairs;
 }
 
+// The crossing count a run makes every frame (edges through triangles they do not touch: what the
+// collision pass must keep at zero), on the scene's positions; its twin below is the brute force.
+void BM_crossings_count( benchmark::State& state, Shape shape )
+{
+	Scene& s = threaded_scene( state, shape );
+	sere_crossings* c = nullptr;
+	if ( sere_crossings_create( s.tri.data(), s.f, s.n, &c ) != SERE_OK ||
+		 sere_crossings_set_threads( c, (int32_t) state.range( 0 ) ) != SERE_OK )
+	{
+		state.SkipWithError( "sere_crossings_create failed" );
+		return;
+	}
+	int64_t count = 0;
+	for ( auto _ : state )
+	{
+		if ( sere_crossings_count( c, s.x.data, s.y.data, s.z.data, &count ) != SERE_OK )
+		{
+			state.SkipWithError( "sere_crossings_count failed" );
+			break;
+		}
+		benchmark::DoNotOptimize( count );
+	}
+	sere_crossings_destroy( c );
+	rate( state, "triangles/s", s.f );
+	state.counters["crossings"] = (double) count;
+}
+
+void BM_crossings_ref_count( benchmark::State& state, Shape shape )
+{
+	Scene& s = scene( shape );
+	int64_t count = 0;
+	for ( auto _ : state )
+	{
+		count = sere_crossings_ref_count( s.x.data, s.y.data, s.z.data, s.n, s.tri.data(), s.f );
+		benchmark::DoNotOptimize( count );
+	}
+	rate( state, "triangles/s", s.f );
+	state.counters["crossings"] = (double) count;
+}
+
 // Embree 3 doing the same search: a triangle geometry refit on commit, then rtcPointQuery per
 // vertex with radius = thickness, whose callback skips the same triangles (a corner, or joined
 // to one by a mesh edge) and applies the same exact test, so both report the same pairs.
@@ -747,6 +789,8 @@ const int kRegistered = [] {
 		{ "BM_embree_search", BM_embree_search, kThreads, { kFlat, kDried, kWaved, kDense } },
 		{ "BM_collide_ref_pairs", BM_collide_ref_pairs, kOnce, { kDried, kDense } },
 		{ "BM_collide_ref_edge_pairs", BM_collide_ref_edge_pairs, kOnce, { kDried, kDense } },
+		{ "BM_crossings_count", BM_crossings_count, kThreads, { kFlat, kDried, kDense } },
+		{ "BM_crossings_ref_count", BM_crossings_ref_count, kOnce, { kDried } },
 	};
 	for ( const Registration& row : table )
 	{

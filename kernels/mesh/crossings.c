@@ -87,8 +87,14 @@ typedef struct crossing_entry
 {
 	float lo[3], hi[3]; /* its box */
 	int32_t v[3];		/* its corners */
-	int32_t cell[3];	/* the cell of its box's low corner */
 } crossing_entry;
+
+/* A cell's entries come in 8 groups by which axes of the cell hold the low corner of the
+ * triangle's box: bit a set when the box starts in this cell's slab along axis a. */
+enum
+{
+	kGroups = 8
+};
 
 struct sere_crossings
 {
@@ -99,7 +105,8 @@ struct sere_crossings
 	int32_t* tri;
 	int32_t *edge_a, *edge_b;
 	crossing_box* box; /* per triangle, at the current positions */
-	/* The grid: the triangles overlapping cell c are entry[cell_start[c] .. cell_start[c + 1] − 1] */
+	/* The grid: the triangles of group g overlapping cell c are entry[cell_start[kGroups c + g] ..
+	 * cell_start[kGroups c + g + 1] − 1] */
 	int32_t cell_capacity;
 	int32_t entry_capacity;
 	int32_t* cell_start;
@@ -233,7 +240,7 @@ sere_status sere_crossings_create( const int32_t* tri, int32_t triangle_count, i
 	size_t tri_bytes = sizeof( int32_t ) * 3 * (size_t) triangle_count;
 	c->tri = sere_alloc( tri_bytes );
 	c->box = sere_alloc( sizeof( crossing_box ) * (size_t) triangle_count );
-	c->cell_start = sere_alloc( sizeof( int32_t ) * ( (size_t) c->cell_capacity + 1 ) );
+	c->cell_start = sere_alloc( sizeof( int32_t ) * ( kGroups * (size_t) c->cell_capacity + 1 ) );
 	c->entry = sere_alloc( sizeof( crossing_entry ) * (size_t) c->entry_capacity );
 	int failed = c->tri == NULL || c->box == NULL || c->cell_start == NULL || c->entry == NULL;
 	if ( failed )
@@ -268,16 +275,19 @@ static bool crossings_boxes( sere_crossings* c, const float* x, const float* y, 
 		float longest = 0.0f;
 		for ( int a = 0; a < 3; ++a )
 		{
-			/* checked before fminf, which would pass over a NaN */
 			if ( !isfinite( p[0][a] ) || !isfinite( p[1][a] ) || !isfinite( p[2][a] ) )
 			{
 				return false;
 			}
-			blo[a] = fminf( p[0][a], fminf( p[1][a], p[2][a] ) );
-			bhi[a] = fmaxf( p[0][a], fmaxf( p[1][a], p[2][a] ) );
-			lo[a] = fminf( lo[a], blo[a] );
-			hi[a] = fmaxf( hi[a], bhi[a] );
-			longest = fmaxf( longest, bhi[a] - blo[a] );
+			/* finite from here on: plain comparisons give fminf's and fmaxf's answers
+			 * without their NaN handling's library calls */
+			blo[a] = p[0][a] < p[1][a] ? p[0][a] : p[1][a];
+			blo[a] = p[2][a] < blo[a] ? p[2][a] : blo[a];
+			bhi[a] = p[0][a] < p[1][a] ? p[1][a] : p[0][a];
+			bhi[a] = p[2][a] > bhi[a] ? p[2][a] : bhi[a];
+			lo[a] = blo[a] < lo[a] ? blo[a] : lo[a];
+			hi[a] = bhi[a] > hi[a] ? bhi[a] : hi[a];
+			longest = bhi[a] - blo[a] > longest ? bhi[a] - blo[a] : longest;
 		}
 		c->box[t] = ( crossing_box ){ { blo[0], blo[1], blo[2] }, { bhi[0], bhi[1], bhi[2] } };
 		side_sum += longest;
@@ -334,12 +344,13 @@ static bool crossings_boxes( sere_crossings* c, const float* x, const float* y, 
 	}
 }
 
-/* Counting sort of (cell, triangle) entries: cell_start[c] first counts the entries of cells
- * up to c, then each entry is placed by decrementing it, which leaves the start of every cell. */
+/* Counting sort of (cell and group, triangle) entries: cell_start[s] first counts the entries
+ * of slots up to s, then each entry is placed by decrementing it, which leaves the start of
+ * every slot. */
 static void crossings_fill( sere_crossings* c, const crossing_grid* g )
 {
-	int32_t cells = g->n[0] * g->n[1] * g->n[2];
-	memset( c->cell_start, 0, sizeof( int32_t ) * ( (size_t) cells + 1 ) );
+	size_t slots = kGroups * (size_t) g->n[0] * (size_t) g->n[1] * (size_t) g->n[2];
+	memset( c->cell_start, 0, sizeof( int32_t ) * ( slots + 1 ) );
 	for ( int pass = 0; pass < 2; ++pass )
 	{
 		for ( int32_t t = 0; t < c->triangle_count; ++t )
@@ -349,23 +360,24 @@ static void crossings_fill( sere_crossings* c, const crossing_grid* g )
 			int32_t y0 = grid_cell( g, 1, b->lo[1] ), y1 = grid_cell( g, 1, b->hi[1] );
 			int32_t z0 = grid_cell( g, 2, b->lo[2] ), z1 = grid_cell( g, 2, b->hi[2] );
 			const int32_t* v = c->tri + 3 * (size_t) t;
-			crossing_entry entry = {
-				{ b->lo[0], b->lo[1], b->lo[2] }, { b->hi[0], b->hi[1], b->hi[2] }, { v[0], v[1], v[2] }, { x0, y0, z0 }
-			};
+			crossing_entry entry = { { b->lo[0], b->lo[1], b->lo[2] },
+									 { b->hi[0], b->hi[1], b->hi[2] },
+									 { v[0], v[1], v[2] } };
 			for ( int32_t k = z0; k <= z1; ++k )
 			{
 				for ( int32_t j = y0; j <= y1; ++j )
 				{
 					for ( int32_t i = x0; i <= x1; ++i )
 					{
-						int32_t cell = ( k * g->n[1] + j ) * g->n[0] + i;
+						size_t cell = ( (size_t) k * g->n[1] + j ) * g->n[0] + i;
+						size_t slot = kGroups * cell + ( i == x0 ) + 2 * ( j == y0 ) + 4 * ( k == z0 );
 						if ( pass == 0 )
 						{
-							c->cell_start[cell] += 1;
+							c->cell_start[slot] += 1;
 						}
 						else
 						{
-							c->entry[--c->cell_start[cell]] = entry;
+							c->entry[--c->cell_start[slot]] = entry;
 						}
 					}
 				}
@@ -373,9 +385,9 @@ static void crossings_fill( sere_crossings* c, const crossing_grid* g )
 		}
 		if ( pass == 0 )
 		{
-			for ( int32_t cell = 1; cell <= cells; ++cell )
+			for ( size_t slot = 1; slot <= slots; ++slot )
 			{
-				c->cell_start[cell] += c->cell_start[cell - 1];
+				c->cell_start[slot] += c->cell_start[slot - 1];
 			}
 		}
 	}
@@ -404,8 +416,10 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 	for ( int32_t e = 0; e < w->edge_count; ++e )
 	{
 		int32_t ea = w->edge_a[e], eb = w->edge_b[e];
-		float elo[3] = { fminf( x[ea], x[eb] ), fminf( y[ea], y[eb] ), fminf( z[ea], z[eb] ) };
-		float ehi[3] = { fmaxf( x[ea], x[eb] ), fmaxf( y[ea], y[eb] ), fmaxf( z[ea], z[eb] ) };
+		/* every end is a triangle's corner, all finite (crossings_boxes): plain comparisons
+		 * give fminf's and fmaxf's answers without their NaN handling's library calls */
+		float elo[3] = { x[ea] < x[eb] ? x[ea] : x[eb], y[ea] < y[eb] ? y[ea] : y[eb], z[ea] < z[eb] ? z[ea] : z[eb] };
+		float ehi[3] = { x[ea] < x[eb] ? x[eb] : x[ea], y[ea] < y[eb] ? y[eb] : y[ea], z[ea] < z[eb] ? z[eb] : z[ea] };
 		double p[3] = { x[ea], y[ea], z[ea] }, q[3] = { x[eb], y[eb], z[eb] };
 		int32_t x0 = grid_cell( g, 0, elo[0] ), x1 = grid_cell( g, 0, ehi[0] );
 		int32_t y0 = grid_cell( g, 1, elo[1] ), y1 = grid_cell( g, 1, ehi[1] );
@@ -417,25 +431,33 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 			{
 				for ( int32_t i = x0; i <= x1; ++i )
 				{
-					int32_t cell = ( k * g->n[1] + j ) * g->n[0] + i;
-					for ( int32_t s = w->cell_start[cell]; s < w->cell_start[cell + 1]; ++s )
+					/* The pair is tested only in the cell holding the low corner of the
+					 * overlap of the two boxes: that corner lies in both boxes, so exactly one
+					 * cell both visit contains it; grid_cell is monotone, so its cell is the
+					 * larger of the two low cells on each axis. Both boxes reach this cell, so
+					 * on an axis where the edge's box starts before it, the triangle's must
+					 * start in it: only the groups with those bits set are read. */
+					int need = ( i != x0 ) + 2 * ( j != y0 ) + 4 * ( k != z0 );
+					size_t cell = ( (size_t) k * g->n[1] + j ) * g->n[0] + i;
+					for ( int group = need; group < kGroups; group = ( group + 1 ) | need ) /* need's supersets */
 					{
-						const crossing_entry* t = w->entry + s;
-						/* The pair is tested only in the cell holding the low corner of the
-						 * overlap of the two boxes: that corner lies in both boxes, so exactly
-						 * one cell both visit contains it; grid_cell is monotone, so its cell is
-						 * the larger of the two low cells on each axis. */
-						if ( ( x0 > t->cell[0] ? x0 : t->cell[0] ) != i || ( y0 > t->cell[1] ? y0 : t->cell[1] ) != j ||
-							 ( z0 > t->cell[2] ? z0 : t->cell[2] ) != k )
+						size_t slot = kGroups * cell + group;
+						for ( int32_t s = w->cell_start[slot]; s < w->cell_start[slot + 1]; ++s )
 						{
-							continue;
+							const crossing_entry* t = w->entry + s;
+							/* One branch an entry, and a rarely taken one: whether the boxes
+							 * overlap is a coin toss among a cell's entries, and most that do
+							 * are the edge's own neighbours, sharing a corner. */
+							int apart = ( t->lo[0] > ehi[0] ) | ( t->hi[0] < elo[0] ) | ( t->lo[1] > ehi[1] ) |
+										( t->hi[1] < elo[1] ) | ( t->lo[2] > ehi[2] ) | ( t->hi[2] < elo[2] );
+							int touching = ( t->v[0] == ea ) | ( t->v[1] == ea ) | ( t->v[2] == ea ) |
+										   ( t->v[0] == eb ) | ( t->v[1] == eb ) | ( t->v[2] == eb );
+							if ( apart | touching )
+							{
+								continue;
+							}
+							found += sere_edge_crosses_triangle( p, q, ea, eb, t->v, x, y, z );
 						}
-						if ( t->lo[0] > ehi[0] || t->hi[0] < elo[0] || t->lo[1] > ehi[1] || t->hi[1] < elo[1] ||
-							 t->lo[2] > ehi[2] || t->hi[2] < elo[2] )
-						{
-							continue;
-						}
-						found += sere_edge_crosses_triangle( p, q, ea, eb, t->v, x, y, z );
 					}
 				}
 			}
