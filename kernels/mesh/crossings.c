@@ -81,16 +81,10 @@ typedef struct crossing_box
 	float lo[3], hi[3];
 } crossing_box;
 
-/* A triangle as listed in one grid cell, with everything the edge loop reads before the
- * predicate, so a cell's candidates are one contiguous stream. */
-typedef struct crossing_entry
-{
-	float lo[3], hi[3]; /* its box */
-	int32_t v[3];		/* its corners */
-} crossing_entry;
-
 /* A cell's entries come in 8 groups by which axes of the cell hold the low corner of the
- * triangle's box: bit a set when the box starts in this cell's slab along axis a. */
+ * triangle's box: bit 2 for x, 1 for y, 0 for z set when the box starts in this cell's slab
+ * along that axis. z last: a flat leaf is one slab thick, so its groups an edge reads are
+ * consecutive more often. */
 enum
 {
 	kGroups = 8
@@ -110,7 +104,11 @@ struct sere_crossings
 	int32_t cell_capacity;
 	int32_t entry_capacity;
 	int32_t* cell_start;
-	crossing_entry* entry;
+	/* Each entry is a triangle as listed in one cell, with everything the edge loop reads
+	 * before the predicate, in columns (so a run of entries is tested in vectors): its box
+	 * (lo x, y, z, then hi x, y, z) and its corners. */
+	float* entry_box[6];
+	int32_t* entry_v[3];
 };
 
 /* A uniform grid over the bounds of the triangles; cell coordinates clamp to the grid, so the
@@ -201,7 +199,14 @@ void sere_crossings_destroy( sere_crossings* c )
 	sere_free( c->edge_b );
 	sere_free( c->box );
 	sere_free( c->cell_start );
-	sere_free( c->entry );
+	for ( int k = 0; k < 6; ++k )
+	{
+		sere_free( c->entry_box[k] );
+	}
+	for ( int k = 0; k < 3; ++k )
+	{
+		sere_free( c->entry_v[k] );
+	}
 	free( c );
 }
 
@@ -241,8 +246,17 @@ sere_status sere_crossings_create( const int32_t* tri, int32_t triangle_count, i
 	c->tri = sere_alloc( tri_bytes );
 	c->box = sere_alloc( sizeof( crossing_box ) * (size_t) triangle_count );
 	c->cell_start = sere_alloc( sizeof( int32_t ) * ( kGroups * (size_t) c->cell_capacity + 1 ) );
-	c->entry = sere_alloc( sizeof( crossing_entry ) * (size_t) c->entry_capacity );
-	int failed = c->tri == NULL || c->box == NULL || c->cell_start == NULL || c->entry == NULL;
+	int failed = c->tri == NULL || c->box == NULL || c->cell_start == NULL;
+	for ( int k = 0; k < 6; ++k )
+	{
+		c->entry_box[k] = sere_alloc( sizeof( float ) * (size_t) c->entry_capacity );
+		failed |= c->entry_box[k] == NULL;
+	}
+	for ( int k = 0; k < 3; ++k )
+	{
+		c->entry_v[k] = sere_alloc( sizeof( int32_t ) * (size_t) c->entry_capacity );
+		failed |= c->entry_v[k] == NULL;
+	}
 	if ( failed )
 	{
 		sere_crossings_destroy( c );
@@ -360,9 +374,6 @@ static void crossings_fill( sere_crossings* c, const crossing_grid* g )
 			int32_t y0 = grid_cell( g, 1, b->lo[1] ), y1 = grid_cell( g, 1, b->hi[1] );
 			int32_t z0 = grid_cell( g, 2, b->lo[2] ), z1 = grid_cell( g, 2, b->hi[2] );
 			const int32_t* v = c->tri + 3 * (size_t) t;
-			crossing_entry entry = { { b->lo[0], b->lo[1], b->lo[2] },
-									 { b->hi[0], b->hi[1], b->hi[2] },
-									 { v[0], v[1], v[2] } };
 			for ( int32_t k = z0; k <= z1; ++k )
 			{
 				for ( int32_t j = y0; j <= y1; ++j )
@@ -370,14 +381,18 @@ static void crossings_fill( sere_crossings* c, const crossing_grid* g )
 					for ( int32_t i = x0; i <= x1; ++i )
 					{
 						size_t cell = ( (size_t) k * g->n[1] + j ) * g->n[0] + i;
-						size_t slot = kGroups * cell + ( i == x0 ) + 2 * ( j == y0 ) + 4 * ( k == z0 );
+						size_t slot = kGroups * cell + 4 * ( i == x0 ) + 2 * ( j == y0 ) + ( k == z0 );
 						if ( pass == 0 )
 						{
 							c->cell_start[slot] += 1;
+							continue;
 						}
-						else
+						int32_t e = --c->cell_start[slot];
+						for ( int a = 0; a < 3; ++a )
 						{
-							c->entry[--c->cell_start[slot]] = entry;
+							c->entry_box[a][e] = b->lo[a];
+							c->entry_box[3 + a][e] = b->hi[a];
+							c->entry_v[a][e] = v[a];
 						}
 					}
 				}
@@ -391,6 +406,58 @@ static void crossings_fill( sere_crossings* c, const crossing_grid* g )
 			}
 		}
 	}
+}
+
+/* An edge as the grid loop tests it: its box, its ends in double for the predicate, their indices. */
+typedef struct crossing_edge
+{
+	float lo[3], hi[3];
+	double p[3], q[3];
+	int32_t a, b;
+} crossing_edge;
+
+/* Entries first to last − 1 against the edge: the crossings among those whose box meets the
+ * edge's and that share no corner with it. The filter runs in vectors over the columns, a block
+ * at a time; the few entries it keeps (an edge's neighbours share its corners) go to the
+ * predicate. */
+static int64_t crossings_run( const sere_crossings* w, int32_t first, int32_t last, const crossing_edge* edge,
+							  const float* x, const float* y, const float* z )
+{
+	enum
+	{
+		kBlock = 16
+	};
+	const float *lx = w->entry_box[0], *ly = w->entry_box[1], *lz = w->entry_box[2];
+	const float *hx = w->entry_box[3], *hy = w->entry_box[4], *hz = w->entry_box[5];
+	const int32_t *v0 = w->entry_v[0], *v1 = w->entry_v[1], *v2 = w->entry_v[2];
+	const float elx = edge->lo[0], ely = edge->lo[1], elz = edge->lo[2];
+	const float ehx = edge->hi[0], ehy = edge->hi[1], ehz = edge->hi[2];
+	const int32_t a = edge->a, b = edge->b;
+	int64_t found = 0;
+	for ( int32_t s = first; s < last; s += kBlock )
+	{
+		int32_t m = last - s < kBlock ? last - s : kBlock;
+		uint8_t keep[kBlock];
+#pragma omp simd
+		for ( int32_t k = 0; k < m; ++k )
+		{
+			int32_t i = s + k;
+			int apart = ( lx[i] > ehx ) | ( hx[i] < elx ) | ( ly[i] > ehy ) | ( hy[i] < ely ) | ( lz[i] > ehz ) |
+						( hz[i] < elz );
+			int touching =
+				( v0[i] == a ) | ( v1[i] == a ) | ( v2[i] == a ) | ( v0[i] == b ) | ( v1[i] == b ) | ( v2[i] == b );
+			keep[k] = ( uint8_t ) !( apart | touching );
+		}
+		for ( int32_t k = 0; k < m; ++k )
+		{
+			if ( keep[k] )
+			{
+				const int32_t v[3] = { v0[s + k], v1[s + k], v2[s + k] };
+				found += sere_edge_crosses_triangle( edge->p, edge->q, a, b, v, x, y, z );
+			}
+		}
+	}
+	return found;
 }
 
 sere_status sere_crossings_count( sere_crossings* c, const float* x, const float* y, const float* z, int64_t* count )
@@ -418,12 +485,17 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 		int32_t ea = w->edge_a[e], eb = w->edge_b[e];
 		/* every end is a triangle's corner, all finite (crossings_boxes): plain comparisons
 		 * give fminf's and fmaxf's answers without their NaN handling's library calls */
-		float elo[3] = { x[ea] < x[eb] ? x[ea] : x[eb], y[ea] < y[eb] ? y[ea] : y[eb], z[ea] < z[eb] ? z[ea] : z[eb] };
-		float ehi[3] = { x[ea] < x[eb] ? x[eb] : x[ea], y[ea] < y[eb] ? y[eb] : y[ea], z[ea] < z[eb] ? z[eb] : z[ea] };
-		double p[3] = { x[ea], y[ea], z[ea] }, q[3] = { x[eb], y[eb], z[eb] };
-		int32_t x0 = grid_cell( g, 0, elo[0] ), x1 = grid_cell( g, 0, ehi[0] );
-		int32_t y0 = grid_cell( g, 1, elo[1] ), y1 = grid_cell( g, 1, ehi[1] );
-		int32_t z0 = grid_cell( g, 2, elo[2] ), z1 = grid_cell( g, 2, ehi[2] );
+		crossing_edge edge = {
+			{ x[ea] < x[eb] ? x[ea] : x[eb], y[ea] < y[eb] ? y[ea] : y[eb], z[ea] < z[eb] ? z[ea] : z[eb] },
+			{ x[ea] < x[eb] ? x[eb] : x[ea], y[ea] < y[eb] ? y[eb] : y[ea], z[ea] < z[eb] ? z[eb] : z[ea] },
+			{ x[ea], y[ea], z[ea] },
+			{ x[eb], y[eb], z[eb] },
+			ea,
+			eb,
+		};
+		int32_t x0 = grid_cell( g, 0, edge.lo[0] ), x1 = grid_cell( g, 0, edge.hi[0] );
+		int32_t y0 = grid_cell( g, 1, edge.lo[1] ), y1 = grid_cell( g, 1, edge.hi[1] );
+		int32_t z0 = grid_cell( g, 2, edge.lo[2] ), z1 = grid_cell( g, 2, edge.hi[2] );
 		int64_t found = 0;
 		for ( int32_t k = z0; k <= z1; ++k )
 		{
@@ -436,28 +508,19 @@ sere_status sere_crossings_count( sere_crossings* c, const float* x, const float
 					 * cell both visit contains it; grid_cell is monotone, so its cell is the
 					 * larger of the two low cells on each axis. Both boxes reach this cell, so
 					 * on an axis where the edge's box starts before it, the triangle's must
-					 * start in it: only the groups with those bits set are read. */
-					int need = ( i != x0 ) + 2 * ( j != y0 ) + 4 * ( k != z0 );
-					size_t cell = ( (size_t) k * g->n[1] + j ) * g->n[0] + i;
-					for ( int group = need; group < kGroups; group = ( group + 1 ) | need ) /* need's supersets */
+					 * start in it: only the groups with those bits set are read, those next to
+					 * one another as one run. */
+					int need = 4 * ( i != x0 ) + 2 * ( j != y0 ) + ( k != z0 );
+					const int32_t* start = w->cell_start + kGroups * ( ( (size_t) k * g->n[1] + j ) * g->n[0] + i );
+					for ( int group = need; group < kGroups; )
 					{
-						size_t slot = kGroups * cell + group;
-						for ( int32_t s = w->cell_start[slot]; s < w->cell_start[slot + 1]; ++s )
+						int last = group;
+						while ( last + 1 < kGroups && ( ( last + 1 ) | need ) == last + 1 )
 						{
-							const crossing_entry* t = w->entry + s;
-							/* One branch an entry, and a rarely taken one: whether the boxes
-							 * overlap is a coin toss among a cell's entries, and most that do
-							 * are the edge's own neighbours, sharing a corner. */
-							int apart = ( t->lo[0] > ehi[0] ) | ( t->hi[0] < elo[0] ) | ( t->lo[1] > ehi[1] ) |
-										( t->hi[1] < elo[1] ) | ( t->lo[2] > ehi[2] ) | ( t->hi[2] < elo[2] );
-							int touching = ( t->v[0] == ea ) | ( t->v[1] == ea ) | ( t->v[2] == ea ) |
-										   ( t->v[0] == eb ) | ( t->v[1] == eb ) | ( t->v[2] == eb );
-							if ( apart | touching )
-							{
-								continue;
-							}
-							found += sere_edge_crosses_triangle( p, q, ea, eb, t->v, x, y, z );
+							last += 1;
 						}
+						found += crossings_run( w, start[group], start[last + 1], &edge, x, y, z );
+						group = ( last + 1 ) | need; /* the next superset of need */
 					}
 				}
 			}
