@@ -110,6 +110,39 @@ Test( leaf, end_to_end_dry )
 	small_sim_free( sim, &model );
 }
 
+/* A NaN in a Voronoi particle fails the frame it appears in, whether the restore measures ĥ or
+ * uses the rest thickness: ĥ is measured only where the collision pass moved a corner, so this
+ * rests on the rest of the step. While the leaf has water, osmosis meets it first, as a spring of
+ * no finite length (SERE_ERR_GEOMETRY, its documented code); once a layer is dry and osmosis
+ * stops (Sec. 6), the projection's confirming measure, which reads every spring, reports
+ * SERE_ERR_NONFINITE. */
+Test( leaf, a_nonfinite_voronoi_particle_fails_the_frame )
+{
+	for ( int measured = 0; measured < 2; ++measured )
+	{
+		for ( int dry = 0; dry < 2; ++dry )
+		{
+			sere_model model;
+			small_leaf( &model, "wisteria", 300 );
+			sere_leaf_sim* sim = small_sim( &model );
+			/* a fast loss dries a layer within a few hundred frames */
+			sere_leaf_params params = dry ? drying_params( -20.0, -20.0, 0.5 ) : drying_params( -0.2, -0.2, 0.5 );
+			params.restore_measured = measured;
+			sere_leaf_stats stats = { 0 };
+			for ( int frame = 0; frame < 3 || ( dry && !stats.desiccated && frame < 2000 ); ++frame )
+			{
+				cr_assert_eq( sere_leaf_step( sim, &params, &stats ), SERE_OK, "frame %d", frame );
+			}
+			cr_assert_eq( stats.desiccated, dry, "the leaf must be %s", dry ? "dry" : "wet" );
+			model.p.y[model.triangle_particles + model.triangle_count / 2] = NAN;
+			sere_status got = sere_leaf_step( sim, &params, &stats );
+			cr_expect_eq( got, dry ? SERE_ERR_NONFINITE : SERE_ERR_GEOMETRY, "restore_measured %d, dry %d: status %d",
+						  measured, dry, got );
+			small_sim_free( sim, &model );
+		}
+	}
+}
+
 /* The collision thickness follows the triangle layer: Σ l / Σ l⁰ over the T springs, 1 exactly
  * at rest (equal sums), the pass using the rest thickness times it, and fixed when turned off.
  * The scale is recomputed here from the model in the same order, so the comparison is exact. */

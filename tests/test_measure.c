@@ -784,20 +784,31 @@ Test( measure, shape_same_for_one_and_two_threads )
 }
 
 /* pose_only measures the pose and the rolls with the very arithmetic of the full measure (the
- * same bits) and marks every other measure unmeasured, on a crumpled sheet where all of them
- * are nonzero. */
+ * same bits) and marks every other measure unmeasured, on a crumpled sheet with a vein along its
+ * middle and that vein as its midvein, where the full measure gives every one of them a value. */
 Test( measure, pose_only_is_the_full_measure_s_pose_and_rolls )
 {
 	measure_sheet s;
-	measure_crumpled( &s, 40, 30, 1.0, 0.75, 1, 13, 0.6, 0.01, 53 );
+	const int32_t nx = 40, ny = 30;
+	const double w = 1.0, h = 0.75;
+	measure_crumpled( &s, nx, ny, w, h, 1, 13, 0.6, 0.01, 53 );
+	int32_t midvein[31];
+	for ( int32_t j = 0; j <= ny; ++j )
+	{
+		midvein[j] = s.grid[j * ( nx + 1 ) + nx / 2];
+	}
+	measure_vein vein;
+	measure_vein_make( &vein, 0.5 * w, 0.0, 0.5 * w, h );
 	sere_shape_input in = measure_input( &s );
 	in.ground = -0.5;
+	in.midvein = midvein, in.midvein_count = ny + 1;
+	in.veins = &vein.shape;
 	sere_shape full, pose;
 	cr_assert_eq( sere_shape_measure( &in, &full ), SERE_OK );
 	in.pose_only = true;
 	cr_assert_eq( sere_shape_measure( &in, &pose ), SERE_OK );
 	cr_assert_eq( pose.area, full.area );
-	cr_assert_eq( pose.extent, full.extent );
+	cr_assert_eq( pose.extent, full.extent, "pose_only leaves the extent to skip_extent" );
 	for ( int k = 0; k < 3; ++k )
 	{
 		cr_assert_eq( pose.centroid[k], full.centroid[k] );
@@ -810,12 +821,19 @@ Test( measure, pose_only_is_the_full_measure_s_pose_and_rolls )
 	cr_assert( isfinite( full.roll_tip ) && isfinite( full.roll_base ), "the sheet must have rolls to compare" );
 	cr_assert_eq( pose.roll_tip, full.roll_tip );
 	cr_assert_eq( pose.roll_base, full.roll_base );
-	cr_assert( full.wrinkle_sign_changes > 0 && full.surf_edges > 0 && isfinite( full.margin_lift ),
-			   "the full measure of a crumpled sheet has wrinkles, creases and a margin" );
-	cr_assert( isnan( pose.crease_vein ) && isnan( pose.crease_surf ) && isnan( pose.margin_lift ) &&
-				   isnan( pose.curl_tip ) && isnan( pose.curl_base ) && isnan( pose.midvein_curvature ) &&
-				   isnan( pose.crease_main ) && isnan( pose.vein_roll_tip ),
-			   "a measure pose_only skips reads as a number" );
+	const double full_skipped[] = { full.crease_vein,	 full.crease_surf,		full.margin_lift,  full.curl_tip,
+									full.curl_base,		 full.crease_main,		full.crease_blade, full.vein_roll_tip,
+									full.vein_roll_base, full.midvein_curvature };
+	const double pose_skipped[] = { pose.crease_vein,	 pose.crease_surf,		pose.margin_lift,  pose.curl_tip,
+									pose.curl_base,		 pose.crease_main,		pose.crease_blade, pose.vein_roll_tip,
+									pose.vein_roll_base, pose.midvein_curvature };
+	for ( int k = 0; k < 10; ++k )
+	{
+		cr_assert( isfinite( full_skipped[k] ), "measure %d: the full measure must give it a value to skip", k );
+		cr_assert( isnan( pose_skipped[k] ), "measure %d: pose_only skips it, yet it reads as a number", k );
+	}
+	cr_assert( full.wrinkle_sign_changes > 0 && full.vein_edges > 0 && full.surf_edges > 0,
+			   "the full measure of a crumpled sheet counts wrinkles and edges" );
 	cr_assert( pose.wrinkle_sign_changes == -1 && pose.vein_edges == -1 && pose.surf_edges == -1,
 			   "a count pose_only skips reads as a count" );
 	measure_sheet_free( &s );

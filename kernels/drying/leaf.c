@@ -18,7 +18,8 @@ struct sere_leaf_sim
 	sere_pbd* pbd;
 	sere_bvh* bvh;
 	sere_collide* collide;
-	float* h_hat;		 /* ĥ where the last pass moved a corner; elsewhere an older value (0 at first) no one reads */
+	float* h_hat;		 /* ĥ where the last pass moved a corner; elsewhere an older finite value (0 at first), read
+						  * only by the restore's check that every entry is finite */
 	float *x0, *y0, *z0; /* triangle layer at the start of the frame: the contacts' sides */
 	float *xc, *yc, *zc; /* triangle layer before the collision pass: which corners it moved */
 	float* push;		 /* per particle: how far the ground pushed it up this frame (friction) */
@@ -550,7 +551,9 @@ static sere_status self_collide( sere_leaf_sim* sim, const sere_leaf_params* par
 /* Lines 24–27: the Voronoi particles of the triangles the pass moved back on their normals (Jeong
  * Eq. 14), with ĥ as it was before the pass (line 14, Sec. 5.3). Only those triangles read ĥ, so
  * only theirs is measured, from the corners saved before the pass: the same bits as measuring
- * every triangle before it. */
+ * every triangle before it. A NaN or infinity elsewhere in the layers has already failed the
+ * step: the projection's confirming measure reads every spring, each Voronoi particle's links
+ * among them. */
 static sere_status restore_moved( sere_leaf_sim* sim, const sere_leaf_params* params )
 {
 	sere_model* model = sim->model;

@@ -494,8 +494,8 @@ static double diameter2( const sere_shape_input* in )
 	return best;
 }
 
-/* Everything after validation and adjacency; the scratch arrays are the caller's. */
-/* The measures of sere_shape_input::pose_only: the pose and the two cross-section rolls. */
+/* The measures of sere_shape_input::pose_only, after validation: the pose, the extent and the
+ * two cross-section rolls; the scratch arrays are the caller's. */
 static void shape_pose( const sere_shape_input* in, int32_t* tris, double* lateral, sere_shape* out )
 {
 	int32_t tc = in->triangle_count;

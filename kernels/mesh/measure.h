@@ -100,11 +100,12 @@ typedef struct sere_shape_input
 	const int32_t* midvein; /* optional polyline of vertex indices from base to tip, or NULL */
 	int32_t midvein_count;
 	bool skip_extent; /* true: leave extent NaN (the exact diameter is O(N²); per-frame measures skip it) */
-	/* true: measure only the pose (area, centroid, mean_normal, flip, min_z, max_z, ground_gap)
-	 * and roll_tip, roll_base, which need no edge adjacency: every other measure is NaN, its
-	 * counts −1. A per-frame watch reads no more, and this skips the adjacency (a sort of the
-	 * edges, and with it the check for SERE_ERR_GEOMETRY), the dihedrals and the vein measures,
-	 * the same bits for what it measures. */
+	/* true: measure only the pose (area, centroid, mean_normal, flip, min_z, max_z, ground_gap),
+	 * roll_tip and roll_base, which need no edge adjacency, and extent unless skip_extent: every
+	 * other measure is NaN, its counts −1. A per-frame watch reads no more, and this skips the
+	 * adjacency (a sort of the edges, and with it its checks: no SERE_ERR_GEOMETRY, and no
+	 * SERE_ERR_ARGUMENT for an edge listed twice or a triangle edge missing from the list), the
+	 * dihedrals and the vein measures. The same bits for what it measures. */
 	bool pose_only;
 	int32_t threads; /* the measure's threads (core/base.h; 0: OpenMP's count at the call) */
 } sere_shape_input;
