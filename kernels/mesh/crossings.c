@@ -218,8 +218,9 @@ sere_status sere_crossings_create( const int32_t* tri, int32_t triangle_count, i
 		return SERE_ERR_ARGUMENT;
 	}
 	*out = NULL;
-	/* 3 T triangle indices and 8 T + 64 grid entries must fit in int32 */
-	if ( tri == NULL || triangle_count <= 0 || vertex_count <= 0 || triangle_count > ( INT32_MAX - 64 ) / 8 )
+	/* 3 T triangle indices and 8 T + 64 grid entries, and a block's step (16) past the last
+	 * (crossings_run), must fit in int32 */
+	if ( tri == NULL || triangle_count <= 0 || vertex_count <= 0 || triangle_count > ( INT32_MAX - 128 ) / 8 )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
