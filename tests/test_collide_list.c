@@ -316,3 +316,118 @@ Test( collide, served_pass_keeps_a_sliver_the_motion_brings_within_the_thickness
 	sere_collide_destroy( fresh );
 	sere_bvh_destroy( bvh );
 }
+
+/* Scales the sheet's triangle layer by `scale` about the middle of its box. */
+static void scale_sheet( collide_sheet* s, float scale )
+{
+	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+	float* axis[3] = { s->x, s->y, s->z };
+	for ( int r = 0; r < 3; ++r )
+	{
+		for ( int32_t i = 0; i < s->n; ++i )
+		{
+			lo[r] = axis[r][i] < lo[r] ? axis[r][i] : lo[r];
+			hi[r] = axis[r][i] > hi[r] ? axis[r][i] : hi[r];
+		}
+		float middle = 0.5f * ( lo[r] + hi[r] );
+		for ( int32_t i = 0; i < s->n; ++i )
+		{
+			axis[r][i] = middle + scale * ( axis[r][i] - middle );
+		}
+	}
+}
+
+/* Asserts that the last detection of c found what a fresh workspace's search finds on the sheet as
+ * it is: the same contacts of both kinds, bit for bit, in the same order. */
+static void assert_as_searched( collide_sheet* s, sere_bvh* bvh, sere_collide* c, float h, const char* what )
+{
+	sere_collide* fresh;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+	int32_t fresh_count = -1, n_a, n_b, e_a, e_b;
+	cr_assert_eq( sere_collide_detect( fresh, bvh, s->x, s->y, s->z, h, &fresh_count ), SERE_OK );
+	const sere_contact* a = sere_collide_contacts( c, &n_a );
+	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
+	const sere_edge_contact* ea = sere_collide_edge_contacts( c, &e_a );
+	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
+	cr_assert( n_a == n_b && e_a == e_b, "%s: %d + %d contacts, search %d + %d", what, n_a, e_a, n_b, e_b );
+	/* tolerance 0: the same pairs through the same exact test, in the same order */
+	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0, "%s", what );
+	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0, "%s", what );
+	sere_collide_destroy( fresh );
+}
+
+/* A drying leaf shrinks all over, so its rim moves farther than the skin while no two points come
+ * much closer (list_serves takes a uniform scale off the motion). A crumpled sheet folded through
+ * itself shrinks by 0.5% a step about its middle: its rim, half a sheet from the middle, moves
+ * 0.0025 a step against a skin of 0.0021, so a list allowing only a translation would serve no
+ * step. The list must serve most steps, on the same steps at 1 and 2 threads (the scale's sums are
+ * taken in block order), and every step must find what a search and brute force find. */
+Test( collide, list_serves_a_sheet_that_shrinks_all_over )
+{
+	collide_sheet s;
+	collide_sheet_make( &s, 36, 24, 7 );
+	float h = 0.3f * s.cell;
+	uint64_t served_steps[2] = { 0, 0 };
+	for ( int threads = 1; threads <= 2; ++threads )
+	{
+		omp_set_num_threads( threads );
+		collide_sheet_crumple( &s, 0.3, 0.3 * h, 5 );
+		sere_bvh* bvh;
+		cr_assert_eq( sere_bvh_create( s.tri, s.triangles, s.n, s.x, s.y, s.z, &bvh ), SERE_OK );
+		sere_collide* kept;
+		cr_assert_eq( sere_collide_create( bvh, 1 << 16, &kept ), SERE_OK );
+		int32_t most = 0;
+		for ( int step = 0; step < 40; ++step )
+		{
+			collide_sheet_crumple( &s, 0.3 + 0.0005 * step, 0.3 * h, 5 );
+			scale_sheet( &s, powf( 0.995f, (float) step ) );
+			cr_assert_eq( sere_bvh_refit( bvh, s.x, s.y, s.z ), SERE_OK );
+			int32_t count = collide_check_pairs( &s, bvh, kept, h, "shrinking", NULL );
+			most = count > most ? count : most;
+			served_steps[threads - 1] |= (uint64_t) ( sere_collide_list_uses( kept ) > 0 ) << step;
+			assert_as_searched( &s, bvh, kept, h, "shrinking" );
+		}
+		cr_assert_gt( most, 50, "the crumple must fold the sheet onto itself" );
+		int served = __builtin_popcountll( served_steps[threads - 1] );
+		cr_assert_gt( served, 30, "%d threads: the list must serve most steps of the shrink (served %d of 40)", threads,
+					  served );
+		sere_collide_destroy( kept );
+		sere_bvh_destroy( bvh );
+	}
+	cr_assert_eq( served_steps[0], served_steps[1], "the same steps served at 1 and 2 threads" );
+	collide_sheet_free( &s );
+}
+
+/* The scale's bound (list_serves): a U-fold whose halves face each other across `gap` is listed
+ * (a fresh workspace's skin is 0.25 thickness: pairs up to 1.5 thicknesses apart), then the whole
+ * sheet shrinks by `scale` about its middle, bringing the halves within the thickness. At 1.2
+ * thicknesses the pairs across are listed and a shrink by 0.8 keeps every pair left off the list
+ * beyond the thickness (0.8 × 1.5 > 1): the list serves, and the served pass must test the pairs
+ * across, now 0.96 thickness apart (they were 1.2 thicknesses apart, beyond the thickness plus
+ * the residual motion, but within it over the scale). At 1.6 thicknesses the pairs across are
+ * left off the list and a shrink by 0.6 brings them to 0.96: the list must not serve. Either way
+ * the detection finds what a search and brute force find. The thickness is 0.2 cell, so that the
+ * shrunk sheet's triangles stay taller than it. */
+Test( collide, list_serves_a_shrink_only_while_pairs_left_off_stay_apart )
+{
+	const float gaps[2] = { 1.2f, 1.6f }, scales[2] = { 0.8f, 0.6f };
+	for ( int k = 0; k < 2; ++k )
+	{
+		collide_sheet s;
+		float h = 0.2f * collide_sheet_make( &s, 36, 24, 7 );
+		collide_sheet_fold( &s, gaps[k] * h );
+		collide_sheet_tree( &s, 1 << 16 );
+		int32_t before = -1;
+		cr_assert_eq( sere_collide_detect( s.c, s.bvh, s.x, s.y, s.z, h, &before ), SERE_OK );
+		cr_assert_eq( sere_collide_list_uses( s.c ), 0 );
+		scale_sheet( &s, scales[k] );
+		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
+		int32_t count = collide_check_pairs( &s, s.bvh, s.c, h, k == 0 ? "listed across" : "left off", NULL );
+		cr_assert_eq( sere_collide_list_uses( s.c ), k == 0 ? 1 : 0, "gap %g, shrink %g: the list must %s",
+					  (double) gaps[k], (double) scales[k], k == 0 ? "serve" : "not serve" );
+		cr_assert_gt( count, before + 300, "the shrink must bring the halves within the thickness (%d, before %d)",
+					  count, before );
+		assert_as_searched( &s, s.bvh, s.c, h, k == 0 ? "listed across" : "left off" );
+		collide_sheet_release( &s );
+	}
+}

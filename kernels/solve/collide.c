@@ -107,6 +107,7 @@ static void collide_free( sere_collide* c )
 					   c->edge_triangle,
 					   c->push_count,
 					   c->cache_x,
+					   c->cache_sum,
 					   c->cache_y,
 					   c->cache_z,
 					   c->cache_item,
@@ -442,11 +443,12 @@ sere_status sere_collide_create( const sere_bvh* bvh, int32_t contact_capacity, 
 	c->cache_x = sere_alloc( sizeof( float ) * vn );
 	c->cache_y = sere_alloc( sizeof( float ) * vn );
 	c->cache_z = sere_alloc( sizeof( float ) * vn );
+	c->cache_sum = sere_alloc( 4 * sizeof( double ) * blocks );
 	c->cache_block_thread = sere_alloc( sizeof( int32_t ) * blocks );
 	c->cache_block_start = sere_alloc( sizeof( int32_t ) * blocks );
 	c->cache_block_count = sere_alloc( sizeof( int32_t ) * blocks );
-	ok = ok && c->cache_x && c->cache_y && c->cache_z && c->cache_block_thread && c->cache_block_start &&
-		 c->cache_block_count && c->edge_across;
+	ok = ok && c->cache_x && c->cache_y && c->cache_z && c->cache_sum && c->cache_block_thread &&
+		 c->cache_block_start && c->cache_block_count && c->edge_across;
 	if ( !ok || alloc_contacts( c, (int32_t) capacity ) != SERE_OK )
 	{
 		collide_free( c );

@@ -34,8 +34,9 @@
  * of them changes by at most 2δ; a pair the exact test would accept now was closer than the
  * thickness (plus cull_radius's rounding margin), so closer than that plus 2δ at the listing,
  * where its boxes overlapped the grown query boxes and no separating plane put it beyond that
- * radius: it is on the list. The list keeps the order of the search (the tree is walked in a
- * fixed order, and a larger query box only adds visits between the same ones), so the exact test
+ * radius: it is on the list. (list_serves takes a common translation and a uniform scale off the
+ * motion first: distances do not see the one and shrink with the other.) The list keeps the order of the search (the
+ * tree is walked in a fixed order, and a larger query box only adds visits between the same ones), so the exact test
  * meets the same pairs in the same order and finds the same contacts in the same order as a
  * search would: the same bits. On the Table 1 maple a vertex moves by about 0.1 thickness a
  * frame; half a thickness lists pairs up to two thicknesses apart, and rebuilds every few frames. */
@@ -226,8 +227,8 @@ struct sere_collide
 	lane_bits* lane_mark;
 
 	/* The candidate list (see SKIN): the positions it was built at, the thickness and tree
-	 * generation it was built for, and per block the pairs the exact test must see while no
-	 * vertex has moved by more than the skin, in the order the search met them: per thread
+	 * generation it was built for, and per block the pairs the exact test must see while the
+	 * motion stays within the skin (list_serves), in the order the search met them: per thread
 	 * cache_capacity pairs (the vertex or edge, the triangle or other edge, the vertex's
 	 * neighbour flag and their squared distance at the listing, see list_reach2), and per block the
 	 * thread, first pair and count. */
@@ -244,6 +245,13 @@ struct sere_collide
 	uint8_t* cache_near;
 	float* cache_gap;
 	float cache_reach2; /* list_reach2: the served detection's bound on a contact's squared listed distance */
+	/* The listing positions' mean r̄, Σ |r − r̄|² and largest |x| + |y| + |z| (keep_shape), for
+	 * list_serves' scale; and per vertex block, 4 apart, the partial sums of keep_shape and
+	 * list_shrink, added in block order so that neither depends on the thread count. */
+	float cache_mean[3];
+	double cache_spread;
+	float cache_far;
+	double* cache_sum;
 	int32_t *cache_block_thread, *cache_block_start, *cache_block_count;
 	int32_t* cache_used; /* per thread, FAR_STRIDE apart: pairs listed, or −1 after an overflow */
 
@@ -644,19 +652,19 @@ static inline float list_radius( const detect_context* c, const float far[3] )
  * closest_segments' parallel case). Elsewhere it keeps 0, and the pair is always tested: on a
  * sliver the closest point can land off along the face, its distance farther than the true one
  * by more than any allowance (a review built one whose contact a served pass then missed: now a
- * test). A point of a triangle or edge moves by at most D when its corners do, so a distance
- * changes by at most 2D: with D (moved) the largest displacement since the listing, up to the
- * translation T that list_serves takes off, a pair farther than the thickness plus 2D then is
- * farther than the thickness now and cannot be a contact. The served detection skips those,
- * keeping the others in the list's order: the same contacts in the same order. Well-conditioned
- * float distances are within a few ulps of the coordinates of the true ones (|p| 2⁻¹⁹ is ample),
- * which `far` 2⁻¹⁴ covers, with far bounding |p| then and now (the largest |x| + |y| + |z| now,
- * plus |T| and 2δ); 2⁻¹⁰ of the reach covers its own rounding. A list is tested least just after
- * its search, when D is small and its pairs are needed least. Returns the bound on a contact's
- * squared distance at the listing. */
-static inline float list_reach2( float thickness, float moved, float far )
+ * test). With the motion since the listing a scale s and a translation T plus a residual of at
+ * most D (moved) per vertex (list_serves), a point of a triangle or edge moves the same way with a
+ * residual of at most D, so a distance now is at least s times the distance then less 2D: a pair
+ * farther than (thickness + 2D) / s then is farther than the thickness now and cannot be a
+ * contact. The served detection skips those, keeping the others in the list's order: the same
+ * contacts in the same order. Well-conditioned float distances are within a few ulps of the
+ * coordinates of the true ones (|p| 2⁻¹⁹ is ample), which `far` 2⁻¹⁴ covers, with far bounding |p|
+ * then and now (the largest |x| + |y| + |z| of either); 2⁻¹⁰ of the reach covers its own rounding
+ * and the quotient's. A list is tested least just after its search, when D is small and its pairs
+ * are needed least. Returns the bound on a contact's squared distance at the listing. */
+static inline float list_reach2( float thickness, float moved, float scale, float far )
 {
-	float reach = thickness + 2.0f * moved;
+	float reach = ( thickness + 2.0f * moved ) / scale;
 	reach += reach * 0x1p-10f + far * 0x1p-14f;
 	return reach * reach;
 }
