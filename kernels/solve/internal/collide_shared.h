@@ -35,11 +35,11 @@
  * thickness (plus cull_radius's rounding margin), so closer than that plus 2δ at the listing,
  * where its boxes overlapped the grown query boxes and no separating plane put it beyond that
  * radius: it is on the list. (list_serves takes a common translation and a uniform scale off the
- * motion first: distances do not see the one and shrink with the other.) The list keeps the order of the search (the
- * tree is walked in a fixed order, and a larger query box only adds visits between the same ones), so the exact test
- * meets the same pairs in the same order and finds the same contacts in the same order as a
- * search would: the same bits. On the Table 1 maple a vertex moves by about 0.1 thickness a
- * frame; half a thickness lists pairs up to two thicknesses apart, and rebuilds every few frames. */
+ * motion first: distances do not see the one and shrink with the other.) The list keeps the order
+ * of the search (the tree is walked in a fixed order, and a larger query box only adds visits
+ * between the same ones), so the exact test meets the same pairs in the same order and finds the
+ * same contacts in the same order as a search would: the same bits. On the Table 1 maple a vertex moves by about 0.1
+ * thickness a frame; half a thickness lists pairs up to two thicknesses apart, and rebuilds every few frames. */
 #define SKIN 0.25f
 
 /* The skin adapts to how long lists last (the list never changes what a detection finds, only
