@@ -9,8 +9,29 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <omp.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Asserts that the last detection of c found what a fresh workspace's search finds on the sheet as
+ * it is: the same contacts of both kinds, bit for bit, in the same order. */
+static void assert_as_searched( collide_sheet* s, sere_bvh* bvh, sere_collide* c, float h, const char* what )
+{
+	sere_collide* fresh;
+	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
+	int32_t fresh_count = -1, n_a, n_b, e_a, e_b;
+	cr_assert_eq( sere_collide_detect( fresh, bvh, s->x, s->y, s->z, h, &fresh_count ), SERE_OK );
+	cr_assert_eq( sere_collide_list_uses( fresh ), 0, "%s: a fresh workspace searches", what );
+	const sere_contact* a = sere_collide_contacts( c, &n_a );
+	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
+	const sere_edge_contact* ea = sere_collide_edge_contacts( c, &e_a );
+	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
+	cr_assert( n_a == n_b && e_a == e_b, "%s: %d + %d contacts, search %d + %d", what, n_a, e_a, n_b, e_b );
+	/* tolerance 0: the same pairs through the same exact test, in the same order */
+	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0, "%s", what );
+	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0, "%s", what );
+	sere_collide_destroy( fresh );
+}
 
 /* A detection served by the candidate list (collide.c, SKIN) must find what a search finds: the
  * same contacts of both kinds, bit for bit and in the same order. A crumpled sheet folded through
@@ -52,24 +73,9 @@ Test( collide, listed_detection_equals_search_while_the_sheet_moves )
 			served += uses > 0, searched += uses == 0;
 			most = count > most ? count : most;
 			most_edges = edges > most_edges ? edges : most_edges;
-			sere_collide* fresh;
-			cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
-			int32_t fresh_count = -1;
-			cr_assert_eq( sere_collide_detect( fresh, bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
-			cr_assert_eq( sere_collide_list_uses( fresh ), 0 );
-			int32_t n_kept, n_fresh, e_kept, e_fresh;
-			const sere_contact* a = sere_collide_contacts( kept, &n_kept );
-			const sere_contact* b = sere_collide_contacts( fresh, &n_fresh );
-			const sere_edge_contact* ea = sere_collide_edge_contacts( kept, &e_kept );
-			const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_fresh );
-			cr_assert( n_kept == n_fresh && e_kept == e_fresh, "%d threads, step %d: %d + %d contacts, search %d + %d",
-					   threads, step, n_kept, e_kept, n_fresh, e_fresh );
-			/* tolerance 0: the same pairs through the same exact test, in the same order */
-			cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_kept ) == 0, "%d threads, step %d", threads,
-					   step );
-			cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_kept ) == 0, "%d threads, step %d",
-					   threads, step );
-			sere_collide_destroy( fresh );
+			char what[64];
+			snprintf( what, sizeof( what ), "%d threads, step %d", threads, step );
+			assert_as_searched( &s, bvh, kept, h, what );
 		}
 		cr_assert_gt( most, 50, "the crumple must fold the sheet onto itself" );
 		cr_assert_gt( most_edges, 20, "the crumple must bring edges across each other" );
@@ -166,20 +172,7 @@ Test( collide, list_holds_pairs_brought_within_the_thickness_by_the_skin )
 	cr_assert_eq( sere_collide_list_uses( s.c ), 1, "the list must serve a move within its skin" );
 	cr_assert_gt( count, 10 * ( before + 10 ), "closing the fold must bring the halves within the thickness" );
 	cr_assert_gt( edges, 100 );
-	sere_collide* fresh;
-	cr_assert_eq( sere_collide_create( s.bvh, 1 << 16, &fresh ), SERE_OK );
-	int32_t fresh_count = -1;
-	cr_assert_eq( sere_collide_detect( fresh, s.bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
-	int32_t n_a, n_b, e_a, e_b;
-	const sere_contact* a = sere_collide_contacts( s.c, &n_a );
-	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
-	const sere_edge_contact* ea = sere_collide_edge_contacts( s.c, &e_a );
-	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
-	cr_assert( n_a == n_b && e_a == e_b );
-	/* tolerance 0: the same pairs through the same exact test, in the same order */
-	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0 );
-	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0 );
-	sere_collide_destroy( fresh );
+	assert_as_searched( &s, s.bvh, s.c, h, "closed fold" );
 	collide_sheet_release( &s );
 }
 
@@ -221,21 +214,11 @@ Test( collide, served_pass_tests_only_pairs_the_motion_can_bring_within_the_thic
 		}
 		cr_assert_eq( sere_collide_record_served( s.c, s.bvh, &state, &params, traffic[k] ), SERE_OK,
 					  "the list serves a move of %g thickness", (double) ( d / h ) );
-		int32_t count, edges, fresh_count, fresh_edges;
-		const sere_contact* a = sere_collide_contacts( s.c, &count );
-		const sere_edge_contact* ea = sere_collide_edge_contacts( s.c, &edges );
-		sere_collide* fresh;
-		cr_assert_eq( sere_collide_create( s.bvh, 1 << 16, &fresh ), SERE_OK );
+		/* a served pass leaves the tree as it was: the search needs it refit */
 		cr_assert_eq( sere_bvh_refit( s.bvh, s.x, s.y, s.z ), SERE_OK );
-		cr_assert_eq( sere_collide_detect( fresh, s.bvh, s.x, s.y, s.z, h, &fresh_count ), SERE_OK );
-		const sere_contact* b = sere_collide_contacts( fresh, &fresh_count );
-		const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &fresh_edges );
-		cr_assert( count == fresh_count && edges == fresh_edges, "move %d: %d + %d contacts, search %d + %d", k, count,
-				   edges, fresh_count, fresh_edges );
-		/* tolerance 0: the same pairs through the same exact test, in the same order */
-		cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) count ) == 0, "move %d", k );
-		cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) edges ) == 0, "move %d", k );
-		sere_collide_destroy( fresh );
+		char what[32];
+		snprintf( what, sizeof( what ), "move %d", k );
+		assert_as_searched( &s, s.bvh, s.c, h, what );
 	}
 	cr_assert_eq( sere_collide_list_uses( s.c ), 3 );
 	cr_assert_lt( still.exact_pairs * 4, search.exact_pairs, "unmoved: %ld of %ld listed pairs tested",
@@ -335,25 +318,6 @@ static void scale_sheet( collide_sheet* s, float scale )
 			axis[r][i] = middle + scale * ( axis[r][i] - middle );
 		}
 	}
-}
-
-/* Asserts that the last detection of c found what a fresh workspace's search finds on the sheet as
- * it is: the same contacts of both kinds, bit for bit, in the same order. */
-static void assert_as_searched( collide_sheet* s, sere_bvh* bvh, sere_collide* c, float h, const char* what )
-{
-	sere_collide* fresh;
-	cr_assert_eq( sere_collide_create( bvh, 1 << 16, &fresh ), SERE_OK );
-	int32_t fresh_count = -1, n_a, n_b, e_a, e_b;
-	cr_assert_eq( sere_collide_detect( fresh, bvh, s->x, s->y, s->z, h, &fresh_count ), SERE_OK );
-	const sere_contact* a = sere_collide_contacts( c, &n_a );
-	const sere_contact* b = sere_collide_contacts( fresh, &n_b );
-	const sere_edge_contact* ea = sere_collide_edge_contacts( c, &e_a );
-	const sere_edge_contact* eb = sere_collide_edge_contacts( fresh, &e_b );
-	cr_assert( n_a == n_b && e_a == e_b, "%s: %d + %d contacts, search %d + %d", what, n_a, e_a, n_b, e_b );
-	/* tolerance 0: the same pairs through the same exact test, in the same order */
-	cr_assert( memcmp( a, b, sizeof( sere_contact ) * (size_t) n_a ) == 0, "%s", what );
-	cr_assert( memcmp( ea, eb, sizeof( sere_edge_contact ) * (size_t) e_a ) == 0, "%s", what );
-	sere_collide_destroy( fresh );
 }
 
 /* A drying leaf shrinks all over, so its rim moves farther than the skin while no two points come
