@@ -96,7 +96,7 @@ SERE    := $(BUILD)/sere
 TESTS   := $(BUILD)/sere-tests
 BENCHX  := $(BUILD)/sere-bench
 
-.PHONY: all run test test-fast test-asan test-widths bench deps install uninstall examples-check header-check format \
+.PHONY: all run test test-fast test-asan test-widths bench bench-table bench-table-check deps install uninstall examples-check header-check format \
 	format-check clean
 .DEFAULT_GOAL := all
 
@@ -143,6 +143,24 @@ test-widths:
 bench: deps
 	@$(MAKE) --no-print-directory $(BENCHX)
 	$(BENCHX) $(BENCH_ARGS)
+
+# The README's kernel table from one run (scripts/bench-table.py names its benchmarks): each
+# kernel, its floor and its peer at 1 and 2 threads, medians of BENCH_REPS repetitions, written to
+# $(BUILD)/kernels.md beside the run's JSON. BEFORE=run.json (a run of another build) adds a column
+# comparing the two.
+BENCH_REPS ?= 5
+bench-table: deps
+	@$(MAKE) --no-print-directory $(BENCHX)
+	$(BENCHX) --benchmark_repetitions=$(BENCH_REPS) --benchmark_report_aggregates_only=true \
+		--benchmark_out=$(BUILD)/bench-table.json --benchmark_out_format=json \
+		--benchmark_filter="$$(python3 scripts/bench-table.py --filter)"
+	python3 scripts/bench-table.py $(BUILD)/bench-table.json $(if $(BEFORE),--before $(BEFORE)) > $(BUILD)/kernels.md
+	@echo "bench-table: the table is $(BUILD)/kernels.md, the run $(BUILD)/bench-table.json"
+
+# sere-bench builds, and has every benchmark the kernel table names (CI runs this).
+bench-table-check: deps
+	@$(MAKE) --no-print-directory $(BENCHX)
+	$(BENCHX) --benchmark_list_tests | python3 scripts/bench-table.py --check-names -
 
 $(BUILD)/obj/kernels/%.o: kernels/%.c
 	@mkdir -p $(dir $@)
