@@ -35,6 +35,7 @@ Test( cli, bad_input_one_clear_line )
 	/* one thread limit for every command and kernel: SERE_MAX_THREADS (core/base.h) */
 	expect_error( "table1 --threads 257", "--threads takes a whole number from 0 to 256" );
 	expect_error( "table1 --leaf oak", "--leaf takes one of 'all', 'maple', 'plane', 'wisteria', not 'oak'" );
+	expect_error( "table1 --rounds 0", "--rounds takes a whole number from 1 to 1000, not '0'" );
 	expect_error( "wilt --threads 257", "--threads takes a whole number from 0 to 256" );
 	expect_error( "model data/leaves/maple.leaf --particles 100 --springs 7", "no triangulation has 100 particles" );
 	expect_error( "frobnicate", "unknown command 'frobnicate'" );

@@ -560,3 +560,43 @@ Test( machine, table1_json_carries_the_machine, .timeout = 300 )
 	cr_expect_not_null( strstr( out, "\"cg_iterations_v_per_frame\": " ), "%s", out );
 	free( out );
 }
+
+/* --rounds: each leaf dried R times, each cell the median over the rounds. With three rounds the
+ * median total is one of the three as printed, to the digit. */
+Test( machine, table1_rounds_report_the_median_round, .timeout = 300 )
+{
+	int code;
+	char* out = command_output( "table1 --json --frames 1 --threads 1 --rounds 3 --leaf wisteria", &code );
+	cr_assert_eq( code, 0, "%s", out );
+	expect_valid_json( out );
+	cr_expect_not_null( strstr( out, "\"rounds\": 3" ), "%s", out );
+	const char* total = strstr( out, "\"total_ms\": " );
+	const char* rounds = strstr( out, "\"round_total_ms\": [" );
+	cr_assert( total != NULL && rounds != NULL, "%s", out );
+	double median = atof( total + strlen( "\"total_ms\": " ) );
+	double round[3];
+	cr_assert_eq( sscanf( rounds + strlen( "\"round_total_ms\": [" ), "%lf, %lf, %lf]", round, round + 1, round + 2 ),
+				  3, "%s", out );
+	int below = 0, above = 0, equal = 0;
+	for ( int k = 0; k < 3; ++k )
+	{
+		below += round[k]<median, above += round[k]> median, equal += round[k] == median;
+	}
+	cr_expect( equal >= 1 && below <= 1 && above <= 1, "total %.4f is not the median of %.4f %.4f %.4f", median,
+			   round[0], round[1], round[2] );
+	free( out );
+
+	/* the table a person reads says so, and gives the ratio's range over the rounds */
+	out = command_output( "table1 --frames 1 --threads 1 --rounds 2 --leaf wisteria", &code );
+	cr_assert_eq( code, 0, "%s", out );
+	cr_expect_not_null( strstr( out, "median of 2 rounds" ), "%s", out );
+	cr_expect_not_null( strstr( out, "| ratio range" ), "%s", out );
+	char* row = strstr( out, "\nwisteria" );
+	cr_assert_not_null( row, "%s", out );
+	row[strcspn( row + 1, "\n" ) + 1] = '\0';
+	double low, high;
+	const char* range = strrchr( row, '|' );
+	cr_assert( range != NULL && sscanf( range, "| %lf-%lfx", &low, &high ) == 2, "%s", out );
+	cr_expect( low <= high && low > 0.0, "%s", out );
+	free( out );
+}

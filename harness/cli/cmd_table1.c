@@ -6,6 +6,7 @@
 #include "drying/leaf.h"
 #include "read/build.h"
 
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,7 +28,7 @@ static const table1_row rows[3] = {
 };
 
 /* The heading: the machine facts (JSON) or the column titles with the run's machine line. */
-static void table1_print_head( int json, int bound, long long frames )
+static void table1_print_head( int json, int bound, long long frames, long long rounds )
 {
 	if ( json )
 	{
@@ -36,29 +37,90 @@ static void table1_print_head( int json, int bound, long long frames )
 		printf( ",\n  \"leaves\": [" );
 		return;
 	}
-	printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames)\n", bound,
+	printf( "Table 1, ms per frame (paper: Core i5 2.67 GHz, 1 thread; ours: %d threads, mean of %lld frames", bound,
 			frames );
+	if ( rounds > 1 )
+	{
+		printf( ", median of %lld rounds", rounds );
+	}
+	printf( ")\n" );
 	sere_machine machine;
 	char binding[1024];
 	sere_machine_read( &machine, bound );
 	sere_machine_binding_text( &machine, binding, sizeof( binding ) );
 	printf( "ours: %s, %s, threads %s%s, sere %s (commit %s), %s\n\n", machine.cpu, machine.simd,
 			machine.bound ? "on cores " : "", binding, machine.version, machine.commit, machine.compiler );
-	printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %6s | %11s | %s\n", "leaf", "particles", "springs",
+	printf( "%-11s %9s %8s | %17s | %17s | %17s | %17s | %7s | %6s | %11s | %s", "leaf", "particles", "springs",
 			"osmotic flow", "dynamics", "collisions", "total", "ratio", "sweeps", "CG it. T V", "PBD cap hits" );
+	if ( rounds > 1 )
+	{
+		printf( " | ratio range\n" );
+	}
+	else
+	{
+		printf( "\n" );
+	}
 }
 
-/* One leaf's mean ms per frame over the run, and how often PBD hit its cap or stalled. */
+/* One leaf's mean ms per frame over one round, and how often PBD hit its cap or stalled. */
 typedef struct table1_times
 {
 	double osmosis, dynamics, collisions, total;
 	double sweeps, cg_t, cg_v; /* per frame: PBD sweeps, CG iterations of each layer */
 	long long cap_hits, stalls;
+	int particles, springs; /* of the leaf as built */
 } table1_times;
 
-static void table1_print_row( int json, int comma, const table1_row* row, const sere_model* model,
-							  const sere_sim_params* params, const table1_times* t, long long frames, int bound )
+/* A leaf's rounds: their times in the order run, and each column's median over them. */
+#define TABLE1_MAX_ROUNDS 1000
+
+typedef struct table1_rounds
 {
+	table1_times round[TABLE1_MAX_ROUNDS];
+	int count;
+} table1_rounds;
+
+/* The median of values[0..n) (the mean of the middle two for an even n); sorts a copy. */
+static int table1_compare( const void* a, const void* b )
+{
+	double x = *(const double*) a, y = *(const double*) b;
+	return ( x > y ) - ( x < y );
+}
+
+static double table1_median( const table1_rounds* r, size_t offset )
+{
+	double values[TABLE1_MAX_ROUNDS];
+	for ( int k = 0; k < r->count; ++k )
+	{
+		memcpy( values + k, (const char*) ( r->round + k ) + offset, sizeof( double ) );
+	}
+	qsort( values, (size_t) r->count, sizeof( double ), table1_compare );
+	int m = r->count / 2;
+	return r->count % 2 == 1 ? values[m] : 0.5 * ( values[m - 1] + values[m] );
+}
+
+/* Each timed column's median over the rounds; the counts are the same in every round. */
+static table1_times table1_medians( const table1_rounds* r )
+{
+	table1_times t = r->round[0];
+	t.osmosis = table1_median( r, offsetof( table1_times, osmosis ) );
+	t.dynamics = table1_median( r, offsetof( table1_times, dynamics ) );
+	t.collisions = table1_median( r, offsetof( table1_times, collisions ) );
+	t.total = table1_median( r, offsetof( table1_times, total ) );
+	return t;
+}
+
+static void table1_print_row( int json, int comma, const table1_row* row, const sere_sim_params* params,
+							  const table1_rounds* r, long long frames, int bound )
+{
+	const table1_times median = table1_medians( r );
+	const table1_times* t = &median;
+	double fastest = r->round[0].total, slowest = r->round[0].total;
+	for ( int k = 1; k < r->count; ++k )
+	{
+		fastest = r->round[k].total < fastest ? r->round[k].total : fastest;
+		slowest = r->round[k].total > slowest ? r->round[k].total : slowest;
+	}
 	if ( json )
 	{
 		printf( "%s{\"leaf\": \"%s\", \"particles\": %d, \"springs\": %d, \"osmosis_ms\": %.4f, \"dynamics_ms\": %.4f, "
@@ -66,28 +128,39 @@ static void table1_print_row( int json, int comma, const table1_row* row, const 
 				"\"paper_collisions_ms\": %.2f, \"paper_total_ms\": %.2f, \"pbd_tolerance\": %g, \"pbd_cap\": %d, "
 				"\"pbd_cap_hits\": %lld, \"pbd_stall\": %g, \"pbd_stalls\": %lld, \"compliance\": %g, "
 				"\"pbd_sweeps_per_frame\": %.2f, \"cg_iterations_t_per_frame\": %.2f, "
-				"\"cg_iterations_v_per_frame\": %.2f, \"frames\": %lld, \"threads\": %d}",
-				comma ? ", " : "", row->leaf, model->p.count, model->s.count, t->osmosis, t->dynamics, t->collisions,
+				"\"cg_iterations_v_per_frame\": %.2f, \"frames\": %lld, \"threads\": %d, \"rounds\": %d, "
+				"\"round_total_ms\": [",
+				comma ? ", " : "", row->leaf, t->particles, t->springs, t->osmosis, t->dynamics, t->collisions,
 				t->total, row->osmosis, row->dynamics, row->collisions, row->total, params->leaf.pbd.tolerance,
 				params->leaf.pbd.max_iterations, t->cap_hits, params->leaf.pbd.stall, t->stalls,
-				params->leaf.pbd.compliance, t->sweeps, t->cg_t, t->cg_v, frames, bound );
+				params->leaf.pbd.compliance, t->sweeps, t->cg_t, t->cg_v, frames, bound, r->count );
+		for ( int k = 0; k < r->count; ++k )
+		{
+			printf( "%s%.4f", k > 0 ? ", " : "", r->round[k].total );
+		}
+		printf( "]}" );
 		return;
 	}
 	printf( "%-11s %9d %8d | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %7.2f / %7.2f | %6.1fx | %6.1f | "
 			"%5.1f %5.1f | %lld/%lld",
-			row->leaf, model->p.count, model->s.count, t->osmosis, row->osmosis, t->dynamics, row->dynamics,
-			t->collisions, row->collisions, t->total, row->total, row->total / t->total, t->sweeps, t->cg_t, t->cg_v,
-			t->cap_hits, frames );
+			row->leaf, t->particles, t->springs, t->osmosis, row->osmosis, t->dynamics, row->dynamics, t->collisions,
+			row->collisions, t->total, row->total, row->total / t->total, t->sweeps, t->cg_t, t->cg_v, t->cap_hits,
+			frames );
 	if ( params->leaf.pbd.stall > 0.0f )
 	{
 		printf( ", stalled %lld/%lld", t->stalls, frames );
 	}
+	if ( r->count > 1 )
+	{
+		printf( " | %.1f-%.1fx", row->total / slowest, row->total / fastest );
+	}
 	printf( "\n" );
 }
 
-/* Builds row k's leaf at its Table 1 counts, dries it for `frames` and prints its row; 1 on an
- * error (already reported). */
-static int table1_leaf( int k, int comma, const sere_option_list* sets, long long frames, int json, int bound )
+/* Builds row k's leaf at its Table 1 counts with its preset (*params) and dries it for `frames`
+ * into *t; 1 on an error (already reported). */
+static int table1_leaf( int k, const sere_option_list* sets, long long frames, int bound, sere_sim_params* params_out,
+						table1_times* out )
 {
 	const table1_row* row = rows + k;
 	char name[128];
@@ -96,6 +169,7 @@ static int table1_leaf( int k, int comma, const sere_option_list* sets, long lon
 	{
 		return 1;
 	}
+	*params_out = params;
 	sere_model model;
 	sere_build_report report;
 	if ( !command_model_build( "table1", row->path, row->particles, row->springs, 0, &params, &model, &report, name,
@@ -124,7 +198,8 @@ static int table1_leaf( int k, int comma, const sere_option_list* sets, long lon
 	}
 	t.osmosis /= frames, t.dynamics /= frames, t.collisions /= frames, t.total /= frames;
 	t.sweeps /= frames, t.cg_t /= frames, t.cg_v /= frames;
-	table1_print_row( json, comma, row, &model, &params, &t, frames, bound );
+	t.particles = model.p.count, t.springs = model.s.count;
+	*out = t;
 	sere_leaf_destroy( sim );
 	sere_model_destroy( &model );
 	return 0;
@@ -157,26 +232,32 @@ static void table1_print_tail( int json, const sere_option_list* sets )
 static void table1_help( void )
 {
 	printf( "usage: sere table1 [--frames N] [--threads T] [--leaf all|maple|plane|wisteria] [--set key=value]...\n"
-			"                   [--json]\n\n"
+			"                   [--rounds R] [--json]\n\n"
 			"Builds the three Table 1 leaves with their exact particle and spring counts, dries each for N\n"
-			"frames (default 20) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
+			"frames (default 200) with its Table 2 preset, and prints our Osmotic flow / Dynamics / Collisions /\n"
 			"Total ms per frame beside the paper's, with the ratio paper / ours. Threads are bound to cores\n"
 			"with hwloc (T = 0: one per core). --set overrides a parameter of all three presets (keys as in\n"
 			"sere run --help), e.g. --set pbd_stall=0.01 for the stall-aware PBD stop. --leaf runs one of\n"
 			"the three alone (for a profiler).\n\n"
+			"--rounds R (default 1) dries each leaf R times, the leaves taking turns (round 1 of every leaf,\n"
+			"then round 2, ...), so that a busy spell on a shared machine slows one round of each rather than\n"
+			"every round of one. Each cell is then the median over the rounds, and the last column the\n"
+			"ratio's range over them.\n\n"
 			"--json prints one object: \"machine\" (CPU model, SIMD path, threads and the core each is bound\n"
-			"to, sere version, commit, compiler) and \"leaves\", one entry per leaf.\n" );
+			"to, sere version, commit, compiler) and \"leaves\", one entry per leaf, with \"rounds\" and each\n"
+			"round's total in \"round_total_ms\".\n" );
 }
 
 int sere_cmd_table1( int argc, char** argv )
 {
-	long long frames = 20, threads = 0;
+	long long frames = 200, threads = 0, rounds = 1;
 	int json = 0, leaf = 0;
 	sere_option_list sets = { .count = 0 };
 	static const char* const leaves[] = { "all", "maple", "plane", "wisteria", NULL };
 	const sere_option options[] = {
 		{ "--frames", SERE_OPTION_COUNT, &frames, 1, 1000000, NULL },
 		{ "--leaf", SERE_OPTION_CHOICE, &leaf, 0, 0, leaves },
+		{ "--rounds", SERE_OPTION_COUNT, &rounds, 1, TABLE1_MAX_ROUNDS, NULL },
 		sere_option_threads( &threads ),
 		sere_option_sets( &sets ),
 		sere_option_json( &json ),
@@ -188,18 +269,41 @@ int sere_cmd_table1( int argc, char** argv )
 		return code;
 	}
 	int bound = sere_topo_bind( (int) threads, NULL );
-	table1_print_head( json, bound, frames );
-	for ( int k = 0, printed = 0; k < 3; ++k )
+	table1_rounds* runs = calloc( 3, sizeof( table1_rounds ) );
+	sere_sim_params params[3];
+	if ( runs == NULL )
 	{
-		if ( leaf != 0 && leaf != k + 1 )
+		fprintf( stderr, "sere table1: out of memory\n" );
+		return 1;
+	}
+	int code_out = 0;
+	for ( int r = 0; r < rounds && code_out == 0; ++r )
+	{
+		if ( rounds > 1 )
 		{
-			continue;
+			fprintf( stderr, "sere table1: round %d of %lld\n", r + 1, rounds );
 		}
-		if ( table1_leaf( k, printed++, &sets, frames, json, bound ) != 0 )
+		for ( int k = 0; k < 3 && code_out == 0; ++k )
 		{
-			return 1;
+			if ( leaf == 0 || leaf == k + 1 )
+			{
+				code_out = table1_leaf( k, &sets, frames, bound, params + k, runs[k].round + r );
+				runs[k].count = r + 1;
+			}
 		}
 	}
-	table1_print_tail( json, &sets );
-	return 0;
+	if ( code_out == 0 )
+	{
+		table1_print_head( json, bound, frames, rounds );
+		for ( int k = 0, printed = 0; k < 3; ++k )
+		{
+			if ( leaf == 0 || leaf == k + 1 )
+			{
+				table1_print_row( json, printed++, rows + k, params + k, runs + k, frames, bound );
+			}
+		}
+		table1_print_tail( json, &sets );
+	}
+	free( runs );
+	return code_out;
 }
