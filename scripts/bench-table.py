@@ -177,10 +177,10 @@ def cell(times, name, t, per):
 
 def peers_text(row, times):
     parts = []
+    ours = {t: cell(times, row["ours"], t, row.get("per", 1)) for t in THREADS}
     for label, name in row["peers"]:
         per = row.get("peer_per", row.get("per", 1))
         ones = [(t, cell(times, name, t, per)) for t in (THREADS if "{t}" in name else (1,))]
-        ours = {t: cell(times, row["ours"], t, row.get("per", 1)) for t in THREADS}
         shown = [f"{fmt_time(us)} ({fmt_ratio(ours[t], us)} ours/peer{'' if len(ones) == 1 else f', {t} t'})"
                  for t, us in ones if us is not None]
         if shown:
@@ -191,8 +191,10 @@ def peers_text(row, times):
 def table(context, times, before=None):
     lines = []
     machine = ", ".join(str(context[k]) for k in ("cpu", "simd", "compiler") if k in context)
+    load = context.get("load_avg")
+    load = " / ".join(f"{v:.2f}" for v in load) if isinstance(load, list) else "?"
     head = [f"sere-bench {context.get('sere_version', '?')} (commit {context.get('commit', '?')}), "
-            f"{machine}; run {context.get('date', '?')}, load {context.get('load_avg', '?')}; "
+            f"{machine}; run {context.get('date', '?')}, load {load}; "
             "medians over repetitions, ratios within this one run"]
     lines += head + [""]
     cols = ["kernel", "ours, 1 t", "floor, 1 t", "ours/floor, 1 t", "ours, 2 t", "floor, 2 t",

@@ -80,13 +80,14 @@ typedef struct table1_rounds
 	int count;
 } table1_rounds;
 
-/* The median of values[0..n) (the mean of the middle two for an even n); sorts a copy. */
 static int table1_compare( const void* a, const void* b )
 {
 	double x = *(const double*) a, y = *(const double*) b;
 	return ( x > y ) - ( x < y );
 }
 
+/* The median over the rounds of the double at `offset` in table1_times (the mean of the middle
+ * two for an even count), from a sorted copy. */
 static double table1_median( const table1_rounds* r, size_t offset )
 {
 	double values[TABLE1_MAX_ROUNDS];
