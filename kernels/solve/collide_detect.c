@@ -243,6 +243,18 @@ static void block_range( const sere_collide* collide, int32_t b, int32_t* first,
 	*end = *first + DETECT_BLOCK < collide->vertex_count ? *first + DETECT_BLOCK : collide->vertex_count;
 }
 
+/* Column `column` of the vertex blocks' sums in cache_sum (4 doubles a block), added in block
+ * order: the same bits on any number of threads. */
+static double block_total( const double* partial, int32_t blocks, int column )
+{
+	double total = 0.0;
+	for ( int32_t b = 0; b < blocks; ++b )
+	{
+		total += partial[4 * (size_t) b + (size_t) column];
+	}
+	return total;
+}
+
 /* The shrink σ of positions x, y, z since the listing: the least-squares scale about the listing
  * positions' mean r̄, less one, Σ a · Δ / Σ |a|² with a = r − r̄ and Δ = x − r (0 for a list made
  * on one point). Any σ keeps list_serves' argument; this one takes most of a shrink off. Each
@@ -270,11 +282,7 @@ static float list_shrink( sere_collide* collide, const float* x, const float* y,
 		}
 		partial[4 * (size_t) b] = sum;
 	}
-	double dot = 0.0;
-	for ( int32_t b = 0; b < blocks; ++b )
-	{
-		dot += partial[4 * (size_t) b];
-	}
+	double dot = block_total( partial, blocks, 0 );
 	return collide->cache_spread > 0.0 ? (float) ( dot / collide->cache_spread ) : 0.0f;
 }
 
@@ -498,17 +506,10 @@ static void keep_shape( sere_collide* collide, int threads )
 		}
 		partial[4 * (size_t) b] = sum[0], partial[4 * (size_t) b + 1] = sum[1], partial[4 * (size_t) b + 2] = sum[2];
 	}
-	double mean[3] = { 0.0, 0.0, 0.0 };
-	for ( int32_t b = 0; b < blocks; ++b )
-	{
-		for ( int r = 0; r < 3; ++r )
-		{
-			mean[r] += partial[4 * (size_t) b + (size_t) r];
-		}
-	}
 	for ( int r = 0; r < 3; ++r )
 	{
-		collide->cache_mean[r] = collide->vertex_count > 0 ? (float) ( mean[r] / collide->vertex_count ) : 0.0f;
+		collide->cache_mean[r] =
+			collide->vertex_count > 0 ? (float) ( block_total( partial, blocks, r ) / collide->vertex_count ) : 0.0f;
 	}
 	const float m[3] = { collide->cache_mean[0], collide->cache_mean[1], collide->cache_mean[2] };
 #pragma omp parallel for num_threads( threads ) schedule( static )
@@ -524,12 +525,7 @@ static void keep_shape( sere_collide* collide, int threads )
 		}
 		partial[4 * (size_t) b] = sum;
 	}
-	double spread = 0.0;
-	for ( int32_t b = 0; b < blocks; ++b )
-	{
-		spread += partial[4 * (size_t) b];
-	}
-	collide->cache_spread = spread;
+	collide->cache_spread = block_total( partial, blocks, 0 );
 	collide->cache_far = far;
 }
 
