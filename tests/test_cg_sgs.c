@@ -241,6 +241,45 @@ Test( sgs, cg_converges_deterministically, .timeout = 60 )
 	sere_test_cg_system_free( &s );
 }
 
+/* From x = +0 the solve skips the products of its start (A x and L̃ᵀ x are +0): it must take the
+ * bits of the full path, which a start from x = −0 still runs (its products come out +0 too, so
+ * the two solves meet exactly from there on), at 1 and 2 threads. */
+Test( sgs, cold_start_takes_the_full_paths_bits, .timeout = 60 )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 60, 40 );
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( s.n, &w ), SERE_OK );
+	double* x[2][2];
+	sere_cg_result result[2][2];
+	for ( int t = 0; t < 2; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		for ( int sign = 0; sign < 2; ++sign )
+		{
+			x[t][sign] = malloc( sizeof( double ) * s.n );
+			for ( int32_t i = 0; i < s.n; ++i )
+			{
+				x[t][sign][i] = sign ? -0.0 : 0.0;
+			}
+			cr_assert_eq( sere_cg_solve_sgs( w, s.g, s.b, x[t][sign], 1e-10, 5000, &result[t][sign] ), SERE_OK );
+		}
+		cr_expect_gt( result[t][0].iterations, 1 );
+		cr_expect_eq( result[t][0].iterations, result[t][1].iterations );
+		cr_expect_eq( memcmp( &result[t][0].residual, &result[t][1].residual, sizeof( double ) ), 0 );
+		cr_expect_eq( memcmp( x[t][0], x[t][1], sizeof( double ) * s.n ), 0, "%d threads: +0 and −0 starts differ",
+					  t + 1 );
+	}
+	cr_expect_eq( memcmp( x[1][0], x[0][0], sizeof( double ) * s.n ), 0 );
+	cr_expect_leq( result[0][0].residual, 1e-10 );
+	for ( int t = 0; t < 2; ++t )
+	{
+		free( x[t][0] ), free( x[t][1] );
+	}
+	sere_cg_destroy( w );
+	sere_test_cg_system_free( &s );
+}
+
 /* The coloring's smallest cases take their own paths through the solve (the last color's
  * backward rows ride in the update loop only when there are two colors or more, and color 0's
  * backward and forward rows share one loop): a diagonal matrix (one color, M = A, so one step

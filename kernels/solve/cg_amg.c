@@ -699,7 +699,7 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 					( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
 				for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
 				{
-					sgs_chunk_product( g, ch, p, q );
+					sgs_chunk_product( g, ch, p, NULL, q );
 				}
 				partial[4 * blk + 1] = dot_lanes( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
@@ -779,7 +779,7 @@ sere_status sere_cg_solve_amg( sere_cg_workspace* ws, sere_amg* m, const double*
 		{
 			int32_t first, last;
 			sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
-			sgs_residual_blocks( g, first, last, np, b, x, r, partial );
+			sgs_residual_blocks( g, first, last, np, b, x, NULL, r, partial );
 		}
 		result->residual = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( pass == 1 || !( result->residual > tolerance ) || max_iterations == 0 )

@@ -471,21 +471,24 @@ static double sgs_product_sums( const sere_sgs* g, int32_t from_color, const dou
 }
 
 /* The solve's start: b and x into positions, D⁻¹ and the blocks' sums of b²; flags a diagonal
- * that is not positive and a non-finite input. */
-static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, const double* x_in )
+ * that is not positive and a non-finite input, and tells whether x is +0 in every position (a
+ * cold start, whose A x and L̃ᵀ x are +0 without a product). */
+static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, const double* x_in,
+					   bool* x_zero )
 {
 	const int32_t np = g->chunks * LANES;
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	double *x = ws->x, *b = ws->b, *inv_diag = ws->inv_diag, *partial = ws->partial;
-	int bad_diagonal = 0, nonfinite = 0;
+	int bad_diagonal = 0, nonfinite = 0, nonzero = 0;
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
-#pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite )
+#pragma omp for schedule( static ) reduction( | : bad_diagonal, nonfinite, nonzero )
 		for ( int32_t at = 0; at < np; ++at )
 		{
 			int32_t i = g->row[at];
 			nonfinite |= load_position( i, b_in, x_in, b, x, at );
+			nonzero |= x[at] != 0.0 || signbit( x[at] );
 			bad_diagonal |= i >= 0 && !( diagonal[at] > 0.0 );
 			inv_diag[at] = i >= 0 && diagonal[at] > 0.0 ? 1.0 / diagonal[at] : 0.0;
 		}
@@ -502,11 +505,13 @@ static void sgs_start( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, c
 	}
 	st->bad_diagonal = bad_diagonal;
 	st->nonfinite = nonfinite;
+	*x_zero = !nonzero;
 }
 
-/* Into Eisenstat's variables: r̂ = L̃⁻¹ r, ŷ = L̃ᵀ x, u = D⁻¹ r̂, w = E u. s = p = 0 so that the
- * first step's p = u + 0·p is u. Returns r̂ᵀr̂; δ = uᵀw goes to *delta. */
-static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it, double* delta )
+/* Into Eisenstat's variables: r̂ = L̃⁻¹ r, ŷ = L̃ᵀ x (x itself when x_zero: +0 stays +0), u = D⁻¹ r̂,
+ * w = E u. s = p = 0 so that the first step's p = u + 0·p is u. Returns r̂ᵀr̂; δ = uᵀw goes to
+ * *delta. */
+static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it, bool x_zero, double* delta )
 {
 	const int32_t np = g->chunks * LANES;
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
@@ -516,7 +521,10 @@ static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it,
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		sgs_forward( g, inv_diag, r );
-		sgs_upper_product( g, x );
+		if ( !x_zero )
+		{
+			sgs_upper_product( g, x );
+		}
 #pragma omp for schedule( static )
 		for ( int32_t blk = 0; blk < blocks; ++blk )
 		{
@@ -629,7 +637,8 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	double *x = ws->x, *b = ws->b, *r = ws->r, *inv_diag = ws->inv_diag, *partial = ws->partial;
 	cg_state st = { 0 };
-	sgs_start( &st, ws, g, b_in, x_in );
+	bool x_zero;
+	sgs_start( &st, ws, g, b_in, x_in, &x_zero );
 	if ( st.bad_diagonal || st.nonfinite )
 	{
 		return st.bad_diagonal ? SERE_ERR_NOT_SPD : SERE_ERR_NONFINITE;
@@ -646,6 +655,8 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	const int64_t entries = g->upper_ptr[g->chunks] + np;
 	const int32_t chunk = (int32_t) ( ( 1 << 24 ) / entries > 16 ? ( 1 << 24 ) / entries : 16 );
 	double rel = 0.0, safety = 1.0, previous = INFINITY;
+	/* U x of the x the residual measures, once a backward sweep has left it in z (NULL before) */
+	const double* upper = NULL;
 	for ( ;; )
 	{
 		/* The true residual of x: the answer, or where (re)starting from x begins. */
@@ -653,7 +664,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 		{
 			int32_t first, last;
 			sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
-			sgs_residual_blocks( g, first, last, np, b, x, r, partial );
+			sgs_residual_blocks( g, first, last, np, b, x_zero ? NULL : x, upper, r, partial );
 		}
 		rel = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( !isfinite( rel ) )
@@ -668,7 +679,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 			break;
 		}
 		previous = rel;
-		double rr_hat = sgs_restart( ws, g, st.it, &st.delta );
+		double rr_hat = sgs_restart( ws, g, st.it, x_zero, &st.delta );
 		/* Reduce the transformed residual by the factor the true one still needs (and by half
 		 * more at every restart, should the two norms have disagreed). */
 		const double target = sqrt( rr_hat ) * ( tolerance / rel ) * safety;
@@ -679,11 +690,14 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 		{
 			sgs_round( &st, ws, g, first, target, max_iterations, chunk );
 		}
-		/* Back from ŷ: x = L̃⁻ᵀ ŷ. */
+		/* Back from ŷ: x = L̃⁻ᵀ ŷ, its rows' U sums kept in z for the next residual (z is the
+		 * rounds' scratch, free until the next restart). */
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 		{
-			sgs_backward( g, inv_diag, x, x, NULL );
+			sgs_backward( g, inv_diag, x, x, ws->z );
 		}
+		upper = ws->z;
+		x_zero = false;
 		safety *= 0.5;
 	}
 	positions_to_rows( g->row, np, x, x_in, ws->threads );

@@ -211,13 +211,22 @@ static inline void sweep_chunk( const sere_sgs* g, const int32_t* ptr, int32_t c
 	}
 }
 
-/* y = A v for chunk ch: (L v + U v) + D v. */
-static inline void sgs_chunk_product( const sere_sgs* g, int32_t ch, const double* v, double* y )
+/* y = A v for chunk ch: (L v + U v) + D v. U v comes from upper, the sums a backward sweep left
+ * over the same v (sweep_chunk's sum_out: the same slots in the same order, so the same bits),
+ * when it is not NULL. */
+static inline void sgs_chunk_product( const sere_sgs* g, int32_t ch, const double* v, const double* upper, double* y )
 {
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	lanes_t lo, up, d = load_lanes( diagonal + ch * LANES ), x = load_lanes( v + ch * LANES );
 	chunk_sum( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], v, &lo );
-	chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], v, &up );
+	if ( upper != NULL )
+	{
+		up = load_lanes( upper + ch * LANES );
+	}
+	else
+	{
+		chunk_sum( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], v, &up );
+	}
 	lo.lo = ( lo.lo + up.lo ) + d.lo * x.lo;
 	lo.hi = ( lo.hi + up.hi ) + d.hi * x.hi;
 	store_lanes( y + ch * LANES, &lo );
@@ -237,20 +246,23 @@ static inline double dot_lanes( const double* u, const double* v, int32_t begin,
 	return ( ( lo[0] + lo[1] ) + ( lo[2] + lo[3] ) ) + ( ( hi[0] + hi[1] ) + ( hi[2] + hi[3] ) );
 }
 
-/* r = b − A x over the blocks [first, last) of an SGS layout and their sums of rᵀr (slot 0). */
+/* r = b − A x over the blocks [first, last) of an SGS layout and their sums of rᵀr (slot 0).
+ * x NULL stands for x = +0 in every position, whose product is +0 exactly (the diagonal is
+ * positive and the entries finite), so r = b with the bits the product would give; upper, when
+ * not NULL, holds U x (sgs_chunk_product). */
 static inline void sgs_residual_blocks( const sere_sgs* g, int32_t first, int32_t last, int32_t np, const double* b,
-										const double* x, double* r, double* partial )
+										const double* x, const double* upper, double* r, double* partial )
 {
 	for ( int32_t blk = first; blk < last; ++blk )
 	{
 		int32_t chunk_end = ( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+		for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end && x != NULL; ++ch )
 		{
-			sgs_chunk_product( g, ch, x, r );
+			sgs_chunk_product( g, ch, x, upper, r );
 		}
 		for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 		{
-			r[i] = b[i] - r[i];
+			r[i] = x != NULL ? b[i] - r[i] : b[i];
 		}
 		partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 	}
