@@ -523,6 +523,53 @@ void BM_HypreAMG( benchmark::State& state )
 	HYPRE_IJVectorDestroy( ijx );
 	HYPRE_IJMatrixDestroy( ij );
 }
+// One osmosis step of a layer as a drying frame runs it (Jeong Eq. 6-9: the springs' lengths and
+// conductances, the assembly into CSR and the preconditioner's layout, the warm-started PCG), from
+// the leaf at rest each time: the water and masses are restored before every step (two copies of
+// a row's doubles, about 1% of a step), so every step solves the same system. With cap 1 the CG
+// stops after its first true residual: what remains is the assembly's share. Args: system (as
+// leaf_system), threads, cap (0 the preset's 1000 iterations, 1 none).
+void BM_OsmosisStep( benchmark::State& state )
+{
+	const int index = static_cast<int>( state.range( 0 ) );
+	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
+	const sere_model* m = sere_bench_model( index == 2 ? SERE_BENCH_PLANE : SERE_BENCH_MAPLE );
+	const bool triangle = index == 0;
+	const int32_t first = triangle ? 0 : m->triangle_particles;
+	const int32_t count = triangle ? m->triangle_particles : m->triangle_count;
+	const int32_t s0 = triangle ? 0 : m->t_springs, springs = triangle ? m->t_springs : m->v_springs;
+	sere_osmosis* o = nullptr;
+	if ( sere_osmosis_create( first, count, m->s.a + s0, m->s.b + s0, springs, &o ) != SERE_OK )
+	{
+		state.SkipWithError( "osmosis failed" );
+		return;
+	}
+	const std::vector<double> w0( m->p.w, m->p.w + m->p.count ), mass0( m->p.m, m->p.m + m->p.count );
+	std::vector<double> w( w0 ), mass( mass0 );
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.lambda_min = params.lambda_max = index == 2 ? 100.0 : 0.04;
+	params.max_iterations = state.range( 2 ) == 1 ? 0 : params.max_iterations;
+	sere_osmosis_report report{};
+	for ( auto _ : state )
+	{
+		std::copy( w0.begin() + first, w0.begin() + first + count, w.begin() + first );
+		std::copy( mass0.begin() + first, mass0.begin() + first + count, mass.begin() + first );
+		sere_status status =
+			sere_osmosis_step( o, m->p.x, m->p.y, m->p.z, m->p.tau, m->p.M, w.data(), mass.data(), &params, &report );
+		if ( status != SERE_OK && status != SERE_ERR_NO_CONVERGE )
+		{
+			state.SkipWithError( "osmosis step failed" );
+			break;
+		}
+		benchmark::DoNotOptimize( w.data() );
+	}
+	state.counters["rows"] = count;
+	state.counters["springs"] = springs;
+	state.counters["iterations"] = report.iterations;
+	state.counters["springs/s"] =
+		benchmark::Counter( static_cast<double>( springs ) * state.iterations(), benchmark::Counter::kIsRate );
+	sere_osmosis_destroy( o );
+}
 } // namespace
 
 // Args: layer (0 = T, 1 = V), threads.
@@ -555,6 +602,11 @@ BENCHMARK( BM_PCGFloor )
 BENCHMARK( BM_EigenCG )
 	->ArgNames( { "system", "threads" } )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 } } )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_OsmosisStep )
+	->ArgNames( { "system", "threads", "cap" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_HypreAMG )

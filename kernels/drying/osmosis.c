@@ -36,6 +36,7 @@ struct sere_osmosis
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
 	int32_t spring_count;
 	double *rhs, *c, *edge_sum, *length;
+	double* off_sum;	 /* per row, Σ_j a_ij over its off-diagonal entries (assemble's two passes) */
 	double* conductance; /* per spring, K_ij of Jeong Eq. 6–8 at this step (both rows read it) */
 	double* last;		 /* the concentration the previous step started from */
 	double* last2;		 /* and the one before */
@@ -76,6 +77,7 @@ void sere_osmosis_destroy( sere_osmosis* o )
 	sere_free( o->last );
 	sere_free( o->last2 );
 	sere_free( o->edge_sum );
+	sere_free( o->off_sum );
 	sere_free( o->length );
 	sere_free( o->conductance );
 	sere_cg_destroy( o->cg );
@@ -123,11 +125,12 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	o->last = sere_alloc( sizeof( double ) * (size_t) count );
 	o->last2 = sere_alloc( sizeof( double ) * (size_t) count );
 	o->edge_sum = sere_alloc( sizeof( double ) * (size_t) count );
+	o->off_sum = sere_alloc( sizeof( double ) * (size_t) count );
 	o->length = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
 	o->conductance = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
 	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) count );
 	if ( !o->a.row_ptr || !o->a.col || !o->a.val || !o->neighbor_spring || !o->diagonal || !o->rhs || !o->c ||
-		 !o->last || !o->last2 || !o->edge_sum || !o->length || !o->conductance || !fill ||
+		 !o->last || !o->last2 || !o->edge_sum || !o->off_sum || !o->length || !o->conductance || !fill ||
 		 sere_cg_create( count, &o->cg ) != SERE_OK )
 	{
 		free( fill );
@@ -229,18 +232,22 @@ sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
 static sere_status spring_terms( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
 								 const double* M, const sere_osmosis_params* params )
 {
-	const int32_t n = o->count;
+	const int32_t n = o->count, springs = o->spring_count;
+	const double lambda_min = params->lambda_min, lambda_max = params->lambda_max;
+	/* locals, so that the stores cannot alias o's fields and the loop vectorizes (gathers) */
+	const int32_t* restrict sa = o->sa, * restrict sb = o->sb;
+	double* restrict length_out = o->length, * restrict conductance = o->conductance;
 	int nonfinite = 0;
-#pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( | : nonfinite )
-	for ( int32_t s = 0; s < o->spring_count; ++s )
+#pragma omp parallel for simd num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( | : nonfinite )
+	for ( int32_t s = 0; s < springs; ++s )
 	{
-		int32_t i = o->sa[s], j = o->sb[s];
+		int32_t i = sa[s], j = sb[s];
 		double dx = (double) x[j] - x[i], dy = (double) y[j] - y[i], dz = (double) z[j] - z[i];
 		double length = sqrt( dx * dx + dy * dy + dz * dz );
 		double t = 0.5 * ( (double) tau[i] + (double) tau[j] );
-		double lambda = params->lambda_min * ( 1.0 - t ) + params->lambda_max * t;
-		o->length[s] = length;
-		o->conductance[s] = lambda * M[i] * M[j] / ( length * ( M[i] + M[j] ) );
+		double lambda = lambda_min * ( 1.0 - t ) + lambda_max * t;
+		length_out[s] = length;
+		conductance[s] = lambda * M[i] * M[j] / ( length * ( M[i] + M[j] ) );
 		nonfinite |= !( length > 0.0 ) || !isfinite( length );
 	}
 	if ( nonfinite )
@@ -275,72 +282,101 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 	 * (docs/DESIGN.md §6), one row per iteration: every row gathers from its own entries (no
 	 * atomics, the same result for any thread count). */
 	const double rate_dt = params->water_rate * dt;
-	const bool fill_sell = o->filled & FILL_SELL, fill_sgs = o->filled & FILL_SGS;
 	const bool conservative = params->mode == SERE_OSMOSIS_CONSERVATIVE;
+	/* The arrays as locals: the stores into the values cannot then alias the index arrays, which
+	 * the loop would otherwise load again after every store. */
+	const int32_t* restrict row_ptr = o->a.row_ptr, * restrict col = o->a.col;
+	const int32_t* restrict spring = o->neighbor_spring, * restrict diagonal = o->diagonal;
+	const double* restrict conductance = o->conductance, * restrict length = o->length;
+	double* restrict val = o->a.val, * restrict rhs = o->rhs, * restrict c = o->c;
+	double* restrict last = o->last, * restrict last2 = o->last2;
+	double* edge_sum = o->edge_sum; /* read at the neighbours' rows in the conservative mode */
+	double* sell_val = o->filled & FILL_SELL ? o->sell->val : NULL;
+	double* sgs_val = o->filled & FILL_SGS ? o->sgs->val : NULL;
+	const int32_t* sell_slot = sell_val != NULL ? o->sell->slot : NULL;
+	const int32_t* sgs_slot = sgs_val != NULL ? o->sgs->slot : NULL;
+	const int history = o->history;
+	double* restrict row_off = o->off_sum;
 	double offdiag = 0.0;
-#pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static ) reduction( max : offdiag )
-	for ( int32_t i = 0; i < n; ++i )
+#pragma omp parallel num_threads( sere_team_for( o->threads ) )
 	{
-		const int32_t gi = first + i;
-		const double mi = M[gi];
-		double ei = conservative ? o->edge_sum[i] : 0.0; /* else summed below, as spring_terms would */
-		double off_sum = 0.0;
-		for ( int32_t k = o->a.row_ptr[i]; k < o->a.row_ptr[i + 1]; ++k )
+		/* The entries, row by row in column order: each row's sums are a chain of a handful. */
+#pragma omp for schedule( static )
+		for ( int32_t i = 0; i < n; ++i )
 		{
-			int32_t s = o->neighbor_spring[k];
-			if ( s < 0 )
+			double ei = conservative ? edge_sum[i] : 0.0; /* else summed below, as spring_terms would */
+			double off_sum = 0.0;
+			/* Without a branch: the diagonal's entry (spring −1) takes K = 0, so it adds −0 to the
+			 * row's sum and +0 to E_i (the same bits as leaving it out) and its stores are
+			 * overwritten below. A row's entries are a handful, its diagonal among them anywhere. */
+			for ( int32_t k = row_ptr[i]; k < row_ptr[i + 1]; ++k )
 			{
-				continue;
+				const int32_t s = spring[k];
+				const bool off = s >= 0;
+				const int32_t si = off ? s : 0;
+				double kij = conductance[si];
+				if ( conservative )
+				{
+					kij *= 4.0 / ( ei + edge_sum[col[k]] ); /* symmetric in i and j */
+				}
+				else
+				{
+					ei += off ? length[si] : 0.0;
+				}
+				const double value = -dt * ( off ? kij : 0.0 );
+				val[k] = value;
+				if ( sell_val != NULL )
+				{
+					sell_val[sell_slot[k]] = value;
+				}
+				if ( sgs_val != NULL )
+				{
+					sgs_val[sgs_slot[k]] = value;
+				}
+				off_sum += value;
 			}
-			double kij = o->conductance[s];
-			if ( conservative )
+			edge_sum[i] = ei;
+			row_off[i] = off_sum;
+			const double scale = conservative ? 1.0 : 0.5 * ei;
+			const int32_t d = diagonal[i];
+			const double aii = scale * M[first + i] - off_sum;
+			val[d] = aii;
+			if ( sell_val != NULL )
 			{
-				kij *= 4.0 / ( ei + o->edge_sum[o->a.col[k]] ); /* symmetric in i and j */
+				sell_val[sell_slot[d]] = aii;
 			}
-			else
+			if ( sgs_val != NULL )
 			{
-				ei += o->length[s];
+				sgs_val[sgs_slot[d]] = aii;
 			}
-			double value = -dt * kij;
-			o->a.val[k] = value;
-			if ( fill_sell )
-			{
-				o->sell->val[o->sell->slot[k]] = value;
-			}
-			if ( fill_sgs )
-			{
-				o->sgs->val[o->sgs->slot[k]] = value;
-			}
-			off_sum += value;
 		}
-		o->edge_sum[i] = ei;
-		double scale = conservative ? 1.0 : 0.5 * ei;
-		o->a.val[o->diagonal[i]] = scale * mi - off_sum;
-		if ( fill_sell )
+		/* What each row needs of its own sums only, in lanes: its two divisions no longer wait
+		 * behind the next row's chain. The diagonal a_ii is formed again as above (same bits). */
+#pragma omp for simd schedule( static ) reduction( max : offdiag )
+		for ( int32_t i = 0; i < n; ++i )
 		{
-			o->sell->val[o->sell->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
+			const int32_t gi = first + i;
+			const double mi = M[gi];
+			const double scale = conservative ? 1.0 : 0.5 * edge_sum[i];
+			const double aii = scale * mi - row_off[i];
+			/* Σ_j |a_ij| / a_ii: off-diagonal entries are −Δt K_ij ≤ 0, so −off_sum is their sum */
+			const double ratio = -row_off[i] / aii;
+			offdiag = ratio > offdiag ? ratio : offdiag;
+			rhs[i] = scale * ( w[gi] + rate_dt );
+			/* Initial guess: the parabola through the last three concentrations, taken one step
+			 * ahead (3 c_n − 3 c_{n−1} + c_{n−2}; the line through two while there are only two).
+			 * A drying layer's concentration moves smoothly, so the guess is off by O(Δt³) and CG
+			 * has less to remove: on the plane tree's stiff V system (λ = 100) 200 frames take
+			 * 18875 iterations instead of 29738 with the line. A concentration is never negative,
+			 * so neither is the guess. */
+			const double now = w[gi] / mi;
+			const double ahead = history == 2	? 3.0 * now - 3.0 * last[i] + last2[i]
+								 : history == 1 ? 2.0 * now - last[i]
+												: now;
+			c[i] = ahead > 0.0 ? ahead : 0.0;
+			last2[i] = last[i];
+			last[i] = now;
 		}
-		if ( fill_sgs )
-		{
-			o->sgs->val[o->sgs->slot[o->diagonal[i]]] = o->a.val[o->diagonal[i]];
-		}
-		/* Σ_j |a_ij| / a_ii: off-diagonal entries are −Δt K_ij ≤ 0, so −off_sum is their sum */
-		double ratio = -off_sum / o->a.val[o->diagonal[i]];
-		offdiag = ratio > offdiag ? ratio : offdiag;
-		o->rhs[i] = scale * ( w[gi] + rate_dt );
-		/* Initial guess: the parabola through the last three concentrations, taken one step
-		 * ahead (3 c_n − 3 c_{n−1} + c_{n−2}; the line through two while there are only two). A
-		 * drying layer's concentration moves smoothly, so the guess is off by O(Δt³) and CG
-		 * has less to remove: on the plane tree's stiff V system (λ = 100) 200 frames take
-		 * 18875 iterations instead of 29738 with the line. A concentration is never negative,
-		 * so neither is the guess. */
-		double now = w[gi] / mi;
-		double ahead = o->history == 2	 ? 3.0 * now - 3.0 * o->last[i] + o->last2[i]
-					   : o->history == 1 ? 2.0 * now - o->last[i]
-										 : now;
-		o->c[i] = ahead > 0.0 ? ahead : 0.0;
-		o->last2[i] = o->last[i];
-		o->last[i] = now;
 	}
 	return offdiag;
 }
