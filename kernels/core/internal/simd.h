@@ -208,6 +208,13 @@ static inline int sere_vmask_any( sere_vmask m )
 {
 	return m != 0;
 }
+/* The first of the SERE_LANES indices at p that differs from j, or SERE_LANES when none does:
+ * where a run of equal indices ends, in one compare instead of one branch an index. */
+static inline int32_t sere_vi_first_ne( const int32_t* p, int32_t j )
+{
+	__mmask16 ne = _mm512_cmpneq_epi32_mask( _mm512_loadu_si512( p ), _mm512_set1_epi32( j ) );
+	return ne != 0 ? __builtin_ctz( ne ) : SERE_LANES;
+}
 /* The largest lane of a. */
 static inline float sere_vf_max_all( sere_vf a )
 {
@@ -390,6 +397,14 @@ static inline sere_vmask sere_vmask_or( sere_vmask a, sere_vmask b )
 static inline int sere_vmask_any( sere_vmask m )
 {
 	return _mm256_movemask_ps( m ) != 0;
+}
+/* The first of the SERE_LANES indices at p that differs from j, or SERE_LANES when none does:
+ * where a run of equal indices ends, in one compare instead of one branch an index. */
+static inline int32_t sere_vi_first_ne( const int32_t* p, int32_t j )
+{
+	__m256i eq = _mm256_cmpeq_epi32( _mm256_loadu_si256( (const __m256i*) p ), _mm256_set1_epi32( j ) );
+	unsigned ne = ~(unsigned) _mm256_movemask_ps( _mm256_castsi256_ps( eq ) ) & 0xffu;
+	return ne != 0 ? __builtin_ctz( ne ) : SERE_LANES;
 }
 
 #else
@@ -585,6 +600,19 @@ static inline sere_vmask sere_vmask_or( sere_vmask a, sere_vmask b )
 static inline int sere_vmask_any( sere_vmask m )
 {
 	return sere_vmask_count( m ) != 0;
+}
+/* The first of the SERE_LANES indices at p that differs from j, or SERE_LANES when none does:
+ * where a run of equal indices ends, in one compare instead of one branch an index. */
+static inline int32_t sere_vi_first_ne( const int32_t* p, int32_t j )
+{
+	for ( int32_t k = 0; k < SERE_LANES; ++k )
+	{
+		if ( p[k] != j )
+		{
+			return k;
+		}
+	}
+	return SERE_LANES;
 }
 static inline float sere_vf_max_all( sere_vf a )
 {
