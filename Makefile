@@ -132,8 +132,9 @@ test-asan:
 
 # The SIMD lane layer (kernels/core/internal/simd.h) at its other widths: an AVX2 build (when this
 # CPU has AVX2) and the portable 4-lane C build run the tests that pin a kernel's bits with a
-# stored hash, so every width is checked to give the bits of the native one.
-WIDTH_TESTS ?= @(massspring|solvebits)/*
+# stored hash, so every width is checked to give the bits of the native one, and the skinning's
+# bitwise test against its twin (its runs are found with the lane layer's integer compare).
+WIDTH_TESTS ?= @(massspring/*|solvebits/*|skeleton/skinning*)
 test-widths:
 	@if grep -qw avx2 /proc/cpuinfo; then $(MAKE) --no-print-directory BUILD=build/avx2 ARCH=-march=x86-64-v3 build/avx2/sere-tests; fi
 	@$(MAKE) --no-print-directory BUILD=build/portable ARCH=-march=x86-64 build/portable/sere-tests
