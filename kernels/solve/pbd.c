@@ -750,7 +750,17 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 			omega = k <= setup->delay		? 1.0
 					: k == setup->delay + 1 ? 2.0 / ( 2.0 - rho2 )
 											: 4.0 / ( 4.0 - rho2 * omega );
-			extrapolate( pbd, (float) omega, setup->xpbd, &older, t, threads );
+			/* Sweep k's record is read two sweeps on, and only by an extrapolation (k + 2 >
+			 * delay): the plain sweeps before the delay's last two need none, nor its barrier
+			 * (the wisteria's 90 would copy its records and multipliers every sweep). */
+			if ( k + 2 > setup->delay )
+			{
+				extrapolate( pbd, (float) omega, setup->xpbd, &older, t, threads );
+			}
+			else
+			{
+				older ^= 1;
+			}
 		}
 	}
 	/* At the cap the returned positions meet the ground too, unless the last round just did. */
