@@ -248,8 +248,9 @@ static inline double dot_lanes( const double* u, const double* v, int32_t begin,
 
 /* r = b − A x over the blocks [first, last) of an SGS layout and their sums of rᵀr (slot 0).
  * x NULL stands for x = +0 in every position, whose product is +0 exactly (the diagonal is
- * positive and the entries finite), so r = b with the bits the product would give; upper, when
- * not NULL, holds U x (sgs_chunk_product). */
+ * positive), so r = b with the bits the product would give; a non-finite entry, which would have
+ * made r NaN here, makes the first sweep's sums NaN instead, and the solve ends on
+ * SERE_ERR_NONFINITE all the same. upper, when not NULL, holds U x (sgs_chunk_product). */
 static inline void sgs_residual_blocks( const sere_sgs* g, int32_t first, int32_t last, int32_t np, const double* b,
 										const double* x, const double* upper, double* r, double* partial )
 {
