@@ -41,6 +41,14 @@ Test( cli, bad_input_one_clear_line )
 	expect_error( "frobnicate", "unknown command 'frobnicate'" );
 }
 
+/* A step whose solve diverges says so, with the frame and the extrapolation's ρ that caused it,
+ * not the status's "NaN or infinity in the input": the input was the leaf's own state. */
+Test( cli, diverging_solve_names_its_cause, .timeout = 60 )
+{
+	expect_error( "table1 --threads 2 --leaf maple --frames 40 --set chebyshev_rho=0.99 --set chebyshev_delay=2",
+				  "the leaf's state became NaN or infinite: the solve diverged (chebyshev_rho = 0.99" );
+}
+
 Test( cli, help_describes_every_command )
 {
 	const char* commands[] = { "model", "run", "osmosis", "table1", "topo", "wilt", "season", "litter" };

@@ -27,3 +27,23 @@ int command_model_build( const char* command, const char* path, long long partic
 	}
 	return 1;
 }
+
+void command_step_error( const sere_sim_params* params, sere_status status, char* text, size_t size )
+{
+	const float rho = params->leaf.pbd.chebyshev_rho;
+	if ( status != SERE_ERR_NONFINITE )
+	{
+		snprintf( text, size, "%s", sere_status_text( status ) );
+	}
+	else if ( rho > 0.0f )
+	{
+		snprintf( text, size,
+				  "the leaf's state became NaN or infinite: the solve diverged (chebyshev_rho = %g extrapolates "
+				  "too far for this leaf: try a smaller one, or 0)",
+				  (double) rho );
+	}
+	else
+	{
+		snprintf( text, size, "the leaf's state became NaN or infinite: the solve diverged" );
+	}
+}

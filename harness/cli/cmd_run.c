@@ -471,7 +471,9 @@ static int run_step( run_state* r, long long frame, const sere_progress* progres
 	r->status = sere_leaf_step( r->sim, &o->params.leaf, &next );
 	if ( r->status != SERE_OK )
 	{
-		fprintf( stderr, "\nsere run: frame %lld: %s\n", frame, sere_status_text( r->status ) );
+		char why[256];
+		command_step_error( &o->params, r->status, why, sizeof( why ) );
+		fprintf( stderr, "\nsere run: frame %lld: %s\n", frame, why );
 		return -1;
 	}
 	const sere_leaf_stats* s = &r->stats;
@@ -694,7 +696,9 @@ static void run_status_text( const run_state* r, char* text, size_t size )
 {
 	if ( r->status != SERE_OK )
 	{
-		snprintf( text, size, "error: frame %lld: %s", r->done + 1, sere_status_text( r->status ) );
+		char why[256];
+		command_step_error( &r->o->params, r->status, why, sizeof( why ) );
+		snprintf( text, size, "error: frame %lld: %s", r->done + 1, why );
 	}
 	else
 	{

@@ -183,8 +183,10 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 	status = status == SERE_OK ? sere_leaf_set_threads( sim, bound ) : status;
 	table1_times t = { 0 };
 	sere_leaf_stats stats;
+	long long frame = 0;
 	for ( long long f = 0; f < frames && status == SERE_OK; ++f )
 	{
+		frame = f + 1;
 		status = sere_leaf_step( sim, &params.leaf, &stats );
 		t.osmosis += stats.osmosis_ms, t.dynamics += stats.dynamics_ms;
 		t.collisions += stats.collisions_ms, t.total += stats.total_ms;
@@ -194,7 +196,9 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 	}
 	if ( status != SERE_OK )
 	{
-		fprintf( stderr, "sere table1: %s: %s\n", row->leaf, sere_status_text( status ) );
+		char why[256];
+		command_step_error( &params, status, why, sizeof( why ) );
+		fprintf( stderr, "sere table1: %s: frame %lld: %s\n", row->leaf, frame, why );
 		return 1;
 	}
 	t.osmosis /= frames, t.dynamics /= frames, t.collisions /= frames, t.total /= frames;
