@@ -88,8 +88,9 @@ ROWS = [
          floor="BM_skeleton_skin_floor/{t}/real_time",
          peers=[("Eigen affine transforms", "BM_skeleton_skin_eigen/{t}/real_time"),
                 ("scalar reference", "BM_skeleton_skin_ref/real_time")],
-         why="each run of vertices sharing a joint: the scan for its end (16 joint indices at a "
-             "time) and its transform's loads; the floor streams the same 28 bytes a vertex"),
+         why="each run of vertices sharing a joint: the scan for its end (a lane width of joint "
+             "indices in one compare) and its transform's loads; the floor streams the same 28 "
+             "bytes a vertex"),
     dict(kernel="banding (seed 003), one leaf",
          ours="BM_skeleton_band_leaf/{t}/real_time",
          floor="BM_skeleton_band_leaf_floor/{t}/real_time",
