@@ -398,8 +398,6 @@ static inline int sere_vmask_any( sere_vmask m )
 {
 	return _mm256_movemask_ps( m ) != 0;
 }
-/* The first of the SERE_LANES indices at p that differs from j, or SERE_LANES when none does:
- * where a run of equal indices ends, in one compare instead of one branch an index. */
 static inline int32_t sere_vi_first_ne( const int32_t* p, int32_t j )
 {
 	__m256i eq = _mm256_cmpeq_epi32( _mm256_loadu_si256( (const __m256i*) p ), _mm256_set1_epi32( j ) );
@@ -601,8 +599,6 @@ static inline int sere_vmask_any( sere_vmask m )
 {
 	return sere_vmask_count( m ) != 0;
 }
-/* The first of the SERE_LANES indices at p that differs from j, or SERE_LANES when none does:
- * where a run of equal indices ends, in one compare instead of one branch an index. */
 static inline int32_t sere_vi_first_ne( const int32_t* p, int32_t j )
 {
 	for ( int32_t k = 0; k < SERE_LANES; ++k )
