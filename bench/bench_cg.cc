@@ -523,10 +523,11 @@ void BM_HypreAMG( benchmark::State& state )
 	HYPRE_IJVectorDestroy( ijx );
 	HYPRE_IJMatrixDestroy( ij );
 }
+
 // One osmosis step of a layer as a drying frame runs it (Jeong Eq. 6-9: the springs' lengths and
 // conductances, the assembly into CSR and the preconditioner's layout, the warm-started PCG), from
 // the leaf at rest each time: the water and masses are restored before every step (two copies of
-// a row's doubles, about 1% of a step), so every step solves the same system. With cap 1 the CG
+// the layer's doubles, a few µs), so every step solves the same system. With cap 1 the CG
 // stops after its first true residual: what remains is the assembly's share. Args: system (as
 // leaf_system), threads, cap (0 the preset's 1000 iterations, 1 none).
 void BM_OsmosisStep( benchmark::State& state )

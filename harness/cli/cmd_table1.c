@@ -198,7 +198,14 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 	{
 		char why[256];
 		command_step_error( &params, status, why, sizeof( why ) );
-		fprintf( stderr, "sere table1: %s: frame %lld: %s\n", row->leaf, frame, why );
+		if ( frame > 0 )
+		{
+			fprintf( stderr, "sere table1: %s: frame %lld: %s\n", row->leaf, frame, why );
+		}
+		else
+		{
+			fprintf( stderr, "sere table1: %s: %s\n", row->leaf, why );
+		}
 		return 1;
 	}
 	t.osmosis /= frames, t.dynamics /= frames, t.collisions /= frames, t.total /= frames;
