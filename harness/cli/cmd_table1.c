@@ -178,7 +178,7 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 	{
 		return 1;
 	}
-	sere_leaf_sim* sim;
+	sere_leaf_sim* sim = NULL;
 	sere_status status = sere_leaf_create( &model, &sim );
 	status = status == SERE_OK ? sere_leaf_set_threads( sim, bound ) : status;
 	table1_times t = { 0 };
@@ -194,6 +194,9 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 		t.cap_hits += stats.pbd_hit_cap;
 		t.stalls += stats.pbd_stalled;
 	}
+	t.particles = model.p.count, t.springs = model.s.count;
+	sere_leaf_destroy( sim );
+	sere_model_destroy( &model );
 	if ( status != SERE_OK )
 	{
 		char why[256];
@@ -210,10 +213,7 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 	}
 	t.osmosis /= frames, t.dynamics /= frames, t.collisions /= frames, t.total /= frames;
 	t.sweeps /= frames, t.cg_t /= frames, t.cg_v /= frames;
-	t.particles = model.p.count, t.springs = model.s.count;
 	*out = t;
-	sere_leaf_destroy( sim );
-	sere_model_destroy( &model );
 	return 0;
 }
 
