@@ -3,6 +3,7 @@
  * rerun into the same directory redoes only the leaves that are missing, and one leaf's failure
  * costs no other leaf. */
 #define _POSIX_C_SOURCE 200809L
+#include "cli/cmd_leaf.h"
 #include "cli/cmd_litter_shared.h"
 #include "cli/commands.h"
 #include "cli/options.h"
@@ -488,7 +489,9 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	sere_model_destroy( &model );
 	if ( status != SERE_OK )
 	{
-		snprintf( err, sizeof( err ), "frame %ld: %s", frame + 1, sere_status_text( status ) );
+		char why[256];
+		command_step_error( &params, status, why, sizeof( why ) );
+		snprintf( err, sizeof( err ), "frame %ld: %s", frame + 1, why );
 		mesh_free( &m );
 		return leaf_fail( r, err );
 	}
