@@ -370,8 +370,8 @@ static void cg_start( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, c
 			partial[4 * blk] = rr_block;
 			partial[4 * blk + 3] = bb;
 		}
-		double my_b_norm = sqrt( block_sum( partial, blocks, 3 ) );
-		double my_rr = block_sum( partial, blocks, 0 );
+		double my_b_norm = sqrt( sere_block_sum( partial, blocks, 3 ) );
+		double my_rr = sere_block_sum( partial, blocks, 0 );
 		int my_done = bad_diagonal || nonfinite || !isfinite( my_rr );
 		if ( !my_done && my_b_norm == 0.0 )
 		{
@@ -424,8 +424,8 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
 		while ( my.it < round_end )
 		{
-			double delta = block_sum( partial, blocks, 1 );
-			double gamma = block_sum( partial, blocks, 2 );
+			double delta = sere_block_sum( partial, blocks, 1 );
+			double gamma = sere_block_sum( partial, blocks, 2 );
 			double beta = my.it == 0 ? 0.0 : gamma / my.gamma_prev;
 			double pap = my.it == 0 ? delta : delta - beta * gamma / my.alpha_prev; /* pᵀAp */
 			double alpha;
@@ -455,7 +455,7 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 			/* rᵀr has a slot of its own: the product's sums never overwrite it, and the next
 			 * step rewrites it only after every thread has passed the product's barrier, so
 			 * after reading it here. */
-			double my_rr = block_sum( partial, blocks, 0 );
+			double my_rr = sere_block_sum( partial, blocks, 0 );
 			my.it += 1;
 			my.rel = sqrt( my_rr ) / my.b_norm;
 			if ( !isfinite( my.rel ) )

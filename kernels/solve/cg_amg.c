@@ -683,7 +683,7 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 				partial[4 * blk + 2] = dot_lanes( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			const double gamma = block_sum( partial, blocks, 2 );
+			const double gamma = sere_block_sum( partial, blocks, 2 );
 			const double beta = my.it == 0 ? 0.0 : gamma / my.gamma_prev;
 			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
 			{
@@ -705,7 +705,7 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			double alpha;
-			my.status = cg_step_length( block_sum( partial, blocks, 1 ), gamma, &alpha );
+			my.status = cg_step_length( sere_block_sum( partial, blocks, 1 ), gamma, &alpha );
 			if ( my.status != SERE_OK )
 			{
 				my.done = 1;
@@ -722,7 +722,7 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			my.gamma_prev = gamma;
-			if ( cg_step_done( &my, block_sum( partial, blocks, 0 ), target, max_iterations ) )
+			if ( cg_step_done( &my, sere_block_sum( partial, blocks, 0 ), target, max_iterations ) )
 			{
 				break;
 			}
@@ -781,7 +781,7 @@ sere_status sere_cg_solve_amg( sere_cg_workspace* ws, sere_amg* m, const double*
 			sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
 			sgs_residual_blocks( g, first, last, np, b, x, NULL, r, partial );
 		}
-		result->residual = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
+		result->residual = sqrt( sere_block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( pass == 1 || !( result->residual > tolerance ) || max_iterations == 0 )
 		{
 			break;

@@ -420,7 +420,7 @@ static inline void forward_product_chunk( const sere_sgs* g, int32_t ch, const d
  * no U entries, when from_color is colors − 2). Color 0 has no L entries, so its forward rows
  * need only their own chunk's backward result: both run chunk by chunk in one loop. Then the
  * forward sweep's other colors form each chunk's w and share of δ. Every thread sums the shares
- * itself, per block in chunk order and then block by block (block_sum's order, the same bits for
+ * itself, per block in chunk order and then block by block (sere_block_sum's order, the same bits for
  * any thread count), after the last color's barrier: per iteration, two colors' barriers and a
  * summing pass fewer than sweeping each color of both sweeps on its own. The colors meet at the
  * workspace's spin barrier, not at an `omp for`'s: libgomp's makes a system call at each of the
@@ -544,7 +544,7 @@ static double sgs_restart( sere_cg_workspace* ws, const sere_sgs* g, int32_t it,
 #pragma omp master
 		*delta = d;
 	}
-	return block_sum( partial, blocks, 0 );
+	return sere_block_sum( partial, blocks, 0 );
 }
 
 /* One round of at most `chunk` steps of the recurrence from step `first`, in one parallel region
@@ -576,7 +576,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 			/* γ = r̂ᵀu comes from the previous step's update sweep, into slot 2 or 3 by the
 			 * parity of the step: a thread that runs ahead into this step's update writes
 			 * the other slot while a slower one may still be reading this one. */
-			double gamma = block_sum( partial, blocks, 2 + ( my.it & 1 ) );
+			double gamma = sere_block_sum( partial, blocks, 2 + ( my.it & 1 ) );
 			double beta = my.it == first ? 0.0 : gamma / my.gamma_prev;
 			double pap = my.it == first ? delta : delta - beta * gamma / my.alpha_prev;
 			double alpha;
@@ -610,7 +610,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, team );
-			if ( cg_step_done( &my, block_sum( partial, blocks, 0 ), target, max_iterations ) )
+			if ( cg_step_done( &my, sere_block_sum( partial, blocks, 0 ), target, max_iterations ) )
 			{
 				break;
 			}
@@ -643,7 +643,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	{
 		return st.bad_diagonal ? SERE_ERR_NOT_SPD : SERE_ERR_NONFINITE;
 	}
-	const double b_norm = sqrt( block_sum( partial, blocks, 3 ) );
+	const double b_norm = sqrt( sere_block_sum( partial, blocks, 3 ) );
 	if ( b_norm == 0.0 )
 	{
 		for ( int32_t i = 0; i < g->rows; ++i )
@@ -666,7 +666,7 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 			sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
 			sgs_residual_blocks( g, first, last, np, b, x_zero ? NULL : x, upper, r, partial );
 		}
-		rel = sqrt( block_sum( partial, blocks, 0 ) ) / b_norm;
+		rel = sqrt( sere_block_sum( partial, blocks, 0 ) ) / b_norm;
 		if ( !isfinite( rel ) )
 		{
 			st.status = SERE_ERR_NONFINITE;

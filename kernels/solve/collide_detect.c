@@ -243,18 +243,6 @@ static void block_range( const sere_collide* collide, int32_t b, int32_t* first,
 	*end = *first + DETECT_BLOCK < collide->vertex_count ? *first + DETECT_BLOCK : collide->vertex_count;
 }
 
-/* Column `column` of the vertex blocks' sums in cache_sum (4 doubles a block), added in block
- * order: the same bits on any number of threads. */
-static double block_total( const double* partial, int32_t blocks, int column )
-{
-	double total = 0.0;
-	for ( int32_t b = 0; b < blocks; ++b )
-	{
-		total += partial[4 * (size_t) b + (size_t) column];
-	}
-	return total;
-}
-
 /* The shrink σ of positions x, y, z since the listing: the least-squares scale about the listing
  * positions' mean r̄, less one, Σ a · Δ / Σ |a|² with a = r − r̄ and Δ = x − r (0 for a list made
  * on one point). Any σ keeps list_serves' argument; this one takes most of a shrink off. Each
@@ -282,7 +270,7 @@ static float list_shrink( sere_collide* collide, const float* x, const float* y,
 		}
 		partial[4 * (size_t) b] = sum;
 	}
-	double dot = block_total( partial, blocks, 0 );
+	double dot = sere_block_sum( partial, blocks, 0 );
 	return collide->cache_spread > 0.0 ? (float) ( dot / collide->cache_spread ) : 0.0f;
 }
 
@@ -509,7 +497,7 @@ static void keep_shape( sere_collide* collide, int threads )
 	for ( int r = 0; r < 3; ++r )
 	{
 		collide->cache_mean[r] =
-			collide->vertex_count > 0 ? (float) ( block_total( partial, blocks, r ) / collide->vertex_count ) : 0.0f;
+			collide->vertex_count > 0 ? (float) ( sere_block_sum( partial, blocks, r ) / collide->vertex_count ) : 0.0f;
 	}
 	const float m[3] = { collide->cache_mean[0], collide->cache_mean[1], collide->cache_mean[2] };
 #pragma omp parallel for num_threads( threads ) schedule( static )
@@ -525,7 +513,7 @@ static void keep_shape( sere_collide* collide, int threads )
 		}
 		partial[4 * (size_t) b] = sum;
 	}
-	collide->cache_spread = block_total( partial, blocks, 0 );
+	collide->cache_spread = sere_block_sum( partial, blocks, 0 );
 	collide->cache_far = far;
 }
 

@@ -205,6 +205,18 @@ static inline void sere_team_share( int32_t begin, int32_t end, int tid, int tea
 	*last = begin + (int32_t) ( n * ( tid + 1 ) / team );
 }
 
+/* Slot `slot` of per-block sums kept four doubles a block (partial[4 b + slot]), added in block
+ * order: each block's sum is one thread's, so the total has the same bits for any thread count. */
+static inline double sere_block_sum( const double* partial, int32_t blocks, int slot )
+{
+	double sum = 0.0;
+	for ( int32_t b = 0; b < blocks; ++b )
+	{
+		sum += partial[4 * (size_t) b + (size_t) slot];
+	}
+	return sum;
+}
+
 /* A sense-free spin barrier for the threads of one parallel region. libgomp's barrier (the one
  * ending every `omp for`) makes a futex system call at each release, even for a team of one
  * (0.4 µs a barrier at one thread on this machine's virtual CPUs, all of it the call); a PBD

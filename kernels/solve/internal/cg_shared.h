@@ -130,17 +130,6 @@ static inline void positions_to_rows( const int32_t* row, int32_t np, const doub
 	}
 }
 
-/* Sum of partial[slot], partial[slot + 4], ... over blocks in block order. */
-static inline double block_sum( const double* partial, int32_t blocks, int slot )
-{
-	double sum = 0.0;
-	for ( int32_t k = 0; k < blocks; ++k )
-	{
-		sum += partial[4 * k + slot];
-	}
-	return sum;
-}
-
 static inline int32_t block_end( int32_t blk, int32_t n )
 {
 	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
