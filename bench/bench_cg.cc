@@ -275,6 +275,36 @@ void BM_AMGFloor( benchmark::State& state )
 	state.counters["iterations"] = result.iterations;
 }
 
+// The SGS PCG's floor (sere_cg_touch_sgs): each step's update pass and its backward and forward
+// sweeps over the same arrays at the same barriers, adds only, as many steps as BM_PCG's SGS solve
+// of the same system takes (its start, restarts and true residuals are not in it). Args: system,
+// threads.
+void BM_SGSFloor( benchmark::State& state )
+{
+	omp_set_num_threads( static_cast<int>( state.range( 1 ) ) );
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sgs* sgs = nullptr;
+	sere_cg_workspace* w = nullptr;
+	if ( sere_sgs_create( a, &sgs ) != SERE_OK || sere_cg_create( a->rows, &w ) != SERE_OK )
+	{
+		sere_sgs_destroy( sgs );
+		state.SkipWithError( "layout failed" );
+		return;
+	}
+	std::vector<double> x( a->rows, 0.0 );
+	sere_cg_result result{};
+	sere_cg_solve_sgs( w, sgs, s.b.data(), x.data(), 1e-8, 10000, &result );
+	for ( auto _ : state )
+	{
+		sere_cg_touch_sgs( w, sgs, result.iterations );
+		benchmark::ClobberMemory();
+	}
+	state.counters["iterations"] = result.iterations;
+	sere_cg_destroy( w );
+	sere_sgs_destroy( sgs );
+}
+
 // The barrier the solve's passes meet at (kernels/core/internal/team.h, sere_spin_barrier): a
 // count and a generation, spun on. Written again here in C++ atomics because that header's C11
 // _Atomic types do not compile as C++17; the floor must not pay libgomp's barrier, a system call
@@ -588,6 +618,11 @@ BENCHMARK( BM_PCG )
 BENCHMARK( BM_AMG )
 	->ArgNames( { "system", "threads", "refresh" } )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
+	->UseRealTime()
+	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_SGSFloor )
+	->ArgNames( { "system", "threads" } )
+	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_AMGFloor )

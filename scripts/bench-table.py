@@ -43,9 +43,10 @@ ROWS = [
          why="the SELL product's gathers and the vectors' streams: bandwidth"),
     dict(kernel="PCG to 1e-8, maple T system, multicolor SGS (the osmosis's choice)",
          ours="BM_PCG/system:0/threads:{t}/sgs:1/real_time",
-         floor=None,
+         floor="BM_SGSFloor/system:0/threads:{t}/real_time",
          peers=[("Eigen CG", "BM_EigenCG/system:0/threads:{t}/real_time")],
-         why="half Jacobi's iterations, each a forward and a backward sweep; no floor of its own"),
+         why="half Jacobi's iterations, each a backward and a forward sweep over every entry; the floor "
+             "has the steps alone, the solve also its start, restart and two true residuals"),
     dict(kernel="PCG to 1e-8, plane tree V system (λ = 100), multigrid, levels refreshed",
          ours="BM_AMG/system:2/threads:{t}/refresh:1/real_time",
          floor="BM_AMGFloor/system:2/threads:{t}/real_time",

@@ -280,6 +280,43 @@ Test( sgs, cold_start_takes_the_full_paths_bits, .timeout = 60 )
 	sere_test_cg_system_free( &s );
 }
 
+/* The floor (sere_cg_touch_sgs) writes only scratch: a solve after it, at 1 and 2 threads, gives
+ * the bits of a solve before it; it refuses bad input as the solve does. */
+Test( sgs, touch_leaves_the_solve_unchanged, .timeout = 60 )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 40, 30 );
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( s.n, &w ), SERE_OK );
+	sere_cg_result before_result, after_result;
+	double* before = calloc( (size_t) s.n, sizeof( double ) );
+	double* after = calloc( (size_t) s.n, sizeof( double ) );
+	omp_set_num_threads( 1 );
+	cr_assert_eq( sere_cg_solve_sgs( w, s.g, s.b, before, 1e-10, 5000, &before_result ), SERE_OK );
+	cr_assert_gt( before_result.iterations, 1 );
+	for ( int t = 1; t <= 2; ++t )
+	{
+		omp_set_num_threads( t );
+		cr_assert_eq( sere_cg_touch_sgs( w, s.g, before_result.iterations ), SERE_OK );
+		memset( after, 0, sizeof( double ) * (size_t) s.n );
+		omp_set_num_threads( 1 );
+		cr_assert_eq( sere_cg_solve_sgs( w, s.g, s.b, after, 1e-10, 5000, &after_result ), SERE_OK );
+		cr_expect_eq( after_result.iterations, before_result.iterations );
+		cr_expect_eq( memcmp( after, before, sizeof( double ) * (size_t) s.n ), 0, "touching at %d threads", t );
+	}
+	cr_expect_eq( sere_cg_touch_sgs( NULL, s.g, 1 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_touch_sgs( w, NULL, 1 ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_touch_sgs( w, s.g, -1 ), SERE_ERR_ARGUMENT );
+	sere_cg_workspace* small;
+	cr_assert_eq( sere_cg_create( 4, &small ), SERE_OK );
+	cr_expect_eq( sere_cg_touch_sgs( small, s.g, 1 ), SERE_ERR_ARGUMENT, "a workspace too small for the system" );
+	omp_set_num_threads( 2 );
+	free( before ), free( after );
+	sere_cg_destroy( small );
+	sere_cg_destroy( w );
+	sere_test_cg_system_free( &s );
+}
+
 /* The coloring's smallest cases take their own paths through the solve (the last color's
  * backward rows ride in the update loop only when there are two colors or more, and color 0's
  * backward and forward rows share one loop): a diagonal matrix (one color, M = A, so one step

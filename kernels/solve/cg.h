@@ -199,6 +199,14 @@ sere_status sere_sgs_set_threads( sere_sgs* sgs, int32_t threads );
 sere_status sere_cg_solve_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs, const double* b, double* x,
 							   double tolerance, int32_t max_iterations, sere_cg_result* result );
 
+/* The floor of `iterations` steps of sere_cg_solve_sgs (benchmarks): each step's update pass over
+ * the positions and its backward and forward sweeps over every entry, the same loads, gathers and
+ * stores at the same barriers, with an add where the step multiplies, divides or multiplies and
+ * adds. The solve's start, restarts and true residuals are not in it. Writes only the workspace's
+ * scratch vectors, from zero: a solve after it gives the same bits. SERE_ERR_ARGUMENT as
+ * sere_cg_solve_sgs. */
+sere_status sere_cg_touch_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs, int32_t iterations );
+
 /* Aggregation multigrid (AMG), the strongest preconditioner here, for systems whose smooth errors
  * SGS removes slowly: a diffusion system whose mass term is small beside its couplings (the plane
  * tree's Voronoi layer: Σ_j |a_ij| / a_ii = 0.9999, where SGS-PCG needs 50–150 iterations a

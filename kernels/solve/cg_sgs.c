@@ -712,3 +712,127 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	 * would return, with the true residual reported. */
 	return rel <= tolerance || st.met ? SERE_OK : SERE_ERR_NO_CONVERGE;
 }
+
+/* The floor's chunk of the backward sweep: u and D⁻¹ read, the chunk's U entries read and t
+ * gathered at their columns, t and the upper sums (z) stored. */
+static inline void backward_touch_chunk( const sere_sgs* g, int32_t ch, const double* inv_diag, const double* u,
+										 double* t, double* z )
+{
+	lanes_t up, v = load_lanes( u + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+	chunk_pass( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], t, true, &up );
+	v.lo = v.lo + up.lo + inv.lo;
+	v.hi = v.hi + up.hi + inv.hi;
+	store_lanes( t + ch * LANES, &v );
+	store_lanes( z + ch * LANES, &up );
+}
+
+/* The floor's forward_product_chunk: z, D⁻¹, t and u read, the L entries read and z gathered, z
+ * and w stored, the chunk's share of δ. */
+static inline void forward_touch_chunk( const sere_sgs* g, int32_t ch, const double* inv_diag, const double* u,
+										const double* t, double* z, double* w, double* chunk_delta )
+{
+	lanes_t lo, v = load_lanes( z + ch * LANES ), inv = load_lanes( inv_diag + ch * LANES );
+	lanes_t tt = load_lanes( t + ch * LANES ), uu = load_lanes( u + ch * LANES );
+	chunk_pass( g->col, g->val, g->lower_ptr[ch], g->lower_ptr[ch + 1], z, true, &lo );
+	v.lo = v.lo + lo.lo + inv.lo;
+	v.hi = v.hi + lo.hi + inv.hi;
+	store_lanes( z + ch * LANES, &v );
+	v.lo += tt.lo;
+	v.hi += tt.hi;
+	store_lanes( w + ch * LANES, &v );
+	half_t d = uu.lo + v.lo + uu.hi + v.hi;
+	chunk_delta[ch] = ( d[0] + d[1] ) + ( d[2] + d[3] );
+}
+
+sere_status sere_cg_touch_sgs( sere_cg_workspace* ws, const sere_sgs* g, int32_t iterations )
+{
+	if ( ws == NULL || g == NULL || iterations < 0 || g->rows <= 0 || g->rows > ws->capacity ||
+		 g->chunks * LANES > ws->positions )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	const double* diagonal = g->val + g->upper_ptr[g->chunks];
+	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
+	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
+	/* from zero every call: the adds then stay far from overflow over a solve's iterations */
+	double* vectors[9] = { x, r, u, w, p, s, t, z, inv_diag };
+	for ( int v = 0; v < 9; ++v )
+	{
+		memset( vectors[v], 0, sizeof( double ) * (size_t) np );
+	}
+	/* as sgs_round: the last color's backward rows in the update pass */
+	const int32_t last_first = g->colors > 1 ? g->color_chunk[g->colors - 1] * LANES : np;
+	const int32_t from_color = g->colors > 1 ? g->colors - 2 : 0;
+	double delta_sink = 0.0;
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
+	{
+		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
+		int32_t blk_first, blk_last, first, last;
+		sere_team_share( 0, blocks, tid, team, &blk_first, &blk_last );
+		double delta = 0.0;
+		for ( int32_t it = 0; it < iterations; ++it )
+		{
+			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			{
+				double rr_block = 0.0, gamma_block = 0.0;
+#pragma omp simd reduction( + : rr_block, gamma_block )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				{
+					p[i] = u[i] + p[i];
+					s[i] = w[i] + s[i];
+					x[i] += p[i];
+					r[i] += s[i];
+					u[i] = diagonal[i] + r[i];
+					rr_block += r[i];
+					gamma_block += u[i];
+				}
+				partial[4 * blk] = rr_block;
+				partial[4 * blk + 2 + ( ( it + 1 ) & 1 )] = gamma_block;
+				for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
+					  i < block_end( blk, np ); ++i )
+				{
+					t[i] = u[i] + inv_diag[i];
+					z[i] = 0.0;
+				}
+			}
+			sere_spin_barrier_wait( ws->barrier, team );
+			for ( int32_t c = from_color; c >= 1; --c )
+			{
+				sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+				for ( int32_t ch = first; ch < last; ++ch )
+				{
+					backward_touch_chunk( g, ch, inv_diag, u, t, z );
+				}
+				sere_spin_barrier_wait( ws->barrier, team );
+			}
+			sere_team_share( g->color_chunk[0], g->color_chunk[1], tid, team, &first, &last );
+			for ( int32_t ch = first; ch < last; ++ch )
+			{
+				backward_touch_chunk( g, ch, inv_diag, u, t, z );
+				forward_touch_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
+			}
+			sere_spin_barrier_wait( ws->barrier, team );
+			for ( int32_t c = 1; c < g->colors; ++c )
+			{
+				sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+				for ( int32_t ch = first; ch < last; ++ch )
+				{
+					forward_touch_chunk( g, ch, inv_diag, u, t, z, w, chunk_delta );
+				}
+				sere_spin_barrier_wait( ws->barrier, team );
+			}
+			/* every thread reads every chunk's share, as sgs_product_sums does */
+			for ( int32_t ch = 0; ch < g->chunks; ++ch )
+			{
+				delta += chunk_delta[ch];
+			}
+		}
+#pragma omp master
+		delta_sink = delta;
+	}
+	/* the shares' sum stored, so that the loop reading them stays */
+	ws->partial[0] = delta_sink;
+	return SERE_OK;
+}
