@@ -3,7 +3,8 @@
  * with the same multipliers while that pushed more than the slack), at any thread count, where
  * every round's confirming measure passes (the kernel grounds before it measures, so a round
  * whose measure would fail is grounded earlier than the loop grounds it); and a converged
- * strain measured on the positions returned. */
+ * strain measured on the positions returned. The stall rule (sere_pbd_project_stalling) runs
+ * inside the same call, so it keeps these bits too. */
 #include "solve/pbd.h"
 
 #include <criterion/criterion.h>
@@ -261,5 +262,79 @@ Test( pbd_ground, bad_grounds_are_refused_and_leave_the_positions )
 	cr_expect_eq( sere_pbd_project_jacobi( pbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_pbd_ground_push( pbd, NULL ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( memcmp( s.z, before.z, sizeof( s.z ) ), 0 );
+	sere_pbd_destroy( pbd );
+}
+
+/* The stall rule inside the one call: a call it does not stop returns the projection's bits, with
+ * XPBD multipliers, Chebyshev sweeps and the ground all carried through (it once ran the windows
+ * as separate calls, each restarting the multipliers and the Chebyshev sequence); a call it stops
+ * after k sweeps returns what a projection capped at k returns, without the cap hit. */
+Test( pbd_ground, the_stall_rule_keeps_the_projections_bits )
+{
+	static ground_sheet plain, stalling;
+	sere_pbd_params params = sheet_params();
+	params.ground = GROUND, params.ground_slack = SLACK;
+	params.chebyshev_rho = 0.9f, params.chebyshev_delay = 5;
+	params.stall = 1e-6f; /* a window must lower the residual by a millionth */
+	sere_pbd_report by_project, by_stalling;
+	int stalled = -1;
+	for ( int32_t threads = 1; threads <= 2; ++threads )
+	{
+		sheet_make( &plain ), sheet_make( &stalling );
+		sere_pbd* pbd = sheet_solver( &plain, threads );
+		cr_assert_eq( sere_pbd_project( pbd, plain.x, plain.y, plain.z, plain.inv_m, &params, &by_project ), SERE_OK );
+		cr_assert_eq( sere_pbd_project_stalling( pbd, stalling.x, stalling.y, stalling.z, stalling.inv_m, &params,
+												 &by_stalling, &stalled ),
+					  SERE_OK );
+		sere_pbd_destroy( pbd );
+		cr_assert_eq( stalled, 0, "%d threads: the rule stopped the call after %d sweeps", threads,
+					  by_stalling.iterations );
+		cr_assert_gt( by_project.iterations, 2 * SERE_PBD_STALL_WINDOW, "too few windows to test" );
+		cr_expect_eq( by_stalling.iterations, by_project.iterations );
+		cr_expect_eq( by_stalling.hit_cap, by_project.hit_cap );
+		cr_expect_eq( memcmp( stalling.x, plain.x, sizeof( plain.x ) ), 0, "%d threads: x", threads );
+		cr_expect_eq( memcmp( stalling.y, plain.y, sizeof( plain.y ) ), 0, "%d threads: y", threads );
+		cr_expect_eq( memcmp( stalling.z, plain.z, sizeof( plain.z ) ), 0, "%d threads: z", threads );
+	}
+
+	/* The paper's hard constraints, asked to halve the residual every window: they stall. */
+	params = sheet_params();
+	params.compliance = 0.0f, params.tolerance = 1e-7f, params.stall = 0.5f;
+	sheet_make( &stalling );
+	sere_pbd* pbd = sheet_solver( &stalling, 1 );
+	cr_assert_eq( sere_pbd_project_stalling( pbd, stalling.x, stalling.y, stalling.z, stalling.inv_m, &params,
+											 &by_stalling, &stalled ),
+				  SERE_OK );
+	cr_assert_eq( stalled, 1, "%d sweeps, residual %g", by_stalling.iterations, by_stalling.max_strain );
+	cr_expect_eq( by_stalling.hit_cap, 0 );
+	cr_expect_lt( by_stalling.iterations, params.max_iterations );
+	cr_expect_eq( by_stalling.iterations % SERE_PBD_STALL_WINDOW, 0 );
+	params.max_iterations = by_stalling.iterations;
+	sheet_make( &plain );
+	cr_assert_eq( sere_pbd_project( pbd, plain.x, plain.y, plain.z, plain.inv_m, &params, &by_project ), SERE_OK );
+	cr_expect( by_project.hit_cap );
+	cr_expect_eq( memcmp( &by_project.max_strain, &by_stalling.max_strain, sizeof( float ) ), 0 );
+	cr_expect_eq( memcmp( stalling.z, plain.z, sizeof( plain.z ) ), 0, "stopped by the rule and by the cap differ" );
+
+	/* Refused: s outside [0, 1), a NULL flag; the positions are left as they were. */
+	static ground_sheet before;
+	sheet_make( &stalling );
+	before = stalling;
+	const float stalls[] = { 1.0f, -0.1f, NAN };
+	for ( int k = 0; k < 3; ++k )
+	{
+		params.stall = stalls[k];
+		cr_expect_eq( sere_pbd_project_stalling( pbd, stalling.x, stalling.y, stalling.z, stalling.inv_m, &params,
+												 &by_stalling, &stalled ),
+					  SERE_ERR_ARGUMENT, "stall %g", stalls[k] );
+	}
+	params.stall = 0.5f;
+	cr_expect_eq( sere_pbd_project_stalling( pbd, stalling.x, stalling.y, stalling.z, stalling.inv_m, &params,
+											 &by_stalling, NULL ),
+				  SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_pbd_project_stalling( pbd, stalling.x, stalling.y, stalling.z, stalling.inv_m, NULL,
+											 &by_stalling, &stalled ),
+				  SERE_ERR_ARGUMENT );
+	cr_expect_eq( memcmp( stalling.z, before.z, sizeof( before.z ) ), 0 );
 	sere_pbd_destroy( pbd );
 }

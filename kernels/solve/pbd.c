@@ -60,43 +60,6 @@ sere_pbd_params sere_pbd_params_default( void )
 	return params;
 }
 
-sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
-									   const sere_pbd_params* params, sere_pbd_report* report, int* stalled )
-{
-	*stalled = 0;
-	if ( params->stall <= 0.0f || params->linear_stiffness )
-	{
-		return sere_pbd_project( pbd, px, py, pz, inv_m, params, report );
-	}
-	sere_pbd_params window = *params;
-	int32_t done = 0;
-	float previous = INFINITY;
-	while ( done < params->max_iterations )
-	{
-		int32_t left = params->max_iterations - done;
-		window.max_iterations = left < SERE_PBD_STALL_WINDOW ? left : SERE_PBD_STALL_WINDOW;
-		sere_status status = sere_pbd_project( pbd, px, py, pz, inv_m, &window, report );
-		if ( status != SERE_OK )
-		{
-			return status;
-		}
-		done += report->iterations;
-		if ( !report->hit_cap )
-		{
-			break;
-		}
-		if ( report->max_strain > ( 1.0f - params->stall ) * previous )
-		{
-			*stalled = done < params->max_iterations;
-			break;
-		}
-		previous = report->max_strain;
-	}
-	report->iterations = done;
-	report->hit_cap = report->hit_cap && !*stalled;
-	return SERE_OK;
-}
-
 void sere_pbd_destroy( sere_pbd* pbd )
 {
 	if ( pbd == NULL )
@@ -607,6 +570,7 @@ typedef struct solve_setup
 {
 	solver kind;
 	float k, alpha, omega, tolerance;
+	float stall; /* sere_pbd_params.stall; 0: no stall rule */
 	int32_t max_iterations;
 	int xpbd, warm;
 	float ground, slack; /* the ground plane z ≥ ground (−∞: none) and the push a converged round may leave */
@@ -618,7 +582,7 @@ typedef struct solve_result
 {
 	int32_t iterations, flags;
 	float strain;
-	int converged;
+	int converged, stalled;
 } solve_result;
 
 /* One thread's part of sweep `number` of a Gauss–Seidel (or touch) call; returns the
@@ -697,9 +661,10 @@ static float ground_pass( sere_pbd* pbd, float ground, int t, int threads, int* 
 static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const solve_setup* setup, int t, int threads,
 								  int* parity )
 {
-	solve_result result = { 0, 0, 0.0f, 0 };
+	solve_result result = { 0, 0, 0.0f, 0, 0 };
 	const block_mode mode = setup->kind == SOLVER_TOUCH ? MODE_TOUCH : MODE_GAUSS_SEIDEL;
 	const int ground = setup->ground > -INFINITY;
+	float window_strain = INFINITY; /* the stall rule's: the last window's last sweep */
 	/* Chebyshev weights (Wang 2015), the same sequence on every thread. */
 	const double rho2 = (double) setup->rho * (double) setup->rho;
 	double omega = 1.0;
@@ -744,6 +709,18 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 				continue;
 			}
 		}
+		/* The stall rule, inside the one call so that the multipliers and the Chebyshev
+		 * sequence go on as without it; a stall in the last window is the cap. */
+		if ( setup->stall > 0.0f && result.iterations % SERE_PBD_STALL_WINDOW == 0 &&
+			 result.iterations < setup->max_iterations )
+		{
+			if ( result.strain > ( 1.0f - setup->stall ) * window_strain )
+			{
+				result.stalled = 1;
+				break;
+			}
+			window_strain = result.strain;
+		}
 		const int32_t k = result.iterations - round_start;
 		if ( setup->rho > 0.0f && result.iterations < setup->max_iterations )
 		{
@@ -763,7 +740,8 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 			}
 		}
 	}
-	/* At the cap the returned positions meet the ground too, unless the last round just did. */
+	/* At the cap or a stall the returned positions meet the ground too, unless the last round
+	 * just did. */
 	if ( ground && !result.converged && result.flags == 0 && round_start != result.iterations )
 	{
 		ground_pass( pbd, setup->ground, t, threads, parity );
@@ -776,7 +754,7 @@ static solve_result gauss_seidel( sere_pbd* pbd, const block_context* ctx, const
 static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup* setup, int t, int threads,
 							int* parity, int* front )
 {
-	solve_result result = { 0, 0, 0.0f, 0 };
+	solve_result result = { 0, 0, 0.0f, 0, 0 };
 	while ( result.iterations < setup->max_iterations )
 	{
 		float worst = 0.0f;
@@ -798,12 +776,13 @@ static solve_result jacobi( sere_pbd* pbd, block_context* ctx, const solve_setup
 	return result;
 }
 
+/* stalled: set when the stall rule stopped the sweeps (NULL: not asked). */
 static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, const solve_setup* setup,
-						  sere_pbd_report* report )
+						  sere_pbd_report* report, int* stalled )
 {
 	int requested = sere_team_for( pbd->thread_count );
 	requested = requested < 1 ? 1 : requested > MAX_THREADS ? MAX_THREADS : requested;
-	solve_result outcome = { 0, 0, 0.0f, 0 };
+	solve_result outcome = { 0, 0, 0.0f, 0, 0 };
 	/* One parallel region per call; inside it every thread follows the same control flow,
 	 * driven by values combined in exchange(). */
 #pragma omp parallel num_threads( requested )
@@ -844,7 +823,7 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 			atomic_store_explicit( &pbd->done[item].value, 0, memory_order_relaxed );
 		}
 		exchange( pbd, t, threads, &parity, &worst, &flags );
-		solve_result result = { 0, flags, 0.0f, 0 };
+		solve_result result = { 0, flags, 0.0f, 0, 0 };
 		if ( flags == 0 )
 		{
 			result = setup->kind == SOLVER_JACOBI ? jacobi( pbd, &ctx, setup, t, threads, &parity, &front )
@@ -861,7 +840,11 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 	}
 	report->iterations = outcome.iterations;
 	report->max_strain = outcome.strain;
-	report->hit_cap = !outcome.converged;
+	report->hit_cap = !outcome.converged && !outcome.stalled;
+	if ( stalled != NULL )
+	{
+		*stalled = outcome.stalled;
+	}
 	return status_of( outcome.flags );
 }
 
@@ -925,7 +908,32 @@ sere_status sere_pbd_project( sere_pbd* pbd, float* px, float* py, float* pz, co
 		/* (1 − k')^n = 1 − k after n sweeps. */
 		setup.k = (float) ( 1.0 - pow( 1.0 - (double) params->stiffness, 1.0 / (double) params->max_iterations ) );
 	}
-	return solve( pbd, px, py, pz, inv_m, &setup, report );
+	return solve( pbd, px, py, pz, inv_m, &setup, report, NULL );
+}
+
+sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
+									   const sere_pbd_params* params, sere_pbd_report* report, int* stalled )
+{
+	sere_status status = check_call( pbd, px, py, pz, inv_m, params, report );
+	if ( stalled != NULL )
+	{
+		*stalled = 0;
+	}
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
+	if ( stalled == NULL || !( params->stall >= 0.0f && params->stall < 1.0f ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	solve_setup setup = setup_of( params, SOLVER_GAUSS_SEIDEL );
+	if ( params->linear_stiffness )
+	{
+		return sere_pbd_project( pbd, px, py, pz, inv_m, params, report );
+	}
+	setup.stall = params->stall;
+	return solve( pbd, px, py, pz, inv_m, &setup, report, stalled );
 }
 
 sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
@@ -942,7 +950,7 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
 		return SERE_ERR_ARGUMENT;
 	}
 	solve_setup setup = setup_of( params, SOLVER_JACOBI );
-	return solve( pbd, px, py, pz, inv_m, &setup, report );
+	return solve( pbd, px, py, pz, inv_m, &setup, report, NULL );
 }
 
 static sere_status touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps,
@@ -960,7 +968,7 @@ static sere_status touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz,
 						  .ground = -INFINITY,
 						  .xpbd = xpbd };
 	sere_pbd_report report;
-	return solve( pbd, px, py, pz, inv_m, &setup, &report );
+	return solve( pbd, px, py, pz, inv_m, &setup, &report, NULL );
 }
 
 sere_status sere_pbd_touch_sweeps( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m, int32_t sweeps )

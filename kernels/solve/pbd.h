@@ -142,12 +142,14 @@ void sere_pbd_predict( int32_t count, const float* x, const float* y, const floa
 sere_status sere_pbd_project( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 							  const sere_pbd_params* params, sere_pbd_report* report );
 
-/* sere_pbd_project with the stall rule of params->stall (s > 0): the cap's sweeps run in
- * windows of SERE_PBD_STALL_WINDOW, and the call stops when a window ends with max |C/l| (of its
- * last sweep) above (1 − s) times the previous window's. Gauss–Seidel state carries over between
- * windows, so without a stall the positions equal one sere_pbd_project call's. stalled is set
+/* sere_pbd_project with the stall rule of params->stall (s > 0): every SERE_PBD_STALL_WINDOW
+ * sweeps the call compares the residual of the window's last sweep with the previous window's,
+ * and stops when it is above (1 − s) times that. The rule is checked inside the one call, so the
+ * multipliers (XPBD), the Chebyshev sequence and the ground go on as they would without it: a
+ * call that does not stall returns what sere_pbd_project returns, bit for bit. stalled is set
  * when the rule stopped it, neither converged nor at the cap (report->hit_cap is then 0). With
- * s = 0 or linear_stiffness this is sere_pbd_project. */
+ * s = 0 or linear_stiffness this is sere_pbd_project. SERE_ERR_ARGUMENT as sere_pbd_project, and
+ * for a NULL stalled or s outside [0, 1). */
 sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, float* pz, const float* inv_m,
 									   const sere_pbd_params* params, sere_pbd_report* report, int* stalled );
 
