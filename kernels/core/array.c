@@ -19,6 +19,10 @@ int32_t sere_array_capacity( int32_t capacity, int64_t need, int32_t first )
 	{
 		return capacity;
 	}
+	if ( capacity <= 0 && first < 1 )
+	{
+		return -1; /* nothing to double from */
+	}
 	int64_t grown = capacity > 0 ? capacity : first;
 	while ( grown < need )
 	{

@@ -13,7 +13,8 @@ extern "C"
 
 /* The capacity a growable array needs to hold need elements: capacity itself when it already
  * does, otherwise doubled (starting from first when the array is empty) until it does. -1 when
- * need is past INT32_MAX, so a caller's int32_t counts never wrap. */
+ * need is past INT32_MAX, so a caller's int32_t counts never wrap, and when an empty array must
+ * grow from a first below 1. */
 int32_t sere_array_capacity( int32_t capacity, int64_t need, int32_t first );
 
 /* realloc for count elements of element bytes, the byte count checked for overflow. NULL on

@@ -60,9 +60,9 @@ const char* sere_status_text( sere_status status )
 
 void* sere_alloc( size_t bytes )
 {
-	if ( bytes == 0 )
+	if ( bytes == 0 || bytes > SIZE_MAX - ( SERE_ALIGN - 1 ) )
 	{
-		return NULL;
+		return NULL; /* past SIZE_MAX − 63 the round-up would wrap to a 0-byte block */
 	}
 	size_t rounded = ( bytes + SERE_ALIGN - 1 ) & ~(size_t) ( SERE_ALIGN - 1 );
 	void* memory = aligned_alloc( SERE_ALIGN, rounded );
@@ -90,7 +90,7 @@ bool sere_alloc_floats( float** const* arrays, int32_t array_count, size_t count
 {
 	for ( int32_t k = 0; k < array_count; ++k )
 	{
-		*arrays[k] = sere_alloc( count * sizeof( float ) );
+		*arrays[k] = count <= SIZE_MAX / sizeof( float ) ? sere_alloc( count * sizeof( float ) ) : NULL;
 		if ( *arrays[k] == NULL )
 		{
 			return false;
