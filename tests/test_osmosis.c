@@ -111,6 +111,40 @@ Test( osmosis, matrix_is_symmetric )
 	osmosis_free( o, &model );
 }
 
+/* Each bad input names its own cause, and the water is left as it was: a NaN λ is a parameter
+ * out of range and a NaN τ a non-finite input (both once reached the conductances and came back
+ * as a matrix that is not SPD); a missing report or array and counts past int32_t are refused. */
+Test( osmosis, bad_input_names_its_cause )
+{
+	sere_model model;
+	int32_t n = grid_model( &model, 8, 6, 0.8, 0.6 );
+	sere_osmosis* o = t_layer( &model );
+	double* w0 = malloc( sizeof( double ) * (size_t) model.p.count );
+	memcpy( w0, model.p.w, sizeof( double ) * (size_t) model.p.count );
+	sere_osmosis_report report;
+	sere_osmosis_params params = lambda_params( NAN, 1.0 );
+	cr_expect_eq( model_step( o, &model, &params, &report ), SERE_ERR_ARGUMENT );
+	params = lambda_params( 0.5, NAN );
+	cr_expect_eq( model_step( o, &model, &params, &report ), SERE_ERR_ARGUMENT );
+	params = lambda_params( 0.5, 1.0 );
+	model.p.tau[n / 2] = NAN;
+	cr_expect_eq( model_step( o, &model, &params, &report ), SERE_ERR_NONFINITE );
+	model.p.tau[n / 2] = 0.5f;
+	cr_expect_eq( memcmp( model.p.w, w0, sizeof( double ) * (size_t) model.p.count ), 0 );
+	cr_expect_eq( model_step( o, &model, &params, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_osmosis_step( o, model.p.x, model.p.y, model.p.z, NULL, model.p.M, model.p.w, model.p.m, &params,
+									 &report ),
+				  SERE_ERR_ARGUMENT );
+	cr_expect_eq( model_step( o, &model, &params, &report ), SERE_OK, "the layer still steps after the refusals" );
+	sere_osmosis* none = NULL;
+	const int32_t ends[2] = { 0, 1 };
+	cr_expect_eq( sere_osmosis_create( 16, INT32_MAX - 8, ends, ends + 1, 1, &none ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_osmosis_create( 0, 1 << 30, ends, ends + 1, 1 << 30, &none ), SERE_ERR_ARGUMENT );
+	cr_expect_null( none );
+	free( w0 );
+	osmosis_free( o, &model );
+}
+
 Test( osmosis, matches_literal_eq9 )
 {
 	sere_model model;
@@ -438,6 +472,25 @@ Test( cg, solves_spd_and_rejects_bad_matrices )
 	/* NaN right-hand side. */
 	b[3] = NAN;
 	cr_expect_eq( solve_csr( w, &a, b, x, 1e-12, 200, &result ), SERE_ERR_NONFINITE );
+	b[3] = 1.0;
+
+	/* A NaN or infinite entry of A with finite b and x: the first residual shows it (it once
+	 * ended the solve there with SERE_OK and a NaN residual, or NO_CONVERGE for infinity). */
+	const double bad_values[2] = { NAN, INFINITY };
+	for ( int k = 0; k < 2; ++k )
+	{
+		dense[7 * n + 8] = dense[8 * n + 7] = bad_values[k];
+		sere_csr bad = dense_csr( dense, n );
+		memset( x, 0, sizeof( x ) );
+		cr_expect_eq( solve_csr( w, &bad, b, x, 1e-12, 200, &result ), SERE_ERR_NONFINITE, "entry %g", bad_values[k] );
+		free_csr( &bad );
+	}
+	dense[7 * n + 8] = dense[8 * n + 7] = -1.0;
+
+	/* No result to write into: refused, as every other argument, by all three solves. */
+	cr_expect_eq( solve_csr( w, &a, b, x, 1e-12, 200, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_solve_sgs( w, NULL, b, x, 1e-12, 200, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_solve_amg( w, NULL, b, x, 1e-12, 200, NULL ), SERE_ERR_ARGUMENT );
 
 	/* b = 0 gives x = 0 with no iteration. */
 	memset( b, 0, sizeof( b ) );

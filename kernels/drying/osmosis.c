@@ -90,7 +90,9 @@ void sere_osmosis_destroy( sere_osmosis* o )
 sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a, const int32_t* b, int32_t spring_count,
 								 sere_osmosis** out )
 {
-	if ( out == NULL || first < 0 || count <= 0 || spring_count < 0 || ( spring_count > 0 && ( !a || !b ) ) )
+	/* the CSR's nnz, count + 2 · spring_count, and first + count are int32_t */
+	if ( out == NULL || first < 0 || count <= 0 || spring_count < 0 || ( spring_count > 0 && ( !a || !b ) ) ||
+		 (int64_t) first + count > INT32_MAX || (int64_t) count + 2 * (int64_t) spring_count > INT32_MAX )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -385,8 +387,13 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 							   const double* M, double* w, double* m, const sere_osmosis_params* params,
 							   sere_osmosis_report* report )
 {
+	if ( report == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( report, 0, sizeof( *report ) );
-	if ( o == NULL || params == NULL || !( params->dt > 0.0 ) || params->lambda_min < 0.0 || params->lambda_max < 0.0 ||
+	if ( o == NULL || params == NULL || x == NULL || y == NULL || z == NULL || tau == NULL || M == NULL || w == NULL ||
+		 m == NULL || !( params->dt > 0.0 ) || !( params->lambda_min >= 0.0 ) || !( params->lambda_max >= 0.0 ) ||
 		 !isfinite( params->water_rate ) || ( params->supply_count > 0 && params->supply == NULL ) )
 	{
 		return SERE_ERR_ARGUMENT;
@@ -394,17 +401,22 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	const int32_t first = o->first, n = o->count;
 	const double dt = params->dt;
 	double water = 0.0;
-	int bad = 0;
+	int bad = 0, bad_tau = 0;
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		water += w[first + i];
 		bad |= !( M[first + i] > 0.0 ) || !isfinite( M[first + i] ) || !isfinite( w[first + i] );
+		bad_tau |= !isfinite( tau[first + i] );
 	}
 	report->water_before = water;
 	report->water_after = water;
 	if ( bad )
 	{
 		return SERE_ERR_ARGUMENT;
+	}
+	if ( bad_tau )
+	{
+		return SERE_ERR_NONFINITE; /* else it would reach the conductances and read as not SPD */
 	}
 	if ( water <= 0.0 && params->supply_count == 0 )
 	{

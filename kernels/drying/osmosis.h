@@ -82,7 +82,9 @@ typedef struct sere_osmosis sere_osmosis;
 
 /* A layer is the particles [first, first + count) and the springs joining them (indices are
  * global, as in sere_springs). The CSR pattern (diagonal plus one entry per spring end) is
- * built here once; each step only refills values. */
+ * built here once; each step only refills values. SERE_ERR_ARGUMENT for a spring end outside
+ * the layer or a spring joining a particle to itself, and for counts whose CSR (count +
+ * 2 · spring_count entries) or last index would not fit an int32_t. */
 sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a, const int32_t* b, int32_t spring_count,
 								 sere_osmosis** out );
 void sere_osmosis_destroy( sere_osmosis* osmosis );
@@ -97,7 +99,13 @@ sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads );
  * 3 c_n − 3 c_{n−1} + c_{n−2} once there are three, the line 2 c_n − c_{n−1} at the second
  * step, c_n at the first, and never below 0. A drying layer's concentration moves smoothly, so
  * this guess is far closer than c_n alone (plane tree, λ = 100: 556 iterations per step in the
- * first frames, 18875 over 200 frames against 29738 with the line alone). */
+ * first frames, 18875 over 200 frames against 29738 with the line alone).
+ *
+ * SERE_ERR_ARGUMENT for a NULL argument, dt not positive, a λ negative or NaN, a supply index
+ * outside the layer, an M not positive or not finite, or a w not finite; SERE_ERR_NONFINITE for
+ * a τ not finite; SERE_ERR_GEOMETRY for a spring of zero or non-finite length; otherwise the CG
+ * solve's status (cg.h). w and m are left as they were on any status but SERE_OK and
+ * SERE_ERR_NO_CONVERGE. */
 sere_status sere_osmosis_step( sere_osmosis* osmosis, const float* x, const float* y, const float* z, const float* tau,
 							   const double* M, double* w, double* m, const sere_osmosis_params* params,
 							   sere_osmosis_report* report );

@@ -401,7 +401,8 @@ static void cg_start( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, c
 		}
 	}
 	st->bad_diagonal = bad_diagonal;
-	st->nonfinite = nonfinite;
+	/* finite b and x with a NaN or infinite entry of A: the first residual shows it */
+	st->nonfinite = nonfinite || !isfinite( st->rel );
 }
 
 /* One round of at most `chunk` steps of the recurrence, in one parallel region (see
@@ -485,6 +486,10 @@ static void cg_round( cg_state* st, sere_cg_workspace* ws, const sere_sell* a, d
 sere_status sere_cg_solve( sere_cg_workspace* ws, const sere_sell* a, const double* b_in, double* x_in,
 						   double tolerance, int32_t max_iterations, sere_cg_result* result )
 {
+	if ( result == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	result->iterations = 0;
 	result->residual = 0.0;
 	if ( ws == NULL || a == NULL || b_in == NULL || x_in == NULL || a->rows <= 0 || a->rows > ws->capacity ||

@@ -735,6 +735,10 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 sere_status sere_cg_solve_amg( sere_cg_workspace* ws, sere_amg* m, const double* b_in, double* x_in, double tolerance,
 							   int32_t max_iterations, sere_cg_result* result )
 {
+	if ( result == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	result->iterations = 0;
 	result->residual = 0.0;
 	if ( ws == NULL || m == NULL || b_in == NULL || x_in == NULL || m->level[0].g->rows > ws->capacity ||

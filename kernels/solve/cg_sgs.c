@@ -626,6 +626,10 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, double* x_in,
 							   double tolerance, int32_t max_iterations, sere_cg_result* result )
 {
+	if ( result == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	result->iterations = 0;
 	result->residual = 0.0;
 	if ( ws == NULL || g == NULL || b_in == NULL || x_in == NULL || g->rows <= 0 || g->rows > ws->capacity ||
