@@ -296,6 +296,9 @@ Test( bspline, bad_input_is_refused )
 	cr_expect_eq( sere_bspline_fit( NULL, y, 4, &s ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_bspline_fit( x, NULL, 4, &s ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_bspline_fit( x, y, 4, NULL ), SERE_ERR_ARGUMENT );
+	/* the arc-length table's index count · SERE_BSPLINE_STEPS would pass INT32_MAX (refused
+	 * before a key point is read) */
+	cr_expect_eq( sere_bspline_fit( x, y, INT32_MAX / SERE_BSPLINE_STEPS + 1, &s ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_bspline_fit( x, y, 4, &s ), SERE_OK, "the square itself is fine" );
 	sere_bspline_destroy( &s );
 	cr_expect_eq( s.cx, NULL );

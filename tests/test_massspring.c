@@ -488,6 +488,8 @@ Test( massspring, bad_meshes_are_refused )
 	float xn[5] = { 0, 1, NAN, 1, 0.5f };
 	cr_expect_eq( sere_massspring_create( xn, y, z, 5, good, 2, &ms ), SERE_ERR_NONFINITE );
 	cr_expect_eq( sere_massspring_create( x, y, z, 5, good, 0, &ms ), SERE_ERR_ARGUMENT );
+	/* three sides a triangle would pass INT32_MAX (refused before a triangle is read) */
+	cr_expect_eq( sere_massspring_create( x, y, z, 5, good, INT32_MAX / 3 + 1, &ms ), SERE_ERR_ARGUMENT );
 }
 
 Test( massspring, bad_steps_change_nothing )

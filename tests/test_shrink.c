@@ -216,5 +216,7 @@ Test( shrink, bad_input )
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, -1, m, m0, &params, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, NULL, 0 ), SERE_ERR_ARGUMENT );
+	/* first + count past INT32_MAX once wrapped to an empty range and returned SERE_OK */
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, INT32_MAX - 1, 3, m, m0, &params, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 0, m, m0, &params, 0 ), SERE_OK );
 }

@@ -120,7 +120,7 @@ sere_status sere_shrink( const int32_t* a, const int32_t* b, const uint8_t* kind
 		 !( params->sigma_vein >= -DBL_MAX && params->sigma_vein <= DBL_MAX ) ||
 		 !( params->sigma_surf >= -DBL_MAX && params->sigma_surf <= DBL_MAX ) ||
 		 !( params->min_length_ratio >= 0.0 && params->min_length_ratio <= 1.0 ) || params->m_min != params->m_min ||
-		 first < 0 || count < 0 || !sere_threads_valid( threads ) )
+		 first < 0 || count < 0 || (int64_t) first + count > INT32_MAX || !sere_threads_valid( threads ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}

@@ -34,7 +34,9 @@ typedef struct sere_shrink_params
  * of the libm formula or is one ulp off.
  * SERE_ERR_NONFINITE when v_rel or a length is not finite (NaN or infinite masses, a zero
  * m⁰ sum); those springs keep their rest length and the others are updated. On `threads` threads
- * (core/base.h; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). */
+ * (core/base.h; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). SERE_ERR_ARGUMENT also for a NULL
+ * array or params, a negative first or count, first + count past INT32_MAX, or a parameter out
+ * of its range (sere_shrink_params). */
 sere_status sere_shrink( const int32_t* a, const int32_t* b, const uint8_t* kind, const float* rest0, float* rest,
 						 int32_t first, int32_t count, const double* m, const double* m0,
 						 const sere_shrink_params* params, int32_t threads );

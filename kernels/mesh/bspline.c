@@ -108,7 +108,8 @@ sere_status sere_bspline_fit( const double* x, const double* y, int32_t count, s
 		return SERE_ERR_ARGUMENT;
 	}
 	*spline = ( sere_bspline ){ 0 };
-	if ( x == NULL || y == NULL || count < 3 )
+	/* the arc-length table's indices, count · SERE_BSPLINE_STEPS, are int32_t */
+	if ( x == NULL || y == NULL || count < 3 || count > INT32_MAX / SERE_BSPLINE_STEPS )
 	{
 		return SERE_ERR_ARGUMENT;
 	}

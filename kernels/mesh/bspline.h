@@ -28,7 +28,8 @@ typedef struct sere_bspline
 /* Sub-steps per span of the arc-length table. */
 #define SERE_BSPLINE_STEPS 16
 
-/* Fits the curve through count ≥ 3 key points (x, y). SERE_ERR_NONFINITE for NaN or infinite
+/* Fits the curve through count ≥ 3 key points (x, y), at most INT32_MAX / SERE_BSPLINE_STEPS
+ * (SERE_ERR_ARGUMENT otherwise, as for NULL arrays). SERE_ERR_NONFINITE for NaN or infinite
  * input, SERE_ERR_GEOMETRY for two consecutive equal key points (the first and last count as
  * consecutive). The caller frees with sere_bspline_destroy (also safe after a failed fit). */
 sere_status sere_bspline_fit( const double* x, const double* y, int32_t count, sere_bspline* spline );

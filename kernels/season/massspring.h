@@ -92,7 +92,8 @@ typedef struct sere_massspring sere_massspring;
 
 /* Builds the springs of a triangle mesh whose current positions are the rest shape: natural
  * lengths L⁰ are the distances there. Everything a step needs is allocated here.
- * SERE_ERR_ARGUMENT for a vertex index out of range or a triangle repeating a vertex,
+ * SERE_ERR_ARGUMENT for a vertex index out of range, a triangle repeating a vertex or more
+ * than INT32_MAX / 3 triangles,
  * SERE_ERR_GEOMETRY for an edge shared by more than two triangles or of zero length,
  * SERE_ERR_NONFINITE for a NaN or infinite coordinate, SERE_ERR_CAPACITY past SERE_MAX_COLORS. */
 sere_status sere_massspring_create( const float* x, const float* y, const float* z, int32_t vertex_count,

@@ -180,7 +180,8 @@ static sere_status sweep_order( sere_massspring* ms, const int32_t* sa, const in
 static sere_status validate_input( const float* x, const float* y, const float* z, int32_t vertex_count,
 								   const int32_t* tri, int32_t triangle_count )
 {
-	if ( x == NULL || y == NULL || z == NULL || tri == NULL || vertex_count < 3 || triangle_count < 1 )
+	if ( x == NULL || y == NULL || z == NULL || tri == NULL || vertex_count < 3 || triangle_count < 1 ||
+		 triangle_count > INT32_MAX / 3 ) /* three sides a triangle, counted in int32_t */
 	{
 		return SERE_ERR_ARGUMENT;
 	}
