@@ -216,6 +216,13 @@ Test( shrink, bad_input )
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, &bad, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, -1, m, m0, &params, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 3, m, m0, NULL, 0 ), SERE_ERR_ARGUMENT );
+	/* a σ that takes the length past FLT_MAX: not finite once stored, so kept (it was stored as
+	 * infinity with SERE_OK) */
+	float kept[3] = { 0.9f, 0.9f, 0.9f };
+	double fine[6] = { 0.5, 0.5, 0.5, 0.5, 0.5, 0.5 }, fresh[6] = { 1, 1, 1, 1, 1, 1 };
+	bad = params, bad.sigma_surf = -1e39;
+	cr_expect_eq( sere_shrink( a, b, kind, rest0, kept, 0, 3, fine, fresh, &bad, 0 ), SERE_ERR_NONFINITE );
+	cr_expect( kept[0] == 0.9f && kept[1] == 0.9f && kept[2] == 0.9f, "%g %g %g", kept[0], kept[1], kept[2] );
 	/* first + count past INT32_MAX once wrapped to an empty range and returned SERE_OK */
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, INT32_MAX - 1, 3, m, m0, &params, 0 ), SERE_ERR_ARGUMENT );
 	cr_expect_eq( sere_shrink( a, b, kind, rest0, rest, 0, 0, m, m0, &params, 0 ), SERE_OK );

@@ -157,7 +157,8 @@ sere_status sere_shrink( const int32_t* a, const int32_t* b, const uint8_t* kind
 		double sigma = ( kind[s] & SERE_SPRING_VEIN ) ? sigma_vein : sigma_surf;
 		double l0 = (double) rest0[s];
 		double length = l0 * ( 1.0 - sigma * power ); /* Jeong Eq. 12 */
-		int finite = ( v_rel <= DBL_MAX ) & ( v_rel >= -DBL_MAX ) & ( length <= DBL_MAX ) & ( length >= -DBL_MAX );
+		/* the length is stored as a float: one past FLT_MAX would be written as infinity */
+		int finite = ( v_rel <= DBL_MAX ) & ( v_rel >= -DBL_MAX ) & ( length <= FLT_MAX ) & ( length >= -FLT_MAX );
 		int stopped = ( ma < m_min ) | ( mb < m_min ) | ( length < ratio * l0 ) | !finite;
 		bad |= !finite;
 		rest[s] = select_float( stopped, rest[s], (float) length );
