@@ -2,6 +2,7 @@
 
 #include "core/array.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -26,6 +27,10 @@ sere_layer_params sere_layer_params_default( void )
 
 sere_status sere_counts_solve( int64_t particles, int64_t springs, int32_t* n, int32_t* b )
 {
+	if ( n == NULL || b == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	/* particles = 3N − B − 2 and springs = 12N − 6B − 12 give 2N − B = (springs + 12) / 6. */
 	if ( particles <= 0 || springs <= 0 || ( springs + 12 ) % 6 != 0 )
 	{
@@ -173,6 +178,13 @@ static sere_status validate_mesh( const sere_plane_mesh* mesh )
 			return SERE_ERR_GEOMETRY;
 		}
 	}
+	for ( int32_t k = 0; k < 2 * mesh->vein_segment_count; ++k )
+	{
+		if ( mesh->vein_segments[k] < 0 || mesh->vein_segments[k] >= mesh->point_count )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+	}
 	return SERE_OK;
 }
 
@@ -220,9 +232,11 @@ static void morton_order( const sere_plane_mesh* mesh, sere_sort_item* order, in
 
 /* Each directed half-edge paired with its twin: (undirected edge key, triangle) records sorted,
  * so the two triangles of an interior edge stand side by side. The mesh must be a disk: no edge
- * in three triangles, no holes, no unused points, the boundary its outline (Euler: n + f - e = 1). */
-static sere_status pair_half_edges( const sere_plane_mesh* mesh, const int32_t* tri_new, sere_sort_item* half,
-									int32_t* unique, int32_t* interior )
+ * in three triangles, no holes, no unused points, the boundary its outline (Euler: n + f - e = 1),
+ * every boundary edge joining consecutive points of the outline as given (old_of_new: a new
+ * index's original one). */
+static sere_status pair_half_edges( const sere_plane_mesh* mesh, const int32_t* tri_new, const int32_t* old_of_new,
+									sere_sort_item* half, int32_t* unique, int32_t* interior )
 {
 	const int32_t f = mesh->triangle_count;
 	for ( int32_t t = 0; t < f; ++t )
@@ -230,11 +244,11 @@ static sere_status pair_half_edges( const sere_plane_mesh* mesh, const int32_t* 
 		for ( int k = 0; k < 3; ++k )
 		{
 			half[3 * t + k] =
-				( sere_sort_item ){ edge_key( tri_new[3 * t + k], tri_new[3 * t + ( k + 1 ) % 3] ), t, 0 };
+				( sere_sort_item ){ edge_key( tri_new[3 * t + k], tri_new[3 * t + ( k + 1 ) % 3] ), t, k };
 		}
 	}
 	sere_sort_items( half, 3 * f );
-	int32_t boundary_edges = 0;
+	int32_t boundary_edges = 0, off_outline = 0;
 	*unique = 0;
 	*interior = 0;
 	for ( int32_t e = 0; e < 3 * f; )
@@ -251,9 +265,20 @@ static sere_status pair_half_edges( const sere_plane_mesh* mesh, const int32_t* 
 		*unique += 1;
 		*interior += run == 2;
 		boundary_edges += run == 1;
+		if ( run == 1 )
+		{
+			/* a boundary edge must join consecutive outline points (the first boundary_count, in
+			 * order), or the outline flags would mark other points */
+			const int32_t* v = tri_new + 3 * half[e].index;
+			int32_t a = old_of_new[v[half[e].value]], b = old_of_new[v[( half[e].value + 1 ) % 3]];
+			int32_t lo = a < b ? a : b, hi = a < b ? b : a, last = mesh->boundary_count - 1;
+			off_outline += !( hi <= last && ( hi == lo + 1 || ( lo == 0 && hi == last ) ) );
+		}
 		e += run;
 	}
-	return boundary_edges == mesh->boundary_count && mesh->point_count + f - *unique == 1 ? SERE_OK : SERE_ERR_GEOMETRY;
+	return boundary_edges == mesh->boundary_count && off_outline == 0 && mesh->point_count + f - *unique == 1
+			   ? SERE_OK
+			   : SERE_ERR_GEOMETRY;
 }
 
 /* T springs (one per edge), V springs (one per interior edge, joining the Voronoi particles of
@@ -389,6 +414,10 @@ static bool alloc_model_arrays( sere_model* model, int32_t n, int32_t f, int32_t
 
 sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_layer_params* params, sere_model* model )
 {
+	if ( model == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( model, 0, sizeof( *model ) );
 	sere_status status = validate_mesh( mesh );
 	if ( status != SERE_OK || params == NULL )
@@ -399,12 +428,13 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 	const int32_t f = mesh->triangle_count;
 	sere_sort_item* order = malloc( sizeof( sere_sort_item ) * (size_t) ( n > f ? n : f ) );
 	int32_t* new_of_old = malloc( sizeof( int32_t ) * (size_t) n );
+	int32_t* old_of_new = malloc( sizeof( int32_t ) * (size_t) n );
 	int32_t* tri_new = malloc( sizeof( int32_t ) * 3 * (size_t) f );
 	sere_sort_item* half = malloc( sizeof( sere_sort_item ) * 3 * (size_t) f );
 	uint64_t* veins =
 		malloc( sizeof( uint64_t ) * (size_t) ( mesh->vein_segment_count > 0 ? mesh->vein_segment_count : 1 ) );
 	sere_sort_item* entries = NULL;
-	if ( !order || !new_of_old || !tri_new || !half || !veins )
+	if ( !order || !new_of_old || !old_of_new || !tri_new || !half || !veins )
 	{
 		status = SERE_ERR_MEMORY;
 		goto done;
@@ -417,7 +447,11 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 	qsort( veins, (size_t) mesh->vein_segment_count, sizeof( uint64_t ), compare_u64 );
 
 	int32_t unique, interior;
-	status = pair_half_edges( mesh, tri_new, half, &unique, &interior );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		old_of_new[new_of_old[i]] = i;
+	}
+	status = pair_half_edges( mesh, tri_new, old_of_new, half, &unique, &interior );
 	if ( status != SERE_OK )
 	{
 		goto done;
@@ -444,6 +478,7 @@ sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_l
 done:
 	free( order );
 	free( new_of_old );
+	free( old_of_new );
 	free( tri_new );
 	free( half );
 	free( veins );
@@ -508,8 +543,13 @@ static heap_item heap_pop( heap_item* heap, int32_t* size )
 
 sere_status sere_model_assign_masses( sere_model* model, const sere_layer_params* params )
 {
-	if ( params == NULL || params->m_min < 0.0 || params->m_max < params->m_min || params->mu0 < 0.0 ||
-		 params->mu0 >= 1.0 || params->D <= 0.0 || params->omega_vein <= 0.0 || params->omega_surf <= 0.0 )
+	/* written so that NaN fails every test; m_min > 0, as a particle of mass 0 would take an
+	 * infinite inverse mass (0 is the pin) */
+	if ( model == NULL || params == NULL || !( params->m_min > 0.0 ) || !( params->m_max >= params->m_min ) ||
+		 !( params->m_max <= DBL_MAX ) || !( params->mu0 >= 0.0 && params->mu0 < 1.0 ) ||
+		 !( params->D > 0.0 && params->D <= DBL_MAX ) ||
+		 !( params->omega_vein > 0.0 && params->omega_vein <= DBL_MAX ) ||
+		 !( params->omega_surf > 0.0 && params->omega_surf <= DBL_MAX ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}

@@ -103,9 +103,12 @@ typedef struct sere_plane_mesh
 sere_status sere_model_from_triangles( const sere_plane_mesh* mesh, const sere_layer_params* params,
 									   sere_model* model );
 
-/* Weighted shortest distances from the base over T and V springs (Dijkstra: the exact
- * shortest paths the paper computes with Bellman-Ford), τ (Jeong Eq. 1), m⁰ (Jeong Eq. 2) on the
- * triangle layer, Voronoi masses as the mean of their triangle's three, w = μ⁰ m, M = m − w. */
+/* Weighted shortest distances from the base over the triangle layer's T springs (Dijkstra: the
+ * exact shortest paths the paper computes with Bellman-Ford; a vein T spring weighs omega_vein,
+ * the others omega_surf), τ (Jeong Eq. 1), m⁰ (Jeong Eq. 2) on the triangle layer, Voronoi
+ * masses as the mean of their triangle's three, w = μ⁰ m, M = m − w. SERE_ERR_ARGUMENT for a
+ * NULL argument or a parameter out of range or NaN (m_min > 0, m_max ≥ m_min, μ⁰ in [0, 1),
+ * D, omega_vein and omega_surf > 0, all finite). */
 sere_status sere_model_assign_masses( sere_model* model, const sere_layer_params* params );
 
 /* Frees every array of a model made by sere_model_from_triangles or sere_model_build (model.h). */

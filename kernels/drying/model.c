@@ -103,6 +103,10 @@ static void relax( double* x, double* y, int32_t point_count, int32_t first_free
 sere_status sere_model_build( const sere_leaf_shape* shape, const sere_build_params* params, sere_model* model,
 							  sere_build_report* report )
 {
+	if ( model == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( model, 0, sizeof( *model ) );
 	if ( shape == NULL || params == NULL || params->relax_iterations < 0 )
 	{

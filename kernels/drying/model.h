@@ -32,7 +32,8 @@ typedef struct sere_build_report
 } sere_build_report;
 
 /* The outline point count B that makes the outline spacing match the interior spacing for N
- * points in total, from the outline's area and perimeter (at least 3, at most N). */
+ * points in total, from the outline's area and perimeter (at least 3, at most N; N itself when
+ * N < 3, which no triangulation can use). */
 int32_t sere_boundary_for_points( double area, double perimeter, int32_t point_count );
 
 /* Builds a model with exactly N triangle particles, B of them on the outline, so the double
