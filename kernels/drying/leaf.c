@@ -5,6 +5,7 @@
 
 #include "core/internal/team.h"
 
+#include <float.h>
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -611,11 +612,18 @@ static void report_frame( const sere_leaf_sim* sim, const double wall[4], sere_l
 
 sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats )
 {
+	if ( stats == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( stats, 0, sizeof( *stats ) );
+	/* damping is a fraction of the velocity: outside [0, 1] (or NaN) it would grow or poison
+	 * every velocity; the ground is a height or −∞ for none */
 	if ( sim == NULL || params == NULL || !( params->dt > 0.0f ) || !( params->pbd.compliance >= 0.0f ) ||
 		 !( params->vein_compliance >= 0.0f ) || !( params->voronoi_compliance >= 0.0f ) ||
 		 !( params->link_compliance >= 0.0f ) || !( params->friction_static >= 0.0f ) ||
-		 !( params->friction_kinetic >= 0.0f ) )
+		 !( params->friction_kinetic >= 0.0f ) || !( params->damping >= 0.0f && params->damping <= 1.0f ) ||
+		 isnan( params->ground ) || params->ground == INFINITY )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
@@ -720,6 +728,11 @@ sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, 
 
 sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float curl, const sere_pbd_params* pbd )
 {
+	/* refused before anything changes: every new rest length must stay positive */
+	if ( sim == NULL || pbd == NULL || !( crease < 1.0f && crease > -FLT_MAX ) || !( curl > -1.0f && curl < FLT_MAX ) )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	sere_model* model = sim->model;
 	sere_springs* s = &model->s;
 	sere_particles* p = &model->p;

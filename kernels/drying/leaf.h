@@ -85,12 +85,15 @@ void sere_leaf_destroy( sere_leaf_sim* sim );
  * workspace cannot make buffers for that many. */
 sere_status sere_leaf_set_threads( sere_leaf_sim* sim, int32_t threads );
 
-/* One frame of Algorithm 1. */
+/* One frame of Algorithm 1. SERE_ERR_ARGUMENT for a NULL argument, dt not positive, a negative
+ * compliance or friction, damping outside [0, 1], or a ground that is NaN or +∞; otherwise the
+ * first failing kernel's status. */
 sere_status sere_leaf_step( sere_leaf_sim* sim, const sere_leaf_params* params, sere_leaf_stats* stats );
 
 /* Initial shaping (Sec. 3.1, Fig. 3g): vein springs of the Voronoi layer shortened by crease
  * and the other Voronoi springs lengthened by curl (fractions of l⁰), projected to rest, and the
- * result taken as the new rest state (l⁰ and positions). */
+ * result taken as the new rest state (l⁰ and positions). SERE_ERR_ARGUMENT, with nothing
+ * changed, for a NULL argument, crease ≥ 1 or curl ≤ −1 (a rest length not positive) or NaN. */
 sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float curl, const sere_pbd_params* pbd );
 
 /* Σ l / Σ l⁰ over the model's T springs: how far the triangle layer has shrunk (1 at rest). A
