@@ -656,7 +656,8 @@ sere_status sere_bvh_refit( sere_bvh* bvh, const float* x, const float* y, const
 
 double sere_bvh_quality_ratio( const sere_bvh* bvh )
 {
-	return bvh->quality / bvh->quality_built;
+	/* a tree of one node (8 triangles or fewer) has no nodes below its root: 0 / 0 */
+	return bvh->quality_built > 0.0 ? bvh->quality / bvh->quality_built : 1.0;
 }
 
 bool sere_bvh_needs_rebuild( const sere_bvh* bvh, double threshold )

@@ -64,7 +64,8 @@ sere_status sere_bvh_refit( sere_bvh* bvh, const float* x, const float* y, const
  * Σ area(node box) / area(root box) over the internal nodes below the root, now over at build.
  * Normalizing by the root makes it blind to uniform scaling (a drying leaf shrinks without
  * degrading its tree) and nearly so to rigid rotation; it grows when node boxes swell relative
- * to the whole, as when the sheet bends, curls or crumples. 1 right after a build. */
+ * to the whole, as when the sheet bends, curls or crumples. 1 right after a build, and always for
+ * a tree of one node (8 triangles or fewer), which has nothing below its root to swell. */
 double sere_bvh_quality_ratio( const sere_bvh* bvh );
 
 /* True when the quality ratio exceeds threshold. */
@@ -109,7 +110,9 @@ void sere_bvh_query_group_above( const sere_bvh* bvh, const sere_bvh_group* grou
 								 sere_bvh_visit_group_fn* visit, void* context );
 
 /* Triangles whose box overlaps the cube of half-width r around (x, y, z), i.e. whose box padded
- * by r contains the point. Writes the first min(count, capacity) into out and returns count. */
+ * by r contains the point. Writes the first min(count, capacity) into out and returns count. As
+ * for sere_bvh_query_box, a cube that is not finite (a NaN or infinite point or r, or x ± r past
+ * FLT_MAX) finds nothing: to list every triangle, pass a finite r larger than the mesh. */
 int32_t sere_bvh_query( const sere_bvh* bvh, float x, float y, float z, float r, int32_t* out, int32_t capacity );
 
 /* Inspection: node 0 is the root; children always have larger indices than their parent. */
