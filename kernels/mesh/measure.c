@@ -33,11 +33,30 @@ sere_status sere_measure_validate( const sere_shape_input* in )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	if ( in->veins != NULL &&
-		 ( in->main_order < 1 || in->veins->vein_count < 0 ||
-		   ( in->veins->vein_count > 0 && ( in->veins->veins == NULL || in->veins->vein_xy == NULL ) ) ) )
+	if ( in->veins != NULL )
 	{
-		return SERE_ERR_ARGUMENT;
+		/* every vein's points inside vein_xy, which must be finite (the measures walk them) */
+		const sere_leaf_shape* s = in->veins;
+		if ( in->main_order < 1 || s->vein_count < 0 || s->vein_point_count < 0 ||
+			 ( s->vein_count > 0 && s->veins == NULL ) || ( s->vein_point_count > 0 && s->vein_xy == NULL ) )
+		{
+			return SERE_ERR_ARGUMENT;
+		}
+		for ( int32_t k = 0; k < s->vein_count; ++k )
+		{
+			const sere_vein* vein = s->veins + k;
+			if ( vein->first < 0 || vein->count < 0 || (int64_t) vein->first + vein->count > s->vein_point_count )
+			{
+				return SERE_ERR_ARGUMENT;
+			}
+		}
+		for ( int64_t i = 0; i < 2 * (int64_t) s->vein_point_count; ++i )
+		{
+			if ( !isfinite( s->vein_xy[i] ) )
+			{
+				return SERE_ERR_NONFINITE;
+			}
+		}
 	}
 	if ( in->vertex_count <= 0 || in->triangle_count <= 0 || in->edge_count <= 0 || in->midvein_count < 0 ||
 		 ( in->midvein_count > 0 && in->midvein == NULL ) )

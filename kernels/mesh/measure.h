@@ -170,10 +170,10 @@ typedef struct sere_shape
 
 /* Every measure above, computed sequentially except the diameter (an exact max over all
  * vertex pairs in parallel), so the result is the same for any thread count. Allocates
- * scratch. SERE_ERR_ARGUMENT for null arrays, bad sizes or indices, a triangle edge missing from
- * the edge list, a ground that is NaN or +inf; SERE_ERR_NONFINITE for non-finite positions or
- * plane coordinates; SERE_ERR_GEOMETRY when an edge has more than two triangles or two
- * triangles run along it in the same direction (not an oriented manifold). */
+ * scratch. SERE_ERR_ARGUMENT for null arrays, bad sizes or indices (a vein's points outside
+ * vein_xy among them), a triangle edge missing from the edge list, a ground that is NaN or +inf;
+ * SERE_ERR_NONFINITE for non-finite positions, plane coordinates or vein points; SERE_ERR_GEOMETRY when an edge has
+ * more than two triangles or two triangles run along it in the same direction (not an oriented manifold). */
 sere_status sere_shape_measure( const sere_shape_input* in, sere_shape* out );
 
 /* The signed dihedral (as in sere_shape) of every edge of in->edge_a, edge_b into dihedral

@@ -411,7 +411,7 @@ static sere_status best_candidates( const sere_sample_params* params, int32_t fi
 {
 	const int32_t candidates = params->candidates > 0 ? params->candidates : 24;
 	uint64_t state = params->seed ^ 0x5eedull;
-	int32_t attempts_left = fill * candidates * 64 + 1024;
+	int64_t attempts_left = (int64_t) fill * candidates * 64 + 1024; /* past int32_t at large candidates */
 	for ( int32_t placed = 0; placed < fill; ++placed )
 	{
 		double best_score = -1.0, best_x = 0.0, best_y = 0.0;
@@ -524,11 +524,20 @@ static double* outline_polygon( const point_list* points, int32_t b, double box[
 	return polygon;
 }
 
+/* The arguments sere_sample_leaf refuses; out, when there is one, is cleared first. */
+static bool sample_arguments_valid( const sere_leaf_shape* shape, const sere_sample_params* params, sere_samples* out )
+{
+	if ( out != NULL )
+	{
+		memset( out, 0, sizeof( *out ) );
+	}
+	return out != NULL && shape != NULL && params != NULL && shape->outline_count >= 3 && params->boundary_count >= 3 &&
+		   params->point_count >= params->boundary_count;
+}
+
 sere_status sere_sample_leaf( const sere_leaf_shape* shape, const sere_sample_params* params, sere_samples* out )
 {
-	memset( out, 0, sizeof( *out ) );
-	if ( shape == NULL || params == NULL || shape->outline_count < 3 || params->boundary_count < 3 ||
-		 params->point_count < params->boundary_count )
+	if ( !sample_arguments_valid( shape, params, out ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}

@@ -377,13 +377,18 @@ static sere_status check_vein_roots( const sere_leaf_shape* shape, const double 
 
 sere_status sere_shape_validate( const sere_leaf_shape* shape, sere_shape_check* check )
 {
+	if ( check == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	check->problem = SERE_SHAPE_OK;
 	check->vein = -1;
 	check->point = -1;
 	check->other = -1;
 	if ( shape == NULL || shape->outline_count < 0 || shape->vein_count < 0 || shape->vein_point_count < 0 ||
 		 ( shape->outline_count > 0 && shape->outline_xy == NULL ) ||
-		 ( shape->vein_count > 0 && ( shape->veins == NULL || shape->vein_xy == NULL ) ) )
+		 ( shape->vein_count > 0 && shape->veins == NULL ) ||
+		 ( shape->vein_point_count > 0 && shape->vein_xy == NULL ) )
 	{
 		return SERE_ERR_ARGUMENT;
 	}
