@@ -19,7 +19,8 @@ extern "C"
 typedef enum sere_skeleton_problem
 {
 	SERE_SKELETON_OK = 0,
-	SERE_SKELETON_FEW_POINTS,		 /* a curve with fewer than 2 points, a leaf with fewer than 3 */
+	SERE_SKELETON_FEW_POINTS,		 /* a curve with fewer than 2 points (or more than a million), a leaf with
+									  * fewer than 3 */
 	SERE_SKELETON_NONFINITE,		 /* NaN or infinity in a coordinate or parameter */
 	SERE_SKELETON_REPEATED_POINT,	 /* two consecutive feature points coincide */
 	SERE_SKELETON_ENDS_APART,		 /* the boundary curves and the midvein do not meet at base and tip */
@@ -28,7 +29,9 @@ typedef enum sere_skeleton_problem
 	SERE_SKELETON_NO_VEINS,			 /* a venation skeleton needs at least the midvein */
 	SERE_SKELETON_BAD_PARENT,		 /* vein 0 has parent -1; every other vein names an earlier vein */
 	SERE_SKELETON_BAD_SEGMENTS,		 /* a vein cut into fewer than 1 or more than SERE_MAX_SEGMENTS segments */
-	SERE_SKELETON_DETACHED,			 /* a vein starts farther than its length from its parent vein */
+	SERE_SKELETON_DETACHED,			 /* a vein starts farther than its length from the nearest joint of its parent
+									  * vein, the joint it would hang from (a long parent segment can leave
+									  * a short vein that starts on it detached: cut the parent finer) */
 	SERE_SKELETON_BAD_BEND,			 /* a bend angle outside [0, π] */
 	SERE_SKELETON_BAD_SPACING,		 /* sampling interval not positive or too fine for the leaf */
 	SERE_SKELETON_PROBLEM_COUNT

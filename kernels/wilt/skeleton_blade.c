@@ -279,6 +279,30 @@ static int midvein_is_inside( const sere_skel_leaf_curves* c )
 	return 1;
 }
 
+/* The hexagonal lattice sere_leaf_skeleton_mesh fills the outline with: its box, row height and
+ * counts. */
+typedef struct lattice
+{
+	double lo[2], hi[2];
+	double row, columns, rows;
+} lattice;
+
+static lattice lattice_of( const sere_skel_leaf_curves* c, double spacing )
+{
+	lattice l = { { INFINITY, INFINITY }, { -INFINITY, -INFINITY }, spacing * sqrt( 3.0 ) / 2.0, 0.0, 0.0 };
+	for ( int32_t i = 0; i < c->outline_count; ++i )
+	{
+		for ( int a = 0; a < 2; ++a )
+		{
+			l.lo[a] = fmin( l.lo[a], c->outline[2 * i + a] );
+			l.hi[a] = fmax( l.hi[a], c->outline[2 * i + a] );
+		}
+	}
+	l.columns = floor( ( l.hi[0] - l.lo[0] ) / spacing ) + 2.0;
+	l.rows = floor( ( l.hi[1] - l.lo[1] ) / l.row ) + 2.0;
+	return l;
+}
+
 sere_status sere_skel_leaf_curves_build( const sere_leaf_skeleton* leaf, double spacing, sere_skel_leaf_curves* c,
 										 sere_skeleton_check* check )
 {
@@ -318,6 +342,14 @@ sere_status sere_skel_leaf_curves_build( const sere_leaf_skeleton* leaf, double 
 		sere_skel_leaf_curves_destroy( c );
 		return sere_skel_report( check, SERE_SKELETON_MIDVEIN_OUTSIDE, 2, -1 );
 	}
+	/* The mesh's points, lattice and curves, within the bound that keeps its allocation honest:
+	 * checked here so that validation refuses every spacing the mesh would. */
+	lattice l = lattice_of( c, spacing );
+	if ( l.columns * l.rows + c->outline_count + c->mid_count > MAX_CURVE_POINTS )
+	{
+		sere_skel_leaf_curves_destroy( c );
+		return sere_skel_report( check, SERE_SKELETON_BAD_SPACING, -1, -1 );
+	}
 	return sere_skel_report( check, SERE_SKELETON_OK, -1, -1 );
 }
 
@@ -335,6 +367,11 @@ sere_status sere_leaf_skeleton_validate( const sere_leaf_skeleton* leaf, double 
 sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spacing, sere_tri_mesh* mesh,
 									 sere_skeleton_check* check )
 {
+	if ( mesh == NULL )
+	{
+		sere_skel_report( check, SERE_SKELETON_OK, -1, -1 );
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( mesh, 0, sizeof( *mesh ) );
 	sere_skel_leaf_curves c;
 	sere_status status = sere_skel_leaf_curves_build( leaf, spacing, &c, check );
@@ -344,24 +381,9 @@ sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spac
 	}
 	int32_t b = c.outline_count;
 	int32_t inner_mid = c.mid_count - 2;
-	double lo[2] = { INFINITY, INFINITY }, hi[2] = { -INFINITY, -INFINITY };
-	for ( int32_t i = 0; i < b; ++i )
-	{
-		for ( int a = 0; a < 2; ++a )
-		{
-			lo[a] = fmin( lo[a], c.outline[2 * i + a] );
-			hi[a] = fmax( hi[a], c.outline[2 * i + a] );
-		}
-	}
-	/* Hexagonal lattice rows; the count bound below keeps the allocation honest. */
-	double row = spacing * sqrt( 3.0 ) / 2.0;
-	double columns = floor( ( hi[0] - lo[0] ) / spacing ) + 2.0;
-	double rows = floor( ( hi[1] - lo[1] ) / row ) + 2.0;
-	if ( columns * rows + b + c.mid_count > MAX_CURVE_POINTS )
-	{
-		sere_skel_leaf_curves_destroy( &c );
-		return sere_skel_report( check, SERE_SKELETON_BAD_SPACING, -1, -1 );
-	}
+	/* the lattice's count is within MAX_CURVE_POINTS (sere_skel_leaf_curves_build) */
+	const lattice l = lattice_of( &c, spacing );
+	const double *lo = l.lo, *hi = l.hi, row = l.row, columns = l.columns, rows = l.rows;
 	int32_t capacity = (int32_t) ( columns * rows ) + b + c.mid_count;
 	double* x = malloc( (size_t) capacity * sizeof( double ) );
 	double* y = malloc( (size_t) capacity * sizeof( double ) );

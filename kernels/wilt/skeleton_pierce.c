@@ -394,6 +394,10 @@ void sere_pierce_destroy( sere_pierce* pierce )
 sere_status sere_pierce_create( const int32_t* tri, int32_t triangle_count, int32_t vertex_count, const float* x,
 								const float* y, const float* z, const int32_t* rigid_group, sere_pierce** out )
 {
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	*out = NULL;
 	if ( tri == NULL || triangle_count < 1 || vertex_count < 3 || triangle_count > INT32_MAX / 3 - SERE_PAD )
 	{

@@ -305,6 +305,10 @@ static sere_status place_leaves( sere_plant* p, const sere_leaf_template* templa
 sere_status sere_plant_create( const sere_leaf_template* templates, int32_t template_count,
 							   const sere_leaf_placement* leaves, int32_t leaf_count, sere_plant** out )
 {
+	if ( out == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	*out = NULL;
 	if ( templates == NULL || leaves == NULL || template_count < 1 || leaf_count < 1 )
 	{

@@ -256,6 +256,11 @@ static sere_status place_vein_joints( const sere_vein_spec* veins, int32_t vein_
 sere_status sere_skeleton_create( const sere_vein_spec* veins, int32_t vein_count, sere_skeleton* skeleton,
 								  sere_skeleton_check* check )
 {
+	if ( skeleton == NULL )
+	{
+		sere_skel_report( check, SERE_SKELETON_OK, -1, -1 );
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( skeleton, 0, sizeof( *skeleton ) );
 	if ( veins == NULL || vein_count < 1 )
 	{
@@ -343,6 +348,12 @@ static double ray_polygon( const double* o, const double* d, const double* poly,
 sere_status sere_skeleton_generate( const sere_leaf_skeleton* leaf, const sere_venation_params* params,
 									sere_skeleton* skeleton, sere_skeleton_check* check )
 {
+	/* a refused call leaves no problem of an earlier call in check */
+	sere_skel_report( check, SERE_SKELETON_OK, -1, -1 );
+	if ( skeleton == NULL )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
 	memset( skeleton, 0, sizeof( *skeleton ) );
 	if ( params == NULL || leaf == NULL )
 	{
