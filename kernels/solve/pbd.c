@@ -927,11 +927,11 @@ sere_status sere_pbd_project_stalling( sere_pbd* pbd, float* px, float* py, floa
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	solve_setup setup = setup_of( params, SOLVER_GAUSS_SEIDEL );
 	if ( params->linear_stiffness )
 	{
 		return sere_pbd_project( pbd, px, py, pz, inv_m, params, report );
 	}
+	solve_setup setup = setup_of( params, SOLVER_GAUSS_SEIDEL );
 	setup.stall = params->stall;
 	return solve( pbd, px, py, pz, inv_m, &setup, report, stalled );
 }
