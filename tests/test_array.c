@@ -61,3 +61,13 @@ Test( alloc, sizes_past_the_round_up_are_refused )
 	cr_expect( !sere_alloc_floats( columns, 1, SIZE_MAX / 2 ) );
 	cr_expect_null( column );
 }
+
+Test( array, outline_edges_join_consecutive_outline_points )
+{
+	cr_expect( sere_outline_edge( 2, 3, 5 ) );
+	cr_expect( sere_outline_edge( 3, 2, 5 ), "either way round" );
+	cr_expect( sere_outline_edge( 4, 0, 5 ), "the closing edge" );
+	cr_expect( !sere_outline_edge( 1, 3, 5 ), "a chord" );
+	cr_expect( !sere_outline_edge( 4, 5, 5 ), "a point past the outline" );
+	cr_expect( !sere_outline_edge( -1, 0, 5 ) );
+}

@@ -59,6 +59,12 @@ void* sere_array_append( void* array, int32_t* count, int32_t* capacity, int32_t
 	return array;
 }
 
+bool sere_outline_edge( int32_t a, int32_t b, int32_t outline_count )
+{
+	const int32_t lo = a < b ? a : b, hi = a < b ? b : a;
+	return lo >= 0 && hi < outline_count && ( hi == lo + 1 || ( lo == 0 && hi == outline_count - 1 ) );
+}
+
 bool sere_array_indices_valid( const int32_t* index, int64_t count, int32_t bound )
 {
 	for ( int64_t k = 0; k < count; ++k )

@@ -33,6 +33,11 @@ void* sere_array_append( void* array, int32_t* count, int32_t* capacity, int32_t
  * its vertices. */
 bool sere_array_indices_valid( const int32_t* index, int64_t count, int32_t bound );
 
+/* Whether points a and b are consecutive on an outline numbered 0 .. outline_count − 1 in order
+ * (either way round, the closing edge outline_count − 1 to 0 included): the one boundary edge a
+ * triangulation whose outline comes first may have. */
+bool sere_outline_edge( int32_t a, int32_t b, int32_t outline_count );
+
 /* Whether the first count entries of each of the array_count float arrays are finite, on
  * `threads` threads (base.h). */
 bool sere_array_finite( const float* const* arrays, int32_t array_count, int32_t count, int32_t threads );

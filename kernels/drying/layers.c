@@ -270,9 +270,8 @@ static sere_status pair_half_edges( const sere_plane_mesh* mesh, const int32_t* 
 			/* a boundary edge must join consecutive outline points (the first boundary_count, in
 			 * order), or the outline flags would mark other points */
 			const int32_t* v = tri_new + 3 * half[e].index;
-			int32_t a = old_of_new[v[half[e].value]], b = old_of_new[v[( half[e].value + 1 ) % 3]];
-			int32_t lo = a < b ? a : b, hi = a < b ? b : a, last = mesh->boundary_count - 1;
-			off_outline += !( hi <= last && ( hi == lo + 1 || ( lo == 0 && hi == last ) ) );
+			off_outline += !sere_outline_edge( old_of_new[v[half[e].value]], old_of_new[v[( half[e].value + 1 ) % 3]],
+											   mesh->boundary_count );
 		}
 		e += run;
 	}

@@ -1,5 +1,7 @@
 #include "mesh/meshopt.h"
 
+#include "core/array.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -385,8 +387,7 @@ static sere_status connect( sere_meshopt* m )
 		{
 			/* A border edge must be an outline edge (i, i + 1 mod B). */
 			int32_t lo = (int32_t) ( key / nv ), hi = (int32_t) ( key % nv );
-			int outline = hi < m->boundary_count && ( hi == lo + 1 || ( lo == 0 && hi == m->boundary_count - 1 ) );
-			if ( !outline )
+			if ( !sere_outline_edge( lo, hi, m->boundary_count ) )
 			{
 				return SERE_ERR_GEOMETRY;
 			}

@@ -837,6 +837,6 @@ sere_status sere_cg_touch_sgs( sere_cg_workspace* ws, const sere_sgs* g, int32_t
 		delta_sink = delta;
 	}
 	/* the shares' sum stored, so that the loop reading them stays */
-	ws->partial[0] = delta_sink;
+	partial[0] = delta_sink;
 	return SERE_OK;
 }

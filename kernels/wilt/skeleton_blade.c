@@ -383,7 +383,9 @@ sere_status sere_leaf_skeleton_mesh( const sere_leaf_skeleton* leaf, double spac
 	int32_t inner_mid = c.mid_count - 2;
 	/* the lattice's count is within MAX_CURVE_POINTS (sere_skel_leaf_curves_build) */
 	const lattice l = lattice_of( &c, spacing );
-	const double *lo = l.lo, *hi = l.hi, row = l.row, columns = l.columns, rows = l.rows;
+	const double* lo = l.lo;
+	const double* hi = l.hi;
+	const double row = l.row, columns = l.columns, rows = l.rows;
 	int32_t capacity = (int32_t) ( columns * rows ) + b + c.mid_count;
 	double* x = malloc( (size_t) capacity * sizeof( double ) );
 	double* y = malloc( (size_t) capacity * sizeof( double ) );
