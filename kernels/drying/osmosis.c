@@ -31,13 +31,15 @@ struct sere_osmosis
 							   * preconditioner's step starts the count again, so the multigrid
 							   * never resumes with levels older than its own last steps */
 	int filled;				  /* the layouts the assembly writes: FILL_SELL, FILL_SGS (the last step's) */
-	int32_t* neighbor_spring; /* per off-diagonal CSR entry: the spring it comes from */
+	int32_t* neighbor_spring; /* per CSR entry: the spring it comes from; the diagonal's is
+							   * spring_count, whose length and conductance stay 0 */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
 	const int32_t *sa, *sb;	  /* caller's spring arrays (global indices) */
 	int32_t spring_count;
 	double *rhs, *c, *edge_sum, *length;
 	double* off_sum;	 /* per row, Σ_j a_ij over its off-diagonal entries (assemble's two passes) */
-	double* conductance; /* per spring, K_ij of Jeong Eq. 6–8 at this step (both rows read it) */
+	double* conductance; /* per spring, K_ij of Jeong Eq. 6–8 at this step (both rows read it),
+						  * in the conservative mode with its symmetric scale 4/(E_i + E_j) */
 	double* last;		 /* the concentration the previous step started from */
 	double* last2;		 /* and the one before */
 	int history;		 /* how many of last, last2 hold a step (0, 1 or 2) */
@@ -128,8 +130,8 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	o->last2 = sere_alloc( sizeof( double ) * (size_t) count );
 	o->edge_sum = sere_alloc( sizeof( double ) * (size_t) count );
 	o->off_sum = sere_alloc( sizeof( double ) * (size_t) count );
-	o->length = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
-	o->conductance = sere_alloc( sizeof( double ) * (size_t) ( spring_count > 0 ? spring_count : 1 ) );
+	o->length = sere_alloc( sizeof( double ) * ( (size_t) spring_count + 1 ) );
+	o->conductance = sere_alloc( sizeof( double ) * ( (size_t) spring_count + 1 ) );
 	int32_t* fill = malloc( sizeof( int32_t ) * (size_t) count );
 	if ( !o->a.row_ptr || !o->a.col || !o->a.val || !o->neighbor_spring || !o->diagonal || !o->rhs || !o->c ||
 		 !o->last || !o->last2 || !o->edge_sum || !o->off_sum || !o->length || !o->conductance || !fill ||
@@ -139,6 +141,8 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 		sere_osmosis_destroy( o );
 		return SERE_ERR_MEMORY;
 	}
+	o->length[spring_count] = 0.0;
+	o->conductance[spring_count] = 0.0;
 	/* Row i: its springs' other ends in ascending column order with the diagonal in place. */
 	for ( int32_t s = 0; s < spring_count; ++s )
 	{
@@ -150,7 +154,7 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 		o->a.row_ptr[i + 1] += o->a.row_ptr[i] + 1;
 		fill[i] = o->a.row_ptr[i];
 		o->a.col[fill[i]] = i;
-		o->neighbor_spring[fill[i]++] = -1;
+		o->neighbor_spring[fill[i]++] = spring_count;
 	}
 	for ( int32_t s = 0; s < spring_count; ++s )
 	{
@@ -229,8 +233,9 @@ sere_status sere_osmosis_set_threads( sere_osmosis* osmosis, int32_t threads )
  * K_ij = λ_ij M_i M_j / (|l_ij| (M_i + M_j)) (Jeong Eq. 6–8 in c, λ_ij by τ̄ as Sec. 4 says), once
  * for both rows it enters (they then hold the same value, bit for bit); then, in the conservative
  * mode, whose rows read their neighbours' E_j, every E_i = Σ_j |l_ij| (Jeong Eq. 3; the paper's
- * mode sums a row's own in the assembly, in the same order). SERE_ERR_GEOMETRY for a spring of
- * zero or non-finite length. */
+ * mode sums a row's own in the assembly, in the same order) and K_ij scaled by 4/(E_i + E_j),
+ * once a spring and in lanes rather than twice in the assembly's rows (E_i + E_j = E_j + E_i, so
+ * the same bits). SERE_ERR_GEOMETRY for a spring of zero or non-finite length. */
 static sere_status spring_terms( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
 								 const double* M, const sere_osmosis_params* params )
 {
@@ -260,15 +265,26 @@ static sere_status spring_terms( sere_osmosis* o, const float* x, const float* y
 	{
 		return SERE_OK; /* the paper's rows need only their own E_i: the assembly sums it */
 	}
-#pragma omp parallel for num_threads( sere_team_for( o->threads ) ) schedule( static )
-	for ( int32_t i = 0; i < n; ++i )
+	const int32_t first = o->first;
+	double* restrict edge_sum = o->edge_sum;
+#pragma omp parallel num_threads( sere_team_for( o->threads ) )
 	{
-		double e = 0.0;
-		for ( int32_t k = o->a.row_ptr[i]; k < o->a.row_ptr[i + 1]; ++k )
+		/* The diagonal's entry adds its spring's length 0: the same bits as leaving it out. */
+#pragma omp for schedule( static )
+		for ( int32_t i = 0; i < n; ++i )
 		{
-			e += o->neighbor_spring[k] >= 0 ? o->length[o->neighbor_spring[k]] : 0.0;
+			double e = 0.0;
+			for ( int32_t k = o->a.row_ptr[i]; k < o->a.row_ptr[i + 1]; ++k )
+			{
+				e += length_out[o->neighbor_spring[k]];
+			}
+			edge_sum[i] = e;
 		}
-		o->edge_sum[i] = e;
+#pragma omp for simd schedule( static )
+		for ( int32_t s = 0; s < springs; ++s )
+		{
+			conductance[s] *= 4.0 / ( edge_sum[sa[s] - first] + edge_sum[sb[s] - first] ); /* symmetric */
+		}
 	}
 	return SERE_OK;
 }
@@ -287,12 +303,12 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 	const bool conservative = params->mode == SERE_OSMOSIS_CONSERVATIVE;
 	/* The arrays as locals: the stores into the values cannot then alias the index arrays, which
 	 * the loop would otherwise load again after every store. */
-	const int32_t* restrict row_ptr = o->a.row_ptr, * restrict col = o->a.col;
+	const int32_t* restrict row_ptr = o->a.row_ptr;
 	const int32_t* restrict spring = o->neighbor_spring, * restrict diagonal = o->diagonal;
 	const double* restrict conductance = o->conductance, * restrict length = o->length;
 	double* restrict val = o->a.val, * restrict rhs = o->rhs, * restrict c = o->c;
 	double* restrict last = o->last, * restrict last2 = o->last2;
-	double* edge_sum = o->edge_sum; /* read at the neighbours' rows in the conservative mode */
+	double* restrict edge_sum = o->edge_sum;
 	double* sell_val = o->filled & FILL_SELL ? o->sell->val : NULL;
 	double* sgs_val = o->filled & FILL_SGS ? o->sgs->val : NULL;
 	const int32_t* sell_slot = sell_val != NULL ? o->sell->slot : NULL;
@@ -308,24 +324,19 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 		{
 			double ei = conservative ? edge_sum[i] : 0.0; /* else summed below, as spring_terms would */
 			double off_sum = 0.0;
-			/* Without a branch: the diagonal's entry (spring −1) takes K = 0, so it adds −0 to the
-			 * row's sum and +0 to E_i (the same bits as leaving it out) and its stores are
-			 * overwritten below. A row's entries are a handful, its diagonal among them anywhere. */
+			/* Without a branch: the diagonal's entry reads the spring past the last, whose K and
+			 * length are 0, so it adds −0 to the row's sum and +0 to E_i (the same bits as leaving
+			 * it out) and its stores are overwritten below. A row's entries are a handful, its
+			 * diagonal among them anywhere: a test for it was a branch the predictor missed about
+			 * once a row. */
 			for ( int32_t k = row_ptr[i]; k < row_ptr[i + 1]; ++k )
 			{
 				const int32_t s = spring[k];
-				const bool off = s >= 0;
-				const int32_t si = off ? s : 0;
-				double kij = conductance[si];
-				if ( conservative )
+				if ( !conservative )
 				{
-					kij *= 4.0 / ( ei + edge_sum[col[k]] ); /* symmetric in i and j */
+					ei += length[s];
 				}
-				else
-				{
-					ei += off ? length[si] : 0.0;
-				}
-				const double value = -dt * ( off ? kij : 0.0 );
+				const double value = -dt * conductance[s];
 				val[k] = value;
 				if ( sell_val != NULL )
 				{
