@@ -555,18 +555,23 @@ void sere_amg_cycle( const sere_amg* m, int32_t l, const double* b, double* x, a
 	}
 	if ( coarse )
 	{
-		sere_team_share( 0, g->chunks, t.tid, t.team, &first, &last );
-		for ( int32_t ch = first; ch < last; ++ch )
+		/* By the sweeps' shares of the colors, as the passes below: each thread meets the x its
+		 * own sweep wrote (blocks_of_thread). */
+		for ( int32_t c = 0; c < g->colors; ++c )
 		{
-			if ( touch )
+			sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], t.tid, t.team, &first, &last );
+			for ( int32_t ch = first; ch < last; ++ch )
 			{
-				lanes_t up;
-				chunk_touch( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], x, &up );
-				store_lanes( L->r + ch * LANES, &up );
-			}
-			else
-			{
-				upper_residual_chunk( g, ch, x, L->r );
+				if ( touch )
+				{
+					lanes_t up;
+					chunk_touch( g->col, g->val, g->upper_ptr[ch], g->upper_ptr[ch + 1], x, &up );
+					store_lanes( L->r + ch * LANES, &up );
+				}
+				else
+				{
+					upper_residual_chunk( g, ch, x, L->r );
+				}
 			}
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
@@ -588,12 +593,15 @@ void sere_amg_cycle( const sere_amg* m, int32_t l, const double* b, double* x, a
 		}
 		/* Prolongation, scaled: x += ω P x_c (the floor multiplies by one). */
 		const double omega = touch ? 1.0 : SERE_AMG_OVERCORRECT;
-		sere_team_share( 0, L->np, t.tid, t.team, &first, &last );
-		for ( int32_t at = first; at < last; ++at )
+		for ( int32_t c = 0; c < g->colors; ++c )
 		{
-			if ( L->coarse_at[at] >= 0 )
+			sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], t.tid, t.team, &first, &last );
+			for ( int32_t at = first * LANES; at < last * LANES; ++at )
 			{
-				x[at] += omega * xc[L->coarse_at[at]];
+				if ( L->coarse_at[at] >= 0 )
+				{
+					x[at] += omega * xc[L->coarse_at[at]];
+				}
 			}
 		}
 		sere_spin_barrier_wait( t.barrier, t.team );
@@ -671,37 +679,45 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		const amg_team t = { omp_get_thread_num(), omp_get_num_threads(), ws->barrier };
-		int32_t blk_first, blk_last;
-		sere_team_share( 0, blocks, t.tid, t.team, &blk_first, &blk_last );
+		const owned_blocks own = blocks_of_thread( g, t.tid, t.team );
 		cg_state my = *st;
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
 		while ( my.it < round_end )
 		{
 			sere_amg_cycle( m, 0, r, z, t, false );
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				partial[4 * blk + 2] = dot_lanes( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				{
+					partial[4 * blk + 2] = dot_lanes( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+				}
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			const double gamma = sere_block_sum( partial, blocks, 2 );
 			const double beta = my.it == 0 ? 0.0 : gamma / my.gamma_prev;
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
 				{
-					p[i] = my.it == 0 ? z[i] : z[i] + beta * p[i];
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						p[i] = my.it == 0 ? z[i] : z[i] + beta * p[i];
+					}
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				int32_t chunk_end =
-					( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-				for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
 				{
-					sgs_chunk_product( g, ch, p, NULL, q );
+					int32_t chunk_end =
+						( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+					for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+					{
+						sgs_chunk_product( g, ch, p, NULL, q );
+					}
+					partial[4 * blk + 1] = dot_lanes( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 				}
-				partial[4 * blk + 1] = dot_lanes( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			double alpha;
@@ -711,14 +727,17 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 				my.done = 1;
 				break;
 			}
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
 				{
-					x[i] += alpha * p[i];
-					r[i] -= alpha * q[i];
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						x[i] += alpha * p[i];
+						r[i] -= alpha * q[i];
+					}
+					partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 				}
-				partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			my.gamma_prev = gamma;

@@ -29,7 +29,6 @@ sere_status sere_cg_touch_amg( sere_cg_workspace* ws, sere_amg* m, int32_t itera
 	}
 	const sere_sgs* g = m->level[0].g;
 	const int32_t np = m->level[0].np;
-	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	double *x = ws->x, *r = ws->r, *z = ws->z, *p = ws->p, *q = ws->w, *partial = ws->partial;
 	/* from zero every call: the adds then stay far from overflow over a solve's iterations */
 	double* vectors[5] = { x, r, z, p, q };
@@ -40,43 +39,54 @@ sere_status sere_cg_touch_amg( sere_cg_workspace* ws, sere_amg* m, int32_t itera
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		const amg_team t = { omp_get_thread_num(), omp_get_num_threads(), ws->barrier };
-		int32_t blk_first, blk_last;
-		sere_team_share( 0, blocks, t.tid, t.team, &blk_first, &blk_last );
+		const owned_blocks own = blocks_of_thread( g, t.tid, t.team );
 		for ( int32_t it = 0; it < iterations; ++it )
 		{
 			sere_amg_cycle( m, 0, r, z, t, true );
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				partial[4 * blk + 2] = dot_touch( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
-			}
-			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
-			{
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
 				{
-					p[i] = z[i] + p[i];
+					partial[4 * blk + 2] = dot_touch( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				int32_t chunk_end =
-					( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-				for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
 				{
-					sweep_touch( g, true, ch, g->val + g->upper_ptr[g->chunks], p, q );
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						p[i] = z[i] + p[i];
+					}
 				}
-				partial[4 * blk + 1] = dot_touch( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
 				{
-					x[i] += p[i];
-					r[i] += q[i];
+					int32_t chunk_end =
+						( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+					for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
+					{
+						sweep_touch( g, true, ch, g->val + g->upper_ptr[g->chunks], p, q );
+					}
+					partial[4 * blk + 1] = dot_touch( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 				}
-				partial[4 * blk] = dot_touch( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+			}
+			sere_spin_barrier_wait( ws->barrier, t.team );
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			{
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				{
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						x[i] += p[i];
+						r[i] += q[i];
+					}
+					partial[4 * blk] = dot_touch( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+				}
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 		}

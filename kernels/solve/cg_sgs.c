@@ -565,8 +565,7 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 	{
 		/* every thread steps its own copy; they stay equal */
 		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
-		int32_t blk_first, blk_last;
-		sere_team_share( 0, blocks, tid, team, &blk_first, &blk_last );
+		const owned_blocks own = blocks_of_thread( g, tid, team );
 		cg_state my = *st;
 		my.status = SERE_OK, my.done = 0, my.met = 0;
 		const int32_t round_end = max_iterations - my.it > chunk ? my.it + chunk : max_iterations;
@@ -586,27 +585,30 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				my.done = 1;
 				break;
 			}
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				double rr_block = 0.0, gamma_block = 0.0;
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				{
+					double rr_block = 0.0, gamma_block = 0.0;
 #pragma omp simd reduction( + : rr_block, gamma_block )
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-				{
-					p[i] = u[i] + beta * p[i];
-					s[i] = w[i] + beta * s[i];
-					x[i] += alpha * p[i];
-					r[i] -= alpha * s[i];
-					u[i] = diagonal[i] * r[i];
-					rr_block += r[i] * r[i];
-					gamma_block += r[i] * u[i];
-				}
-				partial[4 * blk] = rr_block;
-				partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
-				for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
-					  i < block_end( blk, np ); ++i )
-				{
-					t[i] = u[i] * inv_diag[i];
-					z[i] = 0.0;
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						p[i] = u[i] + beta * p[i];
+						s[i] = w[i] + beta * s[i];
+						x[i] += alpha * p[i];
+						r[i] -= alpha * s[i];
+						u[i] = diagonal[i] * r[i];
+						rr_block += r[i] * r[i];
+						gamma_block += r[i] * u[i];
+					}
+					partial[4 * blk] = rr_block;
+					partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
+					for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
+						  i < block_end( blk, np ); ++i )
+					{
+						t[i] = u[i] * inv_diag[i];
+						z[i] = 0.0;
+					}
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, team );
@@ -756,7 +758,6 @@ sere_status sere_cg_touch_sgs( sere_cg_workspace* ws, const sere_sgs* g, int32_t
 		return SERE_ERR_ARGUMENT;
 	}
 	const int32_t np = g->chunks * LANES;
-	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
 	const double* diagonal = g->val + g->upper_ptr[g->chunks];
 	double *x = ws->x, *r = ws->r, *u = ws->u, *w = ws->w, *p = ws->p, *s = ws->s;
 	double *t = ws->t, *z = ws->z, *inv_diag = ws->inv_diag, *partial = ws->partial, *chunk_delta = ws->chunk_delta;
@@ -773,32 +774,35 @@ sere_status sere_cg_touch_sgs( sere_cg_workspace* ws, const sere_sgs* g, int32_t
 #pragma omp parallel num_threads( sere_team_for( ws->threads ) )
 	{
 		const int tid = omp_get_thread_num(), team = omp_get_num_threads();
-		int32_t blk_first, blk_last, first, last;
-		sere_team_share( 0, blocks, tid, team, &blk_first, &blk_last );
+		const owned_blocks own = blocks_of_thread( g, tid, team );
+		int32_t first, last;
 		double delta = 0.0;
 		for ( int32_t it = 0; it < iterations; ++it )
 		{
-			for ( int32_t blk = blk_first; blk < blk_last; ++blk )
+			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
 			{
-				double rr_block = 0.0, gamma_block = 0.0;
+				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				{
+					double rr_block = 0.0, gamma_block = 0.0;
 #pragma omp simd reduction( + : rr_block, gamma_block )
-				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-				{
-					p[i] = u[i] + p[i];
-					s[i] = w[i] + s[i];
-					x[i] += p[i];
-					r[i] += s[i];
-					u[i] = diagonal[i] + r[i];
-					rr_block += r[i];
-					gamma_block += u[i];
-				}
-				partial[4 * blk] = rr_block;
-				partial[4 * blk + 2 + ( ( it + 1 ) & 1 )] = gamma_block;
-				for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
-					  i < block_end( blk, np ); ++i )
-				{
-					t[i] = u[i] + inv_diag[i];
-					z[i] = 0.0;
+					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+					{
+						p[i] = u[i] + p[i];
+						s[i] = w[i] + s[i];
+						x[i] += p[i];
+						r[i] += s[i];
+						u[i] = diagonal[i] + r[i];
+						rr_block += r[i];
+						gamma_block += u[i];
+					}
+					partial[4 * blk] = rr_block;
+					partial[4 * blk + 2 + ( ( it + 1 ) & 1 )] = gamma_block;
+					for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
+						  i < block_end( blk, np ); ++i )
+					{
+						t[i] = u[i] + inv_diag[i];
+						z[i] = 0.0;
+					}
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, team );

@@ -130,6 +130,32 @@ static inline void positions_to_rows( const int32_t* row, int32_t np, const doub
 	}
 }
 
+/* The blocks a thread of a team takes in a pass over a layout's vectors: those whose first chunk
+ * lies in the thread's share of some color, the chunks its own sweeps take (lo[k] to hi[k] for
+ * color k). A pass over the vectors then meets, in its own cache, the values the same thread's
+ * sweeps wrote: with the blocks split in halves instead, about half of every vector a step
+ * writes crossed between the cores every step, and two threads were slower than one on the
+ * leaves' systems (docs/PERFORMANCE.md). Which thread sums a block never changes its bits. */
+typedef struct owned_blocks
+{
+	int32_t colors;
+	int32_t lo[SERE_SGS_MAX_COLORS], hi[SERE_SGS_MAX_COLORS];
+} owned_blocks;
+
+static inline owned_blocks blocks_of_thread( const sere_sgs* g, int tid, int team )
+{
+	owned_blocks own;
+	own.colors = g->colors;
+	for ( int32_t c = 0; c < g->colors; ++c )
+	{
+		int32_t first, last;
+		sere_team_share( g->color_chunk[c], g->color_chunk[c + 1], tid, team, &first, &last );
+		own.lo[c] = ( first + CHUNKS_PER_BLOCK - 1 ) / CHUNKS_PER_BLOCK;
+		own.hi[c] = ( last + CHUNKS_PER_BLOCK - 1 ) / CHUNKS_PER_BLOCK;
+	}
+	return own;
+}
+
 static inline int32_t block_end( int32_t blk, int32_t n )
 {
 	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
