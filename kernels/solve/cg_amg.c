@@ -685,39 +685,30 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 		while ( my.it < round_end )
 		{
 			sere_amg_cycle( m, 0, r, z, t, false );
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
-				{
-					partial[4 * blk + 2] = dot_lanes( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
-				}
+				partial[4 * blk + 2] = dot_lanes( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			const double gamma = sere_block_sum( partial, blocks, 2 );
 			const double beta = my.it == 0 ? 0.0 : gamma / my.gamma_prev;
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 				{
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						p[i] = my.it == 0 ? z[i] : z[i] + beta * p[i];
-					}
+					p[i] = my.it == 0 ? z[i] : z[i] + beta * p[i];
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				int32_t chunk_end =
+					( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+				for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
 				{
-					int32_t chunk_end =
-						( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-					for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
-					{
-						sgs_chunk_product( g, ch, p, NULL, q );
-					}
-					partial[4 * blk + 1] = dot_lanes( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+					sgs_chunk_product( g, ch, p, NULL, q );
 				}
+				partial[4 * blk + 1] = dot_lanes( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			double alpha;
@@ -727,17 +718,14 @@ static void amg_round( cg_state* st, sere_cg_workspace* ws, const sere_amg* m, d
 				my.done = 1;
 				break;
 			}
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 				{
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						x[i] += alpha * p[i];
-						r[i] -= alpha * q[i];
-					}
-					partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+					x[i] += alpha * p[i];
+					r[i] -= alpha * q[i];
 				}
+				partial[4 * blk] = dot_lanes( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 			my.gamma_prev = gamma;

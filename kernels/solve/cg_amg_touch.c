@@ -43,50 +43,38 @@ sere_status sere_cg_touch_amg( sere_cg_workspace* ws, sere_amg* m, int32_t itera
 		for ( int32_t it = 0; it < iterations; ++it )
 		{
 			sere_amg_cycle( m, 0, r, z, t, true );
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				partial[4 * blk + 2] = dot_touch( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+			}
+			sere_spin_barrier_wait( ws->barrier, t.team );
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
+			{
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 				{
-					partial[4 * blk + 2] = dot_touch( r, z, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+					p[i] = z[i] + p[i];
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				int32_t chunk_end =
+					( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
+				for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
 				{
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						p[i] = z[i] + p[i];
-					}
+					sweep_touch( g, true, ch, g->val + g->upper_ptr[g->chunks], p, q );
 				}
+				partial[4 * blk + 1] = dot_touch( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
 				{
-					int32_t chunk_end =
-						( blk + 1 ) * CHUNKS_PER_BLOCK < g->chunks ? ( blk + 1 ) * CHUNKS_PER_BLOCK : g->chunks;
-					for ( int32_t ch = blk * CHUNKS_PER_BLOCK; ch < chunk_end; ++ch )
-					{
-						sweep_touch( g, true, ch, g->val + g->upper_ptr[g->chunks], p, q );
-					}
-					partial[4 * blk + 1] = dot_touch( p, q, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+					x[i] += p[i];
+					r[i] += q[i];
 				}
-			}
-			sere_spin_barrier_wait( ws->barrier, t.team );
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
-			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
-				{
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						x[i] += p[i];
-						r[i] += q[i];
-					}
-					partial[4 * blk] = dot_touch( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
-				}
+				partial[4 * blk] = dot_touch( r, r, blk * SERE_CG_BLOCK, block_end( blk, np ) );
 			}
 			sere_spin_barrier_wait( ws->barrier, t.team );
 		}

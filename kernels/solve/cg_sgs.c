@@ -585,30 +585,27 @@ static void sgs_round( cg_state* st, sere_cg_workspace* ws, const sere_sgs* g, i
 				my.done = 1;
 				break;
 			}
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
-				{
-					double rr_block = 0.0, gamma_block = 0.0;
+				double rr_block = 0.0, gamma_block = 0.0;
 #pragma omp simd reduction( + : rr_block, gamma_block )
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						p[i] = u[i] + beta * p[i];
-						s[i] = w[i] + beta * s[i];
-						x[i] += alpha * p[i];
-						r[i] -= alpha * s[i];
-						u[i] = diagonal[i] * r[i];
-						rr_block += r[i] * r[i];
-						gamma_block += r[i] * u[i];
-					}
-					partial[4 * blk] = rr_block;
-					partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
-					for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
-						  i < block_end( blk, np ); ++i )
-					{
-						t[i] = u[i] * inv_diag[i];
-						z[i] = 0.0;
-					}
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				{
+					p[i] = u[i] + beta * p[i];
+					s[i] = w[i] + beta * s[i];
+					x[i] += alpha * p[i];
+					r[i] -= alpha * s[i];
+					u[i] = diagonal[i] * r[i];
+					rr_block += r[i] * r[i];
+					gamma_block += r[i] * u[i];
+				}
+				partial[4 * blk] = rr_block;
+				partial[4 * blk + 2 + ( ( my.it + 1 ) & 1 )] = gamma_block;
+				for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
+					  i < block_end( blk, np ); ++i )
+				{
+					t[i] = u[i] * inv_diag[i];
+					z[i] = 0.0;
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, team );
@@ -779,30 +776,27 @@ sere_status sere_cg_touch_sgs( sere_cg_workspace* ws, const sere_sgs* g, int32_t
 		double delta = 0.0;
 		for ( int32_t it = 0; it < iterations; ++it )
 		{
-			for ( int32_t own_color = 0; own_color < own.colors; ++own_color )
+			for ( int32_t blk = owned_block_next( &own, -1 ); blk >= 0; blk = owned_block_next( &own, blk ) )
 			{
-				for ( int32_t blk = own.lo[own_color]; blk < own.hi[own_color]; ++blk )
-				{
-					double rr_block = 0.0, gamma_block = 0.0;
+				double rr_block = 0.0, gamma_block = 0.0;
 #pragma omp simd reduction( + : rr_block, gamma_block )
-					for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
-					{
-						p[i] = u[i] + p[i];
-						s[i] = w[i] + s[i];
-						x[i] += p[i];
-						r[i] += s[i];
-						u[i] = diagonal[i] + r[i];
-						rr_block += r[i];
-						gamma_block += u[i];
-					}
-					partial[4 * blk] = rr_block;
-					partial[4 * blk + 2 + ( ( it + 1 ) & 1 )] = gamma_block;
-					for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
-						  i < block_end( blk, np ); ++i )
-					{
-						t[i] = u[i] + inv_diag[i];
-						z[i] = 0.0;
-					}
+				for ( int32_t i = blk * SERE_CG_BLOCK; i < block_end( blk, np ); ++i )
+				{
+					p[i] = u[i] + p[i];
+					s[i] = w[i] + s[i];
+					x[i] += p[i];
+					r[i] += s[i];
+					u[i] = diagonal[i] + r[i];
+					rr_block += r[i];
+					gamma_block += u[i];
+				}
+				partial[4 * blk] = rr_block;
+				partial[4 * blk + 2 + ( ( it + 1 ) & 1 )] = gamma_block;
+				for ( int32_t i = last_first > blk * SERE_CG_BLOCK ? last_first : blk * SERE_CG_BLOCK;
+					  i < block_end( blk, np ); ++i )
+				{
+					t[i] = u[i] + inv_diag[i];
+					z[i] = 0.0;
 				}
 			}
 			sere_spin_barrier_wait( ws->barrier, team );

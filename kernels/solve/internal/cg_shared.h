@@ -156,6 +156,20 @@ static inline owned_blocks blocks_of_thread( const sere_sgs* g, int tid, int tea
 	return own;
 }
 
+/* The first of own's blocks after blk (blk = −1: its first), or −1 past its last. The ranges
+ * ascend, so this is the walk in block order; a step looks at no more than the colors. */
+static inline int32_t owned_block_next( const owned_blocks* own, int32_t blk )
+{
+	for ( int32_t c = 0; c < own->colors; ++c )
+	{
+		if ( own->lo[c] < own->hi[c] && own->hi[c] > blk + 1 )
+		{
+			return own->lo[c] > blk + 1 ? own->lo[c] : blk + 1;
+		}
+	}
+	return -1;
+}
+
 static inline int32_t block_end( int32_t blk, int32_t n )
 {
 	return ( blk + 1 ) * SERE_CG_BLOCK < n ? ( blk + 1 ) * SERE_CG_BLOCK : n;
