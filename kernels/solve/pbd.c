@@ -838,6 +838,7 @@ static sere_status solve( sere_pbd* pbd, float* px, float* py, float* pz, const 
 			outcome = result;
 		}
 	}
+	pbd->multipliers_valid = setup->xpbd && setup->kind != SOLVER_TOUCH && outcome.flags == 0;
 	report->iterations = outcome.iterations;
 	report->max_strain = outcome.strain;
 	report->hit_cap = !outcome.converged && !outcome.stalled;

@@ -166,6 +166,37 @@ sere_status sere_pbd_project_jacobi( sere_pbd* pbd, float* px, float* py, float*
  * last projection, summed over its sweeps. */
 sere_status sere_pbd_ground_push( const sere_pbd* pbd, float* push );
 
+/* How far the last XPBD call's answer is from the step it solves. An XPBD step (Macklin et al.
+ * 2016) is the pair (x, λ) with h = M (x − x̃) − ∇C(x)ᵀλ = 0 (their Eq. 8) and
+ * g = C(x) + α̃λ = 0 (Eq. 9), x̃ the prediction the call started from. The sweeps drive g to the
+ * tolerance and assume h stays 0, which holds while the gradients keep their directions; each
+ * sweep moves the ends along the gradients of the moment, so once the multipliers are large and
+ * the constraints turn during the step, h is what is left. Norms are over the particles that
+ * count: inverse mass above 0 (a pinned particle takes any force) and not pushed by the ground
+ * in the last call (the ground's reaction is no multiplier). */
+typedef struct sere_pbd_residuals
+{
+	double primal;	   /* ‖h‖₂ */
+	double inertia;	   /* ‖M (x − x̃)‖₂ */
+	double constraint; /* ‖∇C(x)ᵀλ‖₂, the multipliers' forces */
+	int32_t particles; /* particles counted */
+} sere_pbd_residuals;
+
+/* The residuals above for the positions px, py, pz a projection returned and the prediction tx, ty,
+ * tz it was given, with the multipliers of that projection (indexed like the particles given to
+ * create). Each particle sums its constraints in a fixed order, and the norms add fixed blocks of
+ * particles in order, so the result has the same bits for any thread count. SERE_ERR_ARGUMENT for a
+ * NULL argument or when the last projection to run was not an XPBD one that returned SERE_OK (then no
+ * multipliers describe the positions; a call refused for its arguments runs nothing and changes
+ * nothing), SERE_ERR_MEMORY when the block sums cannot be allocated. */
+sere_status sere_pbd_step_residual( const sere_pbd* pbd, const float* px, const float* py, const float* pz,
+									const float* tx, const float* ty, const float* tz, const float* inv_m,
+									sere_pbd_residuals* out );
+
+/* The multipliers λ of the last XPBD projection, indexed like the constraints given to create
+ * (lambda holds constraint_count floats). SERE_ERR_ARGUMENT as sere_pbd_step_residual. */
+sere_status sere_pbd_multipliers( const sere_pbd* pbd, float* lambda );
+
 /* One sweep of sere_pbd_project's schedule, with the same loads and stores of both constraint
  * ends, but the arithmetic replaced by a copy: the memory floor of a sweep, for benchmarks.
  * Leaves the positions bitwise unchanged. */

@@ -64,6 +64,7 @@ struct sere_pbd
 	float* inv_degree;		   /* per slot: 1/n_i, 0 for a particle without constraints */
 	float one;				   /* 1.0f, opaque to the compiler so sere_pbd_touch keeps its stores */
 	int rest_valid;
+	int multipliers_valid;	  /* the last call was an XPBD projection that returned SERE_OK */
 	thread_slot* threads;	  /* MAX_THREADS */
 	padded_counter* counters; /* 2 × MAX_THREADS: next item of each thread's list, by pass parity */
 	padded_counter* done;	  /* per item: the sweep of the current call that last projected it */
