@@ -463,6 +463,7 @@ static int dry_leaf( const litter_options* o, long index, litter_result* r )
 	/* the litter lies on the ground whatever the preset says: under gravity, on z = 0 */
 	params.leaf.gravity[0] = 0.0f, params.leaf.gravity[1] = 0.0f, params.leaf.gravity[2] = -9.8f;
 	params.leaf.ground = 0.0f;
+	params.leaf.step_residual = 0; /* a litter writes no per-frame stats */
 	params.seed = d.sample_seed;
 	char relative[64];
 	snprintf( relative, sizeof( relative ), "leaves/%s.leaf", species_names[d.species] );

@@ -35,8 +35,9 @@ static void run_help( void )
 			"  frames/frame_NNNNN.ply  triangle layer with water, tau, relative water and vein (1 on a vein)\n"
 			"                          per vertex (Blender, MeshLab)\n"
 			"  frames/frame_NNNNN.vtp  the same as VTK PolyData; leaf.pvd is the ParaView time series\n"
-			"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual and\n"
-			"                          whether it converged, particles on the ground, edge-triangle crossings,\n"
+			"  stats.csv               one row per frame: water per layer, area, max |C/l|, the step's residual,\n"
+			"                          the share of its multipliers' forces it leaves unbalanced (step_primal)\n"
+			"                          and whether it converged, particles on the ground, edge-triangle crossings,\n"
 			"                          drift of the area centroid and of the centre of mass (fresh lengths),\n"
 			"                          ground gap, mean normal z and tilt, cross-section roll near the tip\n"
 			"                          and the base, iterations, contacts (vertex-triangle and edge-edge\n"
@@ -449,10 +450,11 @@ static int run_open_outputs( run_state* r )
 		fprintf( stderr, "sere run: cannot write %s: %s\n", r->csv_path, strerror( errno ) );
 		return 1;
 	}
-	fprintf( r->csv, "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,residual,converged,"
-					 "grounded,crossings,drift,mass_drift,ground_gap,normal_z,tilt,roll_tip,roll_base,cg_iterations_t,"
-					 "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,edge_contacts,unresolved,"
-					 "thickness,desiccated,osmosis_ms,dynamics_ms,collisions_ms,total_ms\n" );
+	fprintf( r->csv,
+			 "frame,time,water_t,water_v,relative_water,area,relative_area,max_strain,residual,step_primal,converged,"
+			 "grounded,crossings,drift,mass_drift,ground_gap,normal_z,tilt,roll_tip,roll_base,cg_iterations_t,"
+			 "cg_iterations_v,pbd_iterations,pbd_hit_cap,pbd_stalled,contacts,edge_contacts,unresolved,"
+			 "thickness,desiccated,osmosis_ms,dynamics_ms,collisions_ms,total_ms\n" );
 	return 0;
 }
 
@@ -505,14 +507,14 @@ static int run_step( run_state* r, long long frame, const sere_progress* progres
 	r->curve_rwc[frame] = s->relative_water;
 	r->curve_area[frame] = area / r->area0;
 	fprintf( r->csv,
-			 "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,"
+			 "%lld,%.6g,%.9g,%.9g,%.6g,%.9g,%.6g,%.6g,%.6g,%.4g,%d,%d,%lld,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,"
 			 "%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%d,%.4f,%.4f,%.4f,%.4f\n",
 			 frame, frame * sere_params_decimal( o->params.leaf.dt ), s->water_t, s->water_v, s->relative_water, area,
-			 area / r->area0, s->max_strain, s->residual, s->pbd_converged, s->grounded, (long long) w->crossings,
-			 w->drift, w->mass_drift, w->ground_gap, w->normal_z, w->tilt_degrees, w->roll_tip, w->roll_base,
-			 s->cg_iterations_t, s->cg_iterations_v, s->pbd_iterations, s->pbd_hit_cap, s->pbd_stalled, s->contacts,
-			 s->edge_contacts, s->unresolved, s->collision_thickness, s->desiccated, s->osmosis_ms, s->dynamics_ms,
-			 s->collisions_ms, s->total_ms );
+			 area / r->area0, s->max_strain, s->residual, s->step_primal, s->pbd_converged, s->grounded,
+			 (long long) w->crossings, w->drift, w->mass_drift, w->ground_gap, w->normal_z, w->tilt_degrees,
+			 w->roll_tip, w->roll_base, s->cg_iterations_t, s->cg_iterations_v, s->pbd_iterations, s->pbd_hit_cap,
+			 s->pbd_stalled, s->contacts, s->edge_contacts, s->unresolved, s->collision_thickness, s->desiccated,
+			 s->osmosis_ms, s->dynamics_ms, s->collisions_ms, s->total_ms );
 	if ( fflush( r->csv ) != 0 )
 	{
 		snprintf( r->failure, sizeof( r->failure ), "cannot write %s: %s", r->csv_path, strerror( errno ) );

@@ -166,6 +166,7 @@ static int table1_leaf( int k, const sere_option_list* sets, long long frames, i
 	const table1_row* row = rows + k;
 	char name[128];
 	sere_sim_params params = sere_sim_params_default();
+	params.leaf.step_residual = 0; /* a measure beside the frame, not part of it (--set can ask for it) */
 	if ( !command_params_apply( "table1", &params, row->preset, sets ) )
 	{
 		return 1;

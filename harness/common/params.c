@@ -109,6 +109,9 @@ static const sere_param table[] = {
 	ROW( "local_stop", "", BOOL, leaf.local_stop, 0.0, 1.0,
 		 "Sec. 6 stop where a layer runs dry: a particle whose neighbour in the other layer is dry keeps its water "
 		 "(1)" ),
+	ROW( "step_residual", "", BOOL, leaf.step_residual, 0.0, 1.0,
+		 "measure each frame's XPBD step residual |h|/|grad C^T lambda| (Macklin et al. 2016 Eq. 8; stats.csv "
+		 "step_primal), outside the timed parts (1)" ),
 	ROW( "crease", "", FLOAT, crease, -0.5, 0.5,
 		 "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
 	ROW( "curl", "", FLOAT, curl, -0.5, 0.5,

@@ -48,6 +48,10 @@ typedef struct sere_leaf_params
 	 * layer has run dry keeps its water and mass); 0: only for the whole leaf, when a whole layer
 	 * has run dry. */
 	int local_stop;
+	/* 1 (the default): each frame measures how far its XPBD step is from the step's first
+	 * condition (sere_pbd_step_residual, into sere_leaf_stats.step_primal), outside the timed
+	 * parts: a copy of the prediction and a pass over every particle's springs. */
+	int step_residual;
 } sere_leaf_params;
 
 sere_leaf_params sere_leaf_params_default( void );
@@ -58,8 +62,12 @@ typedef struct sere_leaf_stats
 	double relative_water;	 /* total water / initial total water */
 	int32_t cg_iterations_t, cg_iterations_v;
 	int32_t pbd_iterations;
-	float max_strain;  /* max |C/l| after projection */
-	float residual;	   /* the stop measure after projection: max |C + α̃λ|/l (XPBD), max |C/l| (paper) */
+	float max_strain; /* max |C/l| after projection */
+	float residual;	  /* the stop measure after projection: max |C + α̃λ|/l (XPBD), max |C/l| (paper) */
+	/* ‖h‖/‖∇Cᵀλ‖ of the XPBD step (Macklin et al. 2016 Eq. 8, sere_pbd_step_residual): the share of
+	 * the multipliers' forces the step leaves unbalanced; NaN when not measured (step_residual 0,
+	 * the paper's PBD) */
+	float step_primal;
 	int pbd_converged; /* the residual reached pbd.tolerance (and the ground was met) before the cap */
 	int32_t grounded;  /* particles (either layer) touching the ground after the frame */
 	int pbd_hit_cap;
