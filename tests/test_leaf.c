@@ -61,6 +61,18 @@ static sere_leaf_params drying_params( double rate_t, double rate_v, double sigm
 	return params;
 }
 
+/* x, then y, then z of every particle, in one allocation the caller frees. */
+static float* positions_of( const sere_model* model )
+{
+	const size_t count = (size_t) model->p.count;
+	float* xyz = malloc( sizeof( float ) * 3 * count );
+	cr_assert_not_null( xyz );
+	memcpy( xyz, model->p.x, sizeof( float ) * count );
+	memcpy( xyz + count, model->p.y, sizeof( float ) * count );
+	memcpy( xyz + 2 * count, model->p.z, sizeof( float ) * count );
+	return xyz;
+}
+
 static double t_area( const sere_model* model )
 {
 	const float* p[3] = { model->p.x, model->p.y, model->p.z };
@@ -267,10 +279,7 @@ Test( leaf, step_residual_is_measured_beside_the_frame )
 		}
 		last = stats.step_primal;
 		count = model.p.count;
-		final[measure] = malloc( sizeof( float ) * 3 * count );
-		memcpy( final[measure], model.p.x, sizeof( float ) * count );
-		memcpy( final[measure] + count, model.p.y, sizeof( float ) * count );
-		memcpy( final[measure] + 2 * count, model.p.z, sizeof( float ) * count );
+		final[measure] = positions_of( &model );
 		small_sim_free( sim, &model );
 	}
 	cr_expect_eq( memcmp( final[0], final[1], sizeof( float ) * 3 * count ), 0 );
@@ -325,10 +334,7 @@ Test( leaf, explicit_threads_override_openmp )
 						   process_threads(), before );
 		}
 		count = model.p.count;
-		final[t] = malloc( sizeof( float ) * 3 * count );
-		memcpy( final[t], model.p.x, sizeof( float ) * count );
-		memcpy( final[t] + count, model.p.y, sizeof( float ) * count );
-		memcpy( final[t] + 2 * count, model.p.z, sizeof( float ) * count );
+		final[t] = positions_of( &model );
 		small_sim_free( sim, &model );
 	}
 	cr_expect_eq( memcmp( final[0], final[1], sizeof( float ) * 3 * count ), 0 );
