@@ -327,6 +327,7 @@ typedef struct run_state
 	/* over the run */
 	long long done, converged, crossing_frames, cap_hits, stalls, onset_tip, onset_base;
 	int64_t crossings_max;
+	double step_primal_max; /* the largest step_primal of the run (NaN: never measured) */
 	int32_t max_pbd_iterations;
 	double drift_max, mass_drift_max, gap_max, tilt_max;
 	double sum_osmosis, sum_dynamics, sum_collisions, sum_total;
@@ -494,6 +495,7 @@ static int run_step( run_state* r, long long frame, const sere_progress* progres
 	}
 	const sere_watch_frame* w = &r->watched;
 	r->converged += s->pbd_converged;
+	r->step_primal_max = fmax( r->step_primal_max, s->step_primal );
 	r->crossing_frames += w->crossings > 0;
 	r->crossings_max = w->crossings > r->crossings_max ? w->crossings : r->crossings_max;
 	r->drift_max = fmax( r->drift_max, w->drift );
@@ -746,6 +748,11 @@ static void run_summary_members( const run_state* r, FILE* summary, long long co
 			 r->converged, (long long) r->crossings_max, r->crossing_frames, r->drift_max, r->mass_drift_max,
 			 r->tilt_max );
 	json_number( summary, r->gap_max );
+	/* the share of the multipliers' forces the XPBD step leaves unbalanced (docs/DESIGN.md §8) */
+	fprintf( summary, ",\n  \"step_primal_last\": " );
+	json_number( summary, r->done > 0 ? r->stats.step_primal : NAN );
+	fprintf( summary, ",\n  \"step_primal_max\": " );
+	json_number( summary, r->step_primal_max );
 	fprintf( summary, ",\n  \"roll_onset\": {\"threshold\": %g, \"tip_frame\": ", kRollOnset );
 	json_number( summary, r->onset_tip >= 0 ? (double) r->onset_tip : NAN );
 	fprintf( summary, ", \"base_frame\": " );
@@ -844,7 +851,9 @@ int sere_cmd_run( int argc, char** argv )
 	{
 		return parsed;
 	}
-	run_state r = { .o = &o, .onset_tip = -1, .onset_base = -1, .gap_max = -INFINITY, .shot_every = 1 };
+	run_state r = {
+		.o = &o, .onset_tip = -1, .onset_base = -1, .gap_max = -INFINITY, .step_primal_max = NAN, .shot_every = 1
+	};
 	r.watched = ( sere_watch_frame ){ 0, 0.0, 0.0, NAN, 1.0, 0.0, NAN, NAN };
 	r.bound = sere_topo_bind( (int) o.threads, NULL );
 	if ( run_open_leaf( &r ) != 0 || run_open_outputs( &r ) != 0 )
