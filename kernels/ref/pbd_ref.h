@@ -27,7 +27,8 @@ int32_t sere_pbd_ref_project( sere_ref_particle* particles, const sere_ref_sprin
 
 /* ‖h‖₂, ‖M (x − x̃)‖₂ and ‖∇C(x)ᵀλ‖₂ of an XPBD step (Macklin et al. 2016 Eq. 8) into out[0..2],
  * over the particles with inv_m > 0: the constraints' forces summed spring by spring into a
- * per-particle array, in double. Returns the particles counted. */
+ * per-particle array, in double. Returns the particles counted, −1 when that array cannot be
+ * allocated. */
 int32_t sere_pbd_ref_step_residual( const sere_ref_particle* particles, const sere_ref_particle* predicted,
 									int32_t particle_count, const sere_ref_spring* springs, const float* lambda,
 									int32_t spring_count, double out[3] );

@@ -81,6 +81,7 @@ void sere_pbd_destroy( sere_pbd* pbd )
 	sere_free( pbd->packed[0] );
 	sere_free( pbd->packed[1] );
 	sere_free( pbd->push );
+	sere_free( pbd->residual_partial );
 	sere_free( pbd->history[0] );
 	sere_free( pbd->history[1] );
 	sere_free( pbd->lambda_history[0] );

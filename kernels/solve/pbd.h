@@ -188,7 +188,8 @@ typedef struct sere_pbd_residuals
  * particles in order, so the result has the same bits for any thread count. SERE_ERR_ARGUMENT for a
  * NULL argument or when the last projection to run was not an XPBD one that returned SERE_OK (then no
  * multipliers describe the positions; a call refused for its arguments runs nothing and changes
- * nothing), SERE_ERR_MEMORY when the block sums cannot be allocated. */
+ * nothing). Allocates nothing: the block sums live in the workspace, so two calls on one workspace
+ * must not run at once. */
 sere_status sere_pbd_step_residual( const sere_pbd* pbd, const float* px, const float* py, const float* pz,
 									const float* tx, const float* ty, const float* tz, const float* inv_m,
 									sere_pbd_residuals* out );

@@ -144,6 +144,7 @@ static bool alloc_lanes( sere_pbd* pbd, int32_t n )
 	pbd->factor = sere_alloc( sizeof( float ) * lanes );
 	pbd->slot_count = ( ( n + 3 ) & ~3 ) + 4 * pbd->items;
 	pbd->push = sere_alloc( sizeof( float ) * (size_t) pbd->slot_count );
+	pbd->residual_partial = sere_alloc( sizeof( double ) * 4 * (size_t) ( n / RESIDUAL_BLOCK + 1 ) );
 	pbd->packed[0] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
 	pbd->packed[1] = sere_alloc( sizeof( float ) * 4 * (size_t) pbd->slot_count );
 	for ( int h = 0; h < 2; ++h )
@@ -152,8 +153,8 @@ static bool alloc_lanes( sere_pbd* pbd, int32_t n )
 		pbd->lambda_history[h] = sere_alloc( sizeof( float ) * lanes );
 	}
 	return pbd->ia && pbd->ib && pbd->source && pbd->rest && pbd->lambda && pbd->weight && pbd->factor && pbd->push &&
-		   pbd->packed[0] && pbd->packed[1] && pbd->history[0] && pbd->history[1] && pbd->lambda_history[0] &&
-		   pbd->lambda_history[1];
+		   pbd->residual_partial && pbd->packed[0] && pbd->packed[1] && pbd->history[0] && pbd->history[1] &&
+		   pbd->lambda_history[0] && pbd->lambda_history[1];
 }
 static sere_status build_layout( sere_pbd* pbd, const int32_t* a, const int32_t* b )
 {

@@ -6,11 +6,6 @@
 #include "solve/internal/pbd_shared.h"
 
 #include <math.h>
-#include <stdlib.h>
-
-/* Particles per block of the norms' partial sums: each block is one thread's, and the blocks are
- * added in order, so the sums do not depend on the thread count. */
-#define RESIDUAL_BLOCK 1024
 
 static sere_status check_residual_call( const sere_pbd* pbd )
 {
@@ -69,18 +64,14 @@ sere_status sere_pbd_step_residual( const sere_pbd* pbd, const float* px, const 
 	}
 	const int32_t n = pbd->particle_count;
 	const int32_t blocks = ( n + RESIDUAL_BLOCK - 1 ) / RESIDUAL_BLOCK;
-	double* partial = calloc( 4 * (size_t) ( blocks > 0 ? blocks : 1 ), sizeof( double ) );
-	if ( partial == NULL )
-	{
-		return SERE_ERR_MEMORY;
-	}
+	double* partial = pbd->residual_partial;
 #pragma omp parallel for num_threads( sere_team_for( pbd->thread_count ) ) schedule( static )
 	for ( int32_t block = 0; block < blocks; ++block )
 	{
 		double sum[3] = { 0.0, 0.0, 0.0 };
 		int32_t counted = 0;
-		const int32_t last = n - block * RESIDUAL_BLOCK < RESIDUAL_BLOCK ? n : ( block + 1 ) * RESIDUAL_BLOCK;
-		for ( int32_t s = block * RESIDUAL_BLOCK; s < last; ++s )
+		const int32_t first = block * RESIDUAL_BLOCK, last = n - first < RESIDUAL_BLOCK ? n : first + RESIDUAL_BLOCK;
+		for ( int32_t s = first; s < last; ++s )
 		{
 			const float w = inv_m[pbd->particle[s]];
 			if ( w > 0.0f && !( pbd->push[s] > 0.0f ) )
@@ -96,6 +87,5 @@ sere_status sere_pbd_step_residual( const sere_pbd* pbd, const float* px, const 
 	out->inertia = sqrt( sere_block_sum( partial, blocks, 1 ) );
 	out->constraint = sqrt( sere_block_sum( partial, blocks, 2 ) );
 	out->particles = (int32_t) sere_block_sum( partial, blocks, 3 );
-	free( partial );
 	return SERE_OK;
 }

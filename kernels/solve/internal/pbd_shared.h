@@ -16,6 +16,9 @@ enum
 	 * small share (on the maple, 8 bands: 6% of the constraints). */
 	BAND_PARTICLES = 1600,
 	MAX_BANDS = 8,
+	/* Particles per block of sere_pbd_step_residual's partial sums: each block is one thread's,
+	 * added in block order, so the norms do not depend on the thread count. */
+	RESIDUAL_BLOCK = 1024,
 	/* Threads past this many are not started (per-thread slots live in the workspace): the one
 	 * limit of every kernel (base.h). */
 	MAX_THREADS = SERE_MAX_THREADS,
@@ -65,6 +68,7 @@ struct sere_pbd
 	float one;				   /* 1.0f, opaque to the compiler so sere_pbd_touch keeps its stores */
 	int rest_valid;
 	int multipliers_valid;	  /* the last call was an XPBD projection that returned SERE_OK */
+	double* residual_partial; /* 4 per RESIDUAL_BLOCK particles: sere_pbd_step_residual's block sums */
 	thread_slot* threads;	  /* MAX_THREADS */
 	padded_counter* counters; /* 2 × MAX_THREADS: next item of each thread's list, by pass parity */
 	padded_counter* done;	  /* per item: the sweep of the current call that last projected it */
