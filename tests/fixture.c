@@ -222,3 +222,67 @@ int sere_test_expect_error( const char* args, const char* phrase )
 	sere_test_expect_one_line( args, err );
 	return code;
 }
+
+static void sheet_spring( sere_test_sheet* s, int32_t i, int32_t j, float scale )
+{
+	float dx = s->x[j] - s->x[i], dy = s->y[j] - s->y[i], dz = s->z[j] - s->z[i];
+	s->a[s->count] = i, s->b[s->count] = j;
+	s->rest[s->count] = scale * sqrtf( dx * dx + dy * dy + dz * dz );
+	s->count += 1;
+}
+
+sere_test_sheet sere_test_sheet_make( int32_t nx, int32_t ny )
+{
+	sere_test_sheet s = { 0 };
+	s.n = nx * ny;
+	float** columns[] = { &s.x, &s.y, &s.z, &s.inv_m, &s.tx, &s.ty, &s.tz };
+	for ( size_t k = 0; k < sizeof( columns ) / sizeof( columns[0] ); ++k )
+	{
+		*columns[k] = calloc( (size_t) s.n, sizeof( float ) );
+		cr_assert_not_null( *columns[k] );
+	}
+	s.a = calloc( 3 * (size_t) s.n, sizeof( int32_t ) );
+	s.b = calloc( 3 * (size_t) s.n, sizeof( int32_t ) );
+	s.rest = calloc( 3 * (size_t) s.n, sizeof( float ) );
+	cr_assert( s.a != NULL && s.b != NULL && s.rest != NULL );
+	const float h = (float) SERE_TEST_SHEET_SPACING;
+	for ( int32_t j = 0; j < ny; ++j )
+	{
+		for ( int32_t i = 0; i < nx; ++i )
+		{
+			int32_t p = j * nx + i;
+			s.x[p] = h * (float) i, s.y[p] = h * (float) j;
+			s.z[p] = 0.01f * sinf( 0.7f * (float) i ) * cosf( 0.5f * (float) j );
+			s.inv_m[p] = 1.0f + (float) ( ( i + 2 * j ) % 3 );
+		}
+	}
+	for ( int32_t j = 0; j < ny; ++j )
+	{
+		for ( int32_t i = 0; i < nx; ++i )
+		{
+			int32_t p = j * nx + i;
+			if ( i + 1 < nx )
+			{
+				sheet_spring( &s, p, p + 1, 1.0f );
+			}
+			if ( j + 1 < ny )
+			{
+				sheet_spring( &s, p, p + nx, 1.0f );
+			}
+			if ( i + 1 < nx && j + 1 < ny )
+			{
+				sheet_spring( &s, p, p + nx + 1, 0.8f );
+			}
+		}
+	}
+	memcpy( s.tx, s.x, sizeof( float ) * (size_t) s.n );
+	memcpy( s.ty, s.y, sizeof( float ) * (size_t) s.n );
+	memcpy( s.tz, s.z, sizeof( float ) * (size_t) s.n );
+	return s;
+}
+
+void sere_test_sheet_free( sere_test_sheet* s )
+{
+	free( s->x ), free( s->y ), free( s->z ), free( s->inv_m ), free( s->tx ), free( s->ty ), free( s->tz );
+	free( s->a ), free( s->b ), free( s->rest );
+}

@@ -74,3 +74,22 @@ void sere_test_expect_one_line( const char* what, const char* err );
 /* Runs "BIN ARGS" (sere_test_run) and expects stderr to be one line that contains phrase;
  * returns the exit status for the caller to check. */
 int sere_test_expect_error( const char* args, const char* phrase );
+
+/* A frustrated sheet for the step solvers: nx × ny particles of spacing 0.05, waved in z, with
+ * structural springs at their length and the springs of one diagonal at 0.8 of theirs, so that no
+ * shape meets them all and the springs turn during a step (docs/DESIGN.md §8). Inverse masses
+ * 1..3 so that the masses matter; the prediction t* is the starting shape. The caller frees with
+ * sere_test_sheet_free. */
+typedef struct sere_test_sheet
+{
+	int32_t n, count;
+	float *x, *y, *z, *inv_m;
+	float *tx, *ty, *tz;
+	int32_t *a, *b;
+	float* rest;
+} sere_test_sheet;
+
+#define SERE_TEST_SHEET_SPACING 0.05
+
+sere_test_sheet sere_test_sheet_make( int32_t nx, int32_t ny );
+void sere_test_sheet_free( sere_test_sheet* sheet );
