@@ -10,6 +10,7 @@
 #include "solve/bvh.h"
 #include "solve/collide.h"
 #include "solve/pbd.h"
+#include "solve/vbd.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -174,6 +175,53 @@ Test( solvebits, pbd_projection )
 	h = bits_positions( h, &s );
 	cr_expect_eq( h, 0x81f6134f273d4ba7ull, "hash %#018llx", (unsigned long long) h );
 	sere_pbd_destroy( pbd );
+	bits_sheet_free( &s );
+}
+
+/* The descent step (solve/vbd.h): plain sweeps, then Chebyshev with the ground and weights, then
+ * the floor's sweeps; positions, reports and the ground's reaction. A lane's arithmetic reads
+ * only its own particle's springs in adjacency order (the padding rows add zeros), so the
+ * blocks' widths do not show in the bits. Taken at the commit that added the descent, native
+ * (AVX-512), AVX2 and portable builds alike. */
+Test( solvebits, vbd_step )
+{
+	bits_sheet s;
+	bits_sheet_make( &s, 40, 0.15, 9 );
+	sere_vbd* vbd = NULL;
+	cr_assert_eq( sere_vbd_create( s.a, s.b, s.edges, s.n, &vbd ), SERE_OK );
+	cr_assert_eq( sere_vbd_set_rest( vbd, s.rest ), SERE_OK );
+	uint64_t h = BITS_BASIS;
+	sere_vbd_report report;
+	sere_vbd_params params = sere_vbd_params_default();
+	params.compliance = 1e-6f;
+	params.tolerance = 1e-7f;
+	params.max_iterations = 25;
+	cr_assert_eq( sere_vbd_step( vbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_OK );
+	h = bits_positions( h, &s );
+	h = fnv1a( h, &report, sizeof( report ) );
+
+	float* weight = malloc( sizeof( float ) * (size_t) s.edges );
+	for ( int32_t q = 0; q < s.edges; ++q )
+	{
+		weight[q] = 0.5f + (float) ( q % 3 );
+	}
+	cr_assert_eq( sere_vbd_set_compliance_weights( vbd, weight ), SERE_OK );
+	free( weight );
+	params.chebyshev_rho = 0.9f;
+	params.chebyshev_delay = 4;
+	params.ground = -0.05f;
+	cr_assert_eq( sere_vbd_step( vbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_OK );
+	h = bits_positions( h, &s );
+	h = fnv1a( h, &report, sizeof( report ) );
+	float* push = calloc( (size_t) s.n, sizeof( float ) );
+	cr_assert_eq( sere_vbd_ground_push( vbd, push ), SERE_OK );
+	h = fnv1a( h, push, sizeof( float ) * (size_t) s.n );
+	free( push );
+
+	cr_assert_eq( sere_vbd_touch_sweeps( vbd, s.x, s.y, s.z, s.inv_m, 5 ), SERE_OK );
+	h = bits_positions( h, &s );
+	cr_expect_eq( h, 0x06c6f529909fe6bdull, "hash %#018llx", (unsigned long long) h );
+	sere_vbd_destroy( vbd );
 	bits_sheet_free( &s );
 }
 

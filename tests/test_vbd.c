@@ -8,6 +8,7 @@
 #include "solve/vbd.h"
 
 #include <criterion/criterion.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -330,6 +331,29 @@ Test( vbd, refuses_bad_input_and_leaves_the_positions )
 	cr_expect( memcmp( s.x, s.tx, bytes ) == 0 && memcmp( s.y, s.ty, bytes ) == 0 && memcmp( s.z, s.tz, bytes ) == 0 );
 	cr_expect_eq( sere_vbd_set_threads( vbd, SERE_MAX_THREADS + 1 ), SERE_ERR_ARGUMENT );
 	free( weight );
+	sere_vbd_destroy( vbd );
+	sere_test_sheet_free( &s );
+}
+
+Test( vbd, a_tolerance_below_the_rounding_stops_at_the_rounding )
+{
+	/* Moves of 1e-12 cannot be told from the rounding of coordinates up to 1.15 (1.4e-7 apart):
+	 * the stop rises to FLT_EPSILON times the largest coordinate, where the sweeps get within the
+	 * cap, and the report says which stop was used. */
+	sere_test_sheet s = sere_test_sheet_make( 24, 20 );
+	float largest = 0.0f;
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		largest = fmaxf( largest, fmaxf( fabsf( s.x[i] ), fmaxf( fabsf( s.y[i] ), fabsf( s.z[i] ) ) ) );
+	}
+	sere_vbd* vbd = sheet_solver( &s, 1 );
+	sere_vbd_params params = sheet_params();
+	params.tolerance = 1e-12f;
+	sere_vbd_report report;
+	cr_assert_eq( sere_vbd_step( vbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_OK );
+	cr_expect( !report.hit_cap, "%d sweeps, last move %g", report.iterations, report.max_move );
+	cr_expect_eq( report.tolerance, sqrtf( ( FLT_EPSILON * largest ) * ( FLT_EPSILON * largest ) ) );
+	cr_expect_leq( report.max_move, report.tolerance );
 	sere_vbd_destroy( vbd );
 	sere_test_sheet_free( &s );
 }

@@ -409,14 +409,16 @@ typedef struct step_outcome
 	int32_t iterations, flags;
 	float move2;
 	int converged;
+	float tolerance2; /* the stop the sweeps used: the caller's, or the positions' rounding */
 } step_outcome;
 
 /* Thread t's share of the slots (whole blocks): records, masses, prediction and the stiffnesses
  * of its blocks' rows. Returns the input's flags. */
 static int32_t pack( sere_vbd* v, const float* px, const float* py, const float* pz, const float* inv_m,
-					 const step_setup* setup, int t, int threads )
+					 const step_setup* setup, int t, int threads, float* largest )
 {
 	int32_t first, last, flags = 0;
+	float big = 0.0f;
 	sere_team_share( 0, v->blocks, t, threads, &first, &last );
 	for ( int32_t s = first * SERE_LANES; s < last * SERE_LANES; ++s )
 	{
@@ -432,6 +434,7 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 		flags |= isfinite( px[p] ) && isfinite( py[p] ) && isfinite( pz[p] ) && isfinite( w ) ? 0 : FLAG_NONFINITE;
 		flags |= w < 0.0f ? FLAG_NEGATIVE_MASS : 0;
 		r[0] = px[p], r[1] = py[p], r[2] = pz[p], r[3] = w > 0.0f ? 1.0f : 0.0f;
+		big = fmaxf( big, fmaxf( fabsf( px[p] ), fmaxf( fabsf( py[p] ), fabsf( pz[p] ) ) ) );
 		/* a held particle's step is multiplied by 0; its mass only has to keep the block finite */
 		v->mass[s] = w > 0.0f ? 1.0f / w : 1.0f;
 		v->tx[s] = px[p], v->ty[s] = py[p], v->tz[s] = pz[p];
@@ -444,6 +447,7 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 	{
 		memset( v->record + 4 * (size_t) v->slots, 0, 4 * sizeof( float ) );
 	}
+	*largest = big;
 	return flags;
 }
 
@@ -508,11 +512,15 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 		sere_vf_add( sere_vf_add( sere_vf_mul( c02, gx ), sere_vf_mul( c12, gy ) ), sere_vf_mul( c22, gz ) );
 	const sere_vf mx = sere_vf_mul( sx, scale ), my = sere_vf_mul( sy, scale );
 	sere_vf nz = sere_vf_sub( z, sere_vf_mul( sz, scale ) );
-	/* the ground as a bound: how far below it the step ended, for the caller's friction */
-	const sere_vf push = sere_vf_mul( movable, sere_vf_max( zero, sere_vf_sub( sere_vf_splat( setup->ground ), nz ) ) );
-	nz = sere_vf_add( nz, push );
+	/* the ground as a bound: a step that ends below it ends on it; where it did, the bound's
+	 * reaction, ∂E/∂z at the start of the step over the mass, is the displacement the ground
+	 * holds the particle by (the caller's friction, vbd.h) */
+	const sere_vf depth =
+		sere_vf_mul( movable, sere_vf_max( zero, sere_vf_sub( sere_vf_splat( setup->ground ), nz ) ) );
+	nz = sere_vf_add( nz, depth );
 	const sere_vf mz = sere_vf_sub( nz, z );
-	sere_vf_store( v->push + s0, push );
+	const sere_vf reaction = sere_vf_div( sere_vf_max( zero, gz ), m );
+	sere_vf_store( v->push + s0, sere_vf_keep( sere_vf_gt( depth, zero ), reaction ) );
 	sere_vf_store_records( v->record, at, SERE_LANES, sere_vf_sub( x, mx ), sere_vf_sub( y, my ), nz, movable );
 	const sere_vf move2 =
 		sere_vf_add( sere_vf_add( sere_vf_mul( mx, mx ), sere_vf_mul( my, my ) ), sere_vf_mul( mz, mz ) );
@@ -546,8 +554,9 @@ static float block_touch( sere_vbd* v, int32_t block )
 	return 0.0f;
 }
 
-/* Publishes thread t's largest squared move and flags of the sweep and returns the team's
- * (every thread reads all slots after the barrier, so all decide alike). */
+/* Publishes thread t's largest squared move (or any non-negative value) and flags of the sweep and
+ * returns the team's largest (every thread reads all slots after the barrier, so all decide
+ * alike). */
 static float exchange( sere_vbd* v, int t, int threads, int parity, float move2, int32_t* flags )
 {
 	v->results[t].move2[parity] = move2;
@@ -592,10 +601,39 @@ static void chebyshev( sere_vbd* v, const step_setup* setup, float omega, float*
 	hist[1] = old;
 }
 
-/* The colored sweeps of thread t; every thread runs the same control flow. */
-static step_outcome sweep( sere_vbd* v, const step_setup* setup, int32_t flags, int t, int threads )
+/* The first block of color c whose rows start at or past `row`. */
+static int32_t block_at_row( const sere_vbd* v, int32_t c, int64_t row )
 {
-	step_outcome result = { 0, flags, 0.0f, 0 };
+	int32_t lo = v->color_block[c], hi = v->color_block[c + 1];
+	while ( lo < hi )
+	{
+		const int32_t mid = lo + ( hi - lo ) / 2;
+		if ( v->block_row[mid] < row )
+		{
+			lo = mid + 1;
+		}
+		else
+		{
+			hi = mid;
+		}
+	}
+	return lo;
+}
+
+/* Thread t's blocks of color c, [*first, *last): equal shares of the color's rows, not of its
+ * blocks, since a color's blocks are sorted by degree (an even cut of the blocks gave one thread
+ * the triangle layer's twelve-spring particles and the other the Voronoi layer's six). */
+static void color_share( const sere_vbd* v, int32_t c, int t, int threads, int32_t* first, int32_t* last )
+{
+	const int64_t begin = v->block_row[v->color_block[c]], rows = v->block_row[v->color_block[c + 1]] - begin;
+	*first = t == 0 ? v->color_block[c] : block_at_row( v, c, begin + rows * t / threads );
+	*last = t + 1 == threads ? v->color_block[c + 1] : block_at_row( v, c, begin + rows * ( t + 1 ) / threads );
+}
+
+/* The colored sweeps of thread t; every thread runs the same control flow. */
+static step_outcome sweep( sere_vbd* v, const step_setup* setup, float tolerance2, int32_t flags, int t, int threads )
+{
+	step_outcome result = { 0, flags, 0.0f, 0, tolerance2 };
 	float omega = 0.0f;
 	int parity = 0;
 	float* hist[2] = { v->history[0], v->history[1] };
@@ -609,7 +647,7 @@ static step_outcome sweep( sere_vbd* v, const step_setup* setup, int32_t flags, 
 		for ( int32_t c = 0; c < v->colors; ++c )
 		{
 			int32_t first, last;
-			sere_team_share( v->color_block[c], v->color_block[c + 1], t, threads, &first, &last );
+			color_share( v, c, t, threads, &first, &last );
 			for ( int32_t block = first; block < last; ++block )
 			{
 				const float move2 = setup->touch ? block_touch( v, block ) : block_step( v, block, setup );
@@ -625,7 +663,7 @@ static step_outcome sweep( sere_vbd* v, const step_setup* setup, int32_t flags, 
 		result.flags |= sweep_flags;
 		result.iterations = k;
 		parity ^= 1;
-		if ( result.flags != 0 || ( !setup->touch && result.move2 <= setup->tolerance2 ) )
+		if ( result.flags != 0 || ( !setup->touch && result.move2 <= tolerance2 ) )
 		{
 			result.converged = result.flags == 0;
 			break;
@@ -647,14 +685,19 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 {
 	int requested = sere_team_for( v->thread_count );
 	requested = requested < 1 ? 1 : requested > SERE_MAX_THREADS ? SERE_MAX_THREADS : requested;
-	step_outcome outcome = { 0, 0, 0.0f, 0 };
+	step_outcome outcome = { 0, 0, 0.0f, 0, 0.0f };
 #pragma omp parallel num_threads( requested )
 	{
 		const int t = omp_get_thread_num(), threads = omp_get_num_threads();
-		int32_t flags = pack( v, px, py, pz, inv_m, setup, t, threads );
+		float largest;
+		int32_t flags = pack( v, px, py, pz, inv_m, setup, t, threads, &largest );
 		/* parity 1: the sweeps start on parity 0, and a slot's two halves are never read together */
-		exchange( v, t, threads, 1, 0.0f, &flags );
-		step_outcome result = sweep( v, setup, flags, t, threads );
+		largest = exchange( v, t, threads, 1, largest, &flags );
+		/* no sweep can move a particle by less than its coordinates' rounding: a tolerance below
+		 * it would only run to the cap */
+		const float rounding = FLT_EPSILON * largest;
+		const float tolerance2 = fmaxf( setup->tolerance2, rounding * rounding );
+		step_outcome result = sweep( v, setup, tolerance2, flags, t, threads );
 		if ( result.flags == 0 && !setup->touch )
 		{
 			int32_t first, last;
@@ -711,6 +754,7 @@ sere_status sere_vbd_step( sere_vbd* vbd, float* px, float* py, float* pz, const
 	vbd->push_valid = 1;
 	report->iterations = outcome.iterations;
 	report->max_move = sqrtf( outcome.move2 );
+	report->tolerance = sqrtf( outcome.tolerance2 );
 	report->hit_cap = !outcome.converged;
 	return SERE_OK;
 }

@@ -34,9 +34,10 @@ typedef struct sere_vbd_params
 	float chebyshev_rho;
 	int32_t chebyshev_delay; /* plain sweeps before the first extrapolation, ≥ 2 */
 	/* A ground plane z ≥ ground (−INFINITY: none), a bound of the descent: a particle's Newton step
-	 * that ends below it ends on it instead. sere_vbd_ground_push reports, for the last sweep, how
-	 * far below the ground each step would have ended: the ground's reaction over the step, in
-	 * the displacement the friction of the caller needs. */
+	 * that ends below it ends on it instead. sere_vbd_ground_push reports the ground's reaction on
+	 * the particles it held in the last sweep as a displacement, ∂E/∂z_i / m_i at the start of the
+	 * particle's step (the bound's multiplier over the mass): the normal correction d_n that
+	 * position-based Coulomb friction bounds the sliding by (Macklin et al. 2014, Sec. 6.1). */
 	float ground;
 } sere_vbd_params;
 
@@ -48,7 +49,10 @@ typedef struct sere_vbd_report
 {
 	int32_t iterations; /* sweeps run */
 	float max_move;		/* the largest move of a particle in the last sweep */
-	int hit_cap;		/* stopped by max_iterations, not by the tolerance */
+	/* the stop used: params->tolerance, or FLT_EPSILON times the largest |coordinate| when that is
+	 * larger (a sweep cannot move a particle by less than its coordinates' rounding) */
+	float tolerance;
+	int hit_cap; /* stopped by max_iterations, not by the tolerance */
 } sere_vbd_report;
 
 typedef struct sere_vbd_info
@@ -85,7 +89,8 @@ sere_status sere_vbd_set_compliance_weights( sere_vbd* vbd, const float* weight 
 sere_status sere_vbd_set_threads( sere_vbd* vbd, int32_t threads );
 
 /* Minimizes E from the prediction px, py, pz (x̃ = the positions passed in), in place, until a
- * sweep moves no particle farther than params->tolerance, or the cap. Particles with inv_m = 0
+ * sweep moves no particle farther than params->tolerance (or the rounding of the coordinates,
+ * report->tolerance), or the cap. Particles with inv_m = 0
  * are held and take any force; m_i = 1/inv_m otherwise.
  *
  * A particle's step solves H_i Δ = −∂E/∂x_i with H_i = m_i I + Σ_j k_j [ n nᵀ + β (I − n nᵀ) ],
@@ -101,8 +106,9 @@ sere_status sere_vbd_set_threads( sere_vbd* vbd, int32_t threads );
 sere_status sere_vbd_step( sere_vbd* vbd, float* px, float* py, float* pz, const float* inv_m,
 						   const sere_vbd_params* params, sere_vbd_report* report );
 
-/* Adds to push[i] how far below the ground particle i's last Newton step would have ended
- * (0 when the last step refused the call or had no ground). */
+/* Adds to push[i] the ground's reaction on particle i in the last sweep of the last step, as a
+ * displacement (sere_vbd_params.ground; 0 where the ground did not hold it, and everywhere when
+ * the last step was refused or had no ground). */
 sere_status sere_vbd_ground_push( const sere_vbd* vbd, float* push );
 
 /* How far positions px, py, pz are from a rest state of E for the prediction tx, ty, tz: over the
