@@ -30,7 +30,8 @@ int command_model_build( const char* command, const char* path, long long partic
 
 void command_step_error( const sere_sim_params* params, sere_status status, char* text, size_t size )
 {
-	const float rho = params->leaf.pbd.chebyshev_rho;
+	const int descent = params->leaf.descent;
+	const float rho = descent ? params->leaf.descent_rho : params->leaf.pbd.chebyshev_rho;
 	if ( status != SERE_ERR_NONFINITE )
 	{
 		snprintf( text, size, "%s", sere_status_text( status ) );
@@ -38,9 +39,9 @@ void command_step_error( const sere_sim_params* params, sere_status status, char
 	else if ( rho > 0.0f )
 	{
 		snprintf( text, size,
-				  "the leaf's state became NaN or infinite: the solve diverged (chebyshev_rho = %g extrapolates "
+				  "the leaf's state became NaN or infinite: the solve diverged (%s = %g extrapolates "
 				  "too far for this leaf: try a smaller one, or 0)",
-				  (double) rho );
+				  descent ? "descent_rho" : "chebyshev_rho", (double) rho );
 	}
 	else
 	{

@@ -744,11 +744,13 @@ static void run_summary_members( const run_state* r, FILE* summary, long long co
 			 "  \"pbd_rule\": \"%s\",\n  \"converged_frames\": %lld,\n  \"crossings_max\": %lld,\n"
 			 "  \"crossing_frames\": %lld,\n  \"drift_max\": %.6g,\n  \"mass_drift_max\": %.6g,\n"
 			 "  \"tilt_max_degrees\": %.4g,\n  \"ground_gap_max\": ",
-			 params->leaf.pbd.compliance > 0.0f ? "xpbd residual" : "paper (max |C/l| < lambda_C or the cap)",
+			 params->leaf.pbd.compliance == 0.0f ? "paper (max |C/l| < lambda_C or the cap)"
+			 : params->leaf.descent				 ? "descent (largest move < descent_tolerance of a spring)"
+												 : "xpbd residual",
 			 r->converged, (long long) r->crossings_max, r->crossing_frames, r->drift_max, r->mass_drift_max,
 			 r->tilt_max );
 	json_number( summary, r->gap_max );
-	/* the share of the multipliers' forces the XPBD step leaves unbalanced (docs/DESIGN.md §8) */
+	/* the share of the springs' forces the step leaves unbalanced (docs/DESIGN.md §8) */
 	fprintf( summary, ",\n  \"step_primal_last\": " );
 	json_number( summary, r->done > 0 ? r->stats.step_primal : NAN );
 	fprintf( summary, ",\n  \"step_primal_max\": " );
@@ -804,8 +806,10 @@ static void run_print( const run_state* r )
 			r->sum_osmosis / frames_done, r->sum_dynamics / frames_done, r->sum_collisions / frames_done,
 			r->sum_total / frames_done );
 	printf( "  frames: %s stop %g, converged in %lld of %lld (cap %d)",
-			o->params.leaf.pbd.compliance > 0.0f ? "XPBD residual" : "paper |C/l|", o->params.leaf.pbd.tolerance,
-			r->converged, r->done, o->params.leaf.pbd.max_iterations );
+			o->params.leaf.pbd.compliance == 0.0f ? "paper |C/l|"
+			: o->params.leaf.descent			  ? "descent (moves below descent_tolerance)"
+												  : "XPBD residual",
+			o->params.leaf.pbd.tolerance, r->converged, r->done, o->params.leaf.pbd.max_iterations );
 	if ( o->params.leaf.pbd.stall > 0.0f )
 	{
 		printf( ", stalled (pbd_stall %g) in %lld", o->params.leaf.pbd.stall, r->stalls );

@@ -226,10 +226,12 @@ static void table1_print_tail( int json, const sere_option_list* sets )
 		printf( "]\n}\n" );
 		return;
 	}
-	printf( "\neach cell: ours / paper. A frame's projection stops when its residual is below the preset's\n"
-			"strain_tolerance or at its max_iterations sweeps (a cap hit): max |C + alpha~ lambda|/l for an XPBD\n"
-			"step (compliance > 0), max |C/l| for the paper's PBD (--set compliance=0, the rule behind the\n"
-			"paper's Table 1). sweeps: PBD sweeps a frame; CG it.: the osmosis CG's iterations a frame on the\n"
+	printf( "\neach cell: ours / paper. A frame's step is the descent of the XPBD step's energy (the default),\n"
+			"which stops when a sweep moves no particle farther than descent_tolerance of a spring (or the\n"
+			"rounding of the coordinates), or at its max_iterations sweeps (a cap hit); with --set descent=0\n"
+			"the XPBD projection, stopped at max |C + alpha~ lambda|/l < strain_tolerance, and with\n"
+			"--set compliance=0 the paper's PBD, stopped at max |C/l| (the rule behind the paper's\n"
+			"Table 1). sweeps: sweeps a frame; CG it.: the osmosis CG's iterations a frame on the\n"
 			"triangle (T) and Voronoi (V) layer." );
 	if ( sets->count > 0 )
 	{

@@ -112,6 +112,15 @@ static const sere_param table[] = {
 	ROW( "step_residual", "", BOOL, leaf.step_residual, 0.0, 1.0,
 		 "measure each frame's XPBD step residual |h|/|grad C^T lambda| (Macklin et al. 2016 Eq. 8; stats.csv "
 		 "step_primal), outside the timed parts (1)" ),
+	ROW( "descent", "", BOOL, leaf.descent, 0.0, 1.0,
+		 "each frame's step as a descent of the XPBD step's energy (a Newton step per particle, solve/vbd.h) to moves "
+		 "below descent_tolerance: a rest state of the step (1), or XPBD (0)" ),
+	ROW( "descent_tolerance", "", FLOAT, leaf.descent_tolerance, 1e-9, 0.1,
+		 "the descent's stop: no particle moved farther than this fraction of the mean T spring in a sweep" ),
+	ROW( "descent_rho", "", FLOAT, leaf.descent_rho, 0.0, 0.999,
+		 "the descent's Chebyshev semi-iteration: spectral radius estimate rho (0: off)" ),
+	ROW( "descent_delay", "", INT32, leaf.descent_delay, 2.0, 1e5,
+		 "the descent's plain sweeps before the first Chebyshev extrapolation" ),
 	ROW( "crease", "", FLOAT, crease, -0.5, 0.5,
 		 "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
 	ROW( "curl", "", FLOAT, curl, -0.5, 0.5,
@@ -410,6 +419,26 @@ sere_status sere_params_apply( sere_sim_params* params, const char* preset, cons
 	for ( int k = 0; k < set_count && status == SERE_OK; ++k )
 	{
 		status = sere_params_set( params, sets[k], err, err_size );
+	}
+	/* a descent needs every spring's stiffness finite (solve/vbd.h); XPBD takes a rigid class */
+	const sere_leaf_params* leaf = &params->leaf;
+	const struct
+	{
+		const char* key;
+		float weight;
+	} weights[] = { { "vein_compliance", leaf->vein_compliance },
+					{ "voronoi_compliance", leaf->voronoi_compliance },
+					{ "link_compliance", leaf->link_compliance } };
+	for ( size_t k = 0; k < 3 && status == SERE_OK && leaf->descent && leaf->pbd.compliance > 0.0f; ++k )
+	{
+		if ( weights[k].weight == 0.0f )
+		{
+			snprintf( err, err_size,
+					  "%s = 0 makes those springs rigid, which the descent step cannot take: set it above 0, or "
+					  "descent=0 for the XPBD step",
+					  weights[k].key );
+			status = SERE_ERR_ARGUMENT;
+		}
 	}
 	return status;
 }

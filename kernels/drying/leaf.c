@@ -17,6 +17,8 @@ struct sere_leaf_sim
 	sere_model* model;
 	sere_osmosis *osmosis_t, *osmosis_v;
 	sere_pbd* pbd;
+	sere_vbd* vbd;	 /* the descent step (sere_leaf_params.descent) */
+	int vbd_weights; /* the compliance weights last set were all positive, as the descent needs */
 	sere_bvh* bvh;
 	sere_collide* collide;
 	float* h_hat;		 /* ĥ where the last pass moved a corner; elsewhere an older finite value (0 at first), read
@@ -63,6 +65,10 @@ sere_leaf_params sere_leaf_params_default( void )
 		.soften = 0,
 		.local_stop = 0,
 		.step_residual = 1,
+		.descent = 1,
+		.descent_tolerance = 1e-6f,
+		.descent_rho = 0.9f,
+		.descent_delay = 5,
 	};
 	params.pbd.compliance = 4e-6f;
 	/* Chebyshev semi-iteration (Wang 2015) of the XPBD sweeps is off (ρ = 0): the shapes it
@@ -88,6 +94,7 @@ void sere_leaf_destroy( sere_leaf_sim* sim )
 	sere_osmosis_destroy( sim->osmosis_t );
 	sere_osmosis_destroy( sim->osmosis_v );
 	sere_pbd_destroy( sim->pbd );
+	sere_vbd_destroy( sim->vbd );
 	sere_collide_destroy( sim->collide );
 	sere_bvh_destroy( sim->bvh );
 	sere_free( sim->h_hat );
@@ -107,6 +114,13 @@ void sere_leaf_destroy( sere_leaf_sim* sim )
 	sere_free( sim->w_frame );
 	sere_free( sim->frozen );
 	free( sim );
+}
+
+/* New rest lengths for both step solvers. */
+static sere_status set_rest( sere_leaf_sim* sim, const float* rest )
+{
+	sere_status status = sere_pbd_set_rest( sim->pbd, rest );
+	return status == SERE_OK ? sere_vbd_set_rest( sim->vbd, rest ) : status;
 }
 
 sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
@@ -137,7 +151,11 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	}
 	if ( status == SERE_OK )
 	{
-		status = sere_pbd_set_rest( sim->pbd, s->rest );
+		status = sere_vbd_create( s->a, s->b, s->count, model->p.count, &sim->vbd );
+	}
+	if ( status == SERE_OK )
+	{
+		status = set_rest( sim, s->rest );
 	}
 	if ( status == SERE_OK )
 	{
@@ -214,6 +232,7 @@ sere_status sere_leaf_set_threads( sere_leaf_sim* sim, int32_t threads )
 	sere_osmosis_set_threads( sim->osmosis_t, threads );
 	sere_osmosis_set_threads( sim->osmosis_v, threads );
 	sere_pbd_set_threads( sim->pbd, threads );
+	sere_vbd_set_threads( sim->vbd, threads );
 	sere_bvh_set_threads( sim->bvh, threads );
 	return SERE_OK;
 }
@@ -413,9 +432,69 @@ static sere_status set_weights( sere_leaf_sim* sim, const sere_leaf_params* para
 	}
 	sere_status status = sere_pbd_set_compliance_weights( sim->pbd, sim->weight );
 	sim->weights_set = status == SERE_OK;
+	/* a zero weight (a rigid class) is XPBD's to take; a descent refuses it at its step */
+	sim->vbd_weights = sere_vbd_set_compliance_weights( sim->vbd, sim->weight ) == SERE_OK;
 	sim->vein_weight = params->vein_compliance;
 	sim->voronoi_weight = params->voronoi_compliance;
 	sim->link_weight = params->link_compliance;
+	return status;
+}
+
+/* The prediction the frame's step starts from, kept for the step residual's measure when asked;
+ * returns the seconds it took (a measure beside the frame, kept out of its times). */
+static double keep_prediction( sere_leaf_sim* sim, const sere_leaf_params* params )
+{
+	const sere_particles* p = &sim->model->p;
+	const double start = omp_get_wtime();
+	if ( params->step_residual )
+	{
+		memcpy( sim->tx, p->px, sizeof( float ) * (size_t) p->count );
+		memcpy( sim->ty, p->py, sizeof( float ) * (size_t) p->count );
+		memcpy( sim->tz, p->pz, sizeof( float ) * (size_t) p->count );
+	}
+	return omp_get_wtime() - start;
+}
+
+/* Lines 17–22 as the descent of the XPBD step's energy (sere_leaf_params.descent, solve/vbd.h):
+ * the same compliances, weights and cap; the ground as the descent's bound, its push for the
+ * friction that follows. */
+static sere_status descend( sere_leaf_sim* sim, const sere_leaf_params* params, const sere_pbd_params* pbd,
+							sere_leaf_stats* stats, double* aside )
+{
+	sere_particles* p = &sim->model->p;
+	if ( !sim->vbd_weights )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const float length = sim->mean_rest * sim->thickness_scale;
+	sere_vbd_params step = sere_vbd_params_default();
+	step.dt = pbd->dt;
+	step.compliance = pbd->compliance;
+	step.tolerance = params->descent_tolerance * length;
+	step.max_iterations = pbd->max_iterations;
+	step.chebyshev_rho = params->descent_rho;
+	step.chebyshev_delay = params->descent_delay;
+	step.ground = isfinite( params->ground ) ? params->ground : -INFINITY;
+	*aside = keep_prediction( sim, params );
+	sere_vbd_report report;
+	sere_status status = sere_vbd_step( sim->vbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
+	if ( status == SERE_OK )
+	{
+		status = sere_vbd_ground_push( sim->vbd, sim->push );
+	}
+	if ( status == SERE_OK && params->step_residual )
+	{
+		const double start = omp_get_wtime();
+		sere_vbd_residuals r;
+		status =
+			sere_vbd_step_residual( sim->vbd, p->px, p->py, p->pz, sim->tx, sim->ty, sim->tz, p->inv_m, &step, &r );
+		stats->step_primal = r.constraint > 0.0 ? (float) ( r.primal / r.constraint ) : 0.0f;
+		*aside += omp_get_wtime() - start;
+	}
+	stats->pbd_iterations = report.iterations;
+	stats->residual = length > 0.0f ? report.max_move / length : report.max_move;
+	stats->pbd_converged = !report.hit_cap;
+	stats->pbd_hit_cap = report.hit_cap;
 	return status;
 }
 
@@ -445,18 +524,15 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		stats->pbd_converged = !report.hit_cap && !stats->pbd_stalled;
 		return status;
 	}
+	if ( params->descent )
+	{
+		return descend( sim, params, pbd, stats, aside );
+	}
 	sere_pbd_params step = *pbd;
 	step.warm = 0;
 	step.ground = ground ? params->ground : -INFINITY;
 	step.ground_slack = pbd->tolerance * sim->mean_rest * sim->thickness_scale;
-	double start = omp_get_wtime();
-	if ( params->step_residual )
-	{
-		memcpy( sim->tx, p->px, sizeof( float ) * (size_t) p->count );
-		memcpy( sim->ty, p->py, sizeof( float ) * (size_t) p->count );
-		memcpy( sim->tz, p->pz, sizeof( float ) * (size_t) p->count );
-	}
-	*aside = omp_get_wtime() - start;
+	*aside = keep_prediction( sim, params );
 	sere_status status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
 	if ( status != SERE_OK )
 	{
@@ -468,7 +544,7 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	}
 	if ( params->step_residual )
 	{
-		start = omp_get_wtime();
+		const double start = omp_get_wtime();
 		sere_pbd_residuals r;
 		status = sere_pbd_step_residual( sim->pbd, p->px, p->py, p->pz, sim->tx, sim->ty, sim->tz, p->inv_m, &r );
 		if ( status != SERE_OK )
@@ -528,7 +604,7 @@ static sere_status shrink_rest( sere_leaf_sim* sim, const sere_leaf_params* para
 									  model->s.count, model->p.m, model->p.m0, &params->shrink, sim->threads );
 	if ( status == SERE_OK )
 	{
-		status = sere_pbd_set_rest( sim->pbd, model->s.rest );
+		status = set_rest( sim, model->s.rest );
 	}
 	if ( status == SERE_OK )
 	{
@@ -770,7 +846,7 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
 	{
 		s->rest[k] = s->rest0[k] * ( ( s->kind[k] & SERE_SPRING_VEIN ) ? 1.0f - crease : 1.0f + curl );
 	}
-	sere_status status = sere_pbd_set_rest( sim->pbd, s->rest );
+	sere_status status = set_rest( sim, s->rest );
 	if ( status != SERE_OK )
 	{
 		return status;
@@ -795,7 +871,7 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
 		s->rest0[k] = s->rest[k] = sqrtf( dx * dx + dy * dy + dz * dz );
 	}
 	sim->thickness_scale = sere_leaf_thickness_scale( model );
-	status = sere_pbd_set_rest( sim->pbd, s->rest );
+	status = set_rest( sim, s->rest );
 	if ( status == SERE_OK )
 	{
 		status = sere_bvh_build( sim->bvh, p->x, p->y, p->z );
