@@ -35,6 +35,13 @@ ROWS = [
          floor="BM_XPBDFloor/threads:{t}/sweeps:200/real_time",
          peers=[], per=200,
          why="as PBD, with a third division and the multiplier's load and store"),
+    dict(kernel="descent sweep (the frame's step), the same springs, µs a sweep",
+         ours="BM_VBDStep/threads:{t}/sweeps:40/real_time",
+         floor="BM_VBDFloor/threads:{t}/sweeps:40/real_time",
+         peers=[("serial twin in double, a sweep and its two gradient passes", "BM_VBDReference")],
+         per=40, peer_per=1,
+         why="arithmetic: a √ and a division a spring end and a 3 × 3 solve a particle, one row of "
+             "16 springs at a time; a frame needs fewer of these sweeps than of XPBD's"),
     dict(kernel="PCG to 1e-8, maple T system, Jacobi",
          ours="BM_PCG/system:0/threads:{t}/sgs:0/real_time",
          floor="BM_PCGFloor/system:0/threads:{t}/real_time",

@@ -379,7 +379,7 @@ Test( drying, chebyshev_presets_land_on_the_converged_plain_shape, .disabled = S
 /* The descent (the default step) runs its sweeps with Chebyshev semi-iteration, ρ = 0.9 after 5
  * plain sweeps, on every preset, each frame to the rounding of the coordinates. A descent has one
  * answer near each prediction, so plain and accelerated sweeps converged that far land on one
- * shape. At 800 points the presets end 0.018 (red maple), 0.026 (green maple), 0.008 (plane tree)
+ * shape. At 800 points the presets end 0.015 (red maple), 0.026 (green maple), 0.009 (plane tree)
  * and 0.059 (wisteria) spacings from the plain sweeps, in 0.44–0.64 of their sweeps
  * (docs/DESIGN.md §8). The grass is left out: its nearly unstressed blade's shape is set at the
  * rounding of its coordinates (plain and accelerated sweeps, each converged to it, end 2.4

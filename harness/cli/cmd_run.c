@@ -807,9 +807,11 @@ static void run_print( const run_state* r )
 			r->sum_total / frames_done );
 	printf( "  frames: %s stop %g, converged in %lld of %lld (cap %d)",
 			o->params.leaf.pbd.compliance == 0.0f ? "paper |C/l|"
-			: o->params.leaf.descent			  ? "descent (moves below descent_tolerance)"
+			: o->params.leaf.descent			  ? "descent (moves below descent_tolerance of a spring)"
 												  : "XPBD residual",
-			o->params.leaf.pbd.tolerance, r->converged, r->done, o->params.leaf.pbd.max_iterations );
+			o->params.leaf.descent && o->params.leaf.pbd.compliance > 0.0f ? o->params.leaf.descent_tolerance
+																		   : o->params.leaf.pbd.tolerance,
+			r->converged, r->done, o->params.leaf.pbd.max_iterations );
 	if ( o->params.leaf.pbd.stall > 0.0f )
 	{
 		printf( ", stalled (pbd_stall %g) in %lld", o->params.leaf.pbd.stall, r->stalls );

@@ -17,8 +17,9 @@ struct sere_leaf_sim
 	sere_model* model;
 	sere_osmosis *osmosis_t, *osmosis_v;
 	sere_pbd* pbd;
-	sere_vbd* vbd;	 /* the descent step (sere_leaf_params.descent) */
-	int vbd_weights; /* the compliance weights last set were all positive, as the descent needs */
+	sere_vbd* vbd;						/* the descent step (sere_leaf_params.descent) */
+	int vbd_weights;					/* the compliance weights last set were all positive, as the descent needs */
+	int pbd_rest_stale, vbd_rest_stale; /* the model's rest lengths changed since the solver took them */
 	sere_bvh* bvh;
 	sere_collide* collide;
 	float* h_hat;		 /* ĥ where the last pass moved a corner; elsewhere an older finite value (0 at first), read
@@ -116,11 +117,27 @@ void sere_leaf_destroy( sere_leaf_sim* sim )
 	free( sim );
 }
 
-/* New rest lengths for both step solvers. */
-static sere_status set_rest( sere_leaf_sim* sim, const float* rest )
+/* The model's rest lengths changed: each step solver takes them when it next runs (a frame runs
+ * one of the two, and a copy into the other would be a pass over every spring for nothing). */
+static void rest_changed( sere_leaf_sim* sim )
 {
-	sere_status status = sere_pbd_set_rest( sim->pbd, rest );
-	return status == SERE_OK ? sere_vbd_set_rest( sim->vbd, rest ) : status;
+	sim->pbd_rest_stale = sim->vbd_rest_stale = 1;
+}
+
+/* The PBD workspace with the model's current rest lengths. */
+static sere_status pbd_current( sere_leaf_sim* sim )
+{
+	sere_status status = sim->pbd_rest_stale ? sere_pbd_set_rest( sim->pbd, sim->model->s.rest ) : SERE_OK;
+	sim->pbd_rest_stale = status != SERE_OK;
+	return status;
+}
+
+/* The descent's workspace with the model's current rest lengths. */
+static sere_status vbd_current( sere_leaf_sim* sim )
+{
+	sere_status status = sim->vbd_rest_stale ? sere_vbd_set_rest( sim->vbd, sim->model->s.rest ) : SERE_OK;
+	sim->vbd_rest_stale = status != SERE_OK;
+	return status;
 }
 
 sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
@@ -155,7 +172,8 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out )
 	}
 	if ( status == SERE_OK )
 	{
-		status = set_rest( sim, s->rest );
+		rest_changed( sim );
+		status = pbd_current( sim );
 	}
 	if ( status == SERE_OK )
 	{
@@ -466,6 +484,11 @@ static sere_status descend( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	{
 		return SERE_ERR_ARGUMENT;
 	}
+	sere_status status = vbd_current( sim );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
 	const float length = sim->mean_rest * sim->thickness_scale;
 	sere_vbd_params step = sere_vbd_params_default();
 	step.dt = pbd->dt;
@@ -477,7 +500,7 @@ static sere_status descend( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	step.ground = isfinite( params->ground ) ? params->ground : -INFINITY;
 	*aside = keep_prediction( sim, params );
 	sere_vbd_report report;
-	sere_status status = sere_vbd_step( sim->vbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
+	status = sere_vbd_step( sim->vbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
 	if ( status == SERE_OK )
 	{
 		status = sere_vbd_ground_push( sim->vbd, sim->push );
@@ -498,7 +521,8 @@ static sere_status descend( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	return status;
 }
 
-/* Lines 17–22 as one XPBD step: the projection meets the ground itself (sere_pbd_params.ground:
+/* Lines 17–22: the descent (descend, above) unless descent = 0 or the paper's PBD; as one XPBD
+ * step, the projection meets the ground itself (sere_pbd_params.ground:
  * when the sweeps converge it puts the particles below the ground onto it and goes on with the
  * same multipliers while that pushed more than the slack), so one call is the step; converged
  * when the residual and the ground are both met before the cap. The paper's mode projects once
@@ -510,9 +534,18 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	const int ground = isfinite( params->ground );
 	sere_pbd_report report = { 0, 0.0f, 0 };
 	stats->step_primal = NAN;
+	if ( params->descent && pbd->compliance > 0.0f )
+	{
+		return descend( sim, params, pbd, stats, aside );
+	}
+	sere_status status = pbd_current( sim );
+	if ( status != SERE_OK )
+	{
+		return status;
+	}
 	if ( pbd->compliance == 0.0f )
 	{
-		sere_status status =
+		status =
 			sere_pbd_project_stalling( sim->pbd, p->px, p->py, p->pz, p->inv_m, pbd, &report, &stats->pbd_stalled );
 		if ( ground )
 		{
@@ -524,16 +557,12 @@ static sere_status project( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		stats->pbd_converged = !report.hit_cap && !stats->pbd_stalled;
 		return status;
 	}
-	if ( params->descent )
-	{
-		return descend( sim, params, pbd, stats, aside );
-	}
 	sere_pbd_params step = *pbd;
 	step.warm = 0;
 	step.ground = ground ? params->ground : -INFINITY;
 	step.ground_slack = pbd->tolerance * sim->mean_rest * sim->thickness_scale;
 	*aside = keep_prediction( sim, params );
-	sere_status status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
+	status = sere_pbd_project( sim->pbd, p->px, p->py, p->pz, p->inv_m, &step, &report );
 	if ( status != SERE_OK )
 	{
 		return status;
@@ -604,10 +633,7 @@ static sere_status shrink_rest( sere_leaf_sim* sim, const sere_leaf_params* para
 									  model->s.count, model->p.m, model->p.m0, &params->shrink, sim->threads );
 	if ( status == SERE_OK )
 	{
-		status = set_rest( sim, model->s.rest );
-	}
-	if ( status == SERE_OK )
-	{
+		rest_changed( sim );
 		sim->thickness_scale = sere_leaf_thickness_scale( model );
 	}
 	return status;
@@ -846,7 +872,8 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
 	{
 		s->rest[k] = s->rest0[k] * ( ( s->kind[k] & SERE_SPRING_VEIN ) ? 1.0f - crease : 1.0f + curl );
 	}
-	sere_status status = set_rest( sim, s->rest );
+	rest_changed( sim );
+	sere_status status = pbd_current( sim );
 	if ( status != SERE_OK )
 	{
 		return status;
@@ -871,7 +898,8 @@ sere_status sere_leaf_shape_initial( sere_leaf_sim* sim, float crease, float cur
 		s->rest0[k] = s->rest[k] = sqrtf( dx * dx + dy * dy + dz * dz );
 	}
 	sim->thickness_scale = sere_leaf_thickness_scale( model );
-	status = set_rest( sim, s->rest );
+	rest_changed( sim );
+	status = pbd_current( sim );
 	if ( status == SERE_OK )
 	{
 		status = sere_bvh_build( sim->bvh, p->x, p->y, p->z );

@@ -19,9 +19,10 @@ enum
 	FLAG_NEGATIVE_MASS = 2,
 };
 
-/* A spring shorter than this is measured as this long: its direction is then 0 and it adds
- * nothing but its own stiffness along no axis (padding lanes read the dummy record this way). */
-#define TINY_LENGTH 1e-30f
+/* A spring shorter than this is measured as this long, so that 1/|d|² stays finite in float: a
+ * spring whose ends coincide then pulls along no axis, and a padding lane (stiffness 0, reading
+ * the dummy record) adds exact zeros. */
+#define TINY_LENGTH 1e-18f
 
 /* Per-thread results of a sweep, by sweep parity (a fast thread writes the next sweep's while a
  * slow one still reads this one's). One cache line each. */
@@ -41,10 +42,11 @@ struct sere_vbd
 	int32_t* slot_of;					 /* per particle */
 	int32_t* particle_of;				 /* per slot: the particle, or −1 for padding */
 	/* A row holds one spring of every lane of its block: the neighbour's record (an offset in
-	 * floats; padding reads the dummy record after the last slot), the spring, its rest length,
-	 * compliance weight and stiffness (0 for padding, which then adds nothing). */
+	 * floats; padding reads the dummy record after the last slot), the spring (padding: the
+	 * sentinel spring_count, whose rest length is 1 and weight +∞), its rest length and stiffness
+	 * (0 for padding, which then adds nothing). */
 	int32_t *neighbour, *spring;
-	float *rest, *weight, *stiffness;
+	float *rest, *stiffness;
 	/* Particle records (x, y, z, movable: 1 or 0) by slot, slots + 1 (the dummy); the Chebyshev history. */
 	float *record, *history[2];
 	float *mass, *tx, *ty, *tz, *push; /* by slot */
@@ -53,6 +55,9 @@ struct sere_vbd
 	int32_t *a, *b, *offset, *adjacency;
 	float *spring_rest, *spring_weight;
 	int rest_valid, push_valid;
+	int rest_stale;		  /* rest lengths changed since the rows took them */
+	int stiffness_stale;  /* weights changed since the rows' stiffnesses were computed */
+	float inverse_alpha;  /* the dt²/α the rows' stiffnesses were computed with */
 	thread_slot* results; /* SERE_MAX_THREADS */
 	sere_spin_barrier* barrier;
 };
@@ -75,10 +80,10 @@ void sere_vbd_destroy( sere_vbd* vbd )
 		return;
 	}
 	void* const arrays[] = {
-		vbd->block_row, vbd->slot_of,	vbd->particle_of, vbd->neighbour,	  vbd->spring,	   vbd->rest,
-		vbd->weight,	vbd->stiffness, vbd->record,	  vbd->history[0],	  vbd->history[1], vbd->mass,
-		vbd->tx,		vbd->ty,		vbd->tz,		  vbd->push,		  vbd->a,		   vbd->b,
-		vbd->offset,	vbd->adjacency, vbd->spring_rest, vbd->spring_weight, vbd->results,	   vbd->barrier
+		vbd->block_row, vbd->slot_of,	  vbd->particle_of,	  vbd->neighbour,  vbd->spring, vbd->rest,
+		vbd->stiffness, vbd->record,	  vbd->history[0],	  vbd->history[1], vbd->mass,	vbd->tx,
+		vbd->ty,		vbd->tz,		  vbd->push,		  vbd->a,		   vbd->b,		vbd->offset,
+		vbd->adjacency, vbd->spring_rest, vbd->spring_weight, vbd->results,	   vbd->barrier
 	};
 	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	free( vbd );
@@ -232,8 +237,8 @@ static sere_status lay_out_rows( sere_vbd* v )
 	const size_t entries = (size_t) v->rows * SERE_LANES + 1;
 	v->neighbour = sere_alloc( sizeof( int32_t ) * entries );
 	v->spring = sere_alloc( sizeof( int32_t ) * entries );
-	float** const columns[] = { &v->rest, &v->weight, &v->stiffness };
-	if ( v->neighbour == NULL || v->spring == NULL || !sere_alloc_floats( columns, 3, entries ) )
+	float** const columns[] = { &v->rest, &v->stiffness };
+	if ( v->neighbour == NULL || v->spring == NULL || !sere_alloc_floats( columns, 2, entries ) )
 	{
 		return SERE_ERR_MEMORY;
 	}
@@ -248,10 +253,8 @@ static sere_status lay_out_rows( sere_vbd* v )
 				const int32_t at = p >= 0 ? v->offset[p] + r - v->block_row[block] : -1;
 				const int32_t k = p >= 0 && at < v->offset[p + 1] ? v->adjacency[at] : -1;
 				const int32_t o = k < 0 ? -1 : v->a[k] == p ? v->b[k] : v->a[k];
-				v->spring[e] = k;
+				v->spring[e] = k < 0 ? v->spring_count : k;
 				v->neighbour[e] = 4 * ( o < 0 ? v->slots : v->slot_of[o] );
-				v->rest[e] = 1.0f;
-				v->weight[e] = 1.0f;
 			}
 		}
 	}
@@ -295,6 +298,8 @@ sere_status sere_vbd_create( const int32_t* a, const int32_t* b, int32_t spring_
 		{
 			v->spring_weight[k] = 1.0f;
 		}
+		v->spring_rest[spring_count] = 1.0f, v->spring_weight[spring_count] = INFINITY; /* padding */
+		v->stiffness_stale = 1;
 		status = build_adjacency( v );
 	}
 	status = status == SERE_OK ? color_particles( v, color, &v->colors ) : status;
@@ -344,11 +349,8 @@ sere_status sere_vbd_set_rest( sere_vbd* vbd, const float* rest )
 		}
 	}
 	memcpy( vbd->spring_rest, rest, sizeof( float ) * (size_t) vbd->spring_count );
-	for ( size_t e = 0; e < (size_t) vbd->rows * SERE_LANES; ++e )
-	{
-		vbd->rest[e] = vbd->spring[e] >= 0 ? rest[vbd->spring[e]] : 1.0f;
-	}
 	vbd->rest_valid = 1;
+	vbd->rest_stale = 1; /* the next step's pack lays them out, in parallel */
 	return SERE_OK;
 }
 
@@ -369,10 +371,7 @@ sere_status sere_vbd_set_compliance_weights( sere_vbd* vbd, const float* weight 
 	{
 		vbd->spring_weight[k] = weight != NULL ? weight[k] : 1.0f;
 	}
-	for ( size_t e = 0; e < (size_t) vbd->rows * SERE_LANES; ++e )
-	{
-		vbd->weight[e] = vbd->spring[e] >= 0 ? vbd->spring_weight[vbd->spring[e]] : 1.0f;
-	}
+	vbd->stiffness_stale = 1;
 	return SERE_OK;
 }
 
@@ -439,9 +438,22 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 		v->mass[s] = w > 0.0f ? 1.0f / w : 1.0f;
 		v->tx[s] = px[p], v->ty[s] = py[p], v->tz[s] = pz[p];
 	}
-	for ( size_t e = (size_t) v->block_row[first] * SERE_LANES; e < (size_t) v->block_row[last] * SERE_LANES; ++e )
+	/* the rows take what changed since the last step (the padding's sentinel gives rest 1 and
+	 * stiffness 0): branch-free gathers, in parallel */
+	const size_t begin = (size_t) v->block_row[first] * SERE_LANES, end = (size_t) v->block_row[last] * SERE_LANES;
+	if ( v->rest_stale )
 	{
-		v->stiffness[e] = v->spring[e] >= 0 ? setup->inverse_alpha / v->weight[e] : 0.0f;
+		for ( size_t e = begin; e < end; ++e )
+		{
+			v->rest[e] = v->spring_rest[v->spring[e]];
+		}
+	}
+	if ( v->stiffness_stale || v->inverse_alpha != setup->inverse_alpha )
+	{
+		for ( size_t e = begin; e < end; ++e )
+		{
+			v->stiffness[e] = setup->inverse_alpha / v->spring_weight[v->spring[e]];
+		}
 	}
 	if ( t == 0 )
 	{
@@ -476,23 +488,23 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 		sere_vf_load_records_at( v->record, v->neighbour + e, &ox, &oy, &oz, &ow );
 		const sere_vf k = sere_vf_load( v->stiffness + e ), l = sere_vf_load( v->rest + e );
 		const sere_vf dx = sere_vf_sub( x, ox ), dy = sere_vf_sub( y, oy ), dz = sere_vf_sub( z, oz );
-		const sere_vf length = sere_vf_norm3( dx, dy, dz );
-		const sere_vf inverse = sere_vf_div( one, sere_vf_max( length, tiny ) );
-		const sere_vf nx = sere_vf_mul( dx, inverse ), ny = sere_vf_mul( dy, inverse ), nz = sere_vf_mul( dz, inverse );
-		/* Jeong Eq. 13's C = |d| − l, its force k C n, and the block k [(1 − β) n nᵀ + β I] */
-		const sere_vf force = sere_vf_mul( k, sere_vf_sub( length, l ) );
-		gx = sere_vf_add( gx, sere_vf_mul( force, nx ) );
-		gy = sere_vf_add( gy, sere_vf_mul( force, ny ) );
-		gz = sere_vf_add( gz, sere_vf_mul( force, nz ) );
-		const sere_vf beta = sere_vf_max( zero, sere_vf_sub( one, sere_vf_mul( l, inverse ) ) );
-		const sere_vf along = sere_vf_mul( k, sere_vf_sub( one, beta ) ), across = sere_vf_mul( k, beta );
-		const sere_vf ax = sere_vf_mul( along, nx ), ay = sere_vf_mul( along, ny );
-		hxx = sere_vf_add( hxx, sere_vf_add( sere_vf_mul( ax, nx ), across ) );
-		hyy = sere_vf_add( hyy, sere_vf_add( sere_vf_mul( ay, ny ), across ) );
-		hzz = sere_vf_add( hzz, sere_vf_add( sere_vf_mul( sere_vf_mul( along, nz ), nz ), across ) );
-		hxy = sere_vf_add( hxy, sere_vf_mul( ax, ny ) );
-		hxz = sere_vf_add( hxz, sere_vf_mul( ax, nz ) );
-		hyz = sere_vf_add( hyz, sere_vf_mul( ay, nz ) );
+		const sere_vf inverse = sere_vf_div( one, sere_vf_max( sere_vf_norm3( dx, dy, dz ), tiny ) );
+		/* Jeong Eq. 13's C = |d| − l and its force k C n = k (1 − l/|d|) d; the block
+		 * k [(1 − β) n nᵀ + β I] with β = max(0, 1 − l/|d|), n nᵀ = d dᵀ/|d|² */
+		const sere_vf stretch = sere_vf_sub( one, sere_vf_mul( l, inverse ) );
+		const sere_vf force = sere_vf_mul( k, stretch );
+		gx = sere_vf_add( gx, sere_vf_mul( force, dx ) );
+		gy = sere_vf_add( gy, sere_vf_mul( force, dy ) );
+		gz = sere_vf_add( gz, sere_vf_mul( force, dz ) );
+		const sere_vf beta = sere_vf_max( zero, stretch ), across = sere_vf_mul( k, beta );
+		const sere_vf along = sere_vf_mul( sere_vf_sub( k, across ), sere_vf_mul( inverse, inverse ) );
+		const sere_vf ax = sere_vf_mul( along, dx ), ay = sere_vf_mul( along, dy );
+		hxx = sere_vf_add( hxx, sere_vf_add( sere_vf_mul( ax, dx ), across ) );
+		hyy = sere_vf_add( hyy, sere_vf_add( sere_vf_mul( ay, dy ), across ) );
+		hzz = sere_vf_add( hzz, sere_vf_add( sere_vf_mul( sere_vf_mul( along, dz ), dz ), across ) );
+		hxy = sere_vf_add( hxy, sere_vf_mul( ax, dy ) );
+		hxz = sere_vf_add( hxz, sere_vf_mul( ax, dz ) );
+		hyz = sere_vf_add( hyz, sere_vf_mul( ay, dz ) );
 	}
 	/* Δ = −H⁻¹ g by the adjugate of the symmetric block */
 	const sere_vf c00 = sere_vf_sub( sere_vf_mul( hyy, hzz ), sere_vf_mul( hyz, hyz ) );
@@ -576,27 +588,26 @@ static float exchange( sere_vbd* v, int t, int threads, int parity, float move2,
 /* Chebyshev semi-iteration after sweep k (vbd.h) over thread t's blocks, with this thread's view
  * of the history: hist[1] holds x_{k−1} and hist[0] x_{k−2}. x_k is written to the records and
  * over x_{k−2}, which then becomes the newest; ω = 0 (within the delay) only records x̂_k. Each
- * thread keeps the history of its own blocks, so no other thread reads it. The ground bounds
- * x_k too. */
-static void chebyshev( sere_vbd* v, const step_setup* setup, float omega, float** hist, int t, int threads )
+ * thread keeps the history of its own blocks, so no other thread reads it. The movable flag of a
+ * record comes out as it went in (ω (f − f) + f = f). The ground is left to the next sweep, whose
+ * every step ends above it: the positions returned are a sweep's, never an extrapolation's. */
+static void chebyshev( sere_vbd* v, float omega, float** hist, int t, int threads )
 {
 	int32_t first, last;
 	sere_team_share( 0, v->blocks, t, threads, &first, &last );
-	float *x = v->record, *old = hist[0];
+	float* restrict x = v->record;
+	float* restrict old = hist[0];
 	const size_t begin = 4 * (size_t) first * SERE_LANES, end = 4 * (size_t) last * SERE_LANES;
-	if ( omega != 0.0f )
+	if ( omega == 0.0f )
 	{
-		for ( size_t i = begin; i < end; ++i )
-		{
-			/* the movable flag (i % 4 == 3) comes out as it went in: ω (f − f) + f = f */
-			x[i] = omega * ( x[i] - old[i] ) + old[i];
-		}
-		for ( size_t i = begin; i < end; i += 4 )
-		{
-			x[i + 2] = x[i + 3] > 0.0f && x[i + 2] < setup->ground ? setup->ground : x[i + 2];
-		}
+		memcpy( old + begin, x + begin, sizeof( float ) * ( end - begin ) );
 	}
-	memcpy( old + begin, x + begin, sizeof( float ) * ( end - begin ) );
+	for ( size_t i = begin; omega != 0.0f && i < end; ++i )
+	{
+		const float r = omega * ( x[i] - old[i] ) + old[i];
+		x[i] = r;
+		old[i] = r;
+	}
 	hist[0] = hist[1];
 	hist[1] = old;
 }
@@ -639,7 +650,7 @@ static step_outcome sweep( sere_vbd* v, const step_setup* setup, float tolerance
 	float* hist[2] = { v->history[0], v->history[1] };
 	if ( setup->rho > 0.0f )
 	{
-		chebyshev( v, setup, 0.0f, hist, t, threads ); /* x_0, the prediction */
+		chebyshev( v, 0.0f, hist, t, threads ); /* x_0, the prediction */
 	}
 	for ( int32_t k = 1; k <= setup->sweeps && result.flags == 0; ++k )
 	{
@@ -674,7 +685,7 @@ static step_outcome sweep( sere_vbd* v, const step_setup* setup, float tolerance
 			omega = k <= setup->delay		? 0.0f
 					: k == setup->delay + 1 ? 2.0f / ( 2.0f - rho2 )
 											: 4.0f / ( 4.0f - rho2 * omega );
-			chebyshev( v, setup, omega, hist, t, threads );
+			chebyshev( v, omega, hist, t, threads );
 			sere_spin_barrier_wait( v->barrier, threads );
 		}
 	}
@@ -686,6 +697,7 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 	int requested = sere_team_for( v->thread_count );
 	requested = requested < 1 ? 1 : requested > SERE_MAX_THREADS ? SERE_MAX_THREADS : requested;
 	step_outcome outcome = { 0, 0, 0.0f, 0, 0.0f };
+	/* pack reads the stale flags in every thread; they are cleared once the region has ended */
 #pragma omp parallel num_threads( requested )
 	{
 		const int t = omp_get_thread_num(), threads = omp_get_num_threads();
@@ -713,6 +725,8 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 			outcome = result;
 		}
 	}
+	v->rest_stale = v->stiffness_stale = 0;
+	v->inverse_alpha = setup->inverse_alpha;
 	return outcome;
 }
 
