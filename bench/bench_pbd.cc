@@ -53,11 +53,7 @@ scene& maple()
 	s.y.assign( m->p.y, m->p.y + m->p.count );
 	s.z.assign( m->p.z, m->p.z + m->p.count );
 	s.inv_m.assign( m->p.inv_m, m->p.inv_m + m->p.count );
-	s.rest.assign( m->s.rest, m->s.rest + m->s.count );
-	for ( int32_t k = 0; k < m->s.count; ++k )
-	{
-		s.rest[k] *= ( m->s.kind[k] & SERE_SPRING_LAYER_MASK ) == SERE_SPRING_V ? 0.9f : 1.0f;
-	}
+	s.rest = sere_bench_frustrated_rest( m );
 	if ( sere_pbd_create( m->s.a, m->s.b, m->s.count, m->p.count, &s.pbd ) != SERE_OK ||
 		 sere_pbd_set_rest( s.pbd, s.rest.data() ) != SERE_OK )
 	{

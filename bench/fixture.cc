@@ -102,3 +102,13 @@ const sere_model* sere_bench_dried_model( sere_bench_leaf which, int frames )
 	dried_frames[k] = frames;
 	return &dried[k];
 }
+
+std::vector<float> sere_bench_frustrated_rest( const sere_model* model )
+{
+	std::vector<float> rest( model->s.rest, model->s.rest + model->s.count );
+	for ( int32_t k = 0; k < model->s.count; ++k )
+	{
+		rest[k] *= ( model->s.kind[k] & SERE_SPRING_LAYER_MASK ) == SERE_SPRING_V ? 0.9f : 1.0f;
+	}
+	return rest;
+}

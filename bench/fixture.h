@@ -5,6 +5,8 @@
 
 #include "drying/model.h"
 
+#include <vector>
+
 enum sere_bench_leaf
 {
 	SERE_BENCH_MAPLE = 0,
@@ -20,3 +22,7 @@ const sere_model* sere_bench_model( sere_bench_leaf leaf );
 // plane-tree, wisteria): a shrunk, curled and crumpled state for the collision benchmarks. Built
 // once per process (the maple's 400 frames take a few seconds) and never modified by callers.
 const sere_model* sere_bench_dried_model( sere_bench_leaf leaf, int frames );
+
+// The model's rest lengths with its Voronoi springs shortened by 10%, so that every sweep of a
+// projection or descent over them has work to do (bench_pbd.cc, bench_vbd.cc).
+std::vector<float> sere_bench_frustrated_rest( const sere_model* model );

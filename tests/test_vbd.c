@@ -55,6 +55,20 @@ static double spacings_from( const sere_test_sheet* s, const double* x )
 	return worst / SERE_TEST_SHEET_SPACING;
 }
 
+/* The sheet's positions (prediction: its prediction t*) as 3 doubles a particle, malloc'd. */
+static double* sheet_positions( const sere_test_sheet* s, int prediction )
+{
+	double* x = malloc( sizeof( double ) * 3 * (size_t) s->n );
+	cr_assert_not_null( x );
+	for ( int32_t i = 0; i < s->n; ++i )
+	{
+		x[3 * i] = prediction ? s->tx[i] : s->x[i];
+		x[3 * i + 1] = prediction ? s->ty[i] : s->y[i];
+		x[3 * i + 2] = prediction ? s->tz[i] : s->z[i];
+	}
+	return x;
+}
+
 Test( vbd, lone_spring_lands_on_the_minimum_by_hand )
 {
 	/* End 0 held at the origin, end 1 predicted at 2 with m = 1, rest 1, k = dt²/α = 3: along the
@@ -110,11 +124,7 @@ Test( vbd, reaches_the_twins_minimum_where_it_is_unique )
 	sheet_step( &s, 2, &params );
 	double* stiffness;
 	const sere_vbd_ref_problem problem = twin_problem( &s, &params, &stiffness );
-	double* twin = malloc( sizeof( double ) * 3 * (size_t) s.n );
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		twin[3 * i] = s.tx[i], twin[3 * i + 1] = s.ty[i], twin[3 * i + 2] = s.tz[i];
-	}
+	double* twin = sheet_positions( &s, 1 );
 	cr_assert_geq( sere_vbd_ref_descend( &problem, twin, 1e-9, 20000 ), 0 );
 	const double apart = spacings_from( &s, twin );
 	cr_log_info( "descent against the twin: %g spacings", apart );
@@ -135,11 +145,7 @@ Test( vbd, stops_where_the_twin_measures_no_force_on_a_frustrated_sheet )
 	sheet_step( &s, 2, &params );
 	double* stiffness;
 	const sere_vbd_ref_problem problem = twin_problem( &s, &params, &stiffness );
-	double* x = malloc( sizeof( double ) * 3 * (size_t) s.n );
-	for ( int32_t i = 0; i < s.n; ++i )
-	{
-		x[3 * i] = s.x[i], x[3 * i + 1] = s.y[i], x[3 * i + 2] = s.z[i];
-	}
+	double* x = sheet_positions( &s, 0 );
 	const double gradient = sere_vbd_ref_gradient( &problem, x );
 	cr_log_info( "largest |dE/dx_i| at the descent's answer: %g", gradient );
 	cr_expect_lt( gradient, 1e-4 );
@@ -192,11 +198,7 @@ Test( vbd, chebyshev_reaches_the_same_minimum_in_fewer_sweeps )
 	const int32_t plain_sweeps = sheet_step( &plain, 1, &params );
 	params.chebyshev_rho = 0.8f;
 	const int32_t fast_sweeps = sheet_step( &fast, 1, &params );
-	double* x = malloc( sizeof( double ) * 3 * (size_t) plain.n );
-	for ( int32_t i = 0; i < plain.n; ++i )
-	{
-		x[3 * i] = plain.x[i], x[3 * i + 1] = plain.y[i], x[3 * i + 2] = plain.z[i];
-	}
+	double* x = sheet_positions( &plain, 0 );
 	const double apart = spacings_from( &fast, x );
 	cr_log_info( "plain %d sweeps, Chebyshev %d, %g spacings apart", plain_sweeps, fast_sweeps, apart );
 	cr_expect_lt( apart, 1e-3 );

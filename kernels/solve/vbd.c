@@ -463,18 +463,25 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 	return flags;
 }
 
+/* The records of block b's lanes, and their slots into at (for storing them back). */
+static void load_block( const sere_vbd* v, int32_t block, int32_t at[SERE_LANES], sere_vf* x, sere_vf* y, sere_vf* z,
+						sere_vf* movable )
+{
+	for ( int32_t j = 0; j < SERE_LANES; ++j )
+	{
+		at[j] = block * SERE_LANES + j;
+	}
+	sere_vf_load_records( v->record, at, x, y, z, movable );
+}
+
 /* One Newton step on every lane of block b (module comment of sere_vbd_step); returns the
  * largest squared move, +∞ when a lane's is not finite. */
 static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 {
 	const int32_t s0 = block * SERE_LANES;
 	int32_t at[SERE_LANES];
-	for ( int32_t j = 0; j < SERE_LANES; ++j )
-	{
-		at[j] = s0 + j;
-	}
 	sere_vf x, y, z, movable;
-	sere_vf_load_records( v->record, at, &x, &y, &z, &movable );
+	load_block( v, block, at, &x, &y, &z, &movable );
 	const sere_vf m = sere_vf_load( v->mass + s0 );
 	sere_vf gx = sere_vf_mul( m, sere_vf_sub( x, sere_vf_load( v->tx + s0 ) ) );
 	sere_vf gy = sere_vf_mul( m, sere_vf_sub( y, sere_vf_load( v->ty + s0 ) ) );
@@ -545,12 +552,8 @@ static float block_touch( sere_vbd* v, int32_t block )
 {
 	const int32_t s0 = block * SERE_LANES;
 	int32_t at[SERE_LANES];
-	for ( int32_t j = 0; j < SERE_LANES; ++j )
-	{
-		at[j] = s0 + j;
-	}
 	sere_vf x, y, z, movable;
-	sere_vf_load_records( v->record, at, &x, &y, &z, &movable );
+	load_block( v, block, at, &x, &y, &z, &movable );
 	sere_vf sum = sere_vf_add( sere_vf_load( v->mass + s0 ), sere_vf_load( v->tx + s0 ) );
 	sum = sere_vf_add( sum, sere_vf_add( sere_vf_load( v->ty + s0 ), sere_vf_load( v->tz + s0 ) ) );
 	for ( int32_t r = v->block_row[block]; r < v->block_row[block + 1]; ++r )
