@@ -22,6 +22,7 @@
 #include "solve/collide.h"
 #include "solve/color.h"
 #include "solve/pbd.h"
+#include "solve/vbd.h"
 
 /* drying: Jeong et al.: the double layer, osmosis, shrinkage, the leaf step */
 #include "drying/layers.h"
