@@ -511,7 +511,10 @@ static sere_status descend( sere_leaf_sim* sim, const sere_leaf_params* params, 
 		sere_vbd_residuals r;
 		status =
 			sere_vbd_step_residual( sim->vbd, p->px, p->py, p->pz, sim->tx, sim->ty, sim->tz, p->inv_m, &step, &r );
-		stats->step_primal = r.constraint > 0.0 ? (float) ( r.primal / r.constraint ) : 0.0f;
+		if ( status == SERE_OK )
+		{
+			stats->step_primal = r.constraint > 0.0 ? (float) ( r.primal / r.constraint ) : 0.0f;
+		}
 		*aside += omp_get_wtime() - start;
 	}
 	stats->pbd_iterations = report.iterations;
