@@ -6,6 +6,7 @@
  * one value hold at every width. The PBD projection's hash was taken again at the commit that
  * made the XPBD factor one quotient (f = r/((w_a + w_b + α̃) len) instead of −Δλ/len: rounding
  * only), at all three widths. */
+#include "core/internal/simd.h"
 #include "fixture.h"
 #include "solve/bvh.h"
 #include "solve/collide.h"
@@ -183,6 +184,27 @@ Test( solvebits, pbd_projection )
  * only its own particle's springs in adjacency order (the padding rows add zeros), so the
  * blocks' widths do not show in the bits. Taken at the commit that added the descent, native
  * (AVX-512), AVX2 and portable builds alike. */
+/* The lane layer's fused multiply-add rounds once at every width: (1 + 2⁻¹³)² − 1 is exactly
+ * 2⁻¹² + 2⁻²⁶, which float holds; a multiply rounded before the add loses the 2⁻²⁶. */
+Test( solvebits, lane_fma_rounds_once )
+{
+	const float a = 1.0f + ldexpf( 1.0f, -13 ), exact = ldexpf( 1.0f, -12 ) + ldexpf( 1.0f, -26 );
+	_Alignas( 64 ) float out[SERE_LANES], apart[SERE_LANES];
+	const sere_vf va = sere_vf_splat( a ), one = sere_vf_splat( 1.0f );
+	sere_vf_store( out, sere_vf_fma( va, va, sere_vf_splat( -1.0f ) ) );
+	sere_vf_store( apart, sere_vf_sub( sere_vf_mul( va, va ), one ) );
+	for ( int j = 0; j < SERE_LANES; ++j )
+	{
+		cr_expect_eq( out[j], exact, "lane %d: fma %a, exact %a", j, (double) out[j], (double) exact );
+		cr_expect_neq( apart[j], exact, "lane %d: the unfused product must round", j );
+	}
+	sere_vf_store( out, sere_vf_fnma( va, va, one ) );
+	for ( int j = 0; j < SERE_LANES; ++j )
+	{
+		cr_expect_eq( out[j], -exact, "lane %d: fnma %a", j, (double) out[j] );
+	}
+}
+
 Test( solvebits, vbd_step )
 {
 	bits_sheet s;
@@ -220,7 +242,7 @@ Test( solvebits, vbd_step )
 
 	cr_assert_eq( sere_vbd_touch_sweeps( vbd, s.x, s.y, s.z, s.inv_m, 5 ), SERE_OK );
 	h = bits_positions( h, &s );
-	cr_expect_eq( h, 0x6c67dda9a44b85c4ull, "hash %#018llx", (unsigned long long) h );
+	cr_expect_eq( h, 0x84c8c359179edb6aull, "hash %#018llx", (unsigned long long) h );
 	sere_vbd_destroy( vbd );
 	bits_sheet_free( &s );
 }

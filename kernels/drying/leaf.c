@@ -69,7 +69,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.descent = 1,
 		.descent_tolerance = 1e-6f,
 		.descent_rho = 0.9f,
-		.descent_delay = 5,
+		.descent_delay = 2,
 	};
 	params.pbd.compliance = 4e-6f;
 	/* Chebyshev semi-iteration (Wang 2015) of the XPBD sweeps is off (ρ = 0): the shapes it

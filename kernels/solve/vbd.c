@@ -486,7 +486,9 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 	sere_vf gx = sere_vf_mul( m, sere_vf_sub( x, sere_vf_load( v->tx + s0 ) ) );
 	sere_vf gy = sere_vf_mul( m, sere_vf_sub( y, sere_vf_load( v->ty + s0 ) ) );
 	sere_vf gz = sere_vf_mul( m, sere_vf_sub( z, sere_vf_load( v->tz + s0 ) ) );
-	sere_vf hxx = m, hyy = m, hzz = m, hxy = sere_vf_splat( 0.0f ), hxz = hxy, hyz = hxy;
+	/* the Hessian's off-diagonal and its anisotropic diagonal; the isotropic part Σ k β apart,
+	 * added to the diagonal once after the rows */
+	sere_vf hxx = m, hyy = m, hzz = m, hxy = sere_vf_splat( 0.0f ), hxz = hxy, hyz = hxy, isotropic = hxy;
 	const sere_vf zero = hxy, one = sere_vf_splat( 1.0f ), tiny = sere_vf_splat( TINY_LENGTH );
 	for ( int32_t r = v->block_row[block]; r < v->block_row[block + 1]; ++r )
 	{
@@ -495,24 +497,27 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 		sere_vf_load_records_at( v->record, v->neighbour + e, &ox, &oy, &oz, &ow );
 		const sere_vf k = sere_vf_load( v->stiffness + e ), l = sere_vf_load( v->rest + e );
 		const sere_vf dx = sere_vf_sub( x, ox ), dy = sere_vf_sub( y, oy ), dz = sere_vf_sub( z, oz );
-		const sere_vf inverse = sere_vf_div( one, sere_vf_max( sere_vf_norm3( dx, dy, dz ), tiny ) );
+		const sere_vf d2 = sere_vf_fma( dz, dz, sere_vf_fma( dy, dy, sere_vf_mul( dx, dx ) ) );
+		const sere_vf inverse = sere_vf_div( one, sere_vf_max( sere_vf_sqrt( d2 ), tiny ) );
 		/* Jeong Eq. 13's C = |d| − l and its force k C n = k (1 − l/|d|) d; the block
-		 * k [(1 − β) n nᵀ + β I] with β = max(0, 1 − l/|d|), n nᵀ = d dᵀ/|d|² */
-		const sere_vf stretch = sere_vf_sub( one, sere_vf_mul( l, inverse ) );
-		const sere_vf force = sere_vf_mul( k, stretch );
-		gx = sere_vf_add( gx, sere_vf_mul( force, dx ) );
-		gy = sere_vf_add( gy, sere_vf_mul( force, dy ) );
-		gz = sere_vf_add( gz, sere_vf_mul( force, dz ) );
-		const sere_vf beta = sere_vf_max( zero, stretch ), across = sere_vf_mul( k, beta );
+		 * k [(1 − β) n nᵀ + β I] with β = max(0, 1 − l/|d|), n nᵀ = d dᵀ/|d|², so that
+		 * k β = max(0, force) (k ≥ 0); fused multiply-adds, one rounding each at every width */
+		const sere_vf force = sere_vf_mul( k, sere_vf_fnma( l, inverse, one ) );
+		gx = sere_vf_fma( force, dx, gx );
+		gy = sere_vf_fma( force, dy, gy );
+		gz = sere_vf_fma( force, dz, gz );
+		const sere_vf across = sere_vf_max( zero, force );
 		const sere_vf along = sere_vf_mul( sere_vf_sub( k, across ), sere_vf_mul( inverse, inverse ) );
-		const sere_vf ax = sere_vf_mul( along, dx ), ay = sere_vf_mul( along, dy );
-		hxx = sere_vf_add( hxx, sere_vf_add( sere_vf_mul( ax, dx ), across ) );
-		hyy = sere_vf_add( hyy, sere_vf_add( sere_vf_mul( ay, dy ), across ) );
-		hzz = sere_vf_add( hzz, sere_vf_add( sere_vf_mul( sere_vf_mul( along, dz ), dz ), across ) );
-		hxy = sere_vf_add( hxy, sere_vf_mul( ax, dy ) );
-		hxz = sere_vf_add( hxz, sere_vf_mul( ax, dz ) );
-		hyz = sere_vf_add( hyz, sere_vf_mul( ay, dz ) );
+		const sere_vf ax = sere_vf_mul( along, dx ), ay = sere_vf_mul( along, dy ), az = sere_vf_mul( along, dz );
+		hxx = sere_vf_fma( ax, dx, hxx );
+		hyy = sere_vf_fma( ay, dy, hyy );
+		hzz = sere_vf_fma( az, dz, hzz );
+		hxy = sere_vf_fma( ax, dy, hxy );
+		hxz = sere_vf_fma( ax, dz, hxz );
+		hyz = sere_vf_fma( ay, dz, hyz );
+		isotropic = sere_vf_add( isotropic, across );
 	}
+	hxx = sere_vf_add( hxx, isotropic ), hyy = sere_vf_add( hyy, isotropic ), hzz = sere_vf_add( hzz, isotropic );
 	/* Δ = −H⁻¹ g by the adjugate of the symmetric block */
 	const sere_vf c00 = sere_vf_sub( sere_vf_mul( hyy, hzz ), sere_vf_mul( hyz, hyz ) );
 	const sere_vf c01 = sere_vf_sub( sere_vf_mul( hxz, hyz ), sere_vf_mul( hxy, hzz ) );

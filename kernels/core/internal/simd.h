@@ -1,10 +1,12 @@
 /* sere — private to the kernels (not installed, not part of the API): the SIMD lane layer.
  *
  * A kernel body is written once over sere_vf (SERE_LANES floats) and sere_vmask (one flag per
- * lane); the build picks the width: AVX-512 (16 lanes), AVX2 (8) or a portable 4 lanes in plain
- * C. Every operation is lane-wise IEEE single precision (no FMA: -ffp-contract=off, and none is
- * called here), so a body gives the same bits at every width; only the reductions (max) cross
- * lanes, and a maximum does not depend on the order it is taken in.
+ * lane); the build picks the width: AVX-512 (16 lanes), AVX2 with FMA (8) or a portable 4 lanes
+ * in plain C. Every operation is lane-wise IEEE single precision, so a body gives the same bits at
+ * every width; only the reductions (max) cross lanes, and a maximum does not depend on the order
+ * it is taken in. The compiler contracts nothing (-ffp-contract=off); a fused multiply-add is a
+ * body's explicit choice, sere_vf_fma, which rounds once at every width (the FMA instruction, or
+ * C's fmaf where the target has none).
  *
  * The record loads serve kernels that keep a particle as one 16-byte record (x, y, z, w): a lane
  * fetches its record with one 128-bit load and an in-register 4 × 4 transpose hands out the
@@ -44,6 +46,16 @@ static inline sere_vf sere_vf_mul( sere_vf a, sere_vf b )
 static inline sere_vf sere_vf_div( sere_vf a, sere_vf b )
 {
 	return _mm512_div_ps( a, b );
+}
+/* a b + c, rounded once. */
+static inline sere_vf sere_vf_fma( sere_vf a, sere_vf b, sere_vf c )
+{
+	return _mm512_fmadd_ps( a, b, c );
+}
+/* c − a b, rounded once. */
+static inline sere_vf sere_vf_fnma( sere_vf a, sere_vf b, sere_vf c )
+{
+	return _mm512_fnmadd_ps( a, b, c );
 }
 static inline sere_vf sere_vf_sqrt( sere_vf a )
 {
@@ -221,8 +233,10 @@ static inline float sere_vf_max_all( sere_vf a )
 	return _mm512_reduce_max_ps( a );
 }
 
-#elif defined( __AVX2__ )
+#elif defined( __AVX2__ ) && defined( __FMA__ )
 
+/* Every AVX2 processor has FMA; a build that enables one without the other takes the portable
+ * width. */
 #define SERE_LANES 8
 typedef __m256 sere_vf;
 /* A lane is set when all its bits are (the compare results AVX gives). */
@@ -247,6 +261,16 @@ static inline sere_vf sere_vf_mul( sere_vf a, sere_vf b )
 static inline sere_vf sere_vf_div( sere_vf a, sere_vf b )
 {
 	return _mm256_div_ps( a, b );
+}
+/* a b + c, rounded once. */
+static inline sere_vf sere_vf_fma( sere_vf a, sere_vf b, sere_vf c )
+{
+	return _mm256_fmadd_ps( a, b, c );
+}
+/* c − a b, rounded once. */
+static inline sere_vf sere_vf_fnma( sere_vf a, sere_vf b, sere_vf c )
+{
+	return _mm256_fnmadd_ps( a, b, c );
 }
 static inline sere_vf sere_vf_sqrt( sere_vf a )
 {
@@ -454,6 +478,16 @@ static inline sere_vf sere_vf_mul( sere_vf a, sere_vf b )
 static inline sere_vf sere_vf_div( sere_vf a, sere_vf b )
 {
 	SERE_VF_LANEWISE( a.v[j] / b.v[j] );
+}
+/* a b + c, rounded once (C's fmaf: the instruction where the target has one). */
+static inline sere_vf sere_vf_fma( sere_vf a, sere_vf b, sere_vf c )
+{
+	SERE_VF_LANEWISE( fmaf( a.v[j], b.v[j], c.v[j] ) );
+}
+/* c − a b, rounded once. */
+static inline sere_vf sere_vf_fnma( sere_vf a, sere_vf b, sere_vf c )
+{
+	SERE_VF_LANEWISE( fmaf( -a.v[j], b.v[j], c.v[j] ) );
 }
 static inline sere_vf sere_vf_sqrt( sere_vf a )
 {
