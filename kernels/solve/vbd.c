@@ -411,14 +411,42 @@ typedef struct step_outcome
 	float tolerance2; /* the stop the sweeps used: the caller's, or the positions' rounding */
 } step_outcome;
 
-/* Thread t's share of the slots (whole blocks): records, masses, prediction and the stiffnesses
- * of its blocks' rows. Returns the input's flags. */
-static int32_t pack( sere_vbd* v, const float* px, const float* py, const float* pz, const float* inv_m,
-					 const step_setup* setup, int t, int threads, float* largest )
+/* The first block of color c whose rows start at or past `row`. */
+static int32_t block_at_row( const sere_vbd* v, int32_t c, int64_t row )
 {
-	int32_t first, last, flags = 0;
-	float big = 0.0f;
-	sere_team_share( 0, v->blocks, t, threads, &first, &last );
+	int32_t lo = v->color_block[c], hi = v->color_block[c + 1];
+	while ( lo < hi )
+	{
+		const int32_t mid = lo + ( hi - lo ) / 2;
+		if ( v->block_row[mid] < row )
+		{
+			lo = mid + 1;
+		}
+		else
+		{
+			hi = mid;
+		}
+	}
+	return lo;
+}
+
+/* Thread t's blocks of color c, [*first, *last): equal shares of the color's rows, not of its
+ * blocks, since a color's blocks are sorted by degree (an even cut of the blocks gave one thread
+ * the triangle layer's twelve-spring particles and the other the Voronoi layer's six). */
+static void color_share( const sere_vbd* v, int32_t c, int t, int threads, int32_t* first, int32_t* last )
+{
+	const int64_t begin = v->block_row[v->color_block[c]], rows = v->block_row[v->color_block[c + 1]] - begin;
+	*first = t == 0 ? v->color_block[c] : block_at_row( v, c, begin + rows * t / threads );
+	*last = t + 1 == threads ? v->color_block[c + 1] : block_at_row( v, c, begin + rows * ( t + 1 ) / threads );
+}
+
+/* Blocks [first, last)'s records, masses, prediction and the stiffnesses of their rows. Returns
+ * the input's flags and raises *largest to the largest |coordinate|. */
+static int32_t pack_blocks( sere_vbd* v, const float* px, const float* py, const float* pz, const float* inv_m,
+							const step_setup* setup, int32_t first, int32_t last, float* largest )
+{
+	int32_t flags = 0;
+	float big = *largest;
 	for ( int32_t s = first * SERE_LANES; s < last * SERE_LANES; ++s )
 	{
 		const int32_t p = v->particle_of[s];
@@ -439,7 +467,7 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 		v->tx[s] = px[p], v->ty[s] = py[p], v->tz[s] = pz[p];
 	}
 	/* the rows take what changed since the last step (the padding's sentinel gives rest 1 and
-	 * stiffness 0): branch-free gathers, in parallel */
+	 * stiffness 0): branch-free gathers */
 	const size_t begin = (size_t) v->block_row[first] * SERE_LANES, end = (size_t) v->block_row[last] * SERE_LANES;
 	if ( v->rest_stale )
 	{
@@ -455,11 +483,28 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 			v->stiffness[e] = setup->inverse_alpha / v->spring_weight[v->spring[e]];
 		}
 	}
+	*largest = big;
+	return flags;
+}
+
+/* Thread t's blocks, color by color as its sweeps take them (color_share), so that each block's
+ * records and rows are written by the thread that sweeps and extrapolates them and stay in its
+ * cache. Returns the input's flags. */
+static int32_t pack( sere_vbd* v, const float* px, const float* py, const float* pz, const float* inv_m,
+					 const step_setup* setup, int t, int threads, float* largest )
+{
+	int32_t flags = 0;
+	*largest = 0.0f;
+	for ( int32_t c = 0; c < v->colors; ++c )
+	{
+		int32_t first, last;
+		color_share( v, c, t, threads, &first, &last );
+		flags |= pack_blocks( v, px, py, pz, inv_m, setup, first, last, largest );
+	}
 	if ( t == 0 )
 	{
 		memset( v->record + 4 * (size_t) v->slots, 0, 4 * sizeof( float ) );
 	}
-	*largest = big;
 	return flags;
 }
 
@@ -593,7 +638,7 @@ static float exchange( sere_vbd* v, int t, int threads, int parity, float move2,
 	return worst;
 }
 
-/* Chebyshev semi-iteration after sweep k (vbd.h) over thread t's blocks, with this thread's view
+/* Chebyshev semi-iteration after sweep k (vbd.h) over the blocks thread t swept, with its view
  * of the history: hist[1] holds x_{k−1} and hist[0] x_{k−2}. x_k is written to the records and
  * over x_{k−2}, which then becomes the newest; ω = 0 (within the delay) only records x̂_k. Each
  * thread keeps the history of its own blocks, so no other thread reads it. The movable flag of a
@@ -601,52 +646,26 @@ static float exchange( sere_vbd* v, int t, int threads, int parity, float move2,
  * every step ends above it: the positions returned are a sweep's, never an extrapolation's. */
 static void chebyshev( sere_vbd* v, float omega, float** hist, int t, int threads )
 {
-	int32_t first, last;
-	sere_team_share( 0, v->blocks, t, threads, &first, &last );
 	float* restrict x = v->record;
 	float* restrict old = hist[0];
-	const size_t begin = 4 * (size_t) first * SERE_LANES, end = 4 * (size_t) last * SERE_LANES;
-	if ( omega == 0.0f )
+	for ( int32_t c = 0; c < v->colors; ++c )
 	{
-		memcpy( old + begin, x + begin, sizeof( float ) * ( end - begin ) );
-	}
-	for ( size_t i = begin; omega != 0.0f && i < end; ++i )
-	{
-		const float r = omega * ( x[i] - old[i] ) + old[i];
-		x[i] = r;
-		old[i] = r;
+		int32_t first, last;
+		color_share( v, c, t, threads, &first, &last );
+		const size_t begin = 4 * (size_t) first * SERE_LANES, end = 4 * (size_t) last * SERE_LANES;
+		if ( omega == 0.0f )
+		{
+			memcpy( old + begin, x + begin, sizeof( float ) * ( end - begin ) );
+		}
+		for ( size_t i = begin; omega != 0.0f && i < end; ++i )
+		{
+			const float r = omega * ( x[i] - old[i] ) + old[i];
+			x[i] = r;
+			old[i] = r;
+		}
 	}
 	hist[0] = hist[1];
 	hist[1] = old;
-}
-
-/* The first block of color c whose rows start at or past `row`. */
-static int32_t block_at_row( const sere_vbd* v, int32_t c, int64_t row )
-{
-	int32_t lo = v->color_block[c], hi = v->color_block[c + 1];
-	while ( lo < hi )
-	{
-		const int32_t mid = lo + ( hi - lo ) / 2;
-		if ( v->block_row[mid] < row )
-		{
-			lo = mid + 1;
-		}
-		else
-		{
-			hi = mid;
-		}
-	}
-	return lo;
-}
-
-/* Thread t's blocks of color c, [*first, *last): equal shares of the color's rows, not of its
- * blocks, since a color's blocks are sorted by degree (an even cut of the blocks gave one thread
- * the triangle layer's twelve-spring particles and the other the Voronoi layer's six). */
-static void color_share( const sere_vbd* v, int32_t c, int t, int threads, int32_t* first, int32_t* last )
-{
-	const int64_t begin = v->block_row[v->color_block[c]], rows = v->block_row[v->color_block[c + 1]] - begin;
-	*first = t == 0 ? v->color_block[c] : block_at_row( v, c, begin + rows * t / threads );
-	*last = t + 1 == threads ? v->color_block[c + 1] : block_at_row( v, c, begin + rows * ( t + 1 ) / threads );
 }
 
 /* The colored sweeps of thread t; every thread runs the same control flow. */
