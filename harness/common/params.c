@@ -121,6 +121,8 @@ static const sere_param table[] = {
 		 "the descent's Chebyshev semi-iteration: spectral radius estimate rho (0: off)" ),
 	ROW( "descent_delay", "", INT32, leaf.descent_delay, 2.0, 1e5,
 		 "the descent's plain sweeps before the first Chebyshev extrapolation" ),
+	ROW( "descent_warm", "", BOOL, leaf.descent_warm, 0.0, 1.0,
+		 "the descent's sweeps begin at the prediction plus the last frame's correction (1) or at the prediction (0)" ),
 	ROW( "crease", "", FLOAT, crease, -0.5, 0.5,
 		 "initial shaping (Sec. 3.1): shorten Voronoi vein springs by this fraction" ),
 	ROW( "curl", "", FLOAT, curl, -0.5, 0.5,

@@ -70,6 +70,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.descent_tolerance = 1e-6f,
 		.descent_rho = 0.9f,
 		.descent_delay = 2,
+		.descent_warm = 1,
 	};
 	params.pbd.compliance = 4e-6f;
 	/* Chebyshev semi-iteration (Wang 2015) of the XPBD sweeps is off (ρ = 0): the shapes it
@@ -408,7 +409,7 @@ static float largest_strain( const sere_model* model, int32_t threads )
 	const sere_springs* s = &model->s;
 	const sere_particles* p = &model->p;
 	uint32_t largest = 0;
-#pragma omp parallel for num_threads( sere_team_for( threads ) ) schedule( static ) reduction( max : largest )
+#pragma omp parallel for simd num_threads( sere_team_for( threads ) ) schedule( static ) reduction( max : largest )
 	for ( int32_t k = 0; k < s->count; ++k )
 	{
 		int32_t a = s->a[k], b = s->b[k];
@@ -497,6 +498,7 @@ static sere_status descend( sere_leaf_sim* sim, const sere_leaf_params* params, 
 	step.max_iterations = pbd->max_iterations;
 	step.chebyshev_rho = params->descent_rho;
 	step.chebyshev_delay = params->descent_delay;
+	step.warm_start = params->descent_warm;
 	step.ground = isfinite( params->ground ) ? params->ground : -INFINITY;
 	*aside = keep_prediction( sim, params );
 	sere_vbd_report report;

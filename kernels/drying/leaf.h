@@ -68,12 +68,19 @@ typedef struct sere_leaf_params
 	 * sizes (3e-6 of a spring at 800 points), so the stop is that rounding
 	 * (sere_vbd_report.tolerance): each frame is as converged as single precision allows. */
 	float descent_tolerance;
-	/* The descent's Chebyshev semi-iteration (sere_vbd_params): ρ 0.9 after 5 plain sweeps (the
-	 * default) takes 0.44–0.64 of the plain sweeps on the presets at 800 points and ends within
+	/* The descent's Chebyshev semi-iteration (sere_vbd_params): ρ 0.9 after 2 plain sweeps (the
+	 * default) takes 0.41–0.53 of the plain sweeps on the presets at 800 points and ends within
 	 * 0.06 spacings of the plain sweeps' shape, but for the grass, whose nearly unstressed blade's
 	 * shape is set at the rounding of its coordinates (docs/DESIGN.md §8). */
 	float descent_rho;
 	int32_t descent_delay;
+	/* 1 (the default): each frame's sweeps begin at the prediction plus the last frame's
+	 * correction (sere_vbd_params.warm_start). A leaf at rest or drying slowly needs nearly the
+	 * same correction every frame (the gravity drop its springs hold back, the shrinkage the
+	 * damped velocity lags), so the sweeps begin near the answer: with the Chebyshev default,
+	 * 0.26–0.88 of the cold start's sweeps on the presets, within 0.07 spacings of the plain
+	 * sweeps' shape (docs/DESIGN.md §8). 0: at the prediction. */
+	int descent_warm;
 } sere_leaf_params;
 
 sere_leaf_params sere_leaf_params_default( void );

@@ -50,6 +50,10 @@ struct sere_vbd
 	/* Particle records (x, y, z, movable: 1 or 0) by slot, slots + 1 (the dummy); the Chebyshev history. */
 	float *record, *history[2];
 	float *mass, *tx, *ty, *tz, *push; /* by slot */
+	/* By slot: the last step's answer less its prediction, where a warm start begins the next
+	 * step's sweeps (sere_vbd_params.warm_start); valid once a step has succeeded. */
+	float *cx, *cy, *cz;
+	int correction_valid;
 	/* The springs as given, for the residual: ends, rest lengths, weights, and each particle's
 	 * springs (adjacency[offset[i] .. offset[i+1])). */
 	int32_t *a, *b, *offset, *adjacency;
@@ -80,10 +84,11 @@ void sere_vbd_destroy( sere_vbd* vbd )
 		return;
 	}
 	void* const arrays[] = {
-		vbd->block_row, vbd->slot_of,	  vbd->particle_of,	  vbd->neighbour,  vbd->spring, vbd->rest,
-		vbd->stiffness, vbd->record,	  vbd->history[0],	  vbd->history[1], vbd->mass,	vbd->tx,
-		vbd->ty,		vbd->tz,		  vbd->push,		  vbd->a,		   vbd->b,		vbd->offset,
-		vbd->adjacency, vbd->spring_rest, vbd->spring_weight, vbd->results,	   vbd->barrier
+		vbd->block_row, vbd->slot_of,	  vbd->particle_of,	  vbd->neighbour,  vbd->spring,	 vbd->rest,
+		vbd->stiffness, vbd->record,	  vbd->history[0],	  vbd->history[1], vbd->mass,	 vbd->tx,
+		vbd->ty,		vbd->tz,		  vbd->push,		  vbd->a,		   vbd->b,		 vbd->offset,
+		vbd->adjacency, vbd->spring_rest, vbd->spring_weight, vbd->results,	   vbd->barrier, vbd->cx,
+		vbd->cy,		vbd->cz
 	};
 	sere_free_all( arrays, sizeof( arrays ) / sizeof( arrays[0] ) );
 	free( vbd );
@@ -310,11 +315,11 @@ sere_status sere_vbd_create( const int32_t* a, const int32_t* b, int32_t spring_
 	{
 		const size_t records = 4 * (size_t) ( v->slots + 1 );
 		float** const slot_columns[] = { &v->record, &v->history[0], &v->history[1] };
-		float** const particle_columns[] = { &v->mass, &v->tx, &v->ty, &v->tz, &v->push };
+		float** const particle_columns[] = { &v->mass, &v->tx, &v->ty, &v->tz, &v->push, &v->cx, &v->cy, &v->cz };
 		v->results = sere_alloc( sizeof( thread_slot ) * SERE_MAX_THREADS );
 		v->barrier = sere_alloc( sizeof( sere_spin_barrier ) );
 		if ( !sere_alloc_floats( slot_columns, 3, records ) ||
-			 !sere_alloc_floats( particle_columns, 5, (size_t) v->slots + 1 ) || v->results == NULL ||
+			 !sere_alloc_floats( particle_columns, 8, (size_t) v->slots + 1 ) || v->results == NULL ||
 			 v->barrier == NULL )
 		{
 			status = SERE_ERR_MEMORY;
@@ -389,7 +394,8 @@ static int params_valid( const sere_vbd_params* p )
 {
 	return p->dt > 0.0f && isfinite( p->dt ) && p->compliance > 0.0f && isfinite( p->compliance ) &&
 		   p->tolerance > 0.0f && isfinite( p->tolerance ) && p->max_iterations >= 1 && p->chebyshev_rho >= 0.0f &&
-		   p->chebyshev_rho < 1.0f && p->chebyshev_delay >= 2 && !isnan( p->ground ) && p->ground < INFINITY;
+		   p->chebyshev_rho < 1.0f && p->chebyshev_delay >= 2 && ( p->warm_start == 0 || p->warm_start == 1 ) &&
+		   !isnan( p->ground ) && p->ground < INFINITY;
 }
 
 /* What a call asks of the sweeps. */
@@ -401,6 +407,7 @@ typedef struct step_setup
 	float rho;
 	int32_t delay, sweeps;
 	int touch; /* the floor: loads and stores without the Newton step, `sweeps` sweeps */
+	int warm;  /* start from the prediction plus the last step's correction */
 } step_setup;
 
 typedef struct step_outcome
@@ -461,6 +468,12 @@ static int32_t pack_blocks( sere_vbd* v, const float* px, const float* py, const
 		flags |= isfinite( px[p] ) && isfinite( py[p] ) && isfinite( pz[p] ) && isfinite( w ) ? 0 : FLAG_NONFINITE;
 		flags |= w < 0.0f ? FLAG_NEGATIVE_MASS : 0;
 		r[0] = px[p], r[1] = py[p], r[2] = pz[p], r[3] = w > 0.0f ? 1.0f : 0.0f;
+		if ( setup->warm )
+		{
+			/* the inertia's anchor stays the prediction; only where the sweeps begin moves, and
+			 * never below the ground */
+			r[0] += v->cx[s], r[1] += v->cy[s], r[2] = fmaxf( r[2] + v->cz[s], setup->ground );
+		}
 		big = fmaxf( big, fmaxf( fabsf( px[p] ), fmaxf( fabsf( py[p] ), fabsf( pz[p] ) ) ) );
 		/* a held particle's step is multiplied by 0; its mass only has to keep the block finite */
 		v->mass[s] = w > 0.0f ? 1.0f / w : 1.0f;
@@ -739,6 +752,16 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 		step_outcome result = sweep( v, setup, tolerance2, flags, t, threads );
 		if ( result.flags == 0 && !setup->touch )
 		{
+			for ( int32_t c = 0; c < v->colors; ++c )
+			{
+				int32_t first, last;
+				color_share( v, c, t, threads, &first, &last );
+				for ( int32_t s = first * SERE_LANES; s < last * SERE_LANES; ++s )
+				{
+					const float* r = v->record + 4 * (size_t) s;
+					v->cx[s] = r[0] - v->tx[s], v->cy[s] = r[1] - v->ty[s], v->cz[s] = r[2] - v->tz[s];
+				}
+			}
 			int32_t first, last;
 			sere_team_share( 0, v->particle_count, t, threads, &first, &last );
 			for ( int32_t p = first; p < last; ++p )
@@ -754,6 +777,8 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 	}
 	v->rest_stale = v->stiffness_stale = 0;
 	v->inverse_alpha = setup->inverse_alpha;
+	/* a refused step leaves the last correction as it was */
+	v->correction_valid |= !setup->touch && outcome.flags == 0;
 	return outcome;
 }
 
@@ -782,7 +807,8 @@ sere_status sere_vbd_step( sere_vbd* vbd, float* px, float* py, float* pz, const
 							   params->chebyshev_rho,
 							   params->chebyshev_delay,
 							   params->max_iterations,
-							   0 };
+							   0,
+							   params->warm_start && vbd->correction_valid };
 	const step_outcome outcome = run( vbd, px, py, pz, inv_m, &setup );
 	if ( outcome.flags & FLAG_NEGATIVE_MASS )
 	{
@@ -867,7 +893,7 @@ sere_status sere_vbd_touch_sweeps( sere_vbd* vbd, float* px, float* py, float* p
 	{
 		return SERE_ERR_ARGUMENT;
 	}
-	const step_setup setup = { 1.0f, 0.0f, -INFINITY, 0.0f, 2, sweeps, 1 };
+	const step_setup setup = { 1.0f, 0.0f, -INFINITY, 0.0f, 2, sweeps, 1, 0 };
 	const step_outcome outcome = run( vbd, px, py, pz, inv_m, &setup );
 	vbd->push_valid = 0;
 	return outcome.flags & FLAG_NEGATIVE_MASS ? SERE_ERR_ARGUMENT : outcome.flags != 0 ? SERE_ERR_NONFINITE : SERE_OK;

@@ -39,10 +39,13 @@ typedef struct sere_vbd_params
 	 * particle's step (the bound's multiplier over the mass): the normal correction d_n that
 	 * position-based Coulomb friction bounds the sliding by (Macklin et al. 2014, Sec. 6.1). */
 	float ground;
+	/* 1: begin the sweeps at the prediction plus the last successful step's correction (its answer
+	 * less its prediction) rather than at the prediction; 0 (the default): at the prediction. */
+	int32_t warm_start;
 } sere_vbd_params;
 
 /* dt = 0.002 (Table 2), α = 4e-6 (the leaf's XPBD compliance), tolerance 1e-6, 200 sweeps,
- * no Chebyshev (delay 5 when turned on), no ground. */
+ * no Chebyshev (delay 5 when turned on), no ground, no warm start. */
 sere_vbd_params sere_vbd_params_default( void );
 
 typedef struct sere_vbd_report
@@ -88,10 +91,13 @@ sere_status sere_vbd_set_compliance_weights( sere_vbd* vbd, const float* weight 
 /* The threads a step runs on (core/base.h). SERE_ERR_ARGUMENT above SERE_MAX_THREADS. */
 sere_status sere_vbd_set_threads( sere_vbd* vbd, int32_t threads );
 
-/* Minimizes E from the prediction px, py, pz (x̃ = the positions passed in), in place, until a
+/* Minimizes E for the prediction px, py, pz (x̃ = the positions passed in), in place, until a
  * sweep moves no particle farther than params->tolerance (or the rounding of the coordinates,
- * report->tolerance), or the cap. Particles with inv_m = 0
- * are held and take any force; m_i = 1/inv_m otherwise.
+ * report->tolerance), or the cap. The sweeps begin at x̃, or with params->warm_start at x̃ plus
+ * the last step's correction (its answer less its prediction; at x̃ before any step has
+ * succeeded): E and so its minimum stay the same, only the sweeps' start moves, and it keeps
+ * the same bits at every thread count. Particles with inv_m = 0 are held and take any force;
+ * m_i = 1/inv_m otherwise.
  *
  * A particle's step solves H_i Δ = −∂E/∂x_i with H_i = m_i I + Σ_j k_j [ n nᵀ + β (I − n nᵀ) ],
  * n the spring's direction and β = max(0, 1 − l/|d|): a compressed spring's bending part is left
