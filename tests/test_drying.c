@@ -376,13 +376,13 @@ Test( drying, chebyshev_presets_land_on_the_converged_plain_shape, .disabled = S
 	expect_acceleration_keeps_the_shape( presets, 3, preset_sets, 1, plain_sets, 2, converged_sets, 4 );
 }
 
-/* The descent (the default step) runs its sweeps with Chebyshev semi-iteration, ρ = 0.9 after 2
+/* The descent (the default step) runs its sweeps with Chebyshev semi-iteration, ρ = 0.8 after 2
  * plain sweeps, from a warm start (the prediction plus the last frame's correction), on every
  * preset, each frame to the rounding of the coordinates. A descent has one answer near each
  * prediction, so plain sweeps from the prediction and accelerated ones from the warm start,
- * converged that far, land on one shape. At 800 points the presets end 0.039 (red maple), 0.036
+ * converged that far, land on one shape. At 800 points the presets end 0.041 (red maple), 0.036
  * (green maple), 0.006 (plane tree) and 0.069 (wisteria) spacings from the plain sweeps, in
- * 0.13–0.47 of their sweeps (docs/DESIGN.md §8). The grass is left out: its nearly unstressed
+ * 0.12–0.42 of their sweeps (docs/DESIGN.md §8). The grass is left out: its nearly unstressed
  * blade's shape is set at the rounding of its coordinates (plain and accelerated sweeps, each
  * converged to it, end 2.4–3.8 spacings apart), as under XPBD. */
 Test( drying, descent_presets_land_on_the_converged_plain_shape, .disabled = SERE_LONG_TEST_DISABLED )

@@ -68,7 +68,7 @@ sere_leaf_params sere_leaf_params_default( void )
 		.step_residual = 1,
 		.descent = 1,
 		.descent_tolerance = 1e-6f,
-		.descent_rho = 0.9f,
+		.descent_rho = 0.8f,
 		.descent_delay = 2,
 		.descent_warm = 1,
 	};

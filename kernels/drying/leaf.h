@@ -68,18 +68,18 @@ typedef struct sere_leaf_params
 	 * sizes (3e-6 of a spring at 800 points), so the stop is that rounding
 	 * (sere_vbd_report.tolerance): each frame is as converged as single precision allows. */
 	float descent_tolerance;
-	/* The descent's Chebyshev semi-iteration (sere_vbd_params): ρ 0.9 after 2 plain sweeps (the
-	 * default) takes 0.41–0.53 of the plain sweeps on the presets at 800 points and ends within
-	 * 0.06 spacings of the plain sweeps' shape, but for the grass, whose nearly unstressed blade's
-	 * shape is set at the rounding of its coordinates (docs/DESIGN.md §8). */
+	/* The descent's Chebyshev semi-iteration (sere_vbd_params): ρ 0.8 after 2 plain sweeps (the
+	 * default; from a cold start ρ 0.9 did better, from the warm start below 0.8: on the Table 1
+	 * leaves 7.5 / 13.2 / 2.5 sweeps a frame where 0.9 took 9.2 / 16.2 / 2.5). */
 	float descent_rho;
 	int32_t descent_delay;
 	/* 1 (the default): each frame's sweeps begin at the prediction plus the last frame's
 	 * correction (sere_vbd_params.warm_start). A leaf at rest or drying slowly needs nearly the
 	 * same correction every frame (the gravity drop its springs hold back, the shrinkage the
-	 * damped velocity lags), so the sweeps begin near the answer: with the Chebyshev default,
-	 * 0.26–0.88 of the cold start's sweeps on the presets, within 0.07 spacings of the plain
-	 * sweeps' shape (docs/DESIGN.md §8). 0: at the prediction. */
+	 * damped velocity lags), so the sweeps begin near the answer. With the Chebyshev default the
+	 * presets at 800 points take 0.12–0.42 of the plain sweeps from the prediction and end within
+	 * 0.07 spacings of their shape, but for the grass, whose nearly unstressed blade's shape is set
+	 * at the rounding of its coordinates (docs/DESIGN.md §8). 0: at the prediction. */
 	int descent_warm;
 } sere_leaf_params;
 
