@@ -108,7 +108,8 @@ typedef struct sere_leaf_stats
 	int32_t unresolved;		   /* contacts of either kind still short of the thickness after the pass */
 	float collision_thickness; /* the thickness the pass used */
 	int desiccated;			   /* a layer ran dry: flow and shrinkage have stopped (Sec. 6) */
-	/* Table 1's breakdown, milliseconds of wall time */
+	/* Table 1's breakdown, milliseconds of wall time; the measures beside the frame (max_strain,
+	 * step_primal) are not in it */
 	double osmosis_ms, dynamics_ms, collisions_ms, total_ms;
 } sere_leaf_stats;
 

@@ -472,7 +472,8 @@ static int32_t pack_blocks( sere_vbd* v, const float* px, const float* py, const
 		{
 			/* the inertia's anchor stays the prediction; only where the sweeps begin moves, and
 			 * never below the ground */
-			r[0] += v->cx[s], r[1] += v->cy[s], r[2] = fmaxf( r[2] + v->cz[s], setup->ground );
+			const float z = r[2] + v->cz[s];
+			r[0] += v->cx[s], r[1] += v->cy[s], r[2] = z < setup->ground ? setup->ground : z;
 		}
 		big = fmaxf( big, fmaxf( fabsf( px[p] ), fmaxf( fabsf( py[p] ), fabsf( pz[p] ) ) ) );
 		/* a held particle's step is multiplied by 0; its mass only has to keep the block finite */
