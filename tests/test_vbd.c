@@ -270,6 +270,14 @@ Test( vbd, a_warm_start_reaches_the_cold_answer_in_fewer_sweeps )
 	cr_log_info( "frames 10-19: cold %d sweeps, warm %d; at most %g spacings apart", cold_sweeps, warm_sweeps, worst );
 	cr_expect_lt( worst, 1e-3 );
 	cr_expect_lt( warm_sweeps, cold_sweeps * 3 / 4 );
+	/* a particle held now that was free (and corrected) before stays where it is given */
+	const int32_t held = warm.n / 2;
+	warm.inv_m[held] = 0.0f;
+	const float where[3] = { warm.x[held], warm.y[held], warm.z[held] };
+	drying_frames( warm_vbd, &warm, &warm_params, 20, rest );
+	cr_expect( warm.x[held] == where[0] && warm.y[held] == where[1] && warm.z[held] == where[2],
+			   "held particle moved to (%g, %g, %g)", (double) warm.x[held], (double) warm.y[held],
+			   (double) warm.z[held] );
 	free( rest );
 	sere_vbd_destroy( cold_vbd ), sere_vbd_destroy( warm_vbd ), sere_vbd_destroy( other_vbd );
 	sere_test_sheet_free( &cold ), sere_test_sheet_free( &warm ), sere_test_sheet_free( &other );

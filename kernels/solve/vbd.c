@@ -468,10 +468,11 @@ static int32_t pack_blocks( sere_vbd* v, const float* px, const float* py, const
 		flags |= isfinite( px[p] ) && isfinite( py[p] ) && isfinite( pz[p] ) && isfinite( w ) ? 0 : FLAG_NONFINITE;
 		flags |= w < 0.0f ? FLAG_NEGATIVE_MASS : 0;
 		r[0] = px[p], r[1] = py[p], r[2] = pz[p], r[3] = w > 0.0f ? 1.0f : 0.0f;
-		if ( setup->warm )
+		if ( setup->warm && w > 0.0f )
 		{
 			/* the inertia's anchor stays the prediction; only where the sweeps begin moves, and
-			 * never below the ground */
+			 * never below the ground (a held particle stays where it is given, whatever it did
+			 * when it was free) */
 			const float z = r[2] + v->cz[s];
 			r[0] += v->cx[s], r[1] += v->cy[s], r[2] = z < setup->ground ? setup->ground : z;
 		}
