@@ -34,8 +34,8 @@ static inline double horner( const double* c, int count, double x )
 
 /* x^alpha for x in [2^-53, 1] and alpha > 0 as exp(alpha ln x), built from operations gcc
  * turns into SIMD lanes (bit casts, integer/double conversions, polynomials; no libm call, no
- * branch). Relative error about |alpha ln x| · 2e-16 + 1e-14 over that range: the series stop
- * where the length, l⁰ (1 − σ x^α) rounded to float, can no longer tell. */
+ * branch). Relative error at most 2e-13 over that range for alpha ≤ 10 (shrink.h): the series
+ * stop where the length, l⁰ (1 − σ x^α) rounded to float, can no longer tell. */
 static inline double pow_unit( double x, double alpha )
 {
 	/* x = mantissa · 2^e with the mantissa in [√½, √2), so ln of it converges fast below. The

@@ -29,9 +29,10 @@ typedef struct sere_shrink_params
  * (σ_surf = 10 for grass, Table 2).
  *
  * The power is evaluated in double by an exp/log pair written for SIMD lanes (libm's pow does
- * not vectorize without -ffast-math); its relative error is about |α ln x| · 2e-16 (2e-14 for
- * α ≤ 3, 7e-14 for α = 10), far under the float rounding of l, so l equals the float rounding
- * of the libm formula or is one ulp off.
+ * not vectorize without -ffast-math) with series cut where the float length can no longer
+ * tell: its relative error against libm's pow is at most 2e-14 for α ≤ 1, 6e-14 for α = 3 and
+ * 2e-13 for α = 10 (x over [2^-53, 1]), far under the float rounding of l, so l equals the float
+ * rounding of the libm formula or is one ulp off.
  * SERE_ERR_NONFINITE when v_rel or a length is not finite (NaN or infinite masses, a zero
  * m⁰ sum); those springs keep their rest length and the others are updated. On `threads` threads
  * (core/base.h; SERE_ERR_ARGUMENT above SERE_MAX_THREADS). SERE_ERR_ARGUMENT also for a NULL
