@@ -207,14 +207,9 @@ Test( vbd, chebyshev_reaches_the_same_minimum_in_fewer_sweeps )
 	sere_test_sheet_free( &plain ), sere_test_sheet_free( &fast );
 }
 
-/* Twenty frames of a drying sheet: every frame its rest lengths shrink by 0.2% and its prediction
- * is the last answer dropped by g dt². A warm start begins each frame's sweeps where the last
- * frame's correction points; the answer is the same descent's (within 1e-3 spacings of the cold
- * start's every frame, where the tolerance of 1e-7 is 2e-6 spacings and the sweeps contract
- * slowly), in fewer sweeps once the sheet has left its frustrated start (frames 10–19; the first
- * frames' corrections are that start's relaxation, which does not recur), and the same bits at 1
- * and 2 threads. The first frame has no correction: the cold start's bits. */
-static int32_t drying_frames( sere_vbd* vbd, sere_test_sheet* s, const sere_vbd_params* params, int frame, float* rest )
+/* One frame of a drying sheet: rest lengths 0.2% shorter a frame, the prediction the last answer
+ * dropped by g dt², one step; returns its sweeps. */
+static int32_t drying_frame( sere_vbd* vbd, sere_test_sheet* s, const sere_vbd_params* params, int frame, float* rest )
 {
 	for ( int32_t k = 0; k < s->count; ++k )
 	{
@@ -232,6 +227,13 @@ static int32_t drying_frames( sere_vbd* vbd, sere_test_sheet* s, const sere_vbd_
 	return report.iterations;
 }
 
+/* Twenty frames of a drying sheet: every frame its rest lengths shrink by 0.2% and its prediction
+ * is the last answer dropped by g dt². A warm start begins each frame's sweeps where the last
+ * frame's correction points; the answer is the same descent's (within 1e-3 spacings of the cold
+ * start's every frame, where the tolerance of 1e-7 is 2e-6 spacings and the sweeps contract
+ * slowly), in fewer sweeps once the sheet has left its frustrated start (frames 10–19; the first
+ * frames' corrections are that start's relaxation, which does not recur), and the same bits at 1
+ * and 2 threads. The first frame has no correction: the cold start's bits. */
 Test( vbd, a_warm_start_reaches_the_cold_answer_in_fewer_sweeps )
 {
 	sere_test_sheet cold = sere_test_sheet_make( 24, 20 ), warm = sere_test_sheet_make( 24, 20 ),
@@ -247,9 +249,9 @@ Test( vbd, a_warm_start_reaches_the_cold_answer_in_fewer_sweeps )
 	const size_t bytes = sizeof( float ) * (size_t) cold.n;
 	for ( int frame = 0; frame < 20; ++frame )
 	{
-		const int32_t c = drying_frames( cold_vbd, &cold, &params, frame, rest );
-		const int32_t w = drying_frames( warm_vbd, &warm, &warm_params, frame, rest );
-		drying_frames( other_vbd, &other, &warm_params, frame, rest );
+		const int32_t c = drying_frame( cold_vbd, &cold, &params, frame, rest );
+		const int32_t w = drying_frame( warm_vbd, &warm, &warm_params, frame, rest );
+		drying_frame( other_vbd, &other, &warm_params, frame, rest );
 		cr_expect( memcmp( warm.x, other.x, bytes ) == 0 && memcmp( warm.y, other.y, bytes ) == 0 &&
 					   memcmp( warm.z, other.z, bytes ) == 0,
 				   "frame %d: 2 threads differ from 1", frame );
@@ -274,7 +276,7 @@ Test( vbd, a_warm_start_reaches_the_cold_answer_in_fewer_sweeps )
 	const int32_t held = warm.n / 2;
 	warm.inv_m[held] = 0.0f;
 	const float where[3] = { warm.x[held], warm.y[held], warm.z[held] };
-	drying_frames( warm_vbd, &warm, &warm_params, 20, rest );
+	drying_frame( warm_vbd, &warm, &warm_params, 20, rest );
 	cr_expect( warm.x[held] == where[0] && warm.y[held] == where[1] && warm.z[held] == where[2],
 			   "held particle moved to (%g, %g, %g)", (double) warm.x[held], (double) warm.y[held],
 			   (double) warm.z[held] );
