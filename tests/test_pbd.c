@@ -469,23 +469,23 @@ Test( pbd, deterministic_across_threads )
 	}
 }
 
-/* One spring's projection (Jeong Eq. 13) with the kernel's operations in the kernel's order (an
- * explicit multiply, then the add: the build contracts nothing), moving m's positions; returns
- * the spring's |C/l| (|C + α̃λ|/l with compliance) before the move. */
+/* One spring's projection (Jeong Eq. 13) with the kernel's operations in the kernel's order:
+ * fmaf where the kernel fuses (one rounding), an explicit multiply and add where it does not (the
+ * build contracts nothing), moving m's positions; returns the spring's |C/l| (|C + α̃λ|/l with
+ * compliance) before the move. */
 static float replay_spring( test_mesh* m, int32_t s, float rest, float k, float alpha, float* lambda )
 {
 	const int32_t a = m->a[s], b = m->b[s];
 	float dx = m->x[b] - m->x[a], dy = m->y[b] - m->y[a], dz = m->z[b] - m->z[a];
-	float len = sqrtf( ( dx * dx + dy * dy ) + dz * dz );
+	float len = sqrtf( fmaf( dz, dz, fmaf( dy, dy, dx * dx ) ) );
 	float c = len - rest;
 	float wsum = m->inv_m[a] + m->inv_m[b];
 	float residual = c, f;
 	if ( alpha > 0.0f )
 	{
-		residual = c + alpha * *lambda;
+		residual = fmaf( alpha, *lambda, c );
 		float denominator = wsum + alpha;
-		float dlambda = denominator > 0.0f ? ( 0.0f - residual ) / denominator : 0.0f;
-		*lambda = *lambda + dlambda;
+		*lambda = *lambda - ( denominator > 0.0f ? residual / denominator : 0.0f );
 		f = denominator > 0.0f ? residual / ( denominator * len ) : 0.0f;
 	}
 	else
@@ -493,8 +493,8 @@ static float replay_spring( test_mesh* m, int32_t s, float rest, float k, float 
 		f = wsum > 0.0f ? ( k * c ) / ( wsum * len ) : 0.0f;
 	}
 	float fa = m->inv_m[a] * f, fb = m->inv_m[b] * f;
-	m->x[a] = m->x[a] + fa * dx, m->y[a] = m->y[a] + fa * dy, m->z[a] = m->z[a] + fa * dz;
-	m->x[b] = m->x[b] - fb * dx, m->y[b] = m->y[b] - fb * dy, m->z[b] = m->z[b] - fb * dz;
+	m->x[a] = fmaf( fa, dx, m->x[a] ), m->y[a] = fmaf( fa, dy, m->y[a] ), m->z[a] = fmaf( fa, dz, m->z[a] );
+	m->x[b] = fmaf( -fb, dx, m->x[b] ), m->y[b] = fmaf( -fb, dy, m->y[b] ), m->z[b] = fmaf( -fb, dz, m->z[b] );
 	return fabsf( residual ) / rest;
 }
 

@@ -175,7 +175,8 @@ FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block
 	sere_vf_load_records_at( ctx->packed, ctx->ia + q, &h.ax, &h.ay, &h.az, &h.aw );
 	sere_vf_load_records_at( ctx->packed, ctx->ib + q, &h.bx, &h.by, &h.bz, &h.bw );
 	const sere_vf zero = sere_vf_splat( 0.0f );
-	sere_vf len = sere_vf_norm3( sere_vf_sub( h.bx, h.ax ), sere_vf_sub( h.by, h.ay ), sere_vf_sub( h.bz, h.az ) );
+	const sere_vf dx = sere_vf_sub( h.bx, h.ax ), dy = sere_vf_sub( h.by, h.ay ), dz = sere_vf_sub( h.bz, h.az );
+	sere_vf len = sere_vf_sqrt( sere_vf_fma( dz, dz, sere_vf_fma( dy, dy, sere_vf_mul( dx, dx ) ) ) );
 	sere_vf rest = sere_vf_load( ctx->rest + q );
 	sere_vf c = sere_vf_sub( len, rest ); /* Jeong Eq. 13 */
 	acc->zero = sere_vmask_or( acc->zero, sere_vf_eq( len, zero ) );
@@ -186,7 +187,7 @@ FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block
 	{
 		alpha = sere_vf_mul( sere_vf_splat( ctx->alpha ), sere_vf_load( ctx->weight + q ) );
 		lambda = sere_vf_load( ctx->lambda + q );
-		residual = sere_vf_add( c, sere_vf_mul( alpha, lambda ) );
+		residual = sere_vf_fma( alpha, lambda, c );
 	}
 	acc->worst = sere_vf_max( acc->worst, sere_vf_div( sere_vf_abs( residual ), rest ) );
 	h.f = zero;
@@ -197,10 +198,10 @@ FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block
 	if ( xpbd )
 	{
 		sere_vf denominator = sere_vf_add( wsum, alpha );
-		sere_vf numerator = sere_vf_sub( zero, residual );
 		sere_vmask positive = sere_vf_gt( denominator, zero );
-		sere_vf dlambda = sere_vf_keep( positive, sere_vf_div( numerator, denominator ) );
-		sere_vf_store( ctx->lambda + q, sere_vf_add( lambda, dlambda ) );
+		/* Δλ = −r/(w_a + w_b + α̃), subtracted as r/(…): one operation fewer than adding −r/(…) */
+		sere_vf_store( ctx->lambda + q,
+					   sere_vf_sub( lambda, sere_vf_keep( positive, sere_vf_div( residual, denominator ) ) ) );
 		/* f = −Δλ/len as one quotient, r/((w_a + w_b + α̃) len): its own division, beside Δλ's
 		 * rather than after it, so the moves wait for one division instead of two (BM_XPBDColored
 		 * at one thread: 5% less time a sweep). */
@@ -218,19 +219,18 @@ FORCE_INLINE part_state measure_part( const block_context* ctx, int32_t q, block
 	return h;
 }
 
-/* The moving part: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), stored. d = p_b − p_a
- * again, the same operation on the same values as in measure_part, so the same bits;
- * recomputing it keeps three registers fewer alive between the two parts. */
+/* The moving part: p_a += (w_a f) d, p_b −= (w_b f) d (Jeong Eq. 13), each coordinate one fused
+ * multiply-add (one rounding at every width), stored. d = p_b − p_a again, the same operation on
+ * the same values as in measure_part, so the same bits; recomputing it keeps three registers fewer
+ * alive between the two parts. */
 FORCE_INLINE void move_part( const block_context* ctx, int32_t q, const part_state* h )
 {
 	sere_vf dx = sere_vf_sub( h->bx, h->ax ), dy = sere_vf_sub( h->by, h->ay ), dz = sere_vf_sub( h->bz, h->az );
 	sere_vf fa = sere_vf_mul( h->aw, h->f ), fb = sere_vf_mul( h->bw, h->f );
-	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_add( h->ax, sere_vf_mul( fa, dx ) ),
-							  sere_vf_add( h->ay, sere_vf_mul( fa, dy ) ), sere_vf_add( h->az, sere_vf_mul( fa, dz ) ),
-							  h->aw );
-	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_sub( h->bx, sere_vf_mul( fb, dx ) ),
-							  sere_vf_sub( h->by, sere_vf_mul( fb, dy ) ), sere_vf_sub( h->bz, sere_vf_mul( fb, dz ) ),
-							  h->bw );
+	sere_vf_store_records_at( ctx->packed, ctx->ia + q, sere_vf_fma( fa, dx, h->ax ), sere_vf_fma( fa, dy, h->ay ),
+							  sere_vf_fma( fa, dz, h->az ), h->aw );
+	sere_vf_store_records_at( ctx->packed, ctx->ib + q, sere_vf_fnma( fb, dx, h->bx ), sere_vf_fnma( fb, dy, h->by ),
+							  sere_vf_fnma( fb, dz, h->bz ), h->bw );
 }
 
 /* Loads and stores both ends unchanged: times one, opaque to the compiler, so the stores stay.
