@@ -17,12 +17,10 @@ const char* sere_simd_path( void )
 {
 #if defined( __AVX512F__ )
 	return "AVX-512";
-#elif defined( __AVX2__ )
+#elif defined( __AVX2__ ) && defined( __FMA__ )
 	return "AVX2";
-#elif defined( __AVX__ )
-	return "AVX";
 #else
-	return "scalar";
+	return "portable";
 #endif
 }
 

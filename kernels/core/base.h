@@ -49,9 +49,10 @@ typedef enum sere_status
  * linked against the shared library gets the version of the libsere.so it runs with. */
 const char* sere_version( void );
 
-/* The SIMD path the kernels were compiled for: "AVX-512" (__AVX512F__), "AVX2", "AVX" (the
- * 256-bit paths) or "scalar" (the portable fallback). Set by the compiler flags (ARCH=), not
- * by the machine the library runs on. */
+/* The lane width the kernels were compiled for, as core/internal/simd.h picks it: "AVX-512"
+ * (__AVX512F__, 16 lanes), "AVX2" (__AVX2__ with __FMA__, 8 lanes) or "portable" (C, 4 lanes;
+ * also a build with AVX, or AVX2 without FMA). Set by the compiler flags (ARCH=), not by the
+ * machine the library runs on. */
 const char* sere_simd_path( void );
 
 /* A short English sentence for a status, never NULL. */
