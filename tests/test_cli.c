@@ -66,6 +66,20 @@ Test( cli, help_describes_every_command )
 	}
 }
 
+/* The README says `sere run --help` lists every option: these are the ones parse_run_options
+ * accepts (cmd_run.c), --until-dry once among them unlisted. */
+Test( cli, run_help_names_every_run_option )
+{
+	static char out[32768];
+	cr_assert_eq( sere_test_stdout( "run --help", out, sizeof( out ) ), 0 );
+	const char* options[] = { "--preset", "--frames",	 "--until-dry", "--out",	 "--every",
+							  "--points", "--particles", "--springs",	"--threads", "--set" };
+	for ( size_t k = 0; k < sizeof( options ) / sizeof( options[0] ); ++k )
+	{
+		cr_expect_not_null( strstr( out, options[k] ), "run --help does not name %s", options[k] );
+	}
+}
+
 Test( cli, model_json_table1_counts )
 {
 	char command[512], out[8192];

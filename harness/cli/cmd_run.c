@@ -52,6 +52,7 @@ static void run_help( void )
 			"options:\n"
 			"  --preset P        maple-green, maple-red, plane-tree, wisteria, grass, or a preset file\n"
 			"  --frames N        frames to simulate (default 400)\n"
+			"  --until-dry       stop at the frame the leaf has dried (Sec. 6), within --frames\n"
 			"  --out DIR         output directory (default out/run)\n"
 			"  --every K         write a mesh frame every K frames (default: about 24 frames in all)\n"
 			"  --points N        triangle-layer points (default 1500; a leaf needs enough for its outline and veins,\n"
