@@ -11,6 +11,7 @@
 #include "solve/cg.h"
 #include "solve/collide.h"
 #include "solve/pbd.h"
+#include "solve/vbd.h"
 #include "wilt/skeleton.h"
 
 #include <criterion/criterion.h>
@@ -63,6 +64,7 @@ SETTER( sere_massspring, sere_massspring_set_threads )
 SETTER( sere_leaf_sim, sere_leaf_set_threads )
 SETTER( sere_joint_grid, sere_joint_grid_set_threads )
 SETTER( sere_pierce, sere_pierce_set_threads )
+SETTER( sere_vbd, sere_vbd_set_threads )
 
 Test( threads, every_object_takes_zero_to_the_limit )
 {
@@ -82,8 +84,10 @@ Test( threads, every_object_takes_zero_to_the_limit )
 	sere_leaf_sim* sim;
 	sere_joint_grid* grid;
 	sere_pierce* pierce;
+	sere_vbd* vbd;
 	cr_assert_eq( sere_pbd_create( model.s.a, model.s.b, model.s.count, p->count, &pbd ), SERE_OK );
 	cr_assert_eq( sere_bvh_create( model.tri, f, n, p->x, p->y, p->z, &bvh ), SERE_OK );
+	cr_assert_eq( sere_vbd_create( model.s.a, model.s.b, model.s.count, p->count, &vbd ), SERE_OK );
 	cr_assert_eq( sere_collide_create( bvh, 0, &collide ), SERE_OK );
 	cr_assert_eq( sere_osmosis_create( 0, n, model.s.a, model.s.b, model.t_springs, &osmosis ), SERE_OK );
 	const sere_csr* a = sere_osmosis_matrix( osmosis );
@@ -112,13 +116,15 @@ Test( threads, every_object_takes_zero_to_the_limit )
 					{ "massspring", ms, set_sere_massspring_set_threads },
 					{ "leaf", sim, set_sere_leaf_set_threads },
 					{ "joint grid", grid, set_sere_joint_grid_set_threads },
-					{ "pierce", pierce, set_sere_pierce_set_threads } };
+					{ "pierce", pierce, set_sere_pierce_set_threads },
+					{ "descent", vbd, set_sere_vbd_set_threads } };
 	for ( size_t k = 0; k < sizeof( setters ) / sizeof( setters[0] ); ++k )
 	{
 		expect_range( setters[k].name, setters[k].object, setters[k].set );
 	}
 
 	sere_pierce_destroy( pierce );
+	sere_vbd_destroy( vbd );
 	sere_joint_grid_destroy( grid );
 	sere_leaf_destroy( sim );
 	sere_massspring_destroy( ms );
