@@ -1,5 +1,7 @@
 #include "core/base.h"
 
+#include "core/internal/simd.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,13 +17,8 @@ const char* sere_version( void )
 
 const char* sere_simd_path( void )
 {
-#if defined( __AVX512F__ )
-	return "AVX-512";
-#elif defined( __AVX2__ ) && defined( __FMA__ )
-	return "AVX2";
-#else
-	return "portable";
-#endif
+	/* the lane layer's own choice of width, so the name cannot drift from what the kernels run */
+	return SERE_LANES == 16 ? "AVX-512" : SERE_LANES == 8 ? "AVX2" : "portable";
 }
 
 const char* sere_status_text( sere_status status )
