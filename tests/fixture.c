@@ -286,3 +286,16 @@ void sere_test_sheet_free( sere_test_sheet* s )
 	free( s->x ), free( s->y ), free( s->z ), free( s->inv_m ), free( s->tx ), free( s->ty ), free( s->tz );
 	free( s->a ), free( s->b ), free( s->rest );
 }
+
+void sere_test_expect_thread_range( const char* name, void* object, sere_test_set_fn* set )
+{
+	cr_expect_eq( set( object, -1 ), SERE_ERR_ARGUMENT, "%s: -1 threads", name );
+	cr_expect_eq( set( object, SERE_MAX_THREADS + 1 ), SERE_ERR_ARGUMENT, "%s: %d threads", name,
+				  SERE_MAX_THREADS + 1 );
+	cr_expect_eq( set( NULL, 1 ), SERE_ERR_ARGUMENT, "%s: NULL", name );
+	const int32_t good[] = { SERE_MAX_THREADS, 3, 1, 0 };
+	for ( size_t k = 0; k < sizeof( good ) / sizeof( good[0] ); ++k )
+	{
+		cr_expect_eq( set( object, good[k] ), SERE_OK, "%s: %d threads", name, good[k] );
+	}
+}

@@ -41,6 +41,13 @@ void sere_test_crumple_make( sere_test_crumple* field, double amplitude, uint64_
 void sere_test_crumple_point( sere_test_crumple* field, double u, double v, double noise, float* x, float* y,
 							  float* z );
 
+/* One object's thread setter, through one signature. */
+typedef sere_status sere_test_set_fn( void* object, int32_t threads );
+
+/* Expects the one limit of every thread setter (docs/DESIGN.md §4): −1, SERE_MAX_THREADS + 1 and
+ * NULL refused, SERE_MAX_THREADS, 3, 1 and 0 taken; name labels the failures. */
+void sere_test_expect_thread_range( const char* name, void* object, sere_test_set_fn* set );
+
 /* The sere binary under test: $SERE_BIN (make test sets it), else build/sere. */
 const char* sere_test_bin( void );
 

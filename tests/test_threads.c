@@ -4,6 +4,7 @@
 #include "drying/model.h"
 #include "drying/osmosis.h"
 #include "drying/shrink.h"
+#include "fixture.h"
 #include "mesh/measure.h"
 #include "read/leafload.h"
 #include "season/markov.h"
@@ -30,23 +31,7 @@ static void maple( sere_model* model )
 	sere_leaf_source_destroy( &leaf );
 }
 
-/* One object's setter: the bounds and one past each, and NULL. */
-typedef sere_status set_fn( void* object, int32_t threads );
-
-static void expect_range( const char* name, void* object, set_fn* set )
-{
-	cr_expect_eq( set( object, -1 ), SERE_ERR_ARGUMENT, "%s: -1 threads", name );
-	cr_expect_eq( set( object, SERE_MAX_THREADS + 1 ), SERE_ERR_ARGUMENT, "%s: %d threads", name,
-				  SERE_MAX_THREADS + 1 );
-	cr_expect_eq( set( NULL, 1 ), SERE_ERR_ARGUMENT, "%s: NULL", name );
-	const int32_t good[] = { SERE_MAX_THREADS, 3, 1, 0 };
-	for ( size_t k = 0; k < sizeof( good ) / sizeof( good[0] ); ++k )
-	{
-		cr_expect_eq( set( object, good[k] ), SERE_OK, "%s: %d threads", name, good[k] );
-	}
-}
-
-/* The setters, each through the one signature expect_range calls. */
+/* The setters, each through the one signature sere_test_expect_thread_range calls. */
 #define SETTER( type, fn )                                                                                             \
 	static sere_status set_##fn( void* object, int32_t threads )                                                       \
 	{                                                                                                                  \
@@ -104,7 +89,7 @@ Test( threads, every_object_takes_zero_to_the_limit )
 	{
 		const char* name;
 		void* object;
-		set_fn* set;
+		sere_test_set_fn* set;
 	} setters[] = { { "pbd", pbd, set_sere_pbd_set_threads },
 					{ "bvh", bvh, set_sere_bvh_set_threads },
 					{ "collide", collide, set_sere_collide_set_threads },
@@ -120,7 +105,7 @@ Test( threads, every_object_takes_zero_to_the_limit )
 					{ "descent", vbd, set_sere_vbd_set_threads } };
 	for ( size_t k = 0; k < sizeof( setters ) / sizeof( setters[0] ); ++k )
 	{
-		expect_range( setters[k].name, setters[k].object, setters[k].set );
+		sere_test_expect_thread_range( setters[k].name, setters[k].object, setters[k].set );
 	}
 
 	sere_pierce_destroy( pierce );
