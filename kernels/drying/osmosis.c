@@ -413,6 +413,8 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	const double dt = params->dt;
 	double water = 0.0;
 	int bad = 0, bad_tau = 0;
+	/* in lanes: the sums are reported, not stepped from, so their order is free */
+#pragma omp simd reduction( + : water ) reduction( | : bad, bad_tau )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		water += w[first + i];
@@ -497,6 +499,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		return status;
 	}
 	double after = 0.0;
+#pragma omp simd reduction( + : after )
 	for ( int32_t i = 0; i < n; ++i )
 	{
 		int32_t gi = first + i;
