@@ -413,7 +413,8 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 	const double dt = params->dt;
 	double water = 0.0;
 	int bad = 0, bad_tau = 0;
-	/* in lanes: the sums are reported, not stepped from, so their order is free */
+	/* in lanes (a fixed order in a build, whatever the threads): the sums are reported and the
+	 * first compared with zero, which every order decides alike for water, never negative */
 #pragma omp simd reduction( + : water ) reduction( | : bad, bad_tau )
 	for ( int32_t i = 0; i < n; ++i )
 	{
