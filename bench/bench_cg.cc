@@ -251,6 +251,39 @@ void BM_AMG( benchmark::State& state )
 	state.counters["coarse_rows"] = sere_amg_rows( m.amg, 1 );
 }
 
+// Building the multigrid levels from the pattern (sere_amg_create: aggregates, the coarse
+// patterns, their SGS layouts and the Galerkin sums' order), which the osmosis does once, at the
+// first step whose layer takes the multigrid; beside BM_HypreAMG's setup:1, which sets BoomerAMG
+// up for every solve. Args: system.
+void BM_AMGSetup( benchmark::State& state )
+{
+	system_t& s = leaf_system( static_cast<int>( state.range( 0 ) ) );
+	const sere_csr* a = sere_osmosis_matrix( s.osmosis );
+	sere_sgs* sgs = nullptr;
+	if ( sere_sgs_create( a, &sgs ) != SERE_OK )
+	{
+		state.SkipWithError( "layout failed" );
+		return;
+	}
+	int32_t levels = 0;
+	for ( auto _ : state )
+	{
+		sere_amg* amg = nullptr;
+		if ( sere_amg_create( a, sgs, &amg ) != SERE_OK )
+		{
+			state.SkipWithError( "levels failed" );
+			break;
+		}
+		levels = sere_amg_levels( amg );
+		sere_amg_destroy( amg );
+	}
+	sere_sgs_destroy( sgs );
+	state.counters["rows"] = a->rows;
+	state.counters["levels"] = levels;
+	state.counters["rows/s"] =
+		benchmark::Counter( static_cast<double>( a->rows ) * state.iterations(), benchmark::Counter::kIsRate );
+}
+
 // The multigrid PCG's floor (sere_cg_touch_amg): the same passes over every level's arrays with
 // adds only, as many iterations as BM_AMG's solve of the same system takes. Args: system, threads.
 void BM_AMGFloor( benchmark::State& state )
@@ -620,6 +653,7 @@ BENCHMARK( BM_AMG )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 }, { 0, 1 } } )
 	->UseRealTime()
 	->Unit( benchmark::kMicrosecond );
+BENCHMARK( BM_AMGSetup )->ArgName( "system" )->DenseRange( 0, 2 )->UseRealTime()->Unit( benchmark::kMicrosecond );
 BENCHMARK( BM_SGSFloor )
 	->ArgNames( { "system", "threads" } )
 	->ArgsProduct( { { 0, 1, 2 }, { 1, 2 } } )

@@ -1,7 +1,11 @@
 /* The aggregation multigrid preconditioner (cg.h: sere_amg) and the CG it drives
  * (sere_cg_solve_amg): its levels, symmetry and positivity, convergence against SGS on stiff
- * systems, thread-count determinism, the smallest matrices, and bad input. */
+ * systems, thread-count determinism, the smallest matrices, and bad input.
+ * _GNU_SOURCE: the private amg_shared.h (the levels' Galerkin sums) reaches internal/team.h. */
+#define _GNU_SOURCE
+
 #include "fixture_cg.h"
+#include "solve/internal/amg_shared.h"
 
 #include <criterion/criterion.h>
 #include <float.h>
@@ -36,6 +40,92 @@ Test( amg, levels_shrink_to_a_dense_level )
 	}
 	cr_expect_leq( sere_amg_rows( m, levels - 1 ), SERE_AMG_DENSE_ROWS );
 	cr_expect_eq( sere_amg_rows( m, levels ), 0 );
+	sere_amg_destroy( m );
+	sere_test_cg_system_free( &s );
+}
+
+/* The finest level's Galerkin sums (sere_amg_refresh adds val[sum_from[q]] into the coarse
+ * entry sum_to[t]): every fine entry a_ij is summed exactly once, into a target whose entries all
+ * join the same pair of aggregates (those of rows i and j), no two targets join the same pair, and
+ * within a target the entries come in (min(i, j), max(i, j), i) order, which makes the coarse
+ * matrix bitwise symmetric. Integers only: exact. */
+Test( amg, galerkin_sums_group_and_order_the_fine_entries )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 30, 20 );
+	sere_amg* m = amg_on( &s );
+	const amg_level* L = &m->level[0];
+	const sere_sgs* g = s.g;
+	const int32_t nnz = s.a->nnz, np = g->chunks * SERE_SELL_C;
+	int32_t* position = malloc( sizeof( int32_t ) * s.n );
+	int32_t* row_of = malloc( sizeof( int32_t ) * nnz );
+	int32_t* seen = calloc( (size_t) nnz, sizeof( int32_t ) );
+	int64_t* pair_target = malloc( sizeof( int64_t ) * (size_t) np * (size_t) np );
+	cr_assert( position && row_of && seen && pair_target );
+	for ( int32_t at = 0; at < np; ++at )
+	{
+		if ( g->row[at] >= 0 )
+		{
+			position[g->row[at]] = at;
+		}
+	}
+	/* the slots hold every entry once (the layout's own contract); map each back to its entry */
+	const int32_t slots = g->upper_ptr[g->chunks] + np;
+	int32_t* slot_entry = malloc( sizeof( int32_t ) * slots );
+	for ( int32_t q = 0; q < slots; ++q )
+	{
+		slot_entry[q] = -1;
+	}
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		for ( int32_t k = s.a->row_ptr[i]; k < s.a->row_ptr[i + 1]; ++k )
+		{
+			slot_entry[g->slot[k]] = k;
+			row_of[k] = i;
+		}
+	}
+	for ( size_t q = 0; q < (size_t) np * (size_t) np; ++q )
+	{
+		pair_target[q] = -1;
+	}
+	cr_assert_eq( L->sum_ptr[0], 0 );
+	cr_assert_eq( L->sum_ptr[L->targets], nnz, "%d entries summed of %d", L->sum_ptr[L->targets], nnz );
+	for ( int32_t t = 0; t < L->targets; ++t )
+	{
+		cr_assert_lt( L->sum_ptr[t], L->sum_ptr[t + 1], "target %d is empty", t );
+		cr_expect( t == 0 || L->sum_to[t] > L->sum_to[t - 1], "targets out of order at %d", t );
+		int32_t ci = -1, cj = -1, low0 = -1, high0 = -1, row0 = -1;
+		for ( int32_t q = L->sum_ptr[t]; q < L->sum_ptr[t + 1]; ++q )
+		{
+			const int32_t k = slot_entry[L->sum_from[q]];
+			cr_assert_geq( k, 0, "slot %d holds no entry", L->sum_from[q] );
+			seen[k] += 1;
+			const int32_t i = row_of[k], j = s.a->col[k];
+			const int32_t low = i < j ? i : j, high = i < j ? j : i;
+			const int32_t pi = L->coarse_at[position[i]], pj = L->coarse_at[position[j]];
+			if ( q == L->sum_ptr[t] )
+			{
+				ci = pi, cj = pj;
+				cr_expect_eq( pair_target[(size_t) pi * np + pj], -1, "aggregates %d, %d summed in two targets", pi,
+							  pj );
+				pair_target[(size_t) pi * np + pj] = t;
+			}
+			else
+			{
+				cr_expect( pi == ci && pj == cj, "target %d joins (%d, %d) and (%d, %d)", t, ci, cj, pi, pj );
+				const bool ascending =
+					low > low0 || ( low == low0 && ( high > high0 || ( high == high0 && i > row0 ) ) );
+				cr_expect( ascending, "target %d: (%d, %d, %d) after (%d, %d, %d)", t, low, high, i, low0, high0,
+						   row0 );
+			}
+			low0 = low, high0 = high, row0 = i;
+		}
+	}
+	for ( int32_t k = 0; k < nnz; ++k )
+	{
+		cr_expect_eq( seen[k], 1, "entry %d summed %d times", k, seen[k] );
+	}
+	free( position ), free( row_of ), free( seen ), free( pair_target ), free( slot_entry );
 	sere_amg_destroy( m );
 	sere_test_cg_system_free( &s );
 }

@@ -150,18 +150,35 @@ typedef struct amg_term
 	int32_t target, low, high, row, source;
 } amg_term;
 
-static int by_term( const void* left, const void* right )
+typedef enum term_key
 {
-	const amg_term *l = left, *r = right;
-	int32_t kl[4] = { l->target, l->low, l->high, l->row }, kr[4] = { r->target, r->low, r->high, r->row };
-	for ( int s = 0; s < 4; ++s )
+	KEY_HIGH,
+	KEY_LOW,
+	KEY_TARGET
+} term_key;
+
+static inline int32_t key_of( const amg_term* t, term_key key )
+{
+	return key == KEY_HIGH ? t->high : key == KEY_LOW ? t->low : t->target;
+}
+
+/* A stable counting sort of n terms from in to out by their key, whose values lie in
+ * [0, range); count holds range + 1 entries of scratch. */
+static void sort_terms_by( const amg_term* in, amg_term* out, int32_t n, term_key key, int32_t range, int32_t* count )
+{
+	memset( count, 0, sizeof( int32_t ) * ( (size_t) range + 1 ) );
+	for ( int32_t k = 0; k < n; ++k )
 	{
-		if ( kl[s] != kr[s] )
-		{
-			return kl[s] < kr[s] ? -1 : 1;
-		}
+		count[key_of( &in[k], key ) + 1] += 1;
 	}
-	return 0;
+	for ( int32_t v = 0; v < range; ++v )
+	{
+		count[v + 1] += count[v];
+	}
+	for ( int32_t k = 0; k < n; ++k )
+	{
+		out[count[key_of( &in[k], key )]++] = in[k];
+	}
 }
 
 /* Level L's links to the next one (the sgs level next, or the dense level of c->rows rows when
@@ -171,18 +188,24 @@ static sere_status link_levels( amg_level* L, const sere_csr* a, const int32_t* 
 {
 	const sere_sgs* g = L->g;
 	const int32_t count = c->rows, next_np = next != NULL ? next->chunks * LANES : count;
+	/* the targets are next's value slots (L, U, then the diagonal per position), or the dense
+	 * level's entries */
+	const int32_t target_range = next != NULL ? next->upper_ptr[next->chunks] + next_np : count * count;
+	const int32_t key_range = target_range > a->rows ? target_range : a->rows;
 	int32_t* position = malloc( sizeof( int32_t ) * (size_t) count );
+	int32_t* tally = malloc( sizeof( int32_t ) * ( (size_t) key_range + 1 ) );
 	amg_term* terms = malloc( sizeof( amg_term ) * (size_t) a->nnz );
+	amg_term* sorted = malloc( sizeof( amg_term ) * (size_t) a->nnz );
 	L->coarse_at = sere_alloc( sizeof( int32_t ) * (size_t) L->np );
 	L->member_ptr = sere_alloc( sizeof( int32_t ) * ( (size_t) next_np + 1 ) );
 	L->member = sere_alloc( sizeof( int32_t ) * (size_t) a->rows );
 	L->sum_ptr = sere_alloc( sizeof( int32_t ) * ( (size_t) a->nnz + 1 ) );
 	L->sum_to = sere_alloc( sizeof( int32_t ) * (size_t) a->nnz );
 	L->sum_from = sere_alloc( sizeof( int32_t ) * (size_t) a->nnz );
-	if ( position == NULL || terms == NULL || L->coarse_at == NULL || L->member_ptr == NULL || L->member == NULL ||
-		 L->sum_ptr == NULL || L->sum_to == NULL || L->sum_from == NULL )
+	if ( position == NULL || tally == NULL || terms == NULL || sorted == NULL || L->coarse_at == NULL ||
+		 L->member_ptr == NULL || L->member == NULL || L->sum_ptr == NULL || L->sum_to == NULL || L->sum_from == NULL )
 	{
-		free( position ), free( terms );
+		free( position ), free( tally ), free( terms ), free( sorted );
 		return SERE_ERR_MEMORY;
 	}
 	for ( int32_t at = 0; at < next_np; ++at )
@@ -228,19 +251,26 @@ static sere_status link_levels( amg_level* L, const sere_csr* a, const int32_t* 
 			};
 		}
 	}
-	qsort( terms, (size_t) a->nnz, sizeof( amg_term ), by_term );
+	/* By (target, low, high, row): the terms come in row order, so stable counting sorts by
+	 * high, then low, then target order them fully, in linear time. A comparison sort of the
+	 * plane tree's 35 000 triangle-layer terms was most of the 6.7 ms its levels took to build
+	 * at the first frame; they now take 2.1 ms. */
+	const int32_t nnz = a->nnz;
+	sort_terms_by( terms, sorted, nnz, KEY_HIGH, a->rows, tally );
+	sort_terms_by( sorted, terms, nnz, KEY_LOW, a->rows, tally );
+	sort_terms_by( terms, sorted, nnz, KEY_TARGET, target_range, tally );
 	L->targets = 0;
-	for ( int32_t k = 0; k < a->nnz; ++k )
+	for ( int32_t k = 0; k < nnz; ++k )
 	{
-		if ( k == 0 || terms[k].target != terms[k - 1].target )
+		if ( k == 0 || sorted[k].target != sorted[k - 1].target )
 		{
 			L->sum_ptr[L->targets] = k;
-			L->sum_to[L->targets++] = terms[k].target;
+			L->sum_to[L->targets++] = sorted[k].target;
 		}
-		L->sum_from[k] = terms[k].source;
+		L->sum_from[k] = sorted[k].source;
 	}
-	L->sum_ptr[L->targets] = a->nnz;
-	free( position ), free( terms );
+	L->sum_ptr[L->targets] = nnz;
+	free( position ), free( tally ), free( terms ), free( sorted );
 	return SERE_OK;
 }
 
