@@ -466,16 +466,22 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		status = needed == FILL_SELL ? sere_sell_update( o->sell, &o->a ) : sere_sgs_update( o->sgs, &o->a );
 	}
 	o->filled = needed;
+	const double tol = params->tolerance;
+	const int32_t cap = params->max_iterations;
+	bool solved = false;
 	if ( status == SERE_OK && report->preconditioner == SERE_OSMOSIS_AMG && o->amg == NULL )
 	{
-		status = sere_amg_create( &o->a, o->sgs, &o->amg );
+		/* The levels cost a dozen iterations to build (BM_AMGSetup): a layer whose guess already
+		 * meets the tolerance (the plane tree's triangle layer, every frame) never builds them.
+		 * The SGS solve without iterations is that check: the true residual, x unchanged. */
+		status = sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, tol, 0, &result );
+		solved = status != SERE_ERR_NO_CONVERGE || cap == 0;
+		status = solved ? status : sere_amg_create( &o->a, o->sgs, &o->amg );
 	}
 	o->amg_steps = report->preconditioner == SERE_OSMOSIS_AMG ? o->amg_steps : 0;
 	/* Jeong Eq. 9 solved: SPD after the change of unknown, so preconditioned CG applies. */
-	if ( status == SERE_OK )
+	if ( status == SERE_OK && !solved )
 	{
-		const double tol = params->tolerance;
-		const int32_t cap = params->max_iterations;
 		switch ( report->preconditioner )
 		{
 			case SERE_OSMOSIS_AMG:
