@@ -1,9 +1,11 @@
 /* The aggregation multigrid preconditioner (cg.h: sere_amg) and the CG it drives
  * (sere_cg_solve_amg): its levels, symmetry and positivity, convergence against SGS on stiff
- * systems, thread-count determinism, the smallest matrices, and bad input.
+ * systems, thread-count determinism, the smallest matrices, bad input, and the osmosis building
+ * the levels only when a step needs them.
  * _GNU_SOURCE: the private amg_shared.h (the levels' Galerkin sums) reaches internal/team.h. */
 #define _GNU_SOURCE
 
+#include "fixture.h"
 #include "fixture_cg.h"
 #include "solve/internal/amg_shared.h"
 
@@ -20,6 +22,83 @@ static sere_amg* amg_on( const sere_test_cg_system* s )
 	cr_assert_eq( sere_amg_create( s->a, s->g, &m ), SERE_OK );
 	cr_assert_eq( sere_amg_update( m ), SERE_OK );
 	return m;
+}
+
+/* A grid leaf's model and its triangle layer's osmosis workspace (the layer whose multigrid the
+ * test below builds). */
+static sere_osmosis* grid_t_layer( sere_model* model )
+{
+	sere_test_plane plane;
+	sere_test_plane_grid( &plane, 60, 40, 3.0, 2.0, 0.3, 1, 5 );
+	sere_layer_params layer = sere_layer_params_default();
+	cr_assert_eq( sere_model_from_triangles( &plane.mesh, &layer, model ), SERE_OK );
+	sere_test_plane_free( &plane );
+	sere_osmosis* o = NULL;
+	cr_assert_eq( sere_osmosis_create( 0, model->triangle_particles, model->s.a, model->s.b, model->t_springs, &o ),
+				  SERE_OK );
+	return o;
+}
+
+static sere_status model_step( sere_osmosis* o, sere_model* model, const sere_osmosis_params* params,
+							   sere_osmosis_report* report )
+{
+	return sere_osmosis_step( o, model->p.x, model->p.y, model->p.z, model->p.tau, model->p.M, model->p.w, model->p.m,
+							  params, report );
+}
+
+/* The multigrid's levels are built only when a step first needs an iteration with them
+ * (osmosis.c): a stiff layer (λ = 2000: Σ|a_ij|/a_ii near 0.9995, past SERE_OSMOSIS_AMG_ABOVE;
+ * the plane tree's 100 gives 0.988 on this coarse grid) whose first step starts at its answer
+ * (uniform concentration, no loss: A c = b for c = w/M) takes no iteration; its next step, from
+ * a dry patch, builds the levels then and solves to the tolerance, to what a fresh workspace
+ * solving the same step finds (as osmosis/extrapolated_start_saves_iterations_not_accuracy
+ * compares them). */
+Test( amg, osmosis_builds_the_levels_when_first_needed )
+{
+	sere_model kept_model, fresh_model;
+	sere_osmosis* kept = grid_t_layer( &kept_model );
+	sere_osmosis* fresh = grid_t_layer( &fresh_model );
+	const int32_t n = kept_model.triangle_particles;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		kept_model.p.w[i] = 0.8 * kept_model.p.M[i];
+	}
+	sere_osmosis_params params = sere_osmosis_params_default();
+	params.lambda_min = params.lambda_max = 2000.0;
+	params.water_rate = 0.0;
+	sere_osmosis_report report;
+	cr_assert_eq( model_step( kept, &kept_model, &params, &report ), SERE_OK );
+	cr_expect_eq( report.preconditioner, SERE_OSMOSIS_AMG, "offdiag %g", report.offdiag );
+	cr_expect_eq( report.iterations, 0 );
+	cr_expect_leq( report.residual, params.tolerance );
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		const double x = kept_model.p.x[i], y = kept_model.p.y[i];
+		kept_model.p.w[i] =
+			( x - 1.5 ) * ( x - 1.5 ) + ( y - 1.0 ) * ( y - 1.0 ) < 0.25 ? 0.1 * kept_model.p.M[i] : kept_model.p.w[i];
+		kept_model.p.m[i] = kept_model.p.M[i] + kept_model.p.w[i];
+		fresh_model.p.w[i] = kept_model.p.w[i], fresh_model.p.m[i] = kept_model.p.m[i];
+	}
+	params.water_rate = -0.1;
+	cr_assert_eq( model_step( kept, &kept_model, &params, &report ), SERE_OK );
+	cr_expect_eq( report.preconditioner, SERE_OSMOSIS_AMG );
+	cr_expect_gt( report.iterations, 0 );
+	cr_expect_leq( report.residual, params.tolerance );
+	sere_osmosis_report fresh_report;
+	cr_assert_eq( model_step( fresh, &fresh_model, &params, &fresh_report ), SERE_OK );
+	/* both at ‖r‖ ≤ 1e-10 ‖b‖ from different guesses: 1e-6 of the
+	 * largest water content is far above what those residuals allow and far below a wrong solve */
+	double worst = 0.0, largest = 0.0;
+	for ( int32_t i = 0; i < n; ++i )
+	{
+		worst = fmax( worst, fabs( kept_model.p.w[i] - fresh_model.p.w[i] ) );
+		largest = fmax( largest, fabs( fresh_model.p.w[i] ) );
+	}
+	cr_expect_leq( worst, 1e-6 * largest, "water differs by %g (largest %g)", worst, largest );
+	sere_osmosis_destroy( kept );
+	sere_osmosis_destroy( fresh );
+	sere_model_destroy( &kept_model );
+	sere_model_destroy( &fresh_model );
 }
 
 /* Each level has at most 4/5 of the rows of the one before, and the last is small enough to be

@@ -435,6 +435,62 @@ Test( sgs, rejects_bad_patterns_and_matrices )
 	sere_sgs_destroy( g );
 }
 
+/* sere_cg_residual_sgs measures a guess as the CSR product does (to rounding), with the same
+ * bits at 1, 2 and 3 threads, leaves x alone, gives 0 for the exact answer of b = 0 and +∞
+ * for any other x then, and refuses what a solve refuses. */
+Test( sgs, residual_of_a_guess )
+{
+	sere_test_cg_system s;
+	sere_test_cg_system_make( &s, 30, 20 );
+	sere_cg_workspace* w;
+	cr_assert_eq( sere_cg_create( s.n, &w ), SERE_OK );
+	double *x = malloc( sizeof( double ) * s.n ), *kept = malloc( sizeof( double ) * s.n );
+	double *zero = calloc( (size_t) s.n, sizeof( double ) ), *ones = malloc( sizeof( double ) * s.n );
+	for ( int32_t i = 0; i < s.n; ++i )
+	{
+		double diagonal = 1.0;
+		for ( int32_t k = s.a->row_ptr[i]; k < s.a->row_ptr[i + 1]; ++k )
+		{
+			diagonal = s.a->col[k] == i ? s.a->val[k] : diagonal;
+		}
+		x[i] = 0.9 * s.b[i] / diagonal + 1e-3 * sin( 0.7 * i ); /* a rough guess */
+		ones[i] = 1.0;
+	}
+	memcpy( kept, x, sizeof( double ) * s.n );
+	double relative[3];
+	for ( int t = 0; t < 3; ++t )
+	{
+		omp_set_num_threads( t + 1 );
+		sere_cg_set_threads( w, t + 1 );
+		cr_assert_eq( sere_cg_residual_sgs( w, s.g, s.b, x, &relative[t] ), SERE_OK );
+		cr_expect_eq( memcmp( &relative[t], &relative[0], sizeof( double ) ), 0, "%d threads: %.17g, 1: %.17g", t + 1,
+					  relative[t], relative[0] );
+	}
+	omp_set_num_threads( 2 );
+	cr_expect_eq( memcmp( x, kept, sizeof( double ) * s.n ), 0, "x changed" );
+	/* the same sums in other orders: this guess's relative residual (about 0.98, from terms of
+	 * order 1) agrees to a few ulps, far within 1e-12 of itself */
+	const double check = sere_test_relative_residual( s.a, s.b, x );
+	cr_expect_gt( check, 1e-6 );
+	cr_expect_leq( fabs( relative[0] - check ), 1e-12 * check, "%.17g against the CSR's %.17g", relative[0], check );
+	double r;
+	cr_expect_eq( sere_cg_residual_sgs( w, s.g, zero, zero, &r ), SERE_OK );
+	cr_expect_eq( r, 0.0 );
+	cr_expect_eq( sere_cg_residual_sgs( w, s.g, zero, ones, &r ), SERE_OK );
+	cr_expect( isinf( r ) );
+	kept[3] = NAN;
+	cr_expect_eq( sere_cg_residual_sgs( w, s.g, s.b, kept, &r ), SERE_ERR_NONFINITE );
+	cr_expect_eq( sere_cg_residual_sgs( w, s.g, s.b, x, NULL ), SERE_ERR_ARGUMENT );
+	cr_expect_eq( sere_cg_residual_sgs( NULL, s.g, s.b, x, &r ), SERE_ERR_ARGUMENT );
+	sere_cg_workspace* small;
+	cr_assert_eq( sere_cg_create( 4, &small ), SERE_OK );
+	cr_expect_eq( sere_cg_residual_sgs( small, s.g, s.b, x, &r ), SERE_ERR_ARGUMENT );
+	sere_cg_destroy( small );
+	free( x ), free( kept ), free( zero ), free( ones );
+	sere_cg_destroy( w );
+	sere_test_cg_system_free( &s );
+}
+
 /* The osmosis picks multigrid for the stiffest system, SGS for a stiff one and Jacobi for the
  * easy one, by q (osmosis.h), and each solve meets the tolerance. On this grid λ = 2000 gives
  * q = 0.9995, λ = 100 gives 0.990 and λ = 0.04 gives 0.037. */
@@ -459,4 +515,54 @@ Test( sgs, osmosis_picks_by_offdiagonal_ratio )
 		sere_model_destroy( &model );
 		free( b );
 	}
+}
+
+/* One workspace whose λ changes between steps takes every preconditioner in turn, each step
+ * copying a's values into the layout the last one did not write: its matrix (sere_osmosis_matrix,
+ * copied from the layout its step wrote) and right-hand side are bitwise those of a fresh
+ * workspace's step from the same state (whose first step writes both layouts), and its water
+ * agrees with the fresh one's. */
+Test( sgs, osmosis_switches_layouts_on_one_workspace )
+{
+	sere_model model;
+	sere_osmosis* kept;
+	sere_osmosis_report report, fresh_report;
+	double* b = sere_test_v_system( &model, 30, 20, 0.04, &kept, &report );
+	cr_assert_eq( report.preconditioner, SERE_OSMOSIS_JACOBI );
+	const double lambdas[4] = { 100.0, 2000.0, 0.04, 100.0 };
+	const sere_osmosis_precond expected[4] = { SERE_OSMOSIS_SGS, SERE_OSMOSIS_AMG, SERE_OSMOSIS_JACOBI,
+											   SERE_OSMOSIS_SGS };
+	const int32_t total = model.p.count, first = model.triangle_particles, count = model.triangle_count;
+	double *w = malloc( sizeof( double ) * total ), *m = malloc( sizeof( double ) * total );
+	for ( int k = 0; k < 4; ++k )
+	{
+		memcpy( w, model.p.w, sizeof( double ) * total );
+		memcpy( m, model.p.m, sizeof( double ) * total );
+		sere_osmosis_params params = sere_osmosis_params_default();
+		params.lambda_min = params.lambda_max = lambdas[k];
+		cr_assert_eq( sere_osmosis_step( kept, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, model.p.w,
+										 model.p.m, &params, &report ),
+					  SERE_OK );
+		cr_expect_eq( report.preconditioner, expected[k], "step %d: preconditioner %d", k, report.preconditioner );
+		cr_expect_leq( report.residual, params.tolerance );
+		sere_osmosis* fresh;
+		cr_assert_eq( sere_osmosis_create( first, count, model.s.a + model.t_springs, model.s.b + model.t_springs,
+										   model.v_springs, &fresh ),
+					  SERE_OK );
+		cr_assert_eq( sere_osmosis_step( fresh, model.p.x, model.p.y, model.p.z, model.p.tau, model.p.M, w, m, &params,
+										 &fresh_report ),
+					  SERE_OK );
+		const sere_csr *a = sere_osmosis_matrix( kept ), *fresh_a = sere_osmosis_matrix( fresh );
+		cr_expect_eq( memcmp( a->val, fresh_a->val, sizeof( double ) * a->nnz ), 0, "step %d: matrices differ", k );
+		cr_expect_eq( memcmp( sere_osmosis_rhs( kept ), sere_osmosis_rhs( fresh ), sizeof( double ) * count ), 0,
+					  "step %d: right-hand sides differ", k );
+		/* both at ‖r‖ ≤ 1e-10 ‖b‖ from different guesses, κ ≲ 10⁴ (q ≤ 0.9995): 1e-6 of the
+		 * largest water content is far above what that allows and far below a wrong solve */
+		double largest, worst = sere_test_worst_difference( model.p.w + first, w + first, count, &largest );
+		cr_expect_leq( worst, 1e-6 * largest, "step %d: water differs by %g of %g", k, worst, largest );
+		sere_osmosis_destroy( fresh );
+	}
+	free( w ), free( m ), free( b );
+	sere_osmosis_destroy( kept );
+	sere_model_destroy( &model );
 }

@@ -673,60 +673,6 @@ Test( osmosis, extrapolated_start_saves_iterations_not_accuracy )
 	sere_model_destroy( &fresh_model );
 }
 
-/* The multigrid's levels are built only when a step first needs an iteration with them
- * (osmosis.c): a stiff layer (λ = 2000: Σ|a_ij|/a_ii near 0.9995, past SERE_OSMOSIS_AMG_ABOVE;
- * the plane tree's 100 gives 0.988 on this coarse grid) whose first step starts at its answer
- * (uniform concentration, no loss: A c = b for c = w/M) takes no iteration; its next step, from
- * a dry patch, builds the levels then and solves to the tolerance, to what a fresh workspace
- * solving the same step finds. */
-Test( osmosis, multigrid_built_when_first_needed )
-{
-	sere_model kept_model, fresh_model;
-	const int32_t n = grid_model( &kept_model, 60, 40, 3.0, 2.0 );
-	grid_model( &fresh_model, 60, 40, 3.0, 2.0 );
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		kept_model.p.w[i] = 0.8 * kept_model.p.M[i];
-	}
-	sere_osmosis_params params = lambda_params( 2000.0, 2000.0 );
-	params.water_rate = 0.0;
-	sere_osmosis* kept = t_layer( &kept_model );
-	sere_osmosis_report report;
-	cr_assert_eq( model_step( kept, &kept_model, &params, &report ), SERE_OK );
-	cr_expect_eq( report.preconditioner, SERE_OSMOSIS_AMG, "offdiag %g", report.offdiag );
-	cr_expect_eq( report.iterations, 0 );
-	cr_expect_leq( report.residual, params.tolerance );
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		const double x = kept_model.p.x[i], y = kept_model.p.y[i];
-		kept_model.p.w[i] =
-			( x - 1.5 ) * ( x - 1.5 ) + ( y - 1.0 ) * ( y - 1.0 ) < 0.25 ? 0.1 * kept_model.p.M[i] : kept_model.p.w[i];
-		kept_model.p.m[i] = kept_model.p.M[i] + kept_model.p.w[i];
-		fresh_model.p.w[i] = kept_model.p.w[i], fresh_model.p.m[i] = kept_model.p.m[i];
-	}
-	params.water_rate = -0.1;
-	cr_assert_eq( model_step( kept, &kept_model, &params, &report ), SERE_OK );
-	cr_expect_eq( report.preconditioner, SERE_OSMOSIS_AMG );
-	cr_expect_gt( report.iterations, 0 );
-	cr_expect_leq( report.residual, params.tolerance );
-	sere_osmosis* fresh = t_layer( &fresh_model );
-	sere_osmosis_report fresh_report;
-	cr_assert_eq( model_step( fresh, &fresh_model, &params, &fresh_report ), SERE_OK );
-	/* both at ‖r‖ ≤ 1e-10 ‖b‖ from different guesses: as in the test above, 1e-6 of the
-	 * largest water content is far above what those residuals allow and far below a wrong solve */
-	double worst = 0.0, largest = 0.0;
-	for ( int32_t i = 0; i < n; ++i )
-	{
-		worst = fmax( worst, fabs( kept_model.p.w[i] - fresh_model.p.w[i] ) );
-		largest = fmax( largest, fabs( fresh_model.p.w[i] ) );
-	}
-	cr_expect_leq( worst, 1e-6 * largest, "water differs by %g (largest %g)", worst, largest );
-	sere_osmosis_destroy( kept );
-	sere_osmosis_destroy( fresh );
-	sere_model_destroy( &kept_model );
-	sere_model_destroy( &fresh_model );
-}
-
 /* A matrix no mesh gives: row lengths from 0 to 300 (empty rows, a few very long ones), columns
  * anywhere and in no particular order, values of both signs. */
 static sere_csr ragged_csr( int32_t n, uint32_t seed )

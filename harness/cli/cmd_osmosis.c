@@ -41,7 +41,7 @@ static int write_mtx_vector( const char* path, const double* v, int32_t n )
 	return sere_atomic_commit( &file );
 }
 
-static int dump( const char* dir, const sere_osmosis* o, const sere_model* model )
+static int dump( const char* dir, sere_osmosis* o, const sere_model* model )
 {
 	if ( sere_dir_create( dir ) != 0 )
 	{

@@ -31,6 +31,8 @@ struct sere_osmosis
 							   * preconditioner's step starts the count again, so the multigrid
 							   * never resumes with levels older than its own last steps */
 	int filled;				  /* the layouts the assembly writes: FILL_SELL, FILL_SGS (the last step's) */
+	int csr_current;		  /* a.val holds the last assembly's values (fill_csr): the assembly writes
+							   * only the layouts, a's values are copied from one when asked for */
 	int32_t* neighbor_spring; /* per CSR entry: the spring it comes from; the diagonal's is
 							   * spring_count, whose length and conductance stay 0 */
 	int32_t* diagonal;		  /* per row: CSR position of the diagonal */
@@ -113,6 +115,7 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	o->first = first;
 	o->count = count;
 	o->filled = FILL_SELL | FILL_SGS;
+	o->csr_current = 1; /* no step yet: a's values are the zeros written below, as the layouts' */
 	o->sa = a;
 	o->sb = b;
 	o->spring_count = spring_count;
@@ -143,6 +146,7 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	}
 	o->length[spring_count] = 0.0;
 	o->conductance[spring_count] = 0.0;
+	memset( o->a.val, 0, sizeof( double ) * (size_t) nnz );
 	/* Row i: its springs' other ends in ascending column order with the diagonal in place. */
 	for ( int32_t s = 0; s < spring_count; ++s )
 	{
@@ -202,8 +206,28 @@ sere_status sere_osmosis_create( int32_t first, int32_t count, const int32_t* a,
 	return SERE_OK;
 }
 
-const sere_csr* sere_osmosis_matrix( const sere_osmosis* o )
+/* a's values from the layout the last assembly wrote (each entry's slot there), once a step:
+ * for callers who read the matrix and for the switch to the other layout. */
+static void fill_csr( sere_osmosis* o )
 {
+	if ( o->csr_current )
+	{
+		return;
+	}
+	const bool sgs = o->filled & FILL_SGS;
+	const double* restrict from = sgs ? o->sgs->val : o->sell->val;
+	const int32_t* restrict slot = sgs ? o->sgs->slot : o->sell->slot;
+	double* restrict val = o->a.val;
+	for ( int32_t k = 0; k < o->a.nnz; ++k )
+	{
+		val[k] = from[slot[k]];
+	}
+	o->csr_current = 1;
+}
+
+const sere_csr* sere_osmosis_matrix( sere_osmosis* o )
+{
+	fill_csr( o );
 	return &o->a;
 }
 
@@ -306,7 +330,7 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 	const int32_t* restrict row_ptr = o->a.row_ptr;
 	const int32_t* restrict spring = o->neighbor_spring, * restrict diagonal = o->diagonal;
 	const double* restrict conductance = o->conductance, * restrict length = o->length;
-	double* restrict val = o->a.val, * restrict rhs = o->rhs, * restrict c = o->c;
+	double* restrict rhs = o->rhs, * restrict c = o->c;
 	double* restrict last = o->last, * restrict last2 = o->last2;
 	double* restrict edge_sum = o->edge_sum;
 	double* sell_val = o->filled & FILL_SELL ? o->sell->val : NULL;
@@ -337,7 +361,6 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 					ei += length[s];
 				}
 				const double value = -dt * conductance[s];
-				val[k] = value;
 				if ( sell_val != NULL )
 				{
 					sell_val[sell_slot[k]] = value;
@@ -353,7 +376,6 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 			const double scale = conservative ? 1.0 : 0.5 * ei;
 			const int32_t d = diagonal[i];
 			const double aii = scale * M[first + i] - off_sum;
-			val[d] = aii;
 			if ( sell_val != NULL )
 			{
 				sell_val[sell_slot[d]] = aii;
@@ -392,6 +414,60 @@ static double assemble( sere_osmosis* o, const double* M, const double* w, const
 		}
 	}
 	return offdiag;
+}
+
+/* Jeong Eq. 9 solved: SPD after the change of unknown, so preconditioned CG applies, with the
+ * preconditioner q = offdiag picks (osmosis.h); its layout takes a's values when the last step
+ * wrote the other one. */
+static sere_status solve( sere_osmosis* o, double offdiag, const sere_osmosis_params* params,
+						  sere_osmosis_report* report, sere_cg_result* result )
+{
+	report->preconditioner = offdiag > SERE_OSMOSIS_AMG_ABOVE	? SERE_OSMOSIS_AMG
+							 : offdiag > SERE_OSMOSIS_SGS_ABOVE ? SERE_OSMOSIS_SGS
+																: SERE_OSMOSIS_JACOBI;
+	const int needed = report->preconditioner == SERE_OSMOSIS_JACOBI ? FILL_SELL : FILL_SGS;
+	sere_status status = SERE_OK;
+	if ( !( o->filled & needed ) )
+	{
+		fill_csr( o );
+		status = needed == FILL_SELL ? sere_sell_update( o->sell, &o->a ) : sere_sgs_update( o->sgs, &o->a );
+	}
+	o->filled = needed;
+	const double tol = params->tolerance;
+	const int32_t cap = params->max_iterations;
+	bool solved = false;
+	if ( status == SERE_OK && report->preconditioner == SERE_OSMOSIS_AMG && o->amg == NULL )
+	{
+		/* The levels cost a dozen iterations to build (BM_AMGSetup): a layer whose guess already
+		 * meets the tolerance (the plane tree's triangle layer, every frame) never builds them. */
+		status = sere_cg_residual_sgs( o->cg, o->sgs, o->rhs, o->c, &result->residual );
+		const bool met = status == SERE_OK && result->residual <= tol;
+		solved = status != SERE_OK || met || cap == 0;
+		if ( status == SERE_OK && !met )
+		{
+			status = cap == 0 ? SERE_ERR_NO_CONVERGE : sere_amg_create( &o->a, o->sgs, &o->amg );
+		}
+	}
+	o->amg_steps = report->preconditioner == SERE_OSMOSIS_AMG ? o->amg_steps : 0;
+	if ( status == SERE_OK && !solved )
+	{
+		switch ( report->preconditioner )
+		{
+			case SERE_OSMOSIS_AMG:
+				if ( o->amg_steps++ % SERE_OSMOSIS_AMG_REFRESH == 0 )
+				{
+					sere_amg_update( o->amg );
+				}
+				status = sere_cg_solve_amg( o->cg, o->amg, o->rhs, o->c, tol, cap, result );
+				break;
+			case SERE_OSMOSIS_SGS:
+				status = sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, tol, cap, result );
+				break;
+			default:
+				status = sere_cg_solve( o->cg, o->sell, o->rhs, o->c, tol, cap, result );
+		}
+	}
+	return status;
 }
 
 sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, const float* z, const float* tau,
@@ -443,6 +519,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 		return SERE_ERR_GEOMETRY;
 	}
 	double offdiag = assemble( o, M, w, params );
+	o->csr_current = 0;
 	for ( int32_t k = 0; k < params->supply_count; ++k )
 	{
 		int32_t i = params->supply[k] - first;
@@ -456,48 +533,7 @@ sere_status sere_osmosis_step( sere_osmosis* o, const float* x, const float* y, 
 
 	o->history = o->history < 2 ? o->history + 1 : 2;
 	sere_cg_result result = { 0 };
-	report->preconditioner = offdiag > SERE_OSMOSIS_AMG_ABOVE	? SERE_OSMOSIS_AMG
-							 : offdiag > SERE_OSMOSIS_SGS_ABOVE ? SERE_OSMOSIS_SGS
-																: SERE_OSMOSIS_JACOBI;
-	const int needed = report->preconditioner == SERE_OSMOSIS_JACOBI ? FILL_SELL : FILL_SGS;
-	sere_status status = SERE_OK;
-	if ( !( o->filled & needed ) )
-	{
-		status = needed == FILL_SELL ? sere_sell_update( o->sell, &o->a ) : sere_sgs_update( o->sgs, &o->a );
-	}
-	o->filled = needed;
-	const double tol = params->tolerance;
-	const int32_t cap = params->max_iterations;
-	bool solved = false;
-	if ( status == SERE_OK && report->preconditioner == SERE_OSMOSIS_AMG && o->amg == NULL )
-	{
-		/* The levels cost a dozen iterations to build (BM_AMGSetup): a layer whose guess already
-		 * meets the tolerance (the plane tree's triangle layer, every frame) never builds them.
-		 * The SGS solve without iterations is that check: the true residual, x unchanged. */
-		status = sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, tol, 0, &result );
-		solved = status != SERE_ERR_NO_CONVERGE || cap == 0;
-		status = solved ? status : sere_amg_create( &o->a, o->sgs, &o->amg );
-	}
-	o->amg_steps = report->preconditioner == SERE_OSMOSIS_AMG ? o->amg_steps : 0;
-	/* Jeong Eq. 9 solved: SPD after the change of unknown, so preconditioned CG applies. */
-	if ( status == SERE_OK && !solved )
-	{
-		switch ( report->preconditioner )
-		{
-			case SERE_OSMOSIS_AMG:
-				if ( o->amg_steps++ % SERE_OSMOSIS_AMG_REFRESH == 0 )
-				{
-					sere_amg_update( o->amg );
-				}
-				status = sere_cg_solve_amg( o->cg, o->amg, o->rhs, o->c, tol, cap, &result );
-				break;
-			case SERE_OSMOSIS_SGS:
-				status = sere_cg_solve_sgs( o->cg, o->sgs, o->rhs, o->c, tol, cap, &result );
-				break;
-			default:
-				status = sere_cg_solve( o->cg, o->sell, o->rhs, o->c, tol, cap, &result );
-		}
-	}
+	sere_status status = solve( o, offdiag, params, report, &result );
 	report->offdiag = offdiag;
 	report->iterations = result.iterations;
 	report->residual = result.residual;

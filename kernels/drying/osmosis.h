@@ -111,8 +111,11 @@ sere_status sere_osmosis_step( sere_osmosis* osmosis, const float* x, const floa
 							   sere_osmosis_report* report );
 
 /* The assembled system of the last step (for --dump and tests): A, right-hand side b and
- * solution c, all in the layer's local numbering. */
-const sere_csr* sere_osmosis_matrix( const sere_osmosis* osmosis );
+ * solution c, all in the layer's local numbering. A step writes A's values only into its
+ * preconditioner's layout; sere_osmosis_matrix copies them into the CSR arrays the first time it
+ * is called after a step (hence the pointer is not const), and the CSR stays valid until the
+ * next step. */
+const sere_csr* sere_osmosis_matrix( sere_osmosis* osmosis );
 const double* sere_osmosis_rhs( const sere_osmosis* osmosis );
 const double* sere_osmosis_solution( const sere_osmosis* osmosis );
 

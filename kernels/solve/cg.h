@@ -199,6 +199,14 @@ sere_status sere_sgs_set_threads( sere_sgs* sgs, int32_t threads );
 sere_status sere_cg_solve_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs, const double* b, double* x,
 							   double tolerance, int32_t max_iterations, sere_cg_result* result );
 
+/* ‖b − A x‖ / ‖b‖ of a guess x, A in the SGS layout's values, into *relative (the true residual
+ * a solve from x would start with, the same sums at any thread count); +∞ when b = 0 and A x is
+ * not. x is not changed. For a caller who wants to know whether a guess already meets a
+ * tolerance before it builds a stronger preconditioner (the osmosis, before the multigrid).
+ * SERE_ERR_ARGUMENT as sere_cg_solve_sgs, SERE_ERR_NONFINITE for a non-finite b or x. */
+sere_status sere_cg_residual_sgs( sere_cg_workspace* workspace, const sere_sgs* sgs, const double* b, const double* x,
+								  double* relative );
+
 /* The floor of `iterations` steps of sere_cg_solve_sgs (benchmarks): each step's update pass over
  * the positions and its backward and forward sweeps over every entry, the same loads, gathers and
  * stores at the same barriers, with an add where the step multiplies, divides or multiplies and

@@ -716,6 +716,42 @@ sere_status sere_cg_solve_sgs( sere_cg_workspace* ws, const sere_sgs* g, const d
 	return rel <= tolerance || st.met ? SERE_OK : SERE_ERR_NO_CONVERGE;
 }
 
+sere_status sere_cg_residual_sgs( sere_cg_workspace* ws, const sere_sgs* g, const double* b_in, const double* x_in,
+								  double* relative )
+{
+	if ( ws == NULL || g == NULL || b_in == NULL || x_in == NULL || relative == NULL || g->rows <= 0 ||
+		 g->rows > ws->capacity || g->chunks * LANES > ws->positions )
+	{
+		return SERE_ERR_ARGUMENT;
+	}
+	const int32_t np = g->chunks * LANES;
+	const int32_t blocks = ( np + SERE_CG_BLOCK - 1 ) / SERE_CG_BLOCK;
+	double *x = ws->x, *b = ws->b, *r = ws->r, *partial = ws->partial;
+	int nonfinite = 0;
+#pragma omp parallel num_threads( sere_team_for( ws->threads ) )
+	{
+#pragma omp for schedule( static ) reduction( | : nonfinite )
+		for ( int32_t at = 0; at < np; ++at )
+		{
+			nonfinite |= load_position( g->row[at], b_in, x_in, b, x, at );
+		}
+		int32_t first, last;
+		sere_team_share( 0, blocks, omp_get_thread_num(), omp_get_num_threads(), &first, &last );
+		sgs_residual_blocks( g, first, last, np, b, x, NULL, r, partial );
+		for ( int32_t blk = first; blk < last; ++blk )
+		{
+			partial[4 * blk + 3] = dot_lanes( b, b, blk * SERE_CG_BLOCK, block_end( blk, np ) );
+		}
+	}
+	if ( nonfinite )
+	{
+		return SERE_ERR_NONFINITE;
+	}
+	const double rr = sere_block_sum( partial, blocks, 0 ), bb = sere_block_sum( partial, blocks, 3 );
+	*relative = bb > 0.0 ? sqrt( rr / bb ) : rr > 0.0 ? INFINITY : 0.0;
+	return SERE_OK;
+}
+
 /* The floor's chunk of the backward sweep: u and D⁻¹ read, the chunk's U entries read and t
  * gathered at their columns, t and the upper sums (z) stored. */
 static inline void backward_touch_chunk( const sere_sgs* g, int32_t ch, const double* inv_diag, const double* u,
