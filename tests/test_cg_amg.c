@@ -86,8 +86,8 @@ Test( amg, osmosis_builds_the_levels_when_first_needed )
 	cr_expect_leq( report.residual, params.tolerance );
 	sere_osmosis_report fresh_report;
 	cr_assert_eq( model_step( fresh, &fresh_model, &params, &fresh_report ), SERE_OK );
-	/* both at ‖r‖ ≤ 1e-10 ‖b‖ from different guesses: 1e-6 of the
-	 * largest water content is far above what those residuals allow and far below a wrong solve */
+	/* both at ‖r‖ ≤ 1e-10 ‖b‖ from different guesses: 1e-6 of the largest water content is far
+	 * above what those residuals allow and far below a wrong solve */
 	double worst = 0.0, largest = 0.0;
 	for ( int32_t i = 0; i < n; ++i )
 	{
