@@ -139,7 +139,9 @@ Test( amg, galerkin_sums_group_and_order_the_fine_entries )
 	int32_t* position = malloc( sizeof( int32_t ) * s.n );
 	int32_t* row_of = malloc( sizeof( int32_t ) * nnz );
 	int32_t* seen = calloc( (size_t) nnz, sizeof( int32_t ) );
-	int64_t* pair_target = malloc( sizeof( int64_t ) * (size_t) np * (size_t) np );
+	/* the aggregates are the next level's positions (or the dense level's rows) */
+	const int32_t next_np = m->levels > 1 ? m->level[1].np : m->dense_rows;
+	int32_t* pair_target = malloc( sizeof( int32_t ) * (size_t) next_np * (size_t) next_np );
 	cr_assert( position && row_of && seen && pair_target );
 	for ( int32_t at = 0; at < np; ++at )
 	{
@@ -163,7 +165,7 @@ Test( amg, galerkin_sums_group_and_order_the_fine_entries )
 			row_of[k] = i;
 		}
 	}
-	for ( size_t q = 0; q < (size_t) np * (size_t) np; ++q )
+	for ( size_t q = 0; q < (size_t) next_np * (size_t) next_np; ++q )
 	{
 		pair_target[q] = -1;
 	}
@@ -185,9 +187,10 @@ Test( amg, galerkin_sums_group_and_order_the_fine_entries )
 			if ( q == L->sum_ptr[t] )
 			{
 				ci = pi, cj = pj;
-				cr_expect_eq( pair_target[(size_t) pi * np + pj], -1, "aggregates %d, %d summed in two targets", pi,
-							  pj );
-				pair_target[(size_t) pi * np + pj] = t;
+				cr_assert( pi >= 0 && pi < next_np && pj >= 0 && pj < next_np, "aggregates %d, %d", pi, pj );
+				cr_expect_eq( pair_target[(size_t) pi * next_np + pj], -1, "aggregates %d, %d summed in two targets",
+							  pi, pj );
+				pair_target[(size_t) pi * next_np + pj] = t;
 			}
 			else
 			{
