@@ -523,15 +523,10 @@ static int32_t pack( sere_vbd* v, const float* px, const float* py, const float*
 	return flags;
 }
 
-/* The records of block b's lanes, and their slots into at (for storing them back). */
-static void load_block( const sere_vbd* v, int32_t block, int32_t at[SERE_LANES], sere_vf* x, sere_vf* y, sere_vf* z,
-						sere_vf* movable )
+/* The records of block b's lanes (a block's slots are consecutive). */
+static float* block_records( const sere_vbd* v, int32_t block )
 {
-	for ( int32_t j = 0; j < SERE_LANES; ++j )
-	{
-		at[j] = block * SERE_LANES + j;
-	}
-	sere_vf_load_records( v->record, at, x, y, z, movable );
+	return v->record + 4 * (size_t) block * SERE_LANES;
 }
 
 /* One Newton step on every lane of block b (module comment of sere_vbd_step); returns the
@@ -539,9 +534,8 @@ static void load_block( const sere_vbd* v, int32_t block, int32_t at[SERE_LANES]
 static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 {
 	const int32_t s0 = block * SERE_LANES;
-	int32_t at[SERE_LANES];
 	sere_vf x, y, z, movable;
-	load_block( v, block, at, &x, &y, &z, &movable );
+	sere_vf_load_block_records( block_records( v, block ), &x, &y, &z, &movable );
 	const sere_vf m = sere_vf_load( v->mass + s0 );
 	sere_vf gx = sere_vf_mul( m, sere_vf_sub( x, sere_vf_load( v->tx + s0 ) ) );
 	sere_vf gy = sere_vf_mul( m, sere_vf_sub( y, sere_vf_load( v->ty + s0 ) ) );
@@ -605,7 +599,7 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 	const sere_vf mz = sere_vf_sub( nz, z );
 	const sere_vf reaction = sere_vf_div( sere_vf_max( zero, gz ), m );
 	sere_vf_store( v->push + s0, sere_vf_keep( sere_vf_gt( depth, zero ), reaction ) );
-	sere_vf_store_records( v->record, at, SERE_LANES, sere_vf_sub( x, mx ), sere_vf_sub( y, my ), nz, movable );
+	sere_vf_store_block_records( block_records( v, block ), sere_vf_sub( x, mx ), sere_vf_sub( y, my ), nz, movable );
 	const sere_vf move2 =
 		sere_vf_add( sere_vf_add( sere_vf_mul( mx, mx ), sere_vf_mul( my, my ) ), sere_vf_mul( mz, mz ) );
 	return sere_vmask_any( sere_vf_not_le( move2, sere_vf_splat( FLT_MAX ) ) ) ? INFINITY : sere_vf_max_all( move2 );
@@ -616,9 +610,8 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 static float block_touch( sere_vbd* v, int32_t block )
 {
 	const int32_t s0 = block * SERE_LANES;
-	int32_t at[SERE_LANES];
 	sere_vf x, y, z, movable;
-	load_block( v, block, at, &x, &y, &z, &movable );
+	sere_vf_load_block_records( block_records( v, block ), &x, &y, &z, &movable );
 	sere_vf sum = sere_vf_add( sere_vf_load( v->mass + s0 ), sere_vf_load( v->tx + s0 ) );
 	sum = sere_vf_add( sum, sere_vf_add( sere_vf_load( v->ty + s0 ), sere_vf_load( v->tz + s0 ) ) );
 	for ( int32_t r = v->block_row[block]; r < v->block_row[block + 1]; ++r )
@@ -630,7 +623,7 @@ static float block_touch( sere_vbd* v, int32_t block )
 		sum = sere_vf_add( sum, sere_vf_add( sere_vf_load( v->stiffness + e ), sere_vf_load( v->rest + e ) ) );
 	}
 	sere_vf_store( v->push + s0, sum );
-	sere_vf_store_records( v->record, at, SERE_LANES, x, y, z, movable );
+	sere_vf_store_block_records( block_records( v, block ), x, y, z, movable );
 	return 0.0f;
 }
 

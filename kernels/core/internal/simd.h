@@ -193,6 +193,40 @@ static inline void sere_vf_store_records( float* rec, const int32_t* at, int32_t
 		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 16 * ( j % 4 ) + 4 * ( j / 4 ) ) );
 	}
 }
+/* Lane j of c0..c3 receives record j of the SERE_LANES consecutive records at rec (64-byte
+ * aligned): four 512-bit loads and two rounds of two-source permutes, instead of sixteen 128-bit
+ * loads with their inserts. */
+static inline void sere_vf_load_block_records( const float* rec, sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
+{
+	const __m512 r0 = _mm512_load_ps( rec ), r1 = _mm512_load_ps( rec + 16 );
+	const __m512 r2 = _mm512_load_ps( rec + 32 ), r3 = _mm512_load_ps( rec + 48 );
+	/* first round: [c0 of records 0–7 | c1 of records 0–7], and so on */
+	const __m512i even = _mm512_setr_epi32( 0, 4, 8, 12, 16, 20, 24, 28, 1, 5, 9, 13, 17, 21, 25, 29 );
+	const __m512i odd = _mm512_setr_epi32( 2, 6, 10, 14, 18, 22, 26, 30, 3, 7, 11, 15, 19, 23, 27, 31 );
+	const __m512 a = _mm512_permutex2var_ps( r0, even, r1 ), b = _mm512_permutex2var_ps( r0, odd, r1 );
+	const __m512 c = _mm512_permutex2var_ps( r2, even, r3 ), d = _mm512_permutex2var_ps( r2, odd, r3 );
+	const __m512i low = _mm512_setr_epi32( 0, 1, 2, 3, 4, 5, 6, 7, 16, 17, 18, 19, 20, 21, 22, 23 );
+	const __m512i high = _mm512_setr_epi32( 8, 9, 10, 11, 12, 13, 14, 15, 24, 25, 26, 27, 28, 29, 30, 31 );
+	*c0 = _mm512_permutex2var_ps( a, low, c ), *c1 = _mm512_permutex2var_ps( a, high, c );
+	*c2 = _mm512_permutex2var_ps( b, low, d ), *c3 = _mm512_permutex2var_ps( b, high, d );
+}
+/* The inverse of sere_vf_load_block_records: the permutes back, then four 512-bit stores (a
+ * transpose through a buffer re-read by 128-bit loads made the descent's block wait on the
+ * buffer's stores). */
+static inline void sere_vf_store_block_records( float* rec, sere_vf c0, sere_vf c1, sere_vf c2, sere_vf c3 )
+{
+	/* first round: [c0 c1 interleaved for records 0–7], [c2 c3 the same], then records 8–15 */
+	const __m512i low = _mm512_setr_epi32( 0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23 );
+	const __m512i high = _mm512_setr_epi32( 8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31 );
+	const __m512 a = _mm512_permutex2var_ps( c0, low, c1 ), b = _mm512_permutex2var_ps( c2, low, c3 );
+	const __m512 c = _mm512_permutex2var_ps( c0, high, c1 ), d = _mm512_permutex2var_ps( c2, high, c3 );
+	const __m512i first = _mm512_setr_epi32( 0, 1, 16, 17, 2, 3, 18, 19, 4, 5, 20, 21, 6, 7, 22, 23 );
+	const __m512i second = _mm512_setr_epi32( 8, 9, 24, 25, 10, 11, 26, 27, 12, 13, 28, 29, 14, 15, 30, 31 );
+	_mm512_store_ps( rec, _mm512_permutex2var_ps( a, first, b ) );
+	_mm512_store_ps( rec + 16, _mm512_permutex2var_ps( a, second, b ) );
+	_mm512_store_ps( rec + 32, _mm512_permutex2var_ps( c, first, d ) );
+	_mm512_store_ps( rec + 48, _mm512_permutex2var_ps( c, second, d ) );
+}
 static inline sere_vf sere_vf_load( const float* p )
 {
 	return _mm512_load_ps( p );
@@ -395,6 +429,30 @@ static inline void sere_vf_store_records( float* rec, const int32_t* at, int32_t
 	for ( int32_t j = 0; j < n; ++j )
 	{
 		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 8 * ( j % 4 ) + 4 * ( j / 4 ) ) );
+	}
+}
+/* Lane j of c0..c3 receives record j of the SERE_LANES consecutive records at rec (32-byte
+ * aligned): the record loads at fixed offsets. */
+static inline void sere_vf_load_block_records( const float* rec, sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
+{
+	__m256 r[4];
+	for ( int k = 0; k < 4; ++k )
+	{
+		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( rec + 4 * k ) ),
+									 _mm_load_ps( rec + 4 * ( k + 4 ) ), 1 );
+	}
+	sere_vf_transpose4( r, c0, c1, c2, c3 );
+}
+/* The inverse of sere_vf_load_block_records: 128-bit stores straight from the transposed registers. */
+static inline void sere_vf_store_block_records( float* rec, sere_vf c0, sere_vf c1, sere_vf c2, sere_vf c3 )
+{
+	const __m256 c[4] = { c0, c1, c2, c3 };
+	__m256 r[4];
+	sere_vf_transpose4( c, &r[0], &r[1], &r[2], &r[3] );
+	for ( int k = 0; k < 4; ++k )
+	{
+		_mm_store_ps( rec + 4 * k, _mm256_castps256_ps128( r[k] ) );
+		_mm_store_ps( rec + 4 * ( k + 4 ), _mm256_extractf128_ps( r[k], 1 ) );
 	}
 }
 static inline sere_vf sere_vf_load( const float* p )
@@ -606,6 +664,22 @@ static inline void sere_vf_store_records_at( float* base, const int32_t* offset,
 		r[1] = c1.v[j];
 		r[2] = c2.v[j];
 		r[3] = c3.v[j];
+	}
+}
+/* Lane j of c0..c3 receives record j of the SERE_LANES consecutive records at rec. */
+static inline void sere_vf_load_block_records( const float* rec, sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
+{
+	for ( int j = 0; j < SERE_LANES; ++j )
+	{
+		c0->v[j] = rec[4 * j], c1->v[j] = rec[4 * j + 1], c2->v[j] = rec[4 * j + 2], c3->v[j] = rec[4 * j + 3];
+	}
+}
+/* The inverse of sere_vf_load_block_records. */
+static inline void sere_vf_store_block_records( float* rec, sere_vf c0, sere_vf c1, sere_vf c2, sere_vf c3 )
+{
+	for ( int j = 0; j < SERE_LANES; ++j )
+	{
+		rec[4 * j] = c0.v[j], rec[4 * j + 1] = c1.v[j], rec[4 * j + 2] = c2.v[j], rec[4 * j + 3] = c3.v[j];
 	}
 }
 static inline sere_vf sere_vf_load( const float* p )
