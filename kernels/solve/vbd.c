@@ -15,6 +15,7 @@
 enum
 {
 	MAX_COLORS = 64, /* a particle's neighbours' colors are bits of one word */
+	CHUNK_ROWS = 16, /* block_step's rows a pass: 4 KiB of a block's spring ends at 16 lanes */
 	FLAG_NONFINITE = 1,
 	FLAG_NEGATIVE_MASS = 2,
 };
@@ -544,32 +545,47 @@ static float block_step( sere_vbd* v, int32_t block, const step_setup* setup )
 	 * added to the diagonal once after the rows */
 	sere_vf hxx = m, hyy = m, hzz = m, hxy = sere_vf_splat( 0.0f ), hxz = hxy, hyz = hxy, isotropic = hxy;
 	const sere_vf zero = hxy, one = sere_vf_splat( 1.0f ), tiny = sere_vf_splat( TINY_LENGTH );
-	for ( int32_t r = v->block_row[block]; r < v->block_row[block + 1]; ++r )
+	/* The rows in chunks, each in two passes: first every row's d and 1/|d| (the gather, then the
+	 * √ and the division, the longest chain of a row), then the sums in row order. Back to back,
+	 * the chains of many rows overlap in the out-of-order window. */
+	for ( int32_t chunk = v->block_row[block]; chunk < v->block_row[block + 1]; chunk += CHUNK_ROWS )
 	{
-		const size_t e = (size_t) r * SERE_LANES;
-		sere_vf ox, oy, oz, ow;
-		sere_vf_load_records_at( v->record, v->neighbour + e, &ox, &oy, &oz, &ow );
-		const sere_vf k = sere_vf_load( v->stiffness + e ), l = sere_vf_load( v->rest + e );
-		const sere_vf dx = sere_vf_sub( x, ox ), dy = sere_vf_sub( y, oy ), dz = sere_vf_sub( z, oz );
-		const sere_vf d2 = sere_vf_fma( dz, dz, sere_vf_fma( dy, dy, sere_vf_mul( dx, dx ) ) );
-		const sere_vf inverse = sere_vf_div( one, sere_vf_max( sere_vf_sqrt( d2 ), tiny ) );
-		/* Jeong Eq. 13's C = |d| − l and its force k C n = k (1 − l/|d|) d; the block
-		 * k [(1 − β) n nᵀ + β I] with β = max(0, 1 − l/|d|), n nᵀ = d dᵀ/|d|², so that
-		 * k β = max(0, force) (k ≥ 0); fused multiply-adds, one rounding each at every width */
-		const sere_vf force = sere_vf_mul( k, sere_vf_fnma( l, inverse, one ) );
-		gx = sere_vf_fma( force, dx, gx );
-		gy = sere_vf_fma( force, dy, gy );
-		gz = sere_vf_fma( force, dz, gz );
-		const sere_vf across = sere_vf_max( zero, force );
-		const sere_vf along = sere_vf_mul( sere_vf_sub( k, across ), sere_vf_mul( inverse, inverse ) );
-		const sere_vf ax = sere_vf_mul( along, dx ), ay = sere_vf_mul( along, dy ), az = sere_vf_mul( along, dz );
-		hxx = sere_vf_fma( ax, dx, hxx );
-		hyy = sere_vf_fma( ay, dy, hyy );
-		hzz = sere_vf_fma( az, dz, hzz );
-		hxy = sere_vf_fma( ax, dy, hxy );
-		hxz = sere_vf_fma( ax, dz, hxz );
-		hyz = sere_vf_fma( ay, dz, hyz );
-		isotropic = sere_vf_add( isotropic, across );
+		const int32_t count =
+			v->block_row[block + 1] - chunk < CHUNK_ROWS ? v->block_row[block + 1] - chunk : CHUNK_ROWS;
+		sere_vf ends[CHUNK_ROWS][4];
+		for ( int32_t q = 0; q < count; ++q )
+		{
+			sere_vf ox, oy, oz, ow;
+			sere_vf_load_records_at( v->record, v->neighbour + (size_t) ( chunk + q ) * SERE_LANES, &ox, &oy, &oz,
+									 &ow );
+			const sere_vf dx = sere_vf_sub( x, ox ), dy = sere_vf_sub( y, oy ), dz = sere_vf_sub( z, oz );
+			const sere_vf d2 = sere_vf_fma( dz, dz, sere_vf_fma( dy, dy, sere_vf_mul( dx, dx ) ) );
+			ends[q][0] = dx, ends[q][1] = dy, ends[q][2] = dz;
+			ends[q][3] = sere_vf_div( one, sere_vf_max( sere_vf_sqrt( d2 ), tiny ) );
+		}
+		for ( int32_t q = 0; q < count; ++q )
+		{
+			const size_t e = (size_t) ( chunk + q ) * SERE_LANES;
+			const sere_vf k = sere_vf_load( v->stiffness + e ), l = sere_vf_load( v->rest + e );
+			const sere_vf dx = ends[q][0], dy = ends[q][1], dz = ends[q][2], inverse = ends[q][3];
+			/* Jeong Eq. 13's C = |d| − l and its force k C n = k (1 − l/|d|) d; the block
+			 * k [(1 − β) n nᵀ + β I] with β = max(0, 1 − l/|d|), n nᵀ = d dᵀ/|d|², so that
+			 * k β = max(0, force) (k ≥ 0); fused multiply-adds, one rounding each at every width */
+			const sere_vf force = sere_vf_mul( k, sere_vf_fnma( l, inverse, one ) );
+			gx = sere_vf_fma( force, dx, gx );
+			gy = sere_vf_fma( force, dy, gy );
+			gz = sere_vf_fma( force, dz, gz );
+			const sere_vf across = sere_vf_max( zero, force );
+			const sere_vf along = sere_vf_mul( sere_vf_sub( k, across ), sere_vf_mul( inverse, inverse ) );
+			const sere_vf ax = sere_vf_mul( along, dx ), ay = sere_vf_mul( along, dy ), az = sere_vf_mul( along, dz );
+			hxx = sere_vf_fma( ax, dx, hxx );
+			hyy = sere_vf_fma( ay, dy, hyy );
+			hzz = sere_vf_fma( az, dz, hzz );
+			hxy = sere_vf_fma( ax, dy, hxy );
+			hxz = sere_vf_fma( ax, dz, hxz );
+			hyz = sere_vf_fma( ay, dz, hyz );
+			isotropic = sere_vf_add( isotropic, across );
+		}
 	}
 	hxx = sere_vf_add( hxx, isotropic ), hyy = sere_vf_add( hyy, isotropic ), hzz = sere_vf_add( hzz, isotropic );
 	/* Δ = −H⁻¹ g by the adjugate of the symmetric block */
