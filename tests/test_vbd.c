@@ -301,6 +301,7 @@ Test( vbd, a_hub_with_more_springs_than_a_pass_reaches_the_twins_minimum )
 		N = RIM + 1
 	};
 	float x[N], y[N], z[N], tx[N], ty[N], tz[N], inv_m[N], rest[RIM];
+	double stiffness[RIM], twin[3 * N]; /* the twin's k = dt²/α, and its positions */
 	int32_t a[RIM], b[RIM];
 	for ( int32_t k = 0; k < RIM; ++k )
 	{
@@ -308,7 +309,7 @@ Test( vbd, a_hub_with_more_springs_than_a_pass_reaches_the_twins_minimum )
 		const float radius = 1.0f + 0.4f * (float) ( ( k * 7 ) % 5 ) / 4.0f;
 		x[k + 1] = radius * cosf( angle ), y[k + 1] = radius * sinf( angle ), z[k + 1] = 0.2f * cosf( 3.0f * angle );
 		inv_m[k + 1] = 0.0f;
-		a[k] = 0, b[k] = k + 1, rest[k] = 0.4f;
+		a[k] = 0, b[k] = k + 1, rest[k] = 0.4f, stiffness[k] = 1.0;
 	}
 	x[0] = 0.3f, y[0] = -0.2f, z[0] = 0.1f, inv_m[0] = 1.0f;
 	memcpy( tx, x, sizeof( x ) ), memcpy( ty, y, sizeof( y ) ), memcpy( tz, z, sizeof( z ) );
@@ -320,10 +321,8 @@ Test( vbd, a_hub_with_more_springs_than_a_pass_reaches_the_twins_minimum )
 	sere_vbd_report report;
 	cr_assert_eq( sere_vbd_step( vbd, x, y, z, inv_m, &params, &report ), SERE_OK );
 	cr_assert( !report.hit_cap );
-	double stiffness[RIM], twin[3 * N];
 	for ( int32_t i = 0; i < N; ++i )
 	{
-		stiffness[i < RIM ? i : 0] = 1.0;
 		twin[3 * i] = tx[i], twin[3 * i + 1] = ty[i], twin[3 * i + 2] = tz[i];
 	}
 	const sere_vbd_ref_problem problem = { N, RIM, tx, ty, tz, inv_m, a, b, rest, stiffness };
