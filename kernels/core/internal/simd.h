@@ -431,29 +431,18 @@ static inline void sere_vf_store_records( float* rec, const int32_t* at, int32_t
 		_mm_store_ps( rec + 4 * at[j], _mm_load_ps( tmp + 8 * ( j % 4 ) + 4 * ( j / 4 ) ) );
 	}
 }
-/* Lane j of c0..c3 receives record j of the SERE_LANES consecutive records at rec (32-byte
- * aligned): the record loads at fixed offsets. */
+/* Lane j of c0..c3 receives record j of the SERE_LANES consecutive records at rec: the record
+ * loads at fixed offsets. */
 static inline void sere_vf_load_block_records( const float* rec, sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
 {
-	__m256 r[4];
-	for ( int k = 0; k < 4; ++k )
-	{
-		r[k] = _mm256_insertf128_ps( _mm256_castps128_ps256( _mm_load_ps( rec + 4 * k ) ),
-									 _mm_load_ps( rec + 4 * ( k + 4 ) ), 1 );
-	}
-	sere_vf_transpose4( r, c0, c1, c2, c3 );
+	static const int32_t offset[SERE_LANES] = { 0, 4, 8, 12, 16, 20, 24, 28 };
+	sere_vf_load_records_at( rec, offset, c0, c1, c2, c3 );
 }
-/* The inverse of sere_vf_load_block_records: 128-bit stores straight from the transposed registers. */
+/* The inverse of sere_vf_load_block_records. */
 static inline void sere_vf_store_block_records( float* rec, sere_vf c0, sere_vf c1, sere_vf c2, sere_vf c3 )
 {
-	const __m256 c[4] = { c0, c1, c2, c3 };
-	__m256 r[4];
-	sere_vf_transpose4( c, &r[0], &r[1], &r[2], &r[3] );
-	for ( int k = 0; k < 4; ++k )
-	{
-		_mm_store_ps( rec + 4 * k, _mm256_castps256_ps128( r[k] ) );
-		_mm_store_ps( rec + 4 * ( k + 4 ), _mm256_extractf128_ps( r[k], 1 ) );
-	}
+	static const int32_t offset[SERE_LANES] = { 0, 4, 8, 12, 16, 20, 24, 28 };
+	sere_vf_store_records_at( rec, offset, c0, c1, c2, c3 );
 }
 static inline sere_vf sere_vf_load( const float* p )
 {
@@ -669,18 +658,14 @@ static inline void sere_vf_store_records_at( float* base, const int32_t* offset,
 /* Lane j of c0..c3 receives record j of the SERE_LANES consecutive records at rec. */
 static inline void sere_vf_load_block_records( const float* rec, sere_vf* c0, sere_vf* c1, sere_vf* c2, sere_vf* c3 )
 {
-	for ( int j = 0; j < SERE_LANES; ++j )
-	{
-		c0->v[j] = rec[4 * j], c1->v[j] = rec[4 * j + 1], c2->v[j] = rec[4 * j + 2], c3->v[j] = rec[4 * j + 3];
-	}
+	static const int32_t offset[SERE_LANES] = { 0, 4, 8, 12 };
+	sere_vf_load_records_at( rec, offset, c0, c1, c2, c3 );
 }
 /* The inverse of sere_vf_load_block_records. */
 static inline void sere_vf_store_block_records( float* rec, sere_vf c0, sere_vf c1, sere_vf c2, sere_vf c3 )
 {
-	for ( int j = 0; j < SERE_LANES; ++j )
-	{
-		rec[4 * j] = c0.v[j], rec[4 * j + 1] = c1.v[j], rec[4 * j + 2] = c2.v[j], rec[4 * j + 3] = c3.v[j];
-	}
+	static const int32_t offset[SERE_LANES] = { 0, 4, 8, 12 };
+	sere_vf_store_records_at( rec, offset, c0, c1, c2, c3 );
 }
 static inline sere_vf sere_vf_load( const float* p )
 {
