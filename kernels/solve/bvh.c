@@ -22,20 +22,20 @@ static box3 box_empty( void )
 
 static void box_grow( box3* b, const sere_bvh* bvh, int32_t t )
 {
-	b->lo[0] = min2( b->lo[0], bvh->lo_x[t] );
-	b->lo[1] = min2( b->lo[1], bvh->lo_y[t] );
-	b->lo[2] = min2( b->lo[2], bvh->lo_z[t] );
-	b->hi[0] = max2( b->hi[0], bvh->hi_x[t] );
-	b->hi[1] = max2( b->hi[1], bvh->hi_y[t] );
-	b->hi[2] = max2( b->hi[2], bvh->hi_z[t] );
+	b->lo[0] = sere_min_x86( b->lo[0], bvh->lo_x[t] );
+	b->lo[1] = sere_min_x86( b->lo[1], bvh->lo_y[t] );
+	b->lo[2] = sere_min_x86( b->lo[2], bvh->lo_z[t] );
+	b->hi[0] = sere_max_x86( b->hi[0], bvh->hi_x[t] );
+	b->hi[1] = sere_max_x86( b->hi[1], bvh->hi_y[t] );
+	b->hi[2] = sere_max_x86( b->hi[2], bvh->hi_z[t] );
 }
 
 static void box_merge( box3* b, const box3* other )
 {
 	for ( int a = 0; a < 3; ++a )
 	{
-		b->lo[a] = min2( b->lo[a], other->lo[a] );
-		b->hi[a] = max2( b->hi[a], other->hi[a] );
+		b->lo[a] = sere_min_x86( b->lo[a], other->lo[a] );
+		b->hi[a] = sere_max_x86( b->hi[a], other->hi[a] );
 	}
 }
 
@@ -116,8 +116,8 @@ static int32_t split_range( sere_bvh* bvh, int32_t begin, int32_t end, int32_t d
 	{
 		for ( int a = 0; a < 3; ++a )
 		{
-			clo[a] = min2( clo[a], centre[a][order[i]] );
-			chi[a] = max2( chi[a], centre[a][order[i]] );
+			clo[a] = sere_min_x86( clo[a], centre[a][order[i]] );
+			chi[a] = sere_max_x86( chi[a], centre[a][order[i]] );
 		}
 	}
 	int widest = 0;
@@ -313,8 +313,10 @@ static void refit_node( sere_bvh* bvh, int32_t n, const float* x, const float* y
 			float ax = x[v[0]], ay = y[v[0]], az = z[v[0]];
 			float bx = x[v[1]], by = y[v[1]], bz = z[v[1]];
 			float cx = x[v[2]], cy = y[v[2]], cz = z[v[2]];
-			lx = min2( ax, min2( bx, cx ) ), ly = min2( ay, min2( by, cy ) ), lz = min2( az, min2( bz, cz ) );
-			hx = max2( ax, max2( bx, cx ) ), hy = max2( ay, max2( by, cy ) ), hz = max2( az, max2( bz, cz ) );
+			lx = sere_min_x86( ax, sere_min_x86( bx, cx ) ), ly = sere_min_x86( ay, sere_min_x86( by, cy ) ),
+			lz = sere_min_x86( az, sere_min_x86( bz, cz ) );
+			hx = sere_max_x86( ax, sere_max_x86( bx, cx ) ), hy = sere_max_x86( ay, sere_max_x86( by, cy ) ),
+			hz = sere_max_x86( az, sere_max_x86( bz, cz ) );
 		}
 		else
 		{
@@ -322,8 +324,8 @@ static void refit_node( sere_bvh* bvh, int32_t n, const float* x, const float* y
 		}
 		node->min_x[k] = lx, node->min_y[k] = ly, node->min_z[k] = lz;
 		node->max_x[k] = hx, node->max_y[k] = hy, node->max_z[k] = hz;
-		nlx = min2( nlx, lx ), nly = min2( nly, ly ), nlz = min2( nlz, lz );
-		nhx = max2( nhx, hx ), nhy = max2( nhy, hy ), nhz = max2( nhz, hz );
+		nlx = sere_min_x86( nlx, lx ), nly = sere_min_x86( nly, ly ), nlz = sere_min_x86( nlz, lz );
+		nhx = sere_max_x86( nhx, hx ), nhy = sere_max_x86( nhy, hy ), nhz = sere_max_x86( nhz, hz );
 	}
 	bvh->node_area[n] = box_area( nlx, nly, nlz, nhx, nhy, nhz );
 }
@@ -393,12 +395,12 @@ static void triangle_boxes( sere_bvh* bvh, const float* x, const float* y, const
 	for ( int32_t t = 0; t < n; ++t )
 	{
 		const int32_t* v = bvh->tri + 3 * (size_t) t;
-		bvh->lo_x[t] = min2( x[v[0]], min2( x[v[1]], x[v[2]] ) );
-		bvh->lo_y[t] = min2( y[v[0]], min2( y[v[1]], y[v[2]] ) );
-		bvh->lo_z[t] = min2( z[v[0]], min2( z[v[1]], z[v[2]] ) );
-		bvh->hi_x[t] = max2( x[v[0]], max2( x[v[1]], x[v[2]] ) );
-		bvh->hi_y[t] = max2( y[v[0]], max2( y[v[1]], y[v[2]] ) );
-		bvh->hi_z[t] = max2( z[v[0]], max2( z[v[1]], z[v[2]] ) );
+		bvh->lo_x[t] = sere_min_x86( x[v[0]], sere_min_x86( x[v[1]], x[v[2]] ) );
+		bvh->lo_y[t] = sere_min_x86( y[v[0]], sere_min_x86( y[v[1]], y[v[2]] ) );
+		bvh->lo_z[t] = sere_min_x86( z[v[0]], sere_min_x86( z[v[1]], z[v[2]] ) );
+		bvh->hi_x[t] = sere_max_x86( x[v[0]], sere_max_x86( x[v[1]], x[v[2]] ) );
+		bvh->hi_y[t] = sere_max_x86( y[v[0]], sere_max_x86( y[v[1]], y[v[2]] ) );
+		bvh->hi_z[t] = sere_max_x86( z[v[0]], sere_max_x86( z[v[1]], z[v[2]] ) );
 		bvh->c_x[t] = 0.5f * ( bvh->lo_x[t] + bvh->hi_x[t] );
 		bvh->c_y[t] = 0.5f * ( bvh->lo_y[t] + bvh->hi_y[t] );
 		bvh->c_z[t] = 0.5f * ( bvh->lo_z[t] + bvh->hi_z[t] );

@@ -215,8 +215,8 @@ static inline void query_group( const sere_bvh* bvh, const sere_bvh_group* group
 		{
 			lo[a][k] = used ? glo[a][k] : INFINITY;
 			hi[a][k] = used ? ghi[a][k] : -INFINITY;
-			ulo[a] = min2( ulo[a], lo[a][k] );
-			uhi[a] = max2( uhi[a], hi[a][k] );
+			ulo[a] = sere_min_x86( ulo[a], lo[a][k] );
+			uhi[a] = sere_max_x86( uhi[a], hi[a][k] );
 		}
 	}
 	bool walk = ulo[0] <= uhi[0] && ulo[1] <= uhi[1] && ulo[2] <= uhi[2];

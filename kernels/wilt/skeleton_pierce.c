@@ -5,6 +5,7 @@
 #include "wilt/internal/skeleton_shared.h"
 
 #include "core/array.h"
+#include "core/internal/simd_fixed.h"
 #include "core/internal/team.h"
 
 #include <float.h>
@@ -117,13 +118,15 @@ static int32_t pierce_limit( const sere_bvh* bvh, const int32_t* tri, const floa
 			corner( x, y, z, i, g.p1[k] );
 			int still = x[i] == px[i] && y[i] == py[i] && z[i] == pz[i];
 			moving |= !still;
-			/* A vertex that does not move cannot pierce anything: a NaN box leaves its lane out. */
-			boxes.lo_x[k] = still ? NAN : fminf( px[i], x[i] );
-			boxes.lo_y[k] = fminf( py[i], y[i] );
-			boxes.lo_z[k] = fminf( pz[i], z[i] );
-			boxes.hi_x[k] = fmaxf( px[i], x[i] );
-			boxes.hi_y[k] = fmaxf( py[i], y[i] );
-			boxes.hi_z[k] = fmaxf( pz[i], z[i] );
+			/* A vertex that does not move cannot pierce anything: a NaN box leaves its lane out.
+			 * The bounds by single instructions (fminf and fmaxf are library calls): both positions
+			 * are finite here (sere_pierce_step checks them first). */
+			boxes.lo_x[k] = still ? NAN : sere_min_x86( px[i], x[i] );
+			boxes.lo_y[k] = sere_min_x86( py[i], y[i] );
+			boxes.lo_z[k] = sere_min_x86( pz[i], z[i] );
+			boxes.hi_x[k] = sere_max_x86( px[i], x[i] );
+			boxes.hi_y[k] = sere_max_x86( py[i], y[i] );
+			boxes.hi_z[k] = sere_max_x86( pz[i], z[i] );
 		}
 		if ( !moving )
 		{
@@ -236,8 +239,8 @@ static void triangle_box( const float* x, const float* y, const float* z, const 
 	const float* p[3] = { x, y, z };
 	for ( int a = 0; a < 3; ++a )
 	{
-		lo[a] = fminf( fminf( p[a][c[0]], p[a][c[1]] ), p[a][c[2]] );
-		hi[a] = fmaxf( fmaxf( p[a][c[0]], p[a][c[1]] ), p[a][c[2]] );
+		lo[a] = sere_min_x86( sere_min_x86( p[a][c[0]], p[a][c[1]] ), p[a][c[2]] );
+		hi[a] = sere_max_x86( sere_max_x86( p[a][c[0]], p[a][c[1]] ), p[a][c[2]] );
 	}
 }
 

@@ -13,6 +13,18 @@
 #include <stdint.h>
 #include <string.h>
 
+/* x86 minss/maxss: the second operand unless the first comparison holds. One instruction each,
+ * where fminf and fmaxf are library calls (for their NaN rule); for values that are never NaN,
+ * or whose NaN is flagged elsewhere, the same answer. */
+static inline float sere_min_x86( float a, float b )
+{
+	return a < b ? a : b;
+}
+static inline float sere_max_x86( float a, float b )
+{
+	return a > b ? a : b;
+}
+
 #if defined( __AVX2__ )
 
 #include <immintrin.h>
@@ -281,15 +293,6 @@ static inline uint32_t sere_m8_bits( sere_m8 m )
 		bits |= (uint32_t) ( m.v[j] != 0 ) << j;
 	}
 	return bits;
-}
-/* x86 minps/maxps: the second operand unless the first comparison holds. */
-static inline float sere_min_x86( float a, float b )
-{
-	return a < b ? a : b;
-}
-static inline float sere_max_x86( float a, float b )
-{
-	return a > b ? a : b;
 }
 static inline float sere_v8_min_all( const float* p )
 {

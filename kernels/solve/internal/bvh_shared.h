@@ -73,17 +73,8 @@ struct sere_bvh
 	build_item* stack;
 };
 
-/* min and max as single instructions: fminf and fmaxf are library calls when NaN must be
- * handled, and no NaN gets this far (positions are checked first). */
-static inline float min2( float a, float b )
-{
-	return a < b ? a : b;
-}
-
-static inline float max2( float a, float b )
-{
-	return a > b ? a : b;
-}
+/* The boxes' bounds take sere_min_x86 and sere_max_x86 (one instruction each, where fminf and
+ * fmaxf are library calls): no NaN gets this far, positions are checked first. */
 
 /* A recorded sequence of group walks (sere_bvh_query_group and _above), for the floor of the
  * collision search (collide.h, sere_collide_touch_search): one byte per decision, appended while
