@@ -429,9 +429,20 @@ Test( vbd, refuses_bad_input_and_leaves_the_positions )
 	sere_vbd_report report;
 	/* no rest lengths yet, then a bad one */
 	cr_expect_eq( sere_vbd_step( vbd, s.x, s.y, s.z, s.inv_m, &params, &report ), SERE_ERR_GEOMETRY );
-	s.rest[5] = 0.0f;
-	cr_expect_eq( sere_vbd_set_rest( vbd, s.rest ), SERE_ERR_GEOMETRY );
-	s.rest[5] = 0.05f;
+	/* each bad length, in the lanes' body and in the last spring (a loop's remainder) */
+	const float bad_length[4] = { 0.0f, -0.05f, NAN, INFINITY };
+	const int32_t where[2] = { 5, s.count - 1 };
+	for ( int w = 0; w < 2; ++w )
+	{
+		for ( int k = 0; k < 4; ++k )
+		{
+			const float kept = s.rest[where[w]];
+			s.rest[where[w]] = bad_length[k];
+			cr_expect_eq( sere_vbd_set_rest( vbd, s.rest ), SERE_ERR_GEOMETRY, "length %g at spring %d", bad_length[k],
+						  where[w] );
+			s.rest[where[w]] = kept;
+		}
+	}
 	cr_assert_eq( sere_vbd_set_rest( vbd, s.rest ), SERE_OK );
 	float* weight = malloc( sizeof( float ) * (size_t) s.count );
 	for ( int32_t k = 0; k < s.count; ++k )

@@ -347,12 +347,16 @@ sere_status sere_vbd_set_rest( sere_vbd* vbd, const float* rest )
 		return SERE_ERR_ARGUMENT;
 	}
 	vbd->rest_valid = 0;
+	/* every length looked at, without an early exit, so that the check runs in lanes (a frame
+	 * sets every spring's) */
+	int bad = 0;
 	for ( int32_t k = 0; k < vbd->spring_count; ++k )
 	{
-		if ( !( rest[k] > 0.0f ) || !isfinite( rest[k] ) )
-		{
-			return SERE_ERR_GEOMETRY;
-		}
+		bad |= !( rest[k] > 0.0f ) | !( rest[k] <= FLT_MAX );
+	}
+	if ( bad )
+	{
+		return SERE_ERR_GEOMETRY;
 	}
 	memcpy( vbd->spring_rest, rest, sizeof( float ) * (size_t) vbd->spring_count );
 	vbd->rest_valid = 1;
