@@ -492,8 +492,11 @@ static int32_t pack_blocks( sere_vbd* v, const float* px, const float* py, const
 			const float z = r[2] + v->cz[s];
 			r[0] += v->cx[s], r[1] += v->cy[s], r[2] = z < setup->ground ? setup->ground : z;
 		}
-		/* one instruction each (fmaxf is a library call); a NaN, flagged above, is passed over */
-		big = sere_max_x86( big, sere_max_x86( fabsf( px[p] ), sere_max_x86( fabsf( py[p] ), fabsf( pz[p] ) ) ) );
+		/* one instruction each (fmaxf is a library call); the new value first, so that a NaN
+		 * (flagged above) is passed over as fmaxf passes it */
+		big = sere_max_x86( fabsf( px[p] ), big );
+		big = sere_max_x86( fabsf( py[p] ), big );
+		big = sere_max_x86( fabsf( pz[p] ), big );
 		/* a held particle's step is multiplied by 0; its mass only has to keep the block finite */
 		v->mass[s] = w > 0.0f ? 1.0f / w : 1.0f;
 		v->tx[s] = px[p], v->ty[s] = py[p], v->tz[s] = pz[p];
