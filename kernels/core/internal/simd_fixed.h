@@ -13,9 +13,10 @@
 #include <stdint.h>
 #include <string.h>
 
-/* x86 minss/maxss: the second operand unless the first comparison holds. One instruction each,
- * where fminf and fmaxf are library calls (for their NaN rule); for values that are never NaN,
- * or whose NaN is flagged elsewhere, the same answer. */
+/* x86 minss/maxss: the second operand unless the first comparison holds, so a NaN first operand
+ * is dropped and a NaN second one returned. One instruction each, where fminf and fmaxf are
+ * library calls (for their NaN rule); for values that are never NaN, their answer (but for the
+ * sign of a zero). */
 static inline float sere_min_x86( float a, float b )
 {
 	return a < b ? a : b;
