@@ -62,12 +62,28 @@ ifeq ($(SAN),1)
 COMMON    += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 LDSAN     := -fsanitize=address,undefined
 endif
+# No hardware gathers in loops gcc vectorizes on its own (-mtune-ctrl=^use_gather; gcc 12 tunes
+# this Zen 4 as Zen 3, which allows them). A 512-bit gather issues one load a lane and is slower
+# here than the scalar loads and inserts gcc emits instead: the osmosis step's spring terms and
+# assembly 8–13% faster, the shrinkage 10%, the skinning 7%, the crossing count 3% slower, the
+# same bits (docs/PERFORMANCE.md, 2026-11-29). Intel parts with the Downfall microcode have slow
+# gathers too. The lane layer's record loads never used them. An x86 switch of gcc's alone
+# (clang 14 has none).
+NO_GATHER := -mtune-ctrl=^use_gather
+ifneq ($(filter x86_64-% i686-% i386-%,$(shell $(CC) -dumpmachine 2>/dev/null)),)
+ifneq ($(CC_IS_CLANG),1)
+COMMON_C   := $(NO_GATHER)
+endif
+ifneq ($(CXX_IS_CLANG),1)
+COMMON_CXX := $(NO_GATHER)
+endif
+endif
 INCLUDES  := -Ikernels -Iharness
 CAIRO_CFLAGS := $(shell pkg-config --cflags cairo 2>/dev/null)
 CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
-CFLAGS_ALL   := -std=c17 $(COMMON) $(WARN) $(INCLUDES)
+CFLAGS_ALL   := -std=c17 $(COMMON) $(COMMON_C) $(WARN) $(INCLUDES)
 HARNESS_CFLAGS := $(CFLAGS_ALL) $(CAIRO_CFLAGS) -DSERE_DATA_DIR='"$(PREFIX)/share/sere"'
-CXXFLAGS_ALL := -std=c++17 $(COMMON) $(WARN) $(INCLUDES) -isystem /usr/include/eigen3
+CXXFLAGS_ALL := -std=c++17 $(COMMON) $(COMMON_CXX) $(WARN) $(INCLUDES) -isystem /usr/include/eigen3
 # MPI when Open MPI's development files are there (scripts/deps.sh installs them): only
 # the cmd_litter*.c files call it, so only they get the flags and -DSERE_MPI; without them the
 # same sources build without MPI and sere litter runs every leaf in one process.
