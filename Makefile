@@ -64,9 +64,9 @@ LDSAN     := -fsanitize=address,undefined
 endif
 # No hardware gathers in loops gcc vectorizes on its own (-mtune-ctrl=^use_gather; gcc 12 tunes
 # this Zen 4 as Zen 3, which allows them). A 512-bit gather issues one load a lane and is slower
-# here than the scalar loads and inserts gcc emits instead: the osmosis step's spring terms and
-# assembly 8–13% faster, the shrinkage 10%, the skinning 7%, the crossing count 3% slower, the
-# same bits (docs/PERFORMANCE.md, 2026-11-29). Intel parts with the Downfall microcode have slow
+# here than the scalar loads and inserts gcc emits instead: the osmosis step without its CG
+# iterations 8–13% faster, the shrinkage 10%, the mass-spring step 4%, the crossing count 2–3%
+# slower, the same bits (docs/PERFORMANCE.md, 2026-11-29). Intel parts with the Downfall microcode have slow
 # gathers too. The lane layer's record loads never used them. An x86 switch of gcc's alone
 # (clang 14 has none).
 NO_GATHER := -mtune-ctrl=^use_gather
