@@ -66,9 +66,9 @@ endif
 # this Zen 4 as Zen 3, which allows them). A 512-bit gather issues one load a lane and is slower
 # here than the scalar loads and inserts gcc emits instead: the osmosis step without its CG
 # iterations 8–13% faster, the shrinkage 10%, the mass-spring step 4%, the crossing count 2–3%
-# slower, the same bits (docs/PERFORMANCE.md, 2026-11-29). Intel parts with the Downfall microcode have slow
-# gathers too. The lane layer's record loads never used them. An x86 switch of gcc's alone
-# (clang 14 has none).
+# slower, the same bits (docs/PERFORMANCE.md, 2026-11-29). Intel parts with the Downfall
+# microcode have slow gathers too. The lane layer's record loads never used them. An x86 switch
+# of gcc's alone (clang 14 has none).
 NO_GATHER := -mtune-ctrl=^use_gather
 ifneq ($(filter x86_64-% i686-% i386-%,$(shell $(CC) -dumpmachine 2>/dev/null)),)
 ifneq ($(CC_IS_CLANG),1)
