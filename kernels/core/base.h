@@ -21,8 +21,11 @@ extern "C"
  * set on that object by its sere_<object>_set_threads; a kernel called on plain arrays takes it
  * as its `threads` argument. 0, every object's initial count, stands for the caller's OpenMP
  * count at the call (omp_get_max_threads(): OMP_NUM_THREADS or omp_set_num_threads); 1 to
- * SERE_MAX_THREADS, that many. A region may run fewer while other processes keep cores busy
- * (core/internal/team.h), and every result is the same bits for every count. */
+ * SERE_MAX_THREADS, that many. A region may run fewer while other processes keep cores busy,
+ * and the descent (sere_vbd) runs its steps, and a leaf (sere_leaf_sim) its osmosis and
+ * shrinkage, with one thread while their team has been measured slower than one thread
+ * (core/internal/team.h; SERE_ADAPTIVE_THREADS=0 in the environment turns both off). Every
+ * result is the same bits for every count. */
 
 /* The most threads a kernel runs: a count above it (OpenMP's, or one set on an object, which
  * refuses more) runs this many. The one limit every kernel and command shares; per-thread slots

@@ -120,8 +120,9 @@ sere_status sere_leaf_create( sere_model* model, sere_leaf_sim** out );
 void sere_leaf_destroy( sere_leaf_sim* sim );
 
 /* The threads every kernel of a step runs with: osmosis, shrinkage, projection, collisions and
- * the leaf's own loops (core/base.h: 0, the initial count, is OpenMP's count at each step).
- * SERE_ERR_ARGUMENT above SERE_MAX_THREADS, SERE_ERR_MEMORY (nothing changed) when the collision
+ * the leaf's own loops (core/base.h: 0, the initial count, is OpenMP's count at each step; the
+ * osmosis and shrinkage, and the descent's sweeps, run on one thread while that has been measured
+ * the faster). SERE_ERR_ARGUMENT above SERE_MAX_THREADS, SERE_ERR_MEMORY (nothing changed) when the collision
  * workspace cannot make buffers for that many. */
 sere_status sere_leaf_set_threads( sere_leaf_sim* sim, int32_t threads );
 

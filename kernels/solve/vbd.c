@@ -65,6 +65,7 @@ struct sere_vbd
 	float inverse_alpha;  /* the dt²/α the rows' stiffnesses were computed with */
 	thread_slot* results; /* SERE_MAX_THREADS */
 	sere_spin_barrier* barrier;
+	sere_team_tuner tuner; /* the team or one thread, by the seconds a sweep takes (team.h) */
 };
 
 sere_vbd_params sere_vbd_params_default( void )
@@ -766,7 +767,10 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 {
 	int requested = sere_team_for( v->thread_count );
 	requested = requested < 1 ? 1 : requested > SERE_MAX_THREADS ? SERE_MAX_THREADS : requested;
+	requested = sere_tuner_team( &v->tuner, requested );
 	step_outcome outcome = { 0, 0, 0.0f, 0, 0.0f };
+	int team = requested;
+	double seconds = 0.0;
 	/* pack reads the stale flags in every thread; they are cleared once the region has ended */
 #pragma omp parallel num_threads( requested )
 	{
@@ -779,7 +783,9 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 		 * it would only run to the cap */
 		const float rounding = FLT_EPSILON * largest;
 		const float tolerance2 = fmaxf( setup->tolerance2, rounding * rounding );
+		const double start = omp_get_wtime();
 		step_outcome result = sweep( v, setup, tolerance2, flags, t, threads );
+		const double swept = omp_get_wtime() - start;
 		if ( result.flags == 0 && !setup->touch )
 		{
 			for ( int32_t c = 0; c < v->colors; ++c )
@@ -803,8 +809,10 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 		if ( t == 0 )
 		{
 			outcome = result;
+			team = threads, seconds = swept;
 		}
 	}
+	sere_tuner_record( &v->tuner, team, seconds, outcome.iterations );
 	v->rest_stale = v->stiffness_stale = 0;
 	v->inverse_alpha = setup->inverse_alpha;
 	/* a refused step leaves the last correction as it was */

@@ -88,7 +88,8 @@ sere_status sere_vbd_set_rest( sere_vbd* vbd, const float* rest );
  * stiffness finite), leaving the previous weights. */
 sere_status sere_vbd_set_compliance_weights( sere_vbd* vbd, const float* weight );
 
-/* The threads a step runs on (core/base.h). SERE_ERR_ARGUMENT above SERE_MAX_THREADS. */
+/* The threads a step runs on (core/base.h; steps run on one thread while the team's sweeps have
+ * been measured slower). SERE_ERR_ARGUMENT above SERE_MAX_THREADS. */
 sere_status sere_vbd_set_threads( sere_vbd* vbd, int32_t threads );
 
 /* Minimizes E for the prediction px, py, pz (x̃ = the positions passed in), in place, until a

@@ -195,6 +195,104 @@ static inline int sere_team_for( int32_t threads )
 	return sere_team( threads > 0 ? threads : omp_get_max_threads() );
 }
 
+/* A choice between a kernel object's team and one thread, by the wall time a unit of its work
+ * (a descent's sweep, a leaf's osmosis and shrinkage of a frame) took with each. /proc/stat does
+ * not see every lost core: in spells of seconds to minutes on the 2-core virtual machine sere is
+ * measured on, every CPU but ours idle, the descent's two threads each swept at half the speed
+ * one thread sweeps alone (their virtual CPUs sharing one core, as far as can be told from
+ * inside: no thread waited long at a barrier and neither lost its CPU in the guest), and a
+ * 2-thread Table 1 frame of the plane tree ran 1.7 times as long as a 1-thread one.
+ *
+ * A team can also be slower than one thread from the start and stay so (a problem too small for
+ * its barriers, a core shared for good, a spell that began before the first call), which its own
+ * fastest run would never show.
+ *
+ * So the calls go in runs of SERE_TUNER_RUN, each run's seconds a unit measured. After the first
+ * run, and every SERE_TUNER_RECHECK runs, one thread is tried for SERE_TUNER_TRIAL calls and
+ * taken if it was SERE_TUNER_GAIN times as fast; sooner, at most every SERE_TUNER_TRY runs,
+ * while the team runs past SERE_TUNER_SLOW of its fastest run (that mark rising 1% a run, so
+ * that a workload that grows heavier does not look slow for ever). One thread, taken, tries the
+ * team again after SERE_TUNER_TRY runs, then after twice as many each time it stays (at most
+ * SERE_TUNER_RECHECK / 4: a trial of the slower team costs its share of the calls), and gives
+ * way unless it is still SERE_TUNER_GAIN times as fast. Single calls' times vary too much (a
+ * step's first sweep meets cold caches) for a choice on one. Results do not depend on the
+ * choice (the kernels' determinism contract); SERE_ADAPTIVE_THREADS=0 turns it off with the
+ * rest of this file. */
+#define SERE_TUNER_RUN	   8
+#define SERE_TUNER_TRIAL   4
+#define SERE_TUNER_TRY	   4
+#define SERE_TUNER_RECHECK 64
+#define SERE_TUNER_SLOW	   1.5
+#define SERE_TUNER_GAIN	   1.2
+
+typedef struct sere_team_tuner
+{
+	double seconds, units; /* the current run's time and work */
+	double per_unit[2];	   /* the last run's seconds a unit: [0] one thread, [1] the team; 0 unknown */
+	double fastest;		   /* the team's mark: its fastest run, rising 1% a run */
+	int32_t team;		   /* the team all this belongs to */
+	int32_t choice;		   /* what runs: 0 one thread, 1 the team */
+	int32_t calls;		   /* in the current run */
+	int32_t trial;		   /* 1 while the current run tries the other choice */
+	int32_t since;		   /* runs since the last trial */
+	int32_t wait;		   /* runs one thread waits before it tries the team */
+} sere_team_tuner;
+
+/* The team for a call that sere_team_for would give `team` threads. */
+static inline int sere_tuner_team( sere_team_tuner* u, int team )
+{
+	if ( team <= 1 || atomic_load_explicit( &sere_team_global.enabled, memory_order_relaxed ) == 0 )
+	{
+		return team;
+	}
+	if ( team != u->team )
+	{
+		*u = ( sere_team_tuner ){ 0.0, 0.0, { 0.0, 0.0 }, 0.0, team, 1, 0, 0, SERE_TUNER_RECHECK, SERE_TUNER_TRY };
+	}
+	return u->choice ? team : 1;
+}
+
+/* Records that a call given `used` threads took `seconds` for `units` units of work. */
+static inline void sere_tuner_record( sere_team_tuner* u, int used, double seconds, double units )
+{
+	if ( u->team <= 1 || used != ( u->choice ? u->team : 1 ) )
+	{
+		return;
+	}
+	u->seconds += seconds, u->units += units, u->calls += 1;
+	if ( u->calls < ( u->trial ? SERE_TUNER_TRIAL : SERE_TUNER_RUN ) )
+	{
+		return;
+	}
+	const double per_unit = u->units > 0.0 ? u->seconds / u->units : 0.0;
+	u->seconds = u->units = 0.0, u->calls = 0;
+	if ( !( per_unit > 0.0 ) )
+	{
+		return;
+	}
+	u->per_unit[u->choice] = per_unit;
+	if ( u->choice )
+	{
+		u->fastest = u->fastest == 0.0 || per_unit < 1.01 * u->fastest ? per_unit : 1.01 * u->fastest;
+	}
+	if ( u->trial )
+	{
+		const int stayed = u->choice; /* one thread tried the team, and stays */
+		u->trial = 0, u->since = 0;
+		u->choice = !( u->per_unit[0] > 0.0 && SERE_TUNER_GAIN * u->per_unit[0] < u->per_unit[1] );
+		u->wait = u->choice ? SERE_TUNER_TRY
+				  : stayed	? ( 2 * u->wait < SERE_TUNER_RECHECK / 4 ? 2 * u->wait : SERE_TUNER_RECHECK / 4 )
+							: u->wait;
+		return;
+	}
+	u->since += 1;
+	if ( u->since >= SERE_TUNER_RECHECK || ( !u->choice && u->since >= u->wait ) ||
+		 ( u->choice && u->since >= SERE_TUNER_TRY && per_unit > SERE_TUNER_SLOW * u->fastest ) )
+	{
+		u->trial = 1, u->choice = !u->choice;
+	}
+}
+
 /* Thread `tid` of `team`'s contiguous share [*first, *last) of [begin, end), cut as OpenMP's
  * static schedule cuts it: for work a kernel splits by hand, where its threads then meet at a
  * sere_spin_barrier instead of an `omp for`'s own barrier. */
