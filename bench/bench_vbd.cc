@@ -6,6 +6,10 @@
 //
 // Counters are per sweep: time/sweep, and spring ends/s (a sweep visits every spring from both
 // ends). As in bench_pbd.cc, the Voronoi springs are shortened by 10% so every sweep has work.
+//
+// The threads:2 rows run as a caller's steps do: the step's tuner (core/internal/team.h) tries
+// one thread for 4 calls after the first 8 and every 512, and keeps it where it is 1.2 times as
+// fast (in the other guest's spells); SERE_ADAPTIVE_THREADS=0 times the team alone.
 #include "fixture.h"
 #include "ref/vbd_ref.h"
 #include "solve/vbd.h"
