@@ -812,7 +812,11 @@ static step_outcome run( sere_vbd* v, float* px, float* py, float* pz, const flo
 			team = threads, seconds = swept;
 		}
 	}
-	sere_tuner_record( &v->tuner, team, seconds, outcome.iterations );
+	/* the floor's sweeps run the step's choice but are no measure of it: theirs are faster */
+	if ( !setup->touch )
+	{
+		sere_tuner_record( &v->tuner, team, seconds, outcome.iterations );
+	}
 	v->rest_stale = v->stiffness_stale = 0;
 	v->inverse_alpha = setup->inverse_alpha;
 	/* a refused step leaves the last correction as it was */
